@@ -1,0 +1,236 @@
+// Single-call latency of the policy forward pass on the reference shapes.
+//
+//   pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|all] [--json FILE]
+//
+// Each call is timed on its own with the time-stamp counter (serialising reads), the median
+// cost of an empty timed region is subtracted, and the distribution over N calls is reported
+// with the allocations per call and the weight-streaming bound: parameter bytes / 64 bytes per
+// cycle at the core clock measured here.
+#include <x86intrin.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "runtime/core/alloc_probe.hpp"
+#include "runtime/core/random.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/policy/policy_model.hpp"
+
+using namespace pbppo::policy;
+
+namespace {
+
+struct Shape {
+  const char* name;
+  std::vector<std::uint32_t> widths;
+  Activation act;
+  double target_us;
+};
+
+inline std::uint64_t Stamp() noexcept {
+  unsigned aux;
+  _mm_lfence();
+  const std::uint64_t t = __rdtscp(&aux);
+  _mm_lfence();
+  return t;
+}
+
+double Now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Time-stamp-counter ticks per second, against the steady clock over 200 ms.
+double TscHz() {
+  const double t0 = Now();
+  const std::uint64_t c0 = Stamp();
+  while (Now() - t0 < 0.2) {
+  }
+  const double t1 = Now();
+  const std::uint64_t c1 = Stamp();
+  return static_cast<double>(c1 - c0) / (t1 - t0);
+}
+
+// Core clock: a chain of dependent register-register adds runs at one per cycle (adds of an
+// immediate are not used: recent cores fold those chains at rename). Median of 5.
+double CoreHz() {
+  std::vector<double> hz;
+  for (int rep = 0; rep < 5; ++rep) {
+    const long iters = 20'000'000;
+    std::uint64_t x = 0;
+    const std::uint64_t step = 3;
+    const double t0 = Now();
+    for (long i = 0; i < iters; ++i) {
+      asm volatile(
+          "add %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\t"
+          "add %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\t"
+          "add %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\t"
+          "add %1, %0\n\tadd %1, %0\n\tadd %1, %0\n\tadd %1, %0"
+          : "+r"(x)
+          : "r"(step));
+    }
+    hz.push_back(16.0 * static_cast<double>(iters) / (Now() - t0));
+  }
+  std::sort(hz.begin(), hz.end());
+  return hz[2];
+}
+
+struct Stats {
+  double median, p99, p999, max, mean;
+};
+
+Stats Summarise(std::vector<double>& v) {
+  std::sort(v.begin(), v.end());
+  auto q = [&](double p) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(p * static_cast<double>(v.size())))];
+  };
+  double sum = 0;
+  for (double x : v) sum += x;
+  return {q(0.5), q(0.99), q(0.999), v.back(), sum / static_cast<double>(v.size())};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  long calls = 1'000'000;
+  std::string kernel_arg = "auto", json_path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "pbppo_bench_inference: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    if (a == "--calls") {
+      const std::string v = next();
+      char* end = nullptr;
+      calls = std::strtol(v.c_str(), &end, 10);
+      if (*end != '\0' || calls < 1000) {
+        std::fprintf(stderr, "pbppo_bench_inference: --calls '%s' must be an integer >= 1000\n", v.c_str());
+        return 2;
+      }
+    } else if (a == "--kernel") {
+      kernel_arg = next();
+    } else if (a == "--json") {
+      json_path = next();
+    } else {
+      std::fprintf(stderr,
+                   "usage: pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|all] [--json FILE]\n");
+      return 2;
+    }
+  }
+  std::vector<Kernel> kernels;
+  if (kernel_arg == "all") {
+    kernels = AvailableKernels();
+  } else if (kernel_arg == "auto") {
+    kernels = {KernelAvailable(Kernel::kAvx512) ? Kernel::kAvx512 : Kernel::kPortable};
+  } else if (kernel_arg == "portable") {
+    kernels = {Kernel::kPortable};
+  } else if (kernel_arg == "avx512") {
+    kernels = {Kernel::kAvx512};
+  } else {
+    std::fprintf(stderr, "pbppo_bench_inference: --kernel '%s' unknown (auto, portable, avx512, all)\n",
+                 kernel_arg.c_str());
+    return 2;
+  }
+
+  const std::vector<Shape> shapes = {
+      {"P1", {48, 512, 256, 128, 12}, Activation::kElu, 4.0},
+      {"P2", {48, 256, 128, 64, 12}, Activation::kElu, 1.3},
+      {"P3", {24, 64, 64, 2}, Activation::kTanh, 0.15},
+  };
+
+  const double tsc_hz = TscHz();
+  const double core_hz = CoreHz();
+  // Cost of the timing itself: median of an empty timed region.
+  std::vector<double> empty(200000);
+  for (auto& e : empty) {
+    const std::uint64_t a = Stamp();
+    const std::uint64_t b = Stamp();
+    e = static_cast<double>(b - a);
+  }
+  std::sort(empty.begin(), empty.end());
+  const double overhead_ticks = empty[empty.size() / 2];
+
+  std::printf("policy inference latency, batch 1, one thread, %ld calls per row\n", calls);
+  std::printf("core clock %.2f GHz (dependent-add chain), TSC %.3f GHz, timer overhead %.1f ns subtracted\n",
+              core_hz / 1e9, tsc_hz / 1e9, overhead_ticks / tsc_hz * 1e9);
+  std::printf("\n%-5s %-9s %-22s %9s %9s %9s %9s %9s %8s %10s %8s %7s\n", "shape", "kernel", "layers", "median", "p99",
+              "p99.9", "max", "mean", "allocs", "bound", "x bound", "target");
+  std::printf("%-5s %-9s %-22s %9s %9s %9s %9s %9s %8s %10s %8s %7s\n", "", "", "", "us", "us", "us", "us", "us",
+              "/call", "us", "", "us");
+
+  std::string json = "{\n  \"core_hz\": " + std::to_string(core_hz) + ",\n  \"calls\": " + std::to_string(calls) +
+                     ",\n  \"rows\": [\n";
+  bool first = true;
+  int misses = 0;
+  for (const Shape& shape : shapes) {
+    const PolicySpec spec = MakeRandomSpec(shape.widths, shape.act, 1);
+    // Through the real blob path: encode, then load from bytes.
+    auto bytes = EncodeBlob(spec);
+    if (!bytes) return 1;
+    for (Kernel k : kernels) {
+      auto model = PolicyModel::FromBlob(*bytes, {.kernel = k});
+      if (!model) {
+        std::fprintf(stderr, "%s: %s\n", shape.name, model.error().message.c_str());
+        return 1;
+      }
+      auto data = MakePolicyData(*model);
+      if (!data) return 1;
+      pbppo::Rng rng(7);
+      std::vector<float> obs(static_cast<std::size_t>(spec.input_size) * 64);
+      for (float& o : obs) o = static_cast<float>(rng.Normal());
+      std::vector<double> ticks(static_cast<std::size_t>(calls));
+      for (int w = 0; w < 20000; ++w) (void)Forward(*model, *data);  // warm caches and clocks
+      std::uint64_t allocations = 0;
+      {
+        pbppo::AllocationScope scope;
+        for (long c = 0; c < calls; ++c) {
+          const float* src = obs.data() + static_cast<std::size_t>(c % 64) * spec.input_size;
+          std::memcpy(data->observation().data(), src, spec.input_size * sizeof(float));
+          const std::uint64_t t0 = Stamp();
+          (void)Forward(*model, *data);
+          const std::uint64_t t1 = Stamp();
+          ticks[static_cast<std::size_t>(c)] = static_cast<double>(t1 - t0) - overhead_ticks;
+        }
+        allocations = scope.count();
+      }
+      const Stats s = Summarise(ticks);
+      const double us = 1e6 / tsc_hz;
+      const double bound_us = static_cast<double>(model->parameter_bytes()) / 64.0 / core_hz * 1e6;
+      std::string layers;
+      for (std::size_t i = 0; i < shape.widths.size(); ++i) layers += (i ? "-" : "") + std::to_string(shape.widths[i]);
+      layers += std::string(" ") + ToString(shape.act);
+      const bool meets = s.median * us <= shape.target_us;
+      misses += !meets;
+      std::printf("%-5s %-9s %-22s %9.3f %9.3f %9.3f %9.2f %9.3f %8.2g %10.3f %8.2f %6.2f%s\n", shape.name, ToString(k),
+                  layers.c_str(), s.median * us, s.p99 * us, s.p999 * us, s.max * us, s.mean * us,
+                  static_cast<double>(allocations) / static_cast<double>(calls), bound_us, s.median * us / bound_us,
+                  shape.target_us, meets ? "" : " (missed)");
+      char row[512];
+      std::snprintf(
+          row, sizeof row,
+          "%s    {\"shape\": \"%s\", \"kernel\": \"%s\", \"median_us\": %.4f, \"p99_us\": %.4f, \"p999_us\": %.4f, "
+          "\"max_us\": %.3f, \"allocations_per_call\": %.3g, \"bound_us\": %.4f, \"target_us\": %.3f}",
+          first ? "" : ",\n", shape.name, ToString(k), s.median * us, s.p99 * us, s.p999 * us, s.max * us,
+          static_cast<double>(allocations) / static_cast<double>(calls), bound_us, shape.target_us);
+      json += row;
+      first = false;
+    }
+  }
+  json += "\n  ]\n}\n";
+  std::printf("\nbound: parameter bytes / (64 bytes per cycle x core clock); x bound = median / bound\n");
+  if (!json_path.empty()) {
+    if (auto st = WriteFileAtomic(json_path, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()}); !st) {
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,152 @@
+#include "policies/cli/inspect.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <vector>
+
+#include "runtime/core/crc32.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/policy/reference.hpp"
+
+namespace pbppo::cli {
+namespace {
+
+using policy::PolicySpec;
+
+std::string Hex64(std::uint64_t v) {
+  char b[24];
+  std::snprintf(b, sizeof b, "0x%016llx", static_cast<unsigned long long>(v));
+  return b;
+}
+
+std::string ShapeLine(const PolicySpec& s) {
+  std::string t = std::to_string(s.input_size);
+  for (const auto& l : s.layers) t += " -> " + std::to_string(l.out) + " " + policy::ToString(l.activation);
+  return t;
+}
+
+nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t crc) {
+  nlohmann::json j;
+  j["format_version"] = policy::kBlobFormatVersion;
+  j["file_bytes"] = file_bytes;
+  j["crc32"] = crc;
+  j["input_size"] = s.input_size;
+  j["output_size"] = s.output_size;
+  j["parameter_count"] = s.ParameterCount();
+  j["layers"] = nlohmann::json::array();
+  for (const auto& l : s.layers)
+    j["layers"].push_back({{"in", l.in}, {"out", l.out}, {"activation", policy::ToString(l.activation)}});
+  j["normaliser"] = {{"mean", s.obs_mean}, {"inv_std", s.obs_inv_std}, {"clip", s.obs_clip}};
+  j["action_head"] = policy::ToString(s.action_head);
+  j["action_map"] = {
+      {"scale", s.action_scale}, {"offset", s.action_offset}, {"low", s.action_low}, {"high", s.action_high}};
+  j["io_layout_hash"] = Hex64(s.io_layout_hash);
+  j["observation_names"] = s.observation_names;
+  j["action_names"] = s.action_names;
+  const auto& p = s.provenance;
+  j["provenance"] = {{"trainer_version", p.trainer_version},
+                     {"git_revision", p.git_revision},
+                     {"environment", p.environment},
+                     {"clip_schedule", p.clip_schedule},
+                     {"seed", p.seed},
+                     {"env_steps", p.env_steps},
+                     {"final_return", p.final_return}};
+  return j;
+}
+
+}  // namespace
+
+int Inspect(const std::string& path, bool json) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    std::fprintf(stderr, "pbppo inspect: %s: cannot open\n", path.c_str());
+    return 1;
+  }
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  auto spec = policy::DecodeBlob(bytes);
+  if (!spec) {
+    std::fprintf(stderr, "pbppo inspect: %s: %s\n", path.c_str(), spec.error().message.c_str());
+    return 1;
+  }
+  const PolicySpec& s = *spec;
+  std::uint32_t crc = 0;
+  std::memcpy(&crc, bytes.data() + bytes.size() - 4, 4);
+  if (json) {
+    std::cout << ToJson(s, bytes.size(), crc).dump(2) << "\n";
+    return 0;
+  }
+  std::printf("policy blob   %s\n", path.c_str());
+  std::printf("  format      v%u, %zu bytes, crc32 0x%08x (verified)\n", policy::kBlobFormatVersion, bytes.size(), crc);
+  std::printf("  network     %s\n", ShapeLine(s).c_str());
+  std::printf("  parameters  %llu (%.1f KiB of float32 weights)\n", static_cast<unsigned long long>(s.ParameterCount()),
+              static_cast<double>(s.ParameterCount()) * 4.0 / 1024.0);
+  std::printf("  head        %s mean, action = clamp(head(y) * scale + offset, low, high)\n",
+              policy::ToString(s.action_head));
+  std::printf("  io layout   hash %s\n", Hex64(s.io_layout_hash).c_str());
+  std::printf("  observations (%u), normalised as clamp((obs - mean) * inv_std, -%g, %g):\n", s.input_size,
+              static_cast<double>(s.obs_clip), static_cast<double>(s.obs_clip));
+  for (std::size_t i = 0; i < s.input_size; ++i) {
+    std::printf("    %3zu %-28s mean %11.5g  inv_std %11.5g\n", i, s.observation_names[i].c_str(),
+                static_cast<double>(s.obs_mean[i]), static_cast<double>(s.obs_inv_std[i]));
+  }
+  std::printf("  actions (%u):\n", s.output_size);
+  for (std::size_t i = 0; i < s.output_size; ++i) {
+    std::printf("    %3zu %-28s scale %9.4g  offset %9.4g  range [%g, %g]\n", i, s.action_names[i].c_str(),
+                static_cast<double>(s.action_scale[i]), static_cast<double>(s.action_offset[i]),
+                static_cast<double>(s.action_low[i]), static_cast<double>(s.action_high[i]));
+  }
+  const auto& p = s.provenance;
+  std::printf("  provenance\n");
+  std::printf("    trainer     %s (git %s)\n", p.trainer_version.c_str(),
+              p.git_revision.empty() ? "-" : p.git_revision.c_str());
+  std::printf("    environment %s\n", p.environment.c_str());
+  std::printf("    schedule    %s\n", p.clip_schedule.c_str());
+  std::printf("    seed        %llu\n", static_cast<unsigned long long>(p.seed));
+  std::printf("    env steps   %llu\n", static_cast<unsigned long long>(p.env_steps));
+  std::printf("    final return %g\n", p.final_return);
+  return 0;
+}
+
+int Synth(const SynthOptions& o) {
+  std::vector<std::uint32_t> widths;
+  std::stringstream ss(o.widths);
+  std::string part;
+  while (std::getline(ss, part, '-')) {
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(part.c_str(), &end, 10);
+    if (part.empty() || *end != '\0' || v == 0 || v > 100000) {
+      std::fprintf(stderr, "pbppo synth: --widths: '%s' is not a positive width in '%s'\n", part.c_str(),
+                   o.widths.c_str());
+      return 2;
+    }
+    widths.push_back(static_cast<std::uint32_t>(v));
+  }
+  if (widths.size() < 2) {
+    std::fprintf(stderr, "pbppo synth: --widths '%s' needs at least input and output, e.g. 24-64-64-2\n",
+                 o.widths.c_str());
+    return 2;
+  }
+  policy::Activation act{};
+  if (!policy::ParseActivation(o.activation, &act)) {
+    std::fprintf(stderr, "pbppo synth: --activation '%s' unknown (identity, tanh, elu, relu)\n", o.activation.c_str());
+    return 2;
+  }
+  const PolicySpec spec = policy::MakeRandomSpec(widths, act, o.seed);
+  if (auto st = policy::WriteBlobFile(o.out, spec); !st) {
+    std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
+    return 1;
+  }
+  const std::string golden = policy::GoldenPathFor(o.out);
+  if (auto st = policy::WriteGoldenFile(golden, policy::MakeGoldenVectors(spec, o.golden_rows, o.seed + 1)); !st) {
+    std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
+    return 1;
+  }
+  std::printf("wrote %s and %s\n", o.out.c_str(), golden.c_str());
+  return 0;
+}
+
+}  // namespace pbppo::cli

@@ -1,0 +1,20 @@
+// `pbppo inspect` and `pbppo synth`: look into a blob, make a random one of a given shape.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace pbppo::cli {
+
+int Inspect(const std::string& path, bool json);
+
+struct SynthOptions {
+  std::string widths = "48-512-256-128-12";
+  std::string activation = "elu";
+  std::uint64_t seed = 1;
+  std::string out;
+  std::size_t golden_rows = 32;
+};
+int Synth(const SynthOptions& o);
+
+}  // namespace pbppo::cli

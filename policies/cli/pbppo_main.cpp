@@ -1,0 +1,32 @@
+// pbppo: the project's command-line tool.
+#include <CLI/CLI.hpp>
+
+#include "policies/cli/inspect.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"pbppo: train Pb-PPO policies and work with frozen policy blobs"};
+  app.require_subcommand(1);
+
+  std::string inspect_path;
+  bool inspect_json = false;
+  auto* inspect = app.add_subcommand("inspect", "Show everything in a policy blob's header");
+  inspect->add_option("blob", inspect_path, "Policy blob file")->required();
+  inspect->add_flag("--json", inspect_json, "Print JSON instead of text");
+
+  pbppo::cli::SynthOptions synth_opts;
+  auto* synth = app.add_subcommand("synth", "Write a random-weight blob of a given shape, with golden vectors");
+  synth->add_option("--widths", synth_opts.widths, "Layer widths, input first, e.g. 48-512-256-128-12");
+  synth->add_option("--activation", synth_opts.activation, "Hidden activation: identity, tanh, elu, relu");
+  synth->add_option("--seed", synth_opts.seed, "Seed for the weights");
+  synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
+  synth->add_option("--out", synth_opts.out, "Output blob path")->required();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // usage errors exit 2, after CLI11 printed the reason
+  }
+  if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json);
+  if (*synth) return pbppo::cli::Synth(synth_opts);
+  return 2;
+}

@@ -1,0 +1,35 @@
+// Writing and loading frozen policy blobs (format v1). Set-up time only.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+#include "runtime/policy/blob_format.hpp"
+#include "runtime/policy/policy_spec.hpp"
+
+namespace pbppo::policy {
+
+// Checks every field of a spec: sizes against `limits`, chained layer widths, array lengths,
+// finite values, positive 1/std and clip, low <= high, names. Errors name the field and value.
+Status ValidateSpec(const PolicySpec& spec, const BlobLimits& limits = {});
+
+// Serialises a valid spec (validated first) into blob bytes, CRC included.
+Result<std::vector<std::uint8_t>> EncodeBlob(const PolicySpec& spec);
+
+// Parses and validates blob bytes. Sizes are checked against `limits` before any allocation.
+Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> bytes, const BlobLimits& limits = {});
+
+// Reads a whole file (at most limits.max_file_bytes) and decodes it; errors start with the path.
+Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limits = {});
+
+// Writes bytes to `path` atomically: a temporary file beside it, fsync, rename. On failure the
+// previous file at `path`, if any, is untouched and no temporary is left behind.
+Status WriteFileAtomic(const std::string& path, std::span<const std::uint8_t> bytes);
+
+// EncodeBlob + WriteFileAtomic.
+Status WriteBlobFile(const std::string& path, const PolicySpec& spec);
+
+}  // namespace pbppo::policy

@@ -1,0 +1,55 @@
+// Plain views of a model's parameters and a data's buffers, shared by the forward kernels.
+// Kept free of standard-library types so that kernels compiled for other instruction sets
+// (forward_avx512.cpp) include nothing they could emit an incompatible inline copy of.
+#pragma once
+
+#include <cstdint>
+
+namespace pbppo::policy::detail {
+
+inline constexpr std::uint32_t kLanes = 16;       // floats per 64-byte vector
+inline constexpr std::uint32_t kTileVectors = 8;  // output vectors per AVX-512 tile
+
+struct KernelLayer {
+  const float* weight;  // portable: row-major [out][in]; avx512: tiles [tile][in][vectors*16]
+  const float* bias;    // [out_pad], zero beyond out
+  std::uint32_t in;
+  std::uint32_t out;
+  std::uint32_t out_pad;  // out rounded up to 16
+  std::uint32_t activation;
+};
+
+struct ModelView {
+  const KernelLayer* layers;
+  std::uint32_t layer_count;
+  std::uint32_t input_size;
+  std::uint32_t input_pad;
+  std::uint32_t output_size;
+  std::uint32_t output_pad;
+  std::uint32_t action_head;
+  float obs_clip;
+  const float* obs_mean;       // [input_pad], zero beyond input
+  const float* obs_inv_std;    // [input_pad], zero beyond input
+  const float* action_scale;   // [output_pad]
+  const float* action_offset;  // [output_pad]
+  const float* action_low;     // [output_pad]
+  const float* action_high;    // [output_pad]
+};
+
+struct DataView {
+  float* observation;  // [input_pad], caller writes the first input_size
+  float* x;            // [input_pad] normalised observation
+  float* ping;         // [max_width_pad]
+  float* pong;         // [max_width_pad]
+  float* action;       // [output_pad]
+};
+
+// Return value of a kernel: bit 0 non-finite observation, bit 1 non-finite action.
+inline constexpr std::uint32_t kBadObservation = 1u;
+inline constexpr std::uint32_t kBadAction = 2u;
+
+std::uint32_t ForwardPortable(const ModelView& m, const DataView& d) noexcept;
+std::uint32_t ForwardAvx512(const ModelView& m, const DataView& d) noexcept;
+bool CpuHasAvx512() noexcept;
+
+}  // namespace pbppo::policy::detail

@@ -1,0 +1,105 @@
+// PolicyModel (immutable, built once from a blob) and PolicyData (every buffer a forward pass
+// needs, one aligned arena made once from the model). Forward() is noexcept and allocation-free.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "runtime/core/aligned_arena.hpp"
+#include "runtime/core/result.hpp"
+#include "runtime/policy/blob_format.hpp"
+#include "runtime/policy/kernel_view.hpp"
+#include "runtime/policy/policy_spec.hpp"
+
+namespace pbppo::policy {
+
+// Which forward implementation a model runs. kAuto picks the fastest this CPU supports.
+enum class Kernel : std::uint8_t { kAuto, kPortable, kAvx512 };
+const char* ToString(Kernel k) noexcept;
+bool KernelAvailable(Kernel k) noexcept;
+std::vector<Kernel> AvailableKernels();
+
+struct LoadOptions {
+  BlobLimits limits{};
+  Kernel kernel = Kernel::kAuto;
+};
+
+class PolicyModel {
+ public:
+  static Result<PolicyModel> FromSpec(const PolicySpec& spec, const LoadOptions& options = {});
+  static Result<PolicyModel> FromBlob(std::span<const std::uint8_t> bytes, const LoadOptions& options = {});
+  static Result<PolicyModel> FromFile(const std::string& path, const LoadOptions& options = {});
+
+  // Everything the blob says except the weights (layer shapes, normaliser, action map, names,
+  // layout hash, provenance); layer weight/bias vectors are empty.
+  const PolicySpec& description() const noexcept { return description_; }
+  std::uint32_t input_size() const noexcept { return view_.input_size; }
+  std::uint32_t output_size() const noexcept { return view_.output_size; }
+  std::uint32_t max_width_pad() const noexcept { return max_width_pad_; }
+  Kernel kernel() const noexcept { return kernel_; }
+  std::uint64_t parameter_bytes() const noexcept { return parameter_bytes_; }
+  const detail::ModelView& view() const noexcept { return view_; }
+
+  PolicyModel(PolicyModel&&) noexcept = default;
+  PolicyModel& operator=(PolicyModel&&) noexcept = default;
+  PolicyModel(const PolicyModel&) = delete;
+  PolicyModel& operator=(const PolicyModel&) = delete;
+
+ private:
+  PolicyModel() = default;
+  PolicySpec description_;
+  AlignedBlock params_;
+  std::vector<detail::KernelLayer> layers_;
+  detail::ModelView view_{};
+  std::uint32_t max_width_pad_ = 0;
+  std::uint64_t parameter_bytes_ = 0;
+  Kernel kernel_ = Kernel::kPortable;
+};
+
+enum class ForwardStatus : std::uint8_t {
+  kOk,
+  kNonFiniteObservation,  // inference skipped, every action element is NaN
+  kNonFiniteAction,       // the non-finite elements are NaN, the others are valid
+  kWrongModel,            // the data was made for another model; nothing computed
+};
+const char* ToString(ForwardStatus s) noexcept;
+
+class PolicyData {
+ public:
+  // Observation to fill before Forward(); raw units, the model normalises.
+  std::span<float> observation() noexcept { return {view_.observation, input_size_}; }
+  // Action after Forward(): scaled, offset and clamped to the blob's limits.
+  std::span<const float> action() const noexcept { return {view_.action, output_size_}; }
+
+  std::uint64_t forward_calls = 0;
+  std::uint64_t nonfinite_observations = 0;
+  std::uint64_t nonfinite_actions = 0;
+
+  PolicyData(PolicyData&&) noexcept = default;
+  PolicyData& operator=(PolicyData&&) noexcept = default;
+
+ private:
+  friend Result<PolicyData> MakePolicyData(const PolicyModel& model);
+  friend ForwardStatus Forward(const PolicyModel& model, PolicyData& data) noexcept;
+  PolicyData() = default;
+  AlignedBlock arena_;
+  detail::DataView view_{};
+  const PolicyModel* model_ = nullptr;
+  std::uint32_t input_size_ = 0;
+  std::uint32_t output_size_ = 0;
+};
+
+// Makes the data for a model (the only allocation). The data refers to the model, which must
+// outlive it and not move.
+Result<PolicyData> MakePolicyData(const PolicyModel& model);
+
+// observation -> action. noexcept, allocation-free, lock-free; safe to call from a real-time tick.
+ForwardStatus Forward(const PolicyModel& model, PolicyData& data) noexcept;
+
+// Turns Eigen's allocation check on or off (builds with EIGEN_RUNTIME_NO_MALLOC; a no-op
+// otherwise): with it off, any heap allocation inside Eigen code aborts.
+void SetEigenMallocAllowed(bool allowed) noexcept;
+
+}  // namespace pbppo::policy

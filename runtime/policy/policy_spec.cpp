@@ -1,0 +1,84 @@
+#include "runtime/policy/policy_spec.hpp"
+
+#include <cmath>
+
+#include "runtime/core/random.hpp"
+
+namespace pbppo::policy {
+
+const char* ToString(Activation a) noexcept {
+  switch (a) {
+    case Activation::kIdentity: return "identity";
+    case Activation::kTanh: return "tanh";
+    case Activation::kElu: return "elu";
+    case Activation::kRelu: return "relu";
+  }
+  return "unknown";
+}
+
+const char* ToString(ActionHead h) noexcept {
+  switch (h) {
+    case ActionHead::kLinear: return "linear";
+    case ActionHead::kTanh: return "tanh";
+  }
+  return "unknown";
+}
+
+bool ParseActivation(const std::string& s, Activation* out) noexcept {
+  for (auto a : {Activation::kIdentity, Activation::kTanh, Activation::kElu, Activation::kRelu}) {
+    if (s == ToString(a)) {
+      *out = a;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::uint64_t PolicySpec::ParameterCount() const noexcept {
+  std::uint64_t n = 0;
+  for (const auto& l : layers) n += static_cast<std::uint64_t>(l.in) * l.out + l.out;
+  return n;
+}
+
+PolicySpec MakeRandomSpec(const std::vector<std::uint32_t>& widths, Activation hidden, std::uint64_t seed) {
+  Rng rng(seed);
+  PolicySpec s;
+  if (widths.size() < 2) return s;
+  s.input_size = widths.front();
+  s.output_size = widths.back();
+  for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
+    DenseLayer l;
+    l.in = widths[i];
+    l.out = widths[i + 1];
+    l.activation = (i + 2 == widths.size()) ? Activation::kIdentity : hidden;
+    // Variance-preserving scale, so that activations stay in the interesting range.
+    const double gain = 1.0 / std::sqrt(static_cast<double>(l.in));
+    l.weight.resize(static_cast<std::size_t>(l.in) * l.out);
+    for (float& w : l.weight) w = static_cast<float>(gain * rng.Normal());
+    l.bias.resize(l.out);
+    for (float& b : l.bias) b = static_cast<float>(0.1 * rng.Normal());
+    s.layers.push_back(std::move(l));
+  }
+  s.obs_mean.resize(s.input_size);
+  s.obs_inv_std.resize(s.input_size);
+  for (std::uint32_t i = 0; i < s.input_size; ++i) {
+    s.obs_mean[i] = static_cast<float>(0.5 * rng.Normal());
+    s.obs_inv_std[i] = static_cast<float>(std::exp(0.5 * rng.Normal()));
+    s.observation_names.push_back("obs" + std::to_string(i));
+  }
+  s.obs_clip = 5.0f;
+  for (std::uint32_t i = 0; i < s.output_size; ++i) {
+    s.action_scale.push_back(0.5f);
+    s.action_offset.push_back(0.0f);
+    s.action_low.push_back(-1.0f);
+    s.action_high.push_back(1.0f);
+    s.action_names.push_back("act" + std::to_string(i));
+  }
+  s.provenance.trainer_version = "random";
+  s.provenance.environment = "none";
+  s.provenance.clip_schedule = "none";
+  s.provenance.seed = seed;
+  return s;
+}
+
+}  // namespace pbppo::policy

@@ -1,0 +1,182 @@
+#include "runtime/policy/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "runtime/core/random.hpp"
+#include "runtime/policy/blob.hpp"
+
+namespace pbppo::policy {
+namespace {
+
+constexpr double kU = 0x1.0p-24;  // unit roundoff of float32
+
+double Gamma(std::size_t n) {
+  return static_cast<double>(n) * kU / (1.0 - static_cast<double>(n) * kU);
+}
+
+double Activate(Activation a, double x) {
+  switch (a) {
+    case Activation::kIdentity: return x;
+    case Activation::kTanh: return std::tanh(x);
+    case Activation::kElu: return x > 0.0 ? x : std::expm1(x);
+    case Activation::kRelu: return x > 0.0 ? x : 0.0;
+  }
+  return x;
+}
+
+double ActivationRoundoff(Activation a, double fx) {
+  return a == Activation::kIdentity || a == Activation::kRelu ? 0.0 : 4.0 * kU * std::max(std::fabs(fx), 1.0);
+}
+
+}  // namespace
+
+ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
+  std::vector<double> x(s.input_size), e(s.input_size);
+  const double clip = s.obs_clip;
+  for (std::size_t i = 0; i < s.input_size; ++i) {
+    const double v =
+        (static_cast<double>(obs[i]) - static_cast<double>(s.obs_mean[i])) * static_cast<double>(s.obs_inv_std[i]);
+    x[i] = std::clamp(v, -clip, clip);
+    e[i] = 2.0 * kU * std::fabs(v) * 1.0000001;
+  }
+  for (const DenseLayer& l : s.layers) {
+    std::vector<double> y(l.out), ey(l.out);
+    const double g = Gamma(l.in + 1);
+    for (std::size_t j = 0; j < l.out; ++j) {
+      double acc = static_cast<double>(l.bias[j]), mag = std::fabs(static_cast<double>(l.bias[j])), prop = 0.0;
+      const float* w = l.weight.data() + j * l.in;
+      for (std::size_t i = 0; i < l.in; ++i) {
+        acc += static_cast<double>(w[i]) * x[i];
+        mag += std::fabs(static_cast<double>(w[i])) * (std::fabs(x[i]) + e[i]);
+        prop += std::fabs(static_cast<double>(w[i])) * e[i];
+      }
+      y[j] = Activate(l.activation, acc);
+      ey[j] = prop + g * mag + ActivationRoundoff(l.activation, y[j]);
+    }
+    x = std::move(y);
+    e = std::move(ey);
+  }
+  ReferenceOutput out;
+  out.action.resize(s.output_size);
+  out.error_bound.resize(s.output_size);
+  for (std::size_t j = 0; j < s.output_size; ++j) {
+    double a = x[j], ea = e[j];
+    if (s.action_head == ActionHead::kTanh) {
+      a = std::tanh(a);
+      ea += ActivationRoundoff(Activation::kTanh, a);
+    }
+    const double sc = s.action_scale[j], off = s.action_offset[j];
+    const double scaled = a * sc + off;
+    out.action[j] = std::clamp(scaled, static_cast<double>(s.action_low[j]), static_cast<double>(s.action_high[j]));
+    out.error_bound[j] = ea * std::fabs(sc) + 2.0 * kU * (std::fabs(a * sc) + std::fabs(scaled)) + 1e-30;
+  }
+  return out;
+}
+
+GoldenVectors MakeGoldenVectors(const PolicySpec& s, std::size_t rows, std::uint64_t seed) {
+  Rng rng(seed);
+  GoldenVectors g;
+  g.input_size = s.input_size;
+  g.output_size = s.output_size;
+  for (std::size_t r = 0; r < rows; ++r) {
+    std::vector<float> obs(s.input_size);
+    // Spread grows with the row: small rows probe the linear region, large ones the clip.
+    const double spread = 0.25 + 3.0 * static_cast<double>(r) / static_cast<double>(std::max<std::size_t>(rows, 2) - 1);
+    for (std::size_t i = 0; i < s.input_size; ++i) {
+      const double sd = 1.0 / static_cast<double>(s.obs_inv_std[i]);
+      obs[i] = static_cast<float>(static_cast<double>(s.obs_mean[i]) + sd * spread * rng.Normal());
+    }
+    g.expected.push_back(ReferenceForward(s, obs.data()));
+    g.observations.push_back(std::move(obs));
+  }
+  return g;
+}
+
+Status WriteGoldenFile(const std::string& path, const GoldenVectors& g) {
+  std::string text;
+  text += "# pbppo golden vectors: observation (float32) | reference action (float64 forward over the\n";
+  text += "# blob's float32 parameters) | per-element bound on a float32 forward's deviation\n";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "pbppo-golden 1 %u %u %zu\n", g.input_size, g.output_size, g.observations.size());
+  text += buf;
+  for (std::size_t r = 0; r < g.observations.size(); ++r) {
+    for (float v : g.observations[r]) {
+      std::snprintf(buf, sizeof buf, "%.9g ", static_cast<double>(v));
+      text += buf;
+    }
+    text += "|";
+    for (double v : g.expected[r].action) {
+      std::snprintf(buf, sizeof buf, " %.17g", v);
+      text += buf;
+    }
+    text += " |";
+    for (double v : g.expected[r].error_bound) {
+      std::snprintf(buf, sizeof buf, " %.3e", v);
+      text += buf;
+    }
+    text += "\n";
+  }
+  return WriteFileAtomic(path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+}
+
+Result<GoldenVectors> ReadGoldenFile(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
+  std::string line;
+  GoldenVectors g;
+  std::size_t rows = 0, lineno = 0;
+  bool header = false;
+  while (std::getline(f, line)) {
+    ++lineno;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream in(line);
+    const std::string where = path + ":" + std::to_string(lineno) + ": ";
+    if (!header) {
+      std::string magic;
+      int version = 0;
+      if (!(in >> magic >> version >> g.input_size >> g.output_size >> rows) || magic != "pbppo-golden" ||
+          version != 1) {
+        return MakeError(ErrorCode::kFormat, where + "expected 'pbppo-golden 1 INPUT OUTPUT ROWS'");
+      }
+      header = true;
+      continue;
+    }
+    std::vector<float> obs(g.input_size);
+    ReferenceOutput out;
+    out.action.resize(g.output_size);
+    out.error_bound.resize(g.output_size);
+    std::string bar1, bar2;
+    for (auto& v : obs) in >> v;
+    in >> bar1;
+    for (auto& v : out.action) in >> v;
+    in >> bar2;
+    for (auto& v : out.error_bound) in >> v;
+    if (!in || bar1 != "|" || bar2 != "|") {
+      return MakeError(ErrorCode::kFormat, where + "expected " + std::to_string(g.input_size) + " observations | " +
+                                               std::to_string(g.output_size) + " actions | " +
+                                               std::to_string(g.output_size) + " bounds");
+    }
+    g.observations.push_back(std::move(obs));
+    g.expected.push_back(std::move(out));
+  }
+  if (!header) return MakeError(ErrorCode::kFormat, path + ": no 'pbppo-golden' header");
+  if (g.observations.size() != rows) {
+    return MakeError(ErrorCode::kFormat, path + ": header says " + std::to_string(rows) + " rows, file has " +
+                                             std::to_string(g.observations.size()));
+  }
+  return g;
+}
+
+std::string GoldenPathFor(const std::string& blob_path) {
+  const auto dot = blob_path.rfind('.');
+  const auto slash = blob_path.rfind('/');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash))
+    return blob_path.substr(0, dot) + ".golden";
+  return blob_path + ".golden";
+}
+
+}  // namespace pbppo::policy

@@ -1,0 +1,43 @@
+// The writer's float64 reference forward and the golden-vector files built from it.
+// Set-up/test time code: allocates freely.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+#include "runtime/policy/policy_spec.hpp"
+
+namespace pbppo::policy {
+
+struct ReferenceOutput {
+  std::vector<double> action;
+  // A first-order bound on |float32 forward - float64 reference| per action element: each dot
+  // product of length n rounds within gamma(n+1) * sum|w||x| (Higham), each activation within
+  // 4 ulp of max(|f|, 1), errors propagate through |W| (activations are 1-Lipschitz), and the
+  // action map adds two roundings. Any summation order and FMA use stay within it.
+  std::vector<double> error_bound;
+};
+
+// Runs the policy in float64 over the spec's float32 parameters.
+ReferenceOutput ReferenceForward(const PolicySpec& spec, const float* observation);
+
+struct GoldenVectors {
+  std::uint32_t input_size = 0;
+  std::uint32_t output_size = 0;
+  std::vector<std::vector<float>> observations;
+  std::vector<ReferenceOutput> expected;
+};
+
+// Observations that exercise the normaliser clip, both signs and every activation region,
+// drawn deterministically from `seed`, with the reference outputs for them.
+GoldenVectors MakeGoldenVectors(const PolicySpec& spec, std::size_t rows, std::uint64_t seed);
+
+Status WriteGoldenFile(const std::string& path, const GoldenVectors& g);
+Result<GoldenVectors> ReadGoldenFile(const std::string& path);
+
+// The conventional golden-vector path beside a blob: "x.blob" -> "x.golden".
+std::string GoldenPathFor(const std::string& blob_path);
+
+}  // namespace pbppo::policy

@@ -1,0 +1,164 @@
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "runtime/core/crc32.hpp"
+#include "runtime/policy/blob.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo::policy;
+
+namespace {
+PolicySpec Small() {
+  return MakeRandomSpec({5, 7, 3}, Activation::kTanh, 11);
+}
+
+std::string ErrorOf(const PolicySpec& s, const BlobLimits& limits = {}) {
+  auto bytes = EncodeBlob(s);
+  if (!bytes) return bytes.error().message;
+  auto back = DecodeBlob(*bytes, limits);
+  return back ? std::string() : back.error().message;
+}
+}  // namespace
+
+TEST_CASE("a blob round-trips every field") {
+  PolicySpec s = MakeRandomSpec({48, 64, 32, 12}, Activation::kElu, 5);
+  s.action_head = ActionHead::kTanh;
+  s.io_layout_hash = 0x0123456789abcdefull;
+  s.provenance = {"pbppo 0.1.0", "abc1234", "auv-nav/hard", "pbppo arms=0.05:0.4:6", 17, 2000000, -123.5};
+  auto bytes = EncodeBlob(s);
+  REQUIRE(bytes.ok());
+  auto back = DecodeBlob(*bytes);
+  REQUIRE_MESSAGE(back.ok(), back.error().message);
+  const PolicySpec& t = *back;
+  CHECK(t.input_size == 48);
+  CHECK(t.output_size == 12);
+  REQUIRE(t.layers.size() == 3);
+  for (std::size_t i = 0; i < 3; ++i) {
+    CHECK(t.layers[i].in == s.layers[i].in);
+    CHECK(t.layers[i].out == s.layers[i].out);
+    CHECK(t.layers[i].activation == s.layers[i].activation);
+    CHECK(t.layers[i].weight == s.layers[i].weight);
+    CHECK(t.layers[i].bias == s.layers[i].bias);
+  }
+  CHECK(t.obs_mean == s.obs_mean);
+  CHECK(t.obs_inv_std == s.obs_inv_std);
+  CHECK(t.obs_clip == s.obs_clip);
+  CHECK(t.action_head == ActionHead::kTanh);
+  CHECK(t.action_scale == s.action_scale);
+  CHECK(t.action_offset == s.action_offset);
+  CHECK(t.action_low == s.action_low);
+  CHECK(t.action_high == s.action_high);
+  CHECK(t.io_layout_hash == s.io_layout_hash);
+  CHECK(t.observation_names == s.observation_names);
+  CHECK(t.action_names == s.action_names);
+  CHECK(t.provenance.trainer_version == "pbppo 0.1.0");
+  CHECK(t.provenance.git_revision == "abc1234");
+  CHECK(t.provenance.environment == "auv-nav/hard");
+  CHECK(t.provenance.clip_schedule == "pbppo arms=0.05:0.4:6");
+  CHECK(t.provenance.seed == 17);
+  CHECK(t.provenance.env_steps == 2000000);
+  CHECK(t.provenance.final_return == -123.5);
+  // Re-encoding the decoded spec gives the same bytes.
+  auto again = EncodeBlob(t);
+  REQUIRE(again.ok());
+  CHECK(*again == *bytes);
+}
+
+TEST_CASE("the stored crc32 covers everything before it") {
+  auto bytes = EncodeBlob(Small());
+  REQUIRE(bytes.ok());
+  std::uint32_t stored = 0;
+  std::memcpy(&stored, bytes->data() + bytes->size() - 4, 4);
+  CHECK(stored == pbppo::Crc32(bytes->data(), bytes->size() - 4));
+}
+
+TEST_CASE("capacity limits are enforced with messages naming field and value") {
+  PolicySpec s = MakeRandomSpec({4, 8, 900, 2}, Activation::kRelu, 1);
+  BlobLimits tight;
+  tight.max_width = 512;
+  CHECK(ErrorOf(s, tight) == "policy blob: layer 1: width 900 exceeds limit 512");
+  tight = {};
+  tight.max_input = 3;
+  CHECK(ErrorOf(s, tight) == "policy blob: input_size 4 outside 1..3");
+  tight = {};
+  tight.max_layers = 2;
+  CHECK(ErrorOf(s, tight) == "policy blob: layer_count 3 outside 1..2");
+  tight = {};
+  tight.max_parameters = 100;
+  CHECK(ErrorOf(s, tight).find("parameter count") != std::string::npos);
+}
+
+TEST_CASE("invalid values are refused by the writer, naming the field") {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  auto expect = [](PolicySpec s, const std::string& msg) {
+    auto r = EncodeBlob(s);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message == msg);
+  };
+  PolicySpec s = Small();
+  s.layers[1].weight[4] = nan;
+  expect(s, "policy blob: layer 1 weight[4]: non-finite value nan");
+  s = Small();
+  s.layers[0].bias[2] = -inf;
+  expect(s, "policy blob: layer 0 bias[2]: non-finite value -inf");
+  s = Small();
+  s.obs_inv_std[3] = 0.0f;
+  expect(s, "policy blob: obs_inv_std[3]: 0 is not positive");
+  s = Small();
+  s.obs_clip = -1.0f;
+  expect(s, "policy blob: obs_clip: -1 is not a positive finite number");
+  s = Small();
+  s.action_low[1] = 2.0f;
+  expect(s, "policy blob: action_low[1] 2 is above action_high 1");
+  s = Small();
+  s.layers[1].in = 6;
+  expect(s, "policy blob: layer 1: input width 6 does not match the previous width 7");
+  s = Small();
+  s.action_names.pop_back();
+  expect(s, "policy blob: action_names: has 2 names, expected 3");
+  s = Small();
+  s.observation_names[0] = "bad name";
+  expect(s, "policy blob: observation_names[0]: byte 0x20 is not a printable ASCII name character");
+  s = Small();
+  s.layers[0].weight.pop_back();
+  expect(s, "policy blob: layer 0 weight: has 34 values, expected 35");
+}
+
+TEST_CASE("files are written atomically and read back; errors name the path") {
+  const std::string dir = pbppo::test::ScratchDir("blob_files");
+  const std::string path = dir + "/p.blob";
+  REQUIRE(WriteBlobFile(path, Small()).ok());
+  auto back = ReadBlobFile(path);
+  REQUIRE(back.ok());
+  CHECK(back->input_size == 5);
+  // Nothing but the blob is left in the folder.
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    (void)e;
+    ++files;
+  }
+  CHECK(files == 1);
+
+  // A writer that fails leaves the old file intact.
+  PolicySpec bad = Small();
+  bad.obs_clip = 0.0f;
+  CHECK_FALSE(WriteBlobFile(path, bad).ok());
+  CHECK(ReadBlobFile(path).ok());
+  CHECK_FALSE(WriteBlobFile(dir + "/missing/p.blob", Small()).ok());
+
+  auto missing = ReadBlobFile(dir + "/nope.blob");
+  REQUIRE_FALSE(missing.ok());
+  CHECK(missing.error().message.find(dir + "/nope.blob: cannot open") == 0);
+
+  std::ofstream(dir + "/junk.blob") << "this is not a policy";
+  auto junk = ReadBlobFile(dir + "/junk.blob");
+  REQUIRE_FALSE(junk.ok());
+  CHECK(junk.error().message ==
+        dir + "/junk.blob: policy blob: magic: not a pbppo policy blob (expected \"PBPPOPOL\")");
+}

@@ -1,0 +1,197 @@
+// The runtime forward pass, every available kernel, against the writer's float64 reference.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "runtime/core/random.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/policy/policy_model.hpp"
+#include "runtime/policy/reference.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo::policy;
+
+namespace {
+
+struct Deviation {
+  double worst_ratio = 0.0;  // max |runtime - reference| / bound
+  double worst_abs = 0.0;
+};
+
+Deviation Check(const PolicyModel& model, const GoldenVectors& g) {
+  auto data = MakePolicyData(model);
+  REQUIRE(data.ok());
+  Deviation dev;
+  for (std::size_t r = 0; r < g.observations.size(); ++r) {
+    std::copy(g.observations[r].begin(), g.observations[r].end(), data->observation().begin());
+    REQUIRE(Forward(model, *data) == ForwardStatus::kOk);
+    for (std::size_t j = 0; j < g.output_size; ++j) {
+      const double got = data->action()[j];
+      const double want = g.expected[r].action[j];
+      const double bound = g.expected[r].error_bound[j];
+      const double err = std::fabs(got - want);
+      dev.worst_abs = std::max(dev.worst_abs, err);
+      dev.worst_ratio = std::max(dev.worst_ratio, err / bound);
+      if (err > bound) {
+        FAIL_CHECK("kernel " << ToString(model.kernel()) << " row " << r << " action " << j << ": " << got
+                             << " vs reference " << want << ", error " << err << " > bound " << bound);
+      }
+    }
+  }
+  return dev;
+}
+
+struct Shape {
+  const char* name;
+  std::vector<std::uint32_t> widths;
+  Activation act;
+  ActionHead head;
+};
+
+const Shape kShapes[] = {
+    {"P1", {48, 512, 256, 128, 12}, Activation::kElu, ActionHead::kLinear},
+    {"P2", {48, 256, 128, 64, 12}, Activation::kElu, ActionHead::kLinear},
+    {"P3", {24, 64, 64, 2}, Activation::kTanh, ActionHead::kLinear},
+    {"relu-odd", {7, 33, 17, 5}, Activation::kRelu, ActionHead::kTanh},
+    {"identity-wide", {130, 200, 19}, Activation::kIdentity, ActionHead::kLinear},
+    {"single-layer", {1, 1}, Activation::kIdentity, ActionHead::kTanh},
+};
+
+}  // namespace
+
+TEST_CASE("every kernel reproduces the golden vectors within the float32 error bound") {
+  for (const Shape& shape : kShapes) {
+    PolicySpec spec = MakeRandomSpec(shape.widths, shape.act, 21);
+    spec.action_head = shape.head;
+    // A non-trivial action map that also clamps.
+    for (std::size_t j = 0; j < spec.output_size; ++j) {
+      spec.action_scale[j] = 0.75f + 0.1f * static_cast<float>(j);
+      spec.action_offset[j] = 0.05f * static_cast<float>(j);
+      spec.action_low[j] = -0.8f;
+      spec.action_high[j] = 0.9f;
+    }
+    const GoldenVectors g = MakeGoldenVectors(spec, 64, 5);
+    for (Kernel k : AvailableKernels()) {
+      CAPTURE(shape.name);
+      CAPTURE(ToString(k));
+      auto model = PolicyModel::FromSpec(spec, {.kernel = k});
+      REQUIRE(model.ok());
+      REQUIRE(model->kernel() == k);
+      const Deviation d = Check(*model, g);
+      MESSAGE(shape.name << " " << ToString(k) << ": max |error| " << d.worst_abs << ", " << d.worst_ratio
+                         << " of the bound");
+    }
+  }
+}
+
+TEST_CASE("golden files written by the writer are reproduced from the files") {
+  const std::string dir = pbppo::test::ScratchDir("forward_files");
+  const PolicySpec spec = MakeRandomSpec({24, 64, 64, 2}, Activation::kTanh, 3);
+  REQUIRE(WriteBlobFile(dir + "/p3.blob", spec).ok());
+  REQUIRE(WriteGoldenFile(GoldenPathFor(dir + "/p3.blob"), MakeGoldenVectors(spec, 16, 4)).ok());
+  auto g = ReadGoldenFile(dir + "/p3.golden");
+  REQUIRE(g.ok());
+  CHECK(g->observations.size() == 16);
+  for (Kernel k : AvailableKernels()) {
+    auto model = PolicyModel::FromFile(dir + "/p3.blob", {.kernel = k});
+    REQUIRE(model.ok());
+    Check(*model, *g);
+  }
+}
+
+TEST_CASE("shipped reference blobs load and match their golden files (format stability)") {
+  const std::string dir = pbppo::test::SourcePath("tests/data/blobs");
+  int seen = 0;
+  for (const char* name : {"p1", "p2", "p3"}) {
+    const std::string blob = dir + "/" + name + ".blob";
+    auto g = ReadGoldenFile(GoldenPathFor(blob));
+    REQUIRE_MESSAGE(g.ok(), g.error().message);
+    for (Kernel k : AvailableKernels()) {
+      auto model = PolicyModel::FromFile(blob, {.kernel = k});
+      REQUIRE_MESSAGE(model.ok(), model.error().message);
+      Check(*model, *g);
+    }
+    ++seen;
+  }
+  CHECK(seen == 3);
+}
+
+TEST_CASE("non-finite observations skip inference and are counted") {
+  const PolicySpec spec = MakeRandomSpec({24, 64, 64, 2}, Activation::kTanh, 3);
+  for (Kernel k : AvailableKernels()) {
+    CAPTURE(ToString(k));
+    auto model = PolicyModel::FromSpec(spec, {.kernel = k});
+    REQUIRE(model.ok());
+    auto data = MakePolicyData(*model);
+    REQUIRE(data.ok());
+    for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                      -std::numeric_limits<float>::infinity()}) {
+      std::fill(data->observation().begin(), data->observation().end(), 0.5f);
+      data->observation()[23] = bad;
+      CHECK(Forward(*model, *data) == ForwardStatus::kNonFiniteObservation);
+      for (float a : data->action()) CHECK(std::isnan(a));
+    }
+    CHECK(data->nonfinite_observations == 3);
+    std::fill(data->observation().begin(), data->observation().end(), 1e30f);  // finite, clipped
+    CHECK(Forward(*model, *data) == ForwardStatus::kOk);
+    for (float a : data->action()) CHECK(std::isfinite(a));
+    CHECK(data->forward_calls == 4);
+  }
+}
+
+TEST_CASE("actions stay inside [low, high]") {
+  PolicySpec spec = MakeRandomSpec({6, 16, 4}, Activation::kRelu, 8);
+  for (std::size_t j = 0; j < 4; ++j) {
+    spec.action_scale[j] = 100.0f;
+    spec.action_low[j] = -0.25f;
+    spec.action_high[j] = 0.5f;
+  }
+  for (Kernel k : AvailableKernels()) {
+    auto model = PolicyModel::FromSpec(spec, {.kernel = k});
+    REQUIRE(model.ok());
+    auto data = MakePolicyData(*model);
+    REQUIRE(data.ok());
+    pbppo::Rng rng(1);
+    bool low = false, high = false;
+    for (int r = 0; r < 200; ++r) {
+      for (float& o : data->observation()) o = static_cast<float>(3.0 * rng.Normal());
+      REQUIRE(Forward(*model, *data) == ForwardStatus::kOk);
+      for (float a : data->action()) {
+        CHECK(a >= -0.25f);
+        CHECK(a <= 0.5f);
+        low |= a == -0.25f;
+        high |= a == 0.5f;
+      }
+    }
+    CHECK(low);
+    CHECK(high);
+  }
+}
+
+TEST_CASE("data made for one model is refused by another") {
+  const PolicySpec spec = MakeRandomSpec({4, 8, 2}, Activation::kTanh, 1);
+  auto a = PolicyModel::FromSpec(spec);
+  auto b = PolicyModel::FromSpec(spec);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  auto data = MakePolicyData(*a);
+  REQUIRE(data.ok());
+  CHECK(Forward(*b, *data) == ForwardStatus::kWrongModel);
+  CHECK(Forward(*a, *data) == ForwardStatus::kOk);
+}
+
+TEST_CASE("an unavailable kernel is refused at load, not at run time") {
+  const PolicySpec spec = MakeRandomSpec({4, 8, 2}, Activation::kTanh, 1);
+  if (!KernelAvailable(Kernel::kAvx512)) {
+    auto m = PolicyModel::FromSpec(spec, {.kernel = Kernel::kAvx512});
+    REQUIRE_FALSE(m.ok());
+    CHECK(m.error().message == "kernel avx512 is not supported by this CPU");
+  } else {
+    CHECK(PolicyModel::FromSpec(spec, {.kernel = Kernel::kAvx512}).ok());
+  }
+  auto m = PolicyModel::FromSpec(spec);
+  REQUIRE(m.ok());
+  CHECK(m->kernel() == (KernelAvailable(Kernel::kAvx512) ? Kernel::kAvx512 : Kernel::kPortable));
+}

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs every Debian package pbppo-rt needs on a Debian 12 machine.
+# Idempotent: packages already present are skipped; apt runs only when something is missing.
+# The one place where the project's system dependencies are listed.
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build git pkg-config
+  clang-19 libclang-rt-19-dev clang-format-19
+  # libraries
+  libeigen3-dev doctest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
+  libsimbody-dev
+  # plots
+  gnuplot-nox
+  # CAN: tools, DBC decoding, and the QEMU runner for the vcan tests (kernel has no AF_CAN)
+  can-utils python3-can python3-canmatrix
+  qemu-system-x86 busybox-static kmod cpio xz-utils
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done"

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh Debian 12 machine: installs what is missing, builds the
+# optimised and the sanitizer configurations and runs every test. Exit status 0 only if all pass.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+
+stage() { printf '\n==== %s ====\n' "$*"; }
+
+stage "packages"
+bash tools/setup.sh
+
+stage "optimised build (preset default)"
+cmake --preset default >/dev/null
+cmake --build --preset default -j "$jobs"
+stage "tests: optimised build"
+ctest --preset default -j "$jobs"
+
+stage "ASan+UBSan build of the unit tests (preset asan)"
+cmake --preset asan >/dev/null
+cmake --build --preset asan -j "$jobs"
+stage "tests: ASan+UBSan"
+ctest --preset asan -j "$jobs" -L unit
+
+stage "libFuzzer build (preset fuzz, clang-19), corpus replay and a short fuzzing run"
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "$jobs" --target blob_loader_fuzz blob_loader_replay
+ctest --test-dir build/fuzz -R '^fuzz_' --output-on-failure
