@@ -14,7 +14,8 @@ inline void Note() noexcept {
 
 #if defined(PBPPO_SANITIZED)
 // Sanitizers own malloc; they call these hooks on every allocation, operator new included.
-#include <sanitizer/allocator_interface.h>
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
+                                                         void (*free_hook)(const volatile void*));
 namespace {
 void OnMalloc(const volatile void*, std::size_t) {
   Note();

@@ -130,7 +130,7 @@ TEST_CASE("invalid values are refused by the writer, naming the field") {
   expect(s, "policy blob: layer 0 weight: has 34 values, expected 35");
 }
 
-TEST_CASE("files are written atomically and read back; errors name the path") {
+TEST_CASE("files are written atomically and read back, errors name the path") {
   const std::string dir = pbppo::test::ScratchDir("blob_files");
   const std::string path = dir + "/p.blob";
   REQUIRE(WriteBlobFile(path, Small()).ok());
@@ -156,7 +156,7 @@ TEST_CASE("files are written atomically and read back; errors name the path") {
   REQUIRE_FALSE(missing.ok());
   CHECK(missing.error().message.find(dir + "/nope.blob: cannot open") == 0);
 
-  std::ofstream(dir + "/junk.blob") << "this is not a policy";
+  std::ofstream(dir + "/junk.blob") << "this is not a policy blob, only a text that is longer than a header";
   auto junk = ReadBlobFile(dir + "/junk.blob");
   REQUIRE_FALSE(junk.ok());
   CHECK(junk.error().message ==

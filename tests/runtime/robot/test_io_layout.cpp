@@ -1,0 +1,111 @@
+#include <doctest/doctest.h>
+
+#include "runtime/robot/io_layout.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo::robot;
+
+namespace {
+const char* kGood = R"(
+robot: testbot
+observations:
+  - {name: yaw, signal: yaw_rad, unit: rad, scale: 0.5, clip: 2}
+  - {name: range, unit: m, history: 3, offset: 1.5}
+actions:
+  - {name: v, command: surge_mps, unit: m/s, scale: 0.5, offset: 0.5, low: 0, high: 1}
+)";
+
+std::string ErrorOf(const std::string& text) {
+  auto r = ParseIoLayout(text, "t.yaml");
+  return r.ok() ? std::string() : r.error().message;
+}
+}  // namespace
+
+TEST_CASE("a layout parses with defaults, history expanded") {
+  auto l = ParseIoLayout(kGood, "t.yaml");
+  REQUIRE_MESSAGE(l.ok(), l.error().message);
+  CHECK(l->robot == "testbot");
+  CHECK(l->observation_size() == 4);
+  CHECK(l->action_size() == 1);
+  CHECK(l->ObservationNames() == std::vector<std::string>{"yaw", "range", "range@-1", "range@-2"});
+  CHECK(l->observations[1].signal == "range");
+  CHECK(l->observations[1].offset == 1.5);
+  CHECK(l->actions[0].high == 1.0);
+}
+
+TEST_CASE("the hash covers every field but not formatting") {
+  auto a = ParseIoLayout(kGood, "a");
+  std::string reformatted = std::string("# comment\n") + kGood;
+  auto b = ParseIoLayout(reformatted, "b");
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  CHECK(a->Hash() == b->Hash());
+  IoLayout c = *a;
+  c.observations[0].scale = 0.25;
+  CHECK(c.Hash() != a->Hash());
+  c = *a;
+  c.actions[0].high = 2;
+  CHECK(c.Hash() != a->Hash());
+  c = *a;
+  c.observations[1].history = 2;
+  CHECK(c.Hash() != a->Hash());
+}
+
+TEST_CASE("bad layouts are refused naming the file, element and field") {
+  CHECK(ErrorOf("robot: x\nobservations: []\nactions: [{name: a}]") ==
+        "t.yaml: observations: expected a non-empty list");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, scale: fast}]\nactions: [{name: b}]") ==
+        "t.yaml: observations[0].scale: 'fast' is not a number");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, clip: -1}]\nactions: [{name: b}]") ==
+        "t.yaml: observations[0].clip: -1 is not positive");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, history: 1.5}]\nactions: [{name: b}]") ==
+        "t.yaml: observations[0].history: 1.5 is not an integer in 1..64");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a}, {name: a}]\nactions: [{name: b}]") ==
+        "t.yaml: observations[1].name: 'a' appears twice");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, gain: 2}]\nactions: [{name: b}]") ==
+        "t.yaml: observations[0]: unknown field 'gain'");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b, low: 1, high: 0}]") ==
+        "t.yaml: actions[0]: low 1 is above high 0");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b, high: .nan}]") ==
+        "t.yaml: actions[0].high: '.nan' is not a number");
+  CHECK(ErrorOf("robot: [x\n").rfind("t.yaml: YAML error at line", 0) == 0);
+  CHECK(ErrorOf("- 1\n- 2\n") == "t.yaml: top level: expected a mapping with robot, observations, actions");
+  auto missing = LoadIoLayout("/nonexistent/layout.yaml");
+  REQUIRE_FALSE(missing.ok());
+  CHECK(missing.error().message == "/nonexistent/layout.yaml: cannot open");
+}
+
+TEST_CASE("a policy must match the layout it runs on") {
+  auto l = ParseIoLayout(kGood, "t.yaml");
+  REQUIRE(l.ok());
+  pbppo::policy::PolicySpec spec = pbppo::policy::MakeRandomSpec({4, 8, 1}, pbppo::policy::Activation::kTanh, 1);
+  ApplyLayoutToSpec(*l, spec);
+  CHECK(spec.action_offset[0] == 0.5f);
+  CHECK(CheckPolicyMatchesLayout(spec, *l).ok());
+
+  IoLayout other = *l;
+  other.observations[0].name = "heading";
+  auto st = CheckPolicyMatchesLayout(spec, other);
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message ==
+        "policy does not fit robot layout 'testbot': observation 0 is 'yaw' in the policy, 'heading' in the layout");
+  other = *l;
+  other.observations[0].scale = 2;
+  st = CheckPolicyMatchesLayout(spec, other);
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message.find("same names, but scales") != std::string::npos);
+  other = *l;
+  other.actions.push_back(other.actions[0]);
+  other.actions[1].name = "w";
+  st = CheckPolicyMatchesLayout(spec, other);
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message ==
+        "policy does not fit robot layout 'testbot': the policy gives 1 actions, the layout takes 2");
+}
+
+TEST_CASE("the shipped pendulum layout loads") {
+  auto l = LoadIoLayout(pbppo::test::SourcePath("models/pendulum/io_layout.yaml"));
+  REQUIRE_MESSAGE(l.ok(), l.error().message);
+  CHECK(l->observation_size() == 3);
+  CHECK(l->action_size() == 1);
+}
