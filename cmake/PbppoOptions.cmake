@@ -10,6 +10,14 @@ if(PBPPO_SANITIZE)
   add_compile_definitions(PBPPO_SANITIZED=1)
 endif()
 
+# Fuzzing builds instrument every target for coverage; fuzz executables add the libFuzzer driver.
+if(PBPPO_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "PBPPO_FUZZ needs clang (use the 'fuzz' preset)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link)
+endif()
+
 # Strict warnings, errors on the real-time code (runtime/).
 function(pbppo_strict_warnings target)
   target_compile_options(${target} PRIVATE

@@ -36,7 +36,7 @@ double ActivationRoundoff(Activation a, double fx) {
 
 ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
   std::vector<double> x(s.input_size), e(s.input_size);
-  const double clip = s.obs_clip;
+  const double clip = static_cast<double>(s.obs_clip);
   for (std::size_t i = 0; i < s.input_size; ++i) {
     const double v =
         (static_cast<double>(obs[i]) - static_cast<double>(s.obs_mean[i])) * static_cast<double>(s.obs_inv_std[i]);
@@ -69,7 +69,7 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
       a = std::tanh(a);
       ea += ActivationRoundoff(Activation::kTanh, a);
     }
-    const double sc = s.action_scale[j], off = s.action_offset[j];
+    const double sc = static_cast<double>(s.action_scale[j]), off = static_cast<double>(s.action_offset[j]);
     const double scaled = a * sc + off;
     out.action[j] = std::clamp(scaled, static_cast<double>(s.action_low[j]), static_cast<double>(s.action_high[j]));
     out.error_bound[j] = ea * std::fabs(sc) + 2.0 * kU * (std::fabs(a * sc) + std::fabs(scaled)) + 1e-30;
