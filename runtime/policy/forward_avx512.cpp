@@ -13,22 +13,28 @@ inline __m512 Set(float v) {
 }
 
 // e^x for x in [-87, 88]: x = k ln2 + r, |r| <= ln2/2, degree-7 Taylor for e^r (truncation
-// below 1e-8 relative), then scale by 2^k.
+// below 1e-8 relative) evaluated in Estrin form for a short dependency chain, then 2^k.
 inline __m512 Exp(__m512 x) {
   x = _mm512_min_ps(_mm512_max_ps(x, Set(-87.0f)), Set(88.0f));
   const __m512 k =
       _mm512_roundscale_ps(_mm512_mul_ps(x, Set(1.44269504088896341f)), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
   __m512 r = _mm512_fnmadd_ps(k, Set(0.693359375f), x);
   r = _mm512_fnmadd_ps(k, Set(-2.12194440e-4f), r);
-  __m512 p = Set(1.0f / 5040.0f);
-  p = _mm512_fmadd_ps(p, r, Set(1.0f / 720.0f));
-  p = _mm512_fmadd_ps(p, r, Set(1.0f / 120.0f));
-  p = _mm512_fmadd_ps(p, r, Set(1.0f / 24.0f));
-  p = _mm512_fmadd_ps(p, r, Set(1.0f / 6.0f));
-  p = _mm512_fmadd_ps(p, r, Set(0.5f));
-  p = _mm512_fmadd_ps(p, r, Set(1.0f));
-  p = _mm512_fmadd_ps(p, r, Set(1.0f));
-  return _mm512_scalef_ps(p, k);
+  const __m512 r2 = _mm512_mul_ps(r, r);
+  const __m512 r4 = _mm512_mul_ps(r2, r2);
+  const __m512 p01 = _mm512_fmadd_ps(r, Set(1.0f), Set(1.0f));
+  const __m512 p23 = _mm512_fmadd_ps(r, Set(1.0f / 6.0f), Set(0.5f));
+  const __m512 p45 = _mm512_fmadd_ps(r, Set(1.0f / 120.0f), Set(1.0f / 24.0f));
+  const __m512 p67 = _mm512_fmadd_ps(r, Set(1.0f / 5040.0f), Set(1.0f / 720.0f));
+  const __m512 p03 = _mm512_fmadd_ps(r2, p23, p01);
+  const __m512 p47 = _mm512_fmadd_ps(r2, p67, p45);
+  return _mm512_scalef_ps(_mm512_fmadd_ps(r4, p47, p03), k);
+}
+
+// 1/d for d >= 1: the 14-bit estimate refined by one Newton step (about 2^-27 relative).
+inline __m512 Reciprocal(__m512 d) {
+  const __m512 r = _mm512_rcp14_ps(d);
+  return _mm512_mul_ps(r, _mm512_fnmadd_ps(d, r, Set(2.0f)));
 }
 
 // tanh(x) = sign(x) (1 - 2 / (e^{2|x|} + 1)).
@@ -37,7 +43,7 @@ inline __m512 Tanh(__m512 x) {
   const __m512i xi = _mm512_castps_si512(x);
   const __m512 ax = _mm512_castsi512_ps(_mm512_andnot_si512(sign_mask, xi));
   const __m512 e = Exp(_mm512_add_ps(ax, ax));
-  const __m512 t = _mm512_sub_ps(Set(1.0f), _mm512_div_ps(Set(2.0f), _mm512_add_ps(e, Set(1.0f))));
+  const __m512 t = _mm512_fnmadd_ps(Set(2.0f), Reciprocal(_mm512_add_ps(e, Set(1.0f))), Set(1.0f));
   return _mm512_castsi512_ps(_mm512_or_si512(_mm512_castps_si512(t), _mm512_and_si512(sign_mask, xi)));
 }
 
@@ -55,9 +61,11 @@ inline __m512 Activate(std::uint32_t activation, __m512 y) {
 
 // One tile of NV output vectors over n inputs. S independent accumulator sets over the inputs
 // keep at least 8 FMA chains in flight when the tile is narrow.
-template <unsigned NV, unsigned S>
-inline void Tile(const float* __restrict w, const float* __restrict bias, const float* __restrict x, std::uint32_t n,
+// N > 0: the input count is known at compile time and the loop is unrolled completely.
+template <unsigned NV, unsigned S, unsigned N = 0>
+inline void Tile(const float* __restrict w, const float* __restrict bias, const float* __restrict x, std::uint32_t n_rt,
                  std::uint32_t activation, float* __restrict y) {
+  const std::uint32_t n = N > 0 ? N : n_rt;
   constexpr unsigned kW = NV * 16;
   __m512 acc[S][NV];
 #pragma GCC unroll 8
@@ -68,6 +76,7 @@ inline void Tile(const float* __restrict w, const float* __restrict bias, const 
     for (unsigned k = 0; k < NV; ++k) acc[s][k] = _mm512_setzero_ps();
   }
   std::uint32_t i = 0;
+#pragma GCC unroll 32
   for (; i + S <= n; i += S) {
 #pragma GCC unroll 4
     for (unsigned s = 0; s < S; ++s) {
@@ -83,16 +92,43 @@ inline void Tile(const float* __restrict w, const float* __restrict bias, const 
 #pragma GCC unroll 8
     for (unsigned k = 0; k < NV; ++k) acc[0][k] = _mm512_fmadd_ps(_mm512_load_ps(row + 16 * k), xb, acc[0][k]);
   }
+  // Pairwise reduction of the accumulator sets: log2(S) dependent adds.
 #pragma GCC unroll 4
-  for (unsigned s = 1; s < S; ++s) {
+  for (unsigned step = 1; step < S; step *= 2) {
 #pragma GCC unroll 8
-    for (unsigned k = 0; k < NV; ++k) acc[0][k] = _mm512_add_ps(acc[0][k], acc[s][k]);
+    for (unsigned s = 0; s + step < S; s += 2 * step) {
+#pragma GCC unroll 8
+      for (unsigned k = 0; k < NV; ++k) acc[s][k] = _mm512_add_ps(acc[s][k], acc[s + step][k]);
+    }
   }
 #pragma GCC unroll 8
   for (unsigned k = 0; k < NV; ++k) _mm512_store_ps(y + 16 * k, Activate(activation, acc[0][k]));
 }
 
+// Narrow layers (out <= kRowFormMaxOut): one dot product per output over row-major weights
+// [out][in_pad], reduced horizontally; far shorter than a 16-wide tile of mostly padding.
+void DenseRows(const KernelLayer& l, const float* x, float* y) {
+  const std::uint32_t in_pad = (l.in + 15) / 16 * 16;
+  float out[16] __attribute__((aligned(64))) = {};
+  for (std::uint32_t j = 0; j < l.out; ++j) {
+    const float* row = l.weight + static_cast<std::size_t>(j) * in_pad;
+    __m512 a0 = _mm512_setzero_ps(), a1 = _mm512_setzero_ps();
+    std::uint32_t i = 0;
+    for (; i + 32 <= in_pad; i += 32) {
+      a0 = _mm512_fmadd_ps(_mm512_load_ps(row + i), _mm512_load_ps(x + i), a0);
+      a1 = _mm512_fmadd_ps(_mm512_load_ps(row + i + 16), _mm512_load_ps(x + i + 16), a1);
+    }
+    if (i < in_pad) a0 = _mm512_fmadd_ps(_mm512_load_ps(row + i), _mm512_load_ps(x + i), a0);
+    out[j] = _mm512_reduce_add_ps(_mm512_add_ps(a0, a1));
+  }
+  _mm512_store_ps(y, Activate(l.activation, _mm512_add_ps(_mm512_load_ps(out), _mm512_load_ps(l.bias))));
+}
+
 void Dense(const KernelLayer& l, const float* x, float* y) {
+  if (l.out <= kRowFormMaxOut) {
+    DenseRows(l, x, y);
+    return;
+  }
   const std::uint32_t vectors = l.out_pad / 16;
   const float* w = l.weight;
   for (std::uint32_t v0 = 0; v0 < vectors; v0 += kTileVectors) {
@@ -103,7 +139,15 @@ void Dense(const KernelLayer& l, const float* x, float* y) {
       case 1: Tile<1, 8>(w, b, x, l.in, l.activation, out); break;
       case 2: Tile<2, 4>(w, b, x, l.in, l.activation, out); break;
       case 3: Tile<3, 2>(w, b, x, l.in, l.activation, out); break;
-      case 4: Tile<4, 2>(w, b, x, l.in, l.activation, out); break;
+      case 4:
+        if (l.in == 64) {
+          Tile<4, 2, 64>(w, b, x, l.in, l.activation, out);
+        } else if (l.in == 24) {
+          Tile<4, 2, 24>(w, b, x, l.in, l.activation, out);
+        } else {
+          Tile<4, 2>(w, b, x, l.in, l.activation, out);
+        }
+        break;
       case 5: Tile<5, 1>(w, b, x, l.in, l.activation, out); break;
       case 6: Tile<6, 1>(w, b, x, l.in, l.activation, out); break;
       case 7: Tile<7, 1>(w, b, x, l.in, l.activation, out); break;

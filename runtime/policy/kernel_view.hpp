@@ -7,12 +7,15 @@
 
 namespace pbppo::policy::detail {
 
-inline constexpr std::uint32_t kLanes = 16;       // floats per 64-byte vector
-inline constexpr std::uint32_t kTileVectors = 8;  // output vectors per AVX-512 tile
+inline constexpr std::uint32_t kLanes = 16;         // floats per 64-byte vector
+inline constexpr std::uint32_t kTileVectors = 8;    // output vectors per AVX-512 tile
+inline constexpr std::uint32_t kRowFormMaxOut = 4;  // avx512: narrower layers use row dot products
 
 struct KernelLayer {
-  const float* weight;  // portable: row-major [out][in]; avx512: tiles [tile][in][vectors*16]
-  const float* bias;    // [out_pad], zero beyond out
+  // portable: row-major [out][in]; avx512: tiles [tile][in][vectors*16], or for layers of at
+  // most kRowFormMaxOut outputs row-major [out][in rounded up to 16], zero-padded
+  const float* weight;
+  const float* bias;  // [out_pad], zero beyond out
   std::uint32_t in;
   std::uint32_t out;
   std::uint32_t out_pad;  // out rounded up to 16

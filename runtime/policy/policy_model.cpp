@@ -34,6 +34,15 @@ void PackTiles(const DenseLayer& l, std::uint32_t out_pad, float* dst) {
   }
 }
 
+// Row-major [out][in rounded up to 16]; the padding columns stay zero.
+void PackRows(const DenseLayer& l, float* dst) {
+  const std::uint32_t in_pad = Pad(l.in);
+  for (std::uint32_t o = 0; o < l.out; ++o) {
+    std::memcpy(dst + static_cast<std::size_t>(o) * in_pad, l.weight.data() + static_cast<std::size_t>(o) * l.in,
+                l.in * sizeof(float));
+  }
+}
+
 }  // namespace
 
 const char* ToString(Kernel k) noexcept {
@@ -93,8 +102,12 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   for (const DenseLayer& l : spec.layers) {
     const std::uint32_t lp = Pad(l.out);
     max_pad = std::max(max_pad, lp);
-    const std::size_t rows = kernel == Kernel::kAvx512 ? lp : l.out;
-    off_w.push_back(plan.Floats(rows * l.in));
+    std::size_t floats = static_cast<std::size_t>(l.out) * l.in;
+    if (kernel == Kernel::kAvx512) {
+      floats = l.out <= detail::kRowFormMaxOut ? static_cast<std::size_t>(l.out) * Pad(l.in)
+                                               : static_cast<std::size_t>(lp) * l.in;
+    }
+    off_w.push_back(plan.Floats(floats));
     off_b.push_back(plan.Floats(lp));
   }
   m.params_ = AlignedBlock(plan.bytes());
@@ -112,7 +125,9 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   for (std::size_t li = 0; li < spec.layers.size(); ++li) {
     const DenseLayer& l = spec.layers[li];
     const std::uint32_t lp = Pad(l.out);
-    if (kernel == Kernel::kAvx512) {
+    if (kernel == Kernel::kAvx512 && l.out <= detail::kRowFormMaxOut) {
+      PackRows(l, at(off_w[li]));
+    } else if (kernel == Kernel::kAvx512) {
       PackTiles(l, lp, at(off_w[li]));
     } else {
       copy(l.weight, at(off_w[li]));

@@ -80,8 +80,8 @@ TEST_CASE("every kernel reproduces the golden vectors within the float32 error b
       REQUIRE(model.ok());
       REQUIRE(model->kernel() == k);
       const Deviation d = Check(*model, g);
-      MESSAGE(shape.name << " " << ToString(k) << ": max |error| " << d.worst_abs << ", " << d.worst_ratio
-                         << " of the bound");
+      const std::string what = std::string(shape.name) + " " + ToString(k);
+      MESSAGE(what << ": max |error| " << d.worst_abs << ", " << d.worst_ratio << " of the bound");
     }
   }
 }
