@@ -22,6 +22,12 @@ cmake --build --preset asan -j "$jobs"
 stage "tests: ASan+UBSan"
 ctest --preset asan -j "$jobs" -L unit
 
+stage "ThreadSanitizer build of the unit tests (preset tsan)"
+cmake --preset tsan >/dev/null
+cmake --build --preset tsan -j "$jobs"
+stage "tests: ThreadSanitizer"
+ctest --preset tsan -j "$jobs" -L unit
+
 stage "libFuzzer build (preset fuzz, clang-19), corpus replay and a short fuzzing run"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$jobs" --target blob_loader_fuzz blob_loader_replay
