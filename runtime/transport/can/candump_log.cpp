@@ -97,6 +97,9 @@ bool ParseCandumpLine(std::string_view line, CandumpRecord* out) noexcept {
   rest.remove_prefix(1);
   const std::size_t sp = rest.find(' ');
   if (sp == std::string_view::npos || sp == 0 || sp > 15) return false;
+  for (std::size_t i = 0; i < sp; ++i) {
+    if (rest[i] < 0x21 || rest[i] > 0x7E) return false;  // interface names are printable ASCII
+  }
   std::memcpy(r.iface, rest.data(), sp);
   r.iface[sp] = '\0';
   rest.remove_prefix(sp + 1);
