@@ -64,6 +64,7 @@ TEST_CASE("lines parse back to the same frames") {
   CandumpRecord r;
   CHECK(ParseCandumpLine("(1.5) can0 7FF#R", &r));
   CHECK((r.frame.flags & kFlagRtr) != 0);
+  CHECK_FALSE(ParseCandumpLine(std::string_view("(1.0) vc\0n0 123#00", 18), &r));  // NUL in the interface name
   for (const char* bad :
        {"", "(1.0)", "(1.0) vcan0", "(1.0) vcan0 123", "(1.0) vcan0 800#00", "(x.0) vcan0 123#00", "(1.0) vcan0 123#0",
         "(1.0) vcan0 123#001122334455667788", "(1.0) vcan0 123##1001122334455667788", "(1.0) vcan0 123##4",
