@@ -1,26 +1,49 @@
 // Writes frames made by the C++ encoders for every device of a CAN map, with the values the C++
 // decoders read back, one frame a line:  KIND NAME ID HEXDATA signal=value ...
-// check_dbc.py decodes the same bytes with the DBC and compares. usage: can_vectors CAN_MAP.yaml
+// check_dbc.py decodes the same bytes with the DBC and compares. With a second argument, also
+// writes every frame through CandumpLogger to that file (check_candump.py reads it back with
+// python-can). usage: can_vectors CAN_MAP.yaml [CANDUMP_LOG]
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "runtime/robot/can_map.hpp"
+#include "runtime/transport/can/candump_log.hpp"
 #include "runtime/transport/can/imu_codec.hpp"
 #include "runtime/transport/can/mit_codec.hpp"
 
 using namespace pbppo::can;
 
 namespace {
+pbppo::can::CandumpLogger* g_log = nullptr;
+std::uint64_t g_time_ns = 1700000000000000000ull;
+
 void Hex(const CanFrame& f) {
   for (int i = 0; i < f.len; ++i) std::printf("%02X", f.data[i]);
+  if (g_log != nullptr) {
+    CanFrame c = f;
+    c.timestamp_ns = (g_time_ns += 1000);
+    while (!g_log->Push(0, c)) {
+    }  // not real-time: wait for room rather than drop
+  }
 }
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: can_vectors CAN_MAP.yaml\n");
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: can_vectors CAN_MAP.yaml [CANDUMP_LOG]\n");
     return 2;
+  }
+  std::unique_ptr<CandumpLogger> log;
+  if (argc == 3) {
+    auto l = CandumpLogger::Open(argv[2], {"vcan0"}, 256);
+    if (!l) {
+      std::fprintf(stderr, "%s\n", l.error().message.c_str());
+      return 1;
+    }
+    log = std::move(*l);
+    g_log = log.get();
   }
   auto map = pbppo::robot::LoadCanMap(argv[1]);
   if (!map) {
@@ -93,6 +116,10 @@ int main(int argc, char** argv) {
           e.quat_wxyz[0], e.quat_wxyz[1], e.quat_wxyz[2], e.quat_wxyz[3], e.gyro_rad_s[0], e.gyro_rad_s[1],
           e.gyro_rad_s[2], e.accel_m_s2[0], e.accel_m_s2[1], e.accel_m_s2[2], e.seq, e.status);
     }
+  }
+  if (log) {
+    log->Stop();
+    if (log->write_errors() != 0) return 1;
   }
   return 0;
 }
