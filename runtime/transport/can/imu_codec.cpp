@@ -106,7 +106,7 @@ bool DecodeImuFd(const std::uint8_t* d, std::uint8_t len, ImuSample* out) noexce
 bool FeedImuClassic(ImuAssembler& a, unsigned index, const std::uint8_t* data, std::uint8_t len,
                     ImuSample* out) noexcept {
   if (index > 2 || len != kImuClassicLen) return false;
-  const std::uint8_t expected = index == 0 ? 0 : static_cast<std::uint8_t>((1u << index) - 1u);
+  const auto expected = static_cast<std::uint8_t>(index == 0 ? 0u : (1u << index) - 1u);
   if (a.have != expected) {
     // A frame out of order: the sample under way is lost; frame 0 starts a new one.
     if (a.have != 0) ++a.broken;

@@ -171,6 +171,7 @@ SocketCanBus::~SocketCanBus() {
 }
 
 std::size_t SocketCanBus::Receive(std::span<CanFrame> out) noexcept {
+  if (out.empty()) return 0;
   Buffers& b = *buf_;
   std::size_t n = 0;
   while (n < out.size()) {
