@@ -1,0 +1,39 @@
+// libFuzzer target: MIT command and special-frame decoders (the motor side). Input: one selector
+// byte (which range), then the payload. An 8-byte payload is either a special frame or a command
+// inside the range whose re-encoding gives the same bytes; other lengths are refused.
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "tests/fuzz/can_mit_fuzz_common.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace pbppo;
+  if (size < 1 || size > 1 + can::kFdMaxLen) return 0;
+  const can::MitRange r = fuzz::FuzzRange(data[0]);
+  const auto len = static_cast<std::uint8_t>(size - 1);
+  std::uint8_t payload[can::kFdMaxLen] = {};
+  std::memcpy(payload, data + 1, len);
+  can::MitSpecial special{};
+  const bool is_special = can::DecodeMitSpecial(payload, len, &special);
+  can::MitCommand c;
+  const bool is_command = can::DecodeMitCommand(r, payload, len, &c);
+  fuzz::Require(!(is_special && is_command));
+  fuzz::Require((is_special || is_command) == (len == can::kMitCommandLen));
+  if (is_special) {
+    std::uint8_t again[8];
+    can::EncodeMitSpecial(special, again);
+    fuzz::Require(std::memcmp(again, payload, 8) == 0);
+    return 0;
+  }
+  if (!is_command) return 0;
+  fuzz::Require(fuzz::Within(c.q_rad, r.p_min, r.p_max));
+  fuzz::Require(fuzz::Within(c.dq_rad_s, r.v_min, r.v_max));
+  fuzz::Require(fuzz::Within(c.kp_nm_rad, r.kp_min, r.kp_max));
+  fuzz::Require(fuzz::Within(c.kd_nm_s_rad, r.kd_min, r.kd_max));
+  fuzz::Require(fuzz::Within(c.tau_ff_nm, r.t_min, r.t_max));
+  std::uint8_t again[8];
+  fuzz::Require(can::EncodeMitCommand(r, c, again) == 0);
+  fuzz::Require(std::memcmp(again, payload, 8) == 0);
+  return 0;
+}
