@@ -39,6 +39,11 @@ stage "tests: ThreadSanitizer"
 ctest --preset tsan -j "$jobs" -L unit
 
 stage "libFuzzer build (preset fuzz, clang-19), corpus replay and a short fuzzing run"
-cmake --preset fuzz >/dev/null
-cmake --build --preset fuzz -j "$jobs" --target blob_loader_fuzz blob_loader_replay
-ctest --test-dir build/fuzz -R '^fuzz_' --output-on-failure
+cmake --preset fuzz -DPBPPO_FUZZ_SECONDS=30 >/dev/null
+targets=()
+for corpus in tests/fuzz/corpus/*/; do
+  name=$(basename "$corpus")
+  targets+=("${name}_fuzz" "${name}_replay")
+done
+cmake --build --preset fuzz -j "$jobs" --target "${targets[@]}"
+ctest --test-dir build/fuzz -R '^fuzz_' -j "$jobs" --output-on-failure
