@@ -1,0 +1,37 @@
+// A fixed set of worker threads that run one function on every worker index and wait for all:
+// index 0 runs on the calling thread. Work is assigned by index, never by timing, so results
+// do not depend on scheduling.
+#pragma once
+
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace pbppo::trainer {
+
+class WorkerPool {
+ public:
+  explicit WorkerPool(int threads);
+  ~WorkerPool();
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  int size() const noexcept { return size_; }
+  // Runs fn(0) ... fn(size() - 1) concurrently and returns when all have finished.
+  void Run(const std::function<void(int)>& fn);
+
+ private:
+  void Loop(int index);
+  int size_;
+  std::vector<std::thread> threads_;
+  std::mutex mu_;
+  std::condition_variable start_cv_, done_cv_;
+  const std::function<void(int)>* job_ = nullptr;
+  unsigned long generation_ = 0;
+  int remaining_ = 0;
+  bool quit_ = false;
+};
+
+}  // namespace pbppo::trainer
