@@ -40,6 +40,13 @@ std::uint64_t Mix(std::uint64_t a, std::uint64_t b) {
   return z ^ (z >> 31);
 }
 
+// In a fixed order, independent of alignment and vector width.
+double SquaredNorm(const Vec<float>& v) {
+  double s = 0;
+  for (Eigen::Index i = 0; i < v.size(); ++i) s += static_cast<double>(v[i]) * static_cast<double>(v[i]);
+  return s;
+}
+
 std::string GitRevision() {
   std::string rev;
   FILE* p = ::popen("git -C '" PBPPO_SOURCE_DIR_FOR_GIT "' rev-parse --short=12 HEAD 2>/dev/null", "r");
@@ -89,7 +96,8 @@ class Trainer {
   int d_ = 0, a_ = 0, N_ = 0, T_ = 0;
   GaussianPolicy<float> pol_;
   Mlp<float> value_;
-  std::vector<float> pp_, pv_, gp_, gv_;
+  // Eigen-aligned storage: vectorised code then sees the same alignment on every run.
+  Vec<float> pp_, pv_, gp_, gv_;
   Adam<float> adam_p_, adam_v_;
   Rng rng_;
   std::vector<std::unique_ptr<envs::Env>> envs_;
@@ -154,17 +162,17 @@ void Trainer::Setup() {
   vw.push_back(1);
   pol_ = GaussianPolicy<float>{Mlp<float>(MlpShape{pw, c_.activation, policy::Activation::kIdentity}), a_};
   value_ = Mlp<float>(MlpShape{vw, c_.activation, policy::Activation::kIdentity});
-  pp_.assign(pol_.size(), 0.f);
-  pv_.assign(value_.size(), 0.f);
-  gp_.assign(pol_.size(), 0.f);
-  gv_.assign(value_.size(), 0.f);
+  pp_ = Vec<float>::Zero(static_cast<Eigen::Index>(pol_.size()));
+  pv_ = Vec<float>::Zero(static_cast<Eigen::Index>(value_.size()));
+  gp_ = Vec<float>::Zero(static_cast<Eigen::Index>(pol_.size()));
+  gv_ = Vec<float>::Zero(static_cast<Eigen::Index>(value_.size()));
   Rng init(Mix(c_.seed, 1));
   pol_.mean.InitOrthogonal(pp_.data(), init, std::sqrt(2.0), 0.01);
   value_.InitOrthogonal(pv_.data(), init, std::sqrt(2.0), 1.0);
   for (int j = 0; j < a_; ++j)
-    pp_[pol_.log_std_offset() + static_cast<std::size_t>(j)] = static_cast<float>(c_.log_std_init);
-  adam_p_ = Adam<float>(pp_.size(), 1e-5);
-  adam_v_ = Adam<float>(pv_.size(), 1e-5);
+    pp_[static_cast<Eigen::Index>(pol_.log_std_offset()) + j] = static_cast<float>(c_.log_std_init);
+  adam_p_ = Adam<float>(static_cast<std::size_t>(pp_.size()), 1e-5);
+  adam_v_ = Adam<float>(static_cast<std::size_t>(pv_.size()), 1e-5);
 
   obs_rms_ = RunningMeanStd(d_);
   ret_rms_ = RunningMeanStd(1);
@@ -373,12 +381,10 @@ void Trainer::Update(double eps, IterationStats& st) {
       ent += ps.entropy;
       kl += ps.approx_kl;
       clipfrac += ps.clip_fraction;
-      sq[k & 1][0] =
-          static_cast<double>(Eigen::Map<Vec<float>>(gp_.data(), static_cast<long>(gp_.size())).squaredNorm());
+      sq[k & 1][0] = SquaredNorm(gp_);
       if (sequential_value) {
         vloss += ValueLossAndGrad(value_, pv_.data(), o, rt.data(), ov.data(), c_.clip_vf, c_.vf_coef, wsv, gv_.data());
-        sq[k & 1][1] =
-            static_cast<double>(Eigen::Map<Vec<float>>(gv_.data(), static_cast<long>(gv_.size())).squaredNorm());
+        sq[k & 1][1] = SquaredNorm(gv_);
       } else {
         sync.arrive_and_wait();
       }
@@ -402,8 +408,7 @@ void Trainer::Update(double eps, IterationStats& st) {
         ov[static_cast<std::size_t>(j)] = values_[static_cast<std::size_t>(i)];
       }
       vloss += ValueLossAndGrad(value_, pv_.data(), o, rt.data(), ov.data(), c_.clip_vf, c_.vf_coef, wsv, gv_.data());
-      sq[k & 1][1] =
-          static_cast<double>(Eigen::Map<Vec<float>>(gv_.data(), static_cast<long>(gv_.size())).squaredNorm());
+      sq[k & 1][1] = SquaredNorm(gv_);
       sync.arrive_and_wait();
       const auto [norm, scale] = clip_scale(k);
       (void)norm;
@@ -428,7 +433,7 @@ void Trainer::Update(double eps, IterationStats& st) {
   st.value_loss = vloss / m;
   st.grad_norm = gnorm / m;
   double ls = 0;
-  for (int j = 0; j < a_; ++j) ls += pp_[pol_.log_std_offset() + static_cast<std::size_t>(j)];
+  for (int j = 0; j < a_; ++j) ls += pp_[static_cast<Eigen::Index>(pol_.log_std_offset()) + j];
   st.log_std_mean = ls / a_;
 }
 
