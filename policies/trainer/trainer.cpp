@@ -89,6 +89,7 @@ class Trainer {
   void Update(double eps, IterationStats& st);
   double Evaluate(int iteration, std::uint64_t* steps);
   policy::PolicySpec Freeze(double final_return) const;
+  double FreezeCheck(const policy::PolicySpec& spec);
   Status WriteCheckpoint(double final_return, std::uint64_t env_steps);
   std::string CsvHeader() const;
   std::string CsvRow(const IterationStats& s) const;
@@ -514,6 +515,27 @@ policy::PolicySpec Trainer::Freeze(double final_return) const {
   return s;
 }
 
+double Trainer::FreezeCheck(const policy::PolicySpec& spec) {
+  typename Mlp<float>::Workspace ws;
+  Mat<float> x(d_, 1);
+  double worst = 0;
+  const long B = static_cast<long>(T_) * N_;
+  for (long k = 0; k < 16; ++k) {
+    const float* raw = raw_obs_.data() + ((k * 7919) % B) * d_;
+    NormalizeInto(raw, x.data());
+    const Mat<float>& mu = pol_.mean.Forward(pp_.data(), x, ws);
+    const policy::ReferenceOutput ref = policy::ReferenceForward(spec, raw);
+    for (int j = 0; j < a_; ++j) {
+      const auto q = static_cast<std::size_t>(j);
+      const double mine = std::clamp(mu(j, 0), spec.action_low[q], spec.action_high[q]);
+      // The trainer's float forward rounds like the runtime's: allow twice the bound, plus 1e-6.
+      const double bound = 2.0 * ref.error_bound[q] + 1e-6;
+      worst = std::max(worst, std::fabs(mine - ref.action[q]) / bound);
+    }
+  }
+  return worst;
+}
+
 std::string Trainer::CsvHeader() const {
   std::ostringstream h;
   h << "iteration,env_steps,eval_steps,total_steps,arm,epsilon,feedback,feedback_before,improved,success_rate,"
@@ -713,6 +735,11 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
   res.steps_per_second = static_cast<double>(env_steps) / res.wall_seconds;
   res.spec = Freeze(res.final_return);
   res.spec.provenance.env_steps = env_steps;
+  res.freeze_check = FreezeCheck(res.spec);
+  if (!(res.freeze_check <= 1.0)) {
+    return MakeError(ErrorCode::kMismatch, "trainer: the frozen policy does not reproduce the trainer's actions (" +
+                                               std::to_string(res.freeze_check) + " x the error bound)");
+  }
   if (!c_.out_dir.empty()) {
     csv.close();
     if (auto s = WriteCheckpoint(res.final_return, env_steps); !s) return s.error();

@@ -92,6 +92,9 @@ struct TrainResult {
   double steps_per_second = 0;  // training steps per wall second, updates included
   bool interrupted = false;
   policy::PolicySpec spec;  // the frozen policy (what the blob holds)
+  // max |trainer's deterministic action - blob reference forward| over observations of the last
+  // rollout, in units of the reference's own error bound (<= 1: the blob acts like the trainer).
+  double freeze_check = 0;
   std::string plots_note;
 };
 

@@ -78,6 +78,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors; the ru
   TrainConfig c = Small();
   c.schedule = ParseSchedule("pbppo", {0.1, 0.2, 0.3}).value();
   c.schedule.eval_episodes = 2;
+  c.normalize_observations = true;
   c.out_dir = out;
   c.plots = false;
   auto r = Train(c);
@@ -85,6 +86,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors; the ru
   // Evaluation steps are counted: 2 episodes of 200 steps before the first update and after each.
   CHECK(r->eval_steps == 2u * 200u * (r->iterations.size() + 1));
   CHECK(r->env_steps == 4096u);
+  CHECK(r->freeze_check <= 1.0);
 
   std::ifstream csv(out + "/log.csv");
   std::string header, line;
@@ -108,6 +110,8 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors; the ru
   CHECK(spec->provenance.env_steps == 4096u);
   CHECK(spec->provenance.clip_schedule.rfind("pbppo ", 0) == 0);
   CHECK(spec->action_low == std::vector<float>{-2.f});
+  CHECK(spec->obs_clip == 10.f);
+  CHECK(spec->obs_mean != std::vector<float>(3, 0.f));
   auto env = envs::MakeEnv("pendulum");
   REQUIRE(env.ok());
   CHECK(robot::CheckPolicyMatchesLayout(spec.value(), (*env)->layout()).ok());
