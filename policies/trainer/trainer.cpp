@@ -1,7 +1,6 @@
 #include "policies/trainer/trainer.hpp"
 
 #include <algorithm>
-#include <barrier>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -355,7 +354,7 @@ void Trainer::Update(double eps, IterationStats& st) {
   double sq[2][2] = {{0, 0}, {0, 0}};
   double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0;
   const bool split = pool_.size() >= 2;
-  std::barrier sync(split ? 2 : 1);
+  SpinBarrier sync(split ? 2 : 1);
 
   auto clip_scale = [&](long k) {
     const double n = std::sqrt(sq[k & 1][0] + sq[k & 1][1]);
@@ -391,7 +390,7 @@ void Trainer::Update(double eps, IterationStats& st) {
         vloss += ValueLossAndGrad(value_, pv_.data(), o, rt.data(), ov.data(), c_.clip_vf, c_.vf_coef, wsv, gv_.data());
         sq[k & 1][1] = SquaredNorm(gv_);
       } else {
-        sync.arrive_and_wait();
+        sync.ArriveAndWait();
       }
       const auto [norm, scale] = clip_scale(k);
       gnorm += norm;
@@ -414,7 +413,7 @@ void Trainer::Update(double eps, IterationStats& st) {
       }
       vloss += ValueLossAndGrad(value_, pv_.data(), o, rt.data(), ov.data(), c_.clip_vf, c_.vf_coef, wsv, gv_.data());
       sq[k & 1][1] = SquaredNorm(gv_);
-      sync.arrive_and_wait();
+      sync.ArriveAndWait();
       const auto [norm, scale] = clip_scale(k);
       (void)norm;
       adam_v_.Step(pv_.data(), gv_.data(), c_.learning_rate, scale);
