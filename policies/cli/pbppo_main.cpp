@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "policies/cli/inspect.hpp"
+#include "policies/cli/train.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"pbppo: train Pb-PPO policies and work with frozen policy blobs"};
@@ -21,6 +22,14 @@ int main(int argc, char** argv) {
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
 
+  pbppo::cli::TrainOptions train_opts;
+  auto* train = app.add_subcommand("train", "Train a policy with PPO and a clip schedule (Pb-PPO)");
+  pbppo::cli::AddTrainOptions(*train, train_opts);
+
+  pbppo::cli::EvalOptions eval_opts;
+  auto* eval = app.add_subcommand("eval", "Run a policy blob on an environment with the runtime forward");
+  pbppo::cli::AddEvalOptions(*eval, eval_opts);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -28,5 +37,7 @@ int main(int argc, char** argv) {
   }
   if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json);
   if (*synth) return pbppo::cli::Synth(synth_opts);
+  if (*train) return pbppo::cli::Train(train_opts);
+  if (*eval) return pbppo::cli::Eval(eval_opts);
   return 2;
 }

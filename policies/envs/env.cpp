@@ -1,0 +1,32 @@
+#include "policies/envs/env.hpp"
+
+#include <cstdlib>
+
+#include "policies/envs/pendulum.hpp"
+
+namespace pbppo::envs {
+
+std::vector<std::string> EnvNames() {
+  return {"pendulum"};
+}
+
+std::string DefaultModelsDir() {
+  if (const char* env = std::getenv("PBPPO_MODELS_DIR"); env != nullptr && env[0] != '\0') return env;
+  return PBPPO_DEFAULT_MODELS_DIR;
+}
+
+Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options) {
+  const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
+  if (name == "pendulum") {
+    auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
+    if (!layout) return std::move(layout).error();
+    auto env = Pendulum::Make(std::move(layout).value());
+    if (!env) return std::move(env).error();
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
+  std::string known;
+  for (const auto& n : EnvNames()) known += (known.empty() ? "" : ", ") + n;
+  return MakeError(ErrorCode::kInvalidValue, "env: '" + name + "' unknown (known: " + known + ")");
+}
+
+}  // namespace pbppo::envs

@@ -1,0 +1,156 @@
+// The PPO losses on one minibatch and their exact gradients (hand-written backprop), templated
+// on the scalar so the same code is checked against finite differences in double.
+//
+// Policy: diagonal Gaussian, mean = MLP(obs), state-independent log-std. Its flat parameter
+// vector is [mean MLP parameters..., log_std (action size)].
+// Loss (stable-baselines3 PPO): L = L_clip + ent_coef * (-mean entropy) + vf_coef * L_value with
+//   L_clip  = -mean_i min(r_i A_i, clamp(r_i, 1 - eps, 1 + eps) A_i),  r_i = exp(logp_i - old_i)
+//   L_value = mean_i (R_i - v'_i)^2,  v'_i = v_i, or old_v_i + clamp(v_i - old_v_i, -c, c) with
+//             value clipping c > 0 (the SB3 form).
+// A is normalised per minibatch, (A - mean) / (std + 1e-8) with the unbiased std, when asked.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "policies/trainer/mlp.hpp"
+
+namespace pbppo::trainer {
+
+struct PolicyLossStats {
+  double policy_loss = 0;  // L_clip
+  double entropy = 0;      // mean entropy of the Gaussian (nats)
+  double approx_kl = 0;    // mean((r - 1) - log r)
+  double clip_fraction = 0;
+};
+
+template <typename S>
+struct GaussianPolicy {
+  Mlp<S> mean;
+  int action_size = 0;
+  std::size_t size() const noexcept { return mean.size() + static_cast<std::size_t>(action_size); }
+  std::size_t log_std_offset() const noexcept { return mean.size(); }
+};
+
+template <typename S>
+struct PolicyWorkspace {
+  typename Mlp<S>::Workspace net;
+  Mat<S> dmean;
+  Vec<S> adv;
+};
+
+// log N(a; mu, diag(exp(log_std))^2) per column.
+template <typename S, typename DA, typename DM>
+S GaussianLogProb(const Eigen::MatrixBase<DA>& a, const Eigen::MatrixBase<DM>& mu, const S* log_std, int col) {
+  const S half_log_2pi = static_cast<S>(0.5 * std::log(2.0 * std::numbers::pi));
+  S lp = 0;
+  for (int j = 0; j < a.rows(); ++j) {
+    const S z = (a(j, col) - mu(j, col)) * std::exp(-log_std[j]);
+    lp += S(-0.5) * z * z - log_std[j] - half_log_2pi;
+  }
+  return lp;
+}
+
+template <typename S>
+S GaussianEntropy(const S* log_std, int n) {
+  const S c = static_cast<S>(0.5 + 0.5 * std::log(2.0 * std::numbers::pi));
+  S h = 0;
+  for (int j = 0; j < n; ++j) h += log_std[j] + c;
+  return h;
+}
+
+// Policy part of the loss, L_clip + ent_coef * (-entropy), and its gradient into `grad`
+// (policy.size() elements, overwritten).
+template <typename S, typename DO, typename DA>
+PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, const Eigen::MatrixBase<DO>& obs,
+                                  const Eigen::MatrixBase<DA>& actions, const S* old_logp, const S* advantages,
+                                  double clip_eps, double ent_coef, bool normalize_advantages, PolicyWorkspace<S>& ws,
+                                  S* grad) {
+  const int B = static_cast<int>(obs.cols());
+  const int A = pol.action_size;
+  const S* log_std = p + pol.log_std_offset();
+  const Mat<S>& mu = pol.mean.Forward(p, obs, ws.net);
+
+  ws.adv = Eigen::Map<const Vec<S>>(advantages, B);
+  if (normalize_advantages && B > 1) {
+    const S m = ws.adv.mean();
+    const S var = (ws.adv.array() - m).square().sum() / static_cast<S>(B - 1);
+    ws.adv = (ws.adv.array() - m) / (std::sqrt(var) + static_cast<S>(1e-8));
+  }
+
+  const S eps = static_cast<S>(clip_eps);
+  const S inv_b = S(1) / static_cast<S>(B);
+  S* g_log_std = grad + pol.log_std_offset();
+  for (int j = 0; j < A; ++j) g_log_std[j] = 0;
+  ws.dmean.resize(A, B);
+  double loss = 0, kl = 0, clipped = 0;
+  for (int i = 0; i < B; ++i) {
+    S lp = 0;
+    for (int j = 0; j < A; ++j) {
+      const S z = (actions(j, i) - mu(j, i)) * std::exp(-log_std[j]);
+      lp += S(-0.5) * z * z - log_std[j];
+    }
+    lp -= static_cast<S>(A) * static_cast<S>(0.5 * std::log(2.0 * std::numbers::pi));
+    const S log_ratio = lp - old_logp[i];
+    const S r = std::exp(log_ratio);
+    const S adv = ws.adv[i];
+    const S u1 = r * adv;
+    const S u2 = std::clamp(r, S(1) - eps, S(1) + eps) * adv;
+    loss -= static_cast<double>(std::min(u1, u2));
+    kl += static_cast<double>((r - S(1)) - log_ratio);
+    if (std::fabs(r - S(1)) > eps) clipped += 1;
+    // d L_clip / d logp_i: the unclipped branch carries -r A / B, the clipped one nothing.
+    const S g = u1 <= u2 ? -u1 * inv_b : S(0);
+    for (int j = 0; j < A; ++j) {
+      const S inv_std = std::exp(-log_std[j]);
+      const S z = (actions(j, i) - mu(j, i)) * inv_std;
+      ws.dmean(j, i) = g * z * inv_std;
+      g_log_std[j] += g * (z * z - S(1));
+    }
+  }
+  for (int j = 0; j < A; ++j) g_log_std[j] -= static_cast<S>(ent_coef);
+  pol.mean.Backward(p, obs, ws.net, ws.dmean, grad);
+
+  PolicyLossStats st;
+  st.policy_loss = loss / B;
+  st.entropy = static_cast<double>(GaussianEntropy(log_std, A));
+  st.approx_kl = kl / B;
+  st.clip_fraction = clipped / B;
+  return st;
+}
+
+template <typename S>
+struct ValueWorkspace {
+  typename Mlp<S>::Workspace net;
+  Mat<S> dv;
+};
+
+// vf_coef * L_value and its gradient into `grad` (value.size() elements, overwritten). Returns
+// L_value (without the coefficient).
+template <typename S, typename DO>
+double ValueLossAndGrad(const Mlp<S>& value, const S* p, const Eigen::MatrixBase<DO>& obs, const S* returns,
+                        const S* old_values, double clip_vf, double vf_coef, ValueWorkspace<S>& ws, S* grad) {
+  const int B = static_cast<int>(obs.cols());
+  const Mat<S>& v = value.Forward(p, obs, ws.net);
+  ws.dv.resize(1, B);
+  const S c = static_cast<S>(clip_vf);
+  const S k = static_cast<S>(2.0 * vf_coef / B);
+  double loss = 0;
+  for (int i = 0; i < B; ++i) {
+    S pred = v(0, i);
+    S pass = 1;
+    if (clip_vf > 0) {
+      const S diff = v(0, i) - old_values[i];
+      if (diff > c || diff < -c) pass = 0;
+      pred = old_values[i] + std::clamp(diff, -c, c);
+    }
+    const S e = pred - returns[i];
+    loss += static_cast<double>(e * e);
+    ws.dv(0, i) = k * e * pass;
+  }
+  value.Backward(p, obs, ws.net, ws.dv, grad);
+  return loss / B;
+}
+
+}  // namespace pbppo::trainer

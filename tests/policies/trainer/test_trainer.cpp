@@ -1,0 +1,166 @@
+// The trainer end to end on Pendulum: determinism, real learning on a small budget, the files
+// it writes (log, summary, blob + golden vectors that the runtime loads), and its errors.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "policies/envs/env.hpp"
+#include "policies/trainer/trainer.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/policy/policy_model.hpp"
+#include "runtime/policy/reference.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace pbppo::trainer {
+namespace {
+
+TrainConfig Small() {
+  TrainConfig c;
+  c.num_envs = 4;
+  c.rollout_steps = 256;
+  c.total_steps = 4096;
+  c.minibatch = 64;
+  c.epochs = 3;
+  c.seed = 3;
+  return c;
+}
+
+TEST_CASE("same seed and thread count give a bit-identical run") {
+  for (int threads : {1, 2}) {
+    TrainConfig c = Small();
+    c.threads = threads;
+    c.normalize_observations = true;
+    c.scale_rewards = true;
+    auto a = Train(c);
+    auto b = Train(c);
+    REQUIRE(a.ok());
+    REQUIRE(b.ok());
+    REQUIRE(a->spec.layers.size() == b->spec.layers.size());
+    for (std::size_t l = 0; l < a->spec.layers.size(); ++l) {
+      CHECK(a->spec.layers[l].weight == b->spec.layers[l].weight);
+      CHECK(a->spec.layers[l].bias == b->spec.layers[l].bias);
+    }
+    CHECK(a->spec.obs_mean == b->spec.obs_mean);
+    REQUIRE(a->iterations.size() == b->iterations.size());
+    for (std::size_t i = 0; i < a->iterations.size(); ++i) {
+      CHECK(a->iterations[i].approx_kl == b->iterations[i].approx_kl);
+      CHECK(a->iterations[i].value_loss == b->iterations[i].value_loss);
+    }
+    c.seed = 4;
+    auto other = Train(c);
+    REQUIRE(other.ok());
+    CHECK(other->spec.layers[0].weight != a->spec.layers[0].weight);
+  }
+}
+
+TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)") {
+  TrainConfig c;
+  c.num_envs = 4;
+  c.rollout_steps = 1024;
+  c.gamma = 0.9;
+  c.learning_rate = 1e-3;
+  c.total_steps = 61440;
+  c.seed = 1;
+  auto r = Train(c);
+  REQUIRE(r.ok());
+  const double first = r->iterations.front().train_return;
+  MESSAGE("first rollout return " << first << ", last-100 return " << r->final_return);
+  CHECK(first < -900);            // a random policy
+  CHECK(r->final_return > -600);  // real progress, far above random
+}
+
+TEST_CASE("a bandit run writes the log, summary, blob and golden vectors; the runtime loads the blob") {
+  const std::string out = test::ScratchDir("trainer_files") + "/run";
+  TrainConfig c = Small();
+  c.schedule = ParseSchedule("pbppo", {0.1, 0.2, 0.3}).value();
+  c.schedule.eval_episodes = 2;
+  c.normalize_observations = true;
+  c.out_dir = out;
+  c.plots = false;
+  auto r = Train(c);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  // Evaluation steps are counted: 2 episodes of 200 steps before the first update and after each.
+  CHECK(r->eval_steps == 2u * 200u * (r->iterations.size() + 1));
+  CHECK(r->env_steps == 4096u);
+  CHECK(r->freeze_check <= 1.0);
+
+  std::ifstream csv(out + "/log.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  CHECK(header.find("epsilon") != std::string::npos);
+  CHECK(header.find("arm2_bonus") != std::string::npos);
+  CHECK(header.find("explained_variance") != std::string::npos);
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  CHECK(rows == static_cast<int>(r->iterations.size()));
+
+  std::ifstream js(out + "/summary.json");
+  const auto j = nlohmann::json::parse(js);
+  CHECK(j["total_env_steps"].get<std::uint64_t>() == r->env_steps + r->eval_steps);
+  CHECK(j["arm_pulls"].size() == 3);
+
+  auto spec = policy::ReadBlobFile(out + "/policy.blob");
+  REQUIRE(spec.ok());
+  CHECK(spec->provenance.environment == "pendulum");
+  CHECK(spec->provenance.seed == 3);
+  CHECK(spec->provenance.env_steps == 4096u);
+  CHECK(spec->provenance.clip_schedule.rfind("pbppo ", 0) == 0);
+  CHECK(spec->action_low == std::vector<float>{-2.f});
+  CHECK(spec->obs_clip == 10.f);
+  CHECK(spec->obs_mean != std::vector<float>(3, 0.f));
+  auto env = envs::MakeEnv("pendulum");
+  REQUIRE(env.ok());
+  CHECK(robot::CheckPolicyMatchesLayout(spec.value(), (*env)->layout()).ok());
+  CHECK(std::filesystem::exists(out + "/policy.golden"));
+
+  // The runtime forward gives the trainer's deterministic action (the Gaussian mean).
+  auto model = policy::PolicyModel::FromFile(out + "/policy.blob");
+  REQUIRE(model.ok());
+  auto data = policy::MakePolicyData(model.value());
+  REQUIRE(data.ok());
+  const float obs[3] = {0.3f, -0.95f, 1.5f};
+  std::copy(obs, obs + 3, data->observation().begin());
+  REQUIRE(policy::Forward(model.value(), data.value()) == policy::ForwardStatus::kOk);
+  const auto ref = policy::ReferenceForward(spec.value(), obs);
+  CHECK(std::fabs(data->action()[0] - ref.action[0]) <= ref.error_bound[0] + 1e-6);
+}
+
+TEST_CASE("trainer errors name the field and value") {
+  TrainConfig c = Small();
+  c.env = "cartpole";
+  CHECK(Train(c).error().message.find("'cartpole' unknown") != std::string::npos);
+  c = Small();
+  c.num_envs = 0;
+  CHECK(Train(c).error().message.find("--envs: 0") != std::string::npos);
+  c = Small();
+  c.schedule.arms = {1.5};
+  CHECK(Train(c).error().message.find("1.5") != std::string::npos);
+  c = Small();
+  const std::string dir = test::ScratchDir("trainer_unwritable");
+  std::ofstream(dir + "/file") << "x";
+  c.out_dir = dir + "/file/run";
+  auto r = Train(c);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("--out") != std::string::npos);
+}
+
+TEST_CASE("a stop request ends the run cleanly with a blob") {
+  const std::string out = test::ScratchDir("trainer_stop") + "/run";
+  std::atomic<bool> stop{true};
+  TrainConfig c = Small();
+  c.out_dir = out;
+  c.plots = false;
+  c.stop = &stop;
+  auto r = Train(c);
+  REQUIRE(r.ok());
+  CHECK(r->interrupted);
+  CHECK(r->iterations.size() == 1);
+  CHECK(policy::ReadBlobFile(out + "/policy.blob").ok());
+}
+
+}  // namespace
+}  // namespace pbppo::trainer
