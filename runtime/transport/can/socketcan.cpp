@@ -4,6 +4,7 @@
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
 #include <net/if.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -168,6 +169,24 @@ Result<std::unique_ptr<SocketCanBus>> SocketCanBus::Open(const SocketCanOptions&
 
 SocketCanBus::~SocketCanBus() {
   if (fd_ >= 0) ::close(fd_);
+}
+
+std::size_t SocketCanBus::ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept {
+  std::size_t got = Receive(out);
+  if (got >= want || got >= out.size()) return got;
+  timespec t0{};
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  while (got < want && got < out.size()) {
+    timespec t{};
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    const std::int64_t elapsed = (t.tv_sec - t0.tv_sec) * 1000000000LL + (t.tv_nsec - t0.tv_nsec);
+    if (elapsed >= timeout_ns) break;
+    pollfd p{fd_, POLLIN, 0};
+    const std::int64_t left_ms = (timeout_ns - elapsed + 999999) / 1000000;
+    (void)poll(&p, 1, static_cast<int>(left_ms > 1000 ? 1000 : left_ms));
+    got += Receive(out.subspan(got));
+  }
+  return got;
 }
 
 std::size_t SocketCanBus::Receive(std::span<CanFrame> out) noexcept {

@@ -42,6 +42,9 @@ class SocketCanBus {
   // receive time); error frames are decoded into stats() and also returned when keep_error_frames.
   // Returns the number of frames written to `out`.
   std::size_t Receive(std::span<CanFrame> out) noexcept;
+  // Lock-step helper: drains like Receive, waiting (poll) until at least `want` frames arrived,
+  // `out` is full or `timeout_ns` of wall time has passed. Returns the number of frames written.
+  std::size_t ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept;
   // Sends the frames with one sendmmsg per tx_batch; frames the kernel refuses (ENOBUFS, EAGAIN)
   // are counted as dropped, never retried. Returns the number accepted.
   std::size_t Send(std::span<const CanFrame> frames) noexcept;

@@ -1,0 +1,548 @@
+#include "runtime/robot/urdf.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+namespace pbppo::robot {
+namespace {
+
+// ---- A small XML reader: elements, attributes, comments, processing instructions. ----------
+
+struct XmlElement {
+  std::string name;
+  int line = 0;
+  std::vector<std::pair<std::string, std::string>> attributes;
+  std::vector<std::unique_ptr<XmlElement>> children;
+
+  const std::string* Attribute(const std::string& key) const {
+    for (const auto& [k, v] : attributes)
+      if (k == key) return &v;
+    return nullptr;
+  }
+  const XmlElement* Child(const std::string& child) const {
+    for (const auto& c : children)
+      if (c->name == child) return c.get();
+    return nullptr;
+  }
+};
+
+class XmlReader {
+ public:
+  XmlReader(const std::string& text, std::string origin) : s_(text), origin_(std::move(origin)) {}
+
+  Result<std::unique_ptr<XmlElement>> Document() {
+    std::unique_ptr<XmlElement> root;
+    while (true) {
+      SkipSpace();
+      if (pos_ >= s_.size()) break;
+      if (Starts("<?")) {
+        if (!SkipPast("?>")) return Fail("unterminated '<?'");
+      } else if (Starts("<!--")) {
+        if (!SkipPast("-->")) return Fail("unterminated comment");
+      } else if (Starts("<!")) {
+        if (!SkipPast(">")) return Fail("unterminated '<!'");
+      } else if (Starts("<")) {
+        if (root) return Fail("a second root element");
+        auto e = Element();
+        if (!e.ok()) return std::move(e).error();
+        root = std::move(*e);
+      } else {
+        return Fail("text outside the root element");
+      }
+    }
+    if (!root) return Fail("no root element");
+    return root;
+  }
+
+ private:
+  Error Fail(const std::string& what) const {
+    return MakeError(ErrorCode::kFormat, origin_ + ":" + std::to_string(Line()) + ": XML: " + what);
+  }
+  int Line() const {
+    int line = 1;
+    for (std::size_t i = 0; i < pos_ && i < s_.size(); ++i) line += s_[i] == '\n' ? 1 : 0;
+    return line;
+  }
+  bool Starts(const char* p) const { return s_.compare(pos_, std::char_traits<char>::length(p), p) == 0; }
+  bool SkipPast(const char* p) {
+    const std::size_t at = s_.find(p, pos_);
+    if (at == std::string::npos) return false;
+    pos_ = at + std::char_traits<char>::length(p);
+    return true;
+  }
+  void SkipSpace() {
+    while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_])) != 0) ++pos_;
+  }
+  static bool NameChar(char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-' || c == '.' || c == ':';
+  }
+  std::string Name() {
+    const std::size_t b = pos_;
+    while (pos_ < s_.size() && NameChar(s_[pos_])) ++pos_;
+    return s_.substr(b, pos_ - b);
+  }
+  Result<std::string> Unescape(const std::string& raw) const {
+    std::string out;
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      if (raw[i] != '&') {
+        out += raw[i];
+        continue;
+      }
+      const std::size_t semi = raw.find(';', i);
+      if (semi == std::string::npos) return Fail("'&' without ';' in an attribute value");
+      const std::string ent = raw.substr(i + 1, semi - i - 1);
+      if (ent == "lt")
+        out += '<';
+      else if (ent == "gt")
+        out += '>';
+      else if (ent == "amp")
+        out += '&';
+      else if (ent == "quot")
+        out += '"';
+      else if (ent == "apos")
+        out += '\'';
+      else
+        return Fail("unknown entity '&" + ent + ";'");
+      i = semi;
+    }
+    return out;
+  }
+
+  Result<std::unique_ptr<XmlElement>> Element() {
+    auto e = std::make_unique<XmlElement>();
+    e->line = Line();
+    ++pos_;  // '<'
+    e->name = Name();
+    if (e->name.empty()) return Fail("element without a name");
+    while (true) {
+      SkipSpace();
+      if (pos_ >= s_.size()) return Fail("unterminated element <" + e->name + ">");
+      if (Starts("/>")) {
+        pos_ += 2;
+        return e;
+      }
+      if (s_[pos_] == '>') {
+        ++pos_;
+        break;
+      }
+      const std::string key = Name();
+      if (key.empty()) return Fail("bad character '" + std::string(1, s_[pos_]) + "' in <" + e->name + ">");
+      SkipSpace();
+      if (pos_ >= s_.size() || s_[pos_] != '=')
+        return Fail("attribute '" + key + "' of <" + e->name + "> has no value");
+      ++pos_;
+      SkipSpace();
+      if (pos_ >= s_.size() || (s_[pos_] != '"' && s_[pos_] != '\''))
+        return Fail("attribute '" + key + "' of <" + e->name + "> is not quoted");
+      const char q = s_[pos_++];
+      const std::size_t end = s_.find(q, pos_);
+      if (end == std::string::npos) return Fail("unterminated value of attribute '" + key + "'");
+      auto value = Unescape(s_.substr(pos_, end - pos_));
+      if (!value.ok()) return std::move(value).error();
+      pos_ = end + 1;
+      if (e->Attribute(key) != nullptr) return Fail("attribute '" + key + "' repeated in <" + e->name + ">");
+      e->attributes.emplace_back(key, std::move(*value));
+    }
+    // Content: children, comments, text (ignored), then the end tag.
+    while (true) {
+      const std::size_t lt = s_.find('<', pos_);
+      if (lt == std::string::npos) {
+        pos_ = s_.size();
+        return MakeError(ErrorCode::kFormat,
+                         origin_ + ":" + std::to_string(e->line) + ": XML: element <" + e->name + "> is not closed");
+      }
+      pos_ = lt;
+      if (Starts("<!--")) {
+        if (!SkipPast("-->")) return Fail("unterminated comment");
+      } else if (Starts("<![CDATA[")) {
+        if (!SkipPast("]]>")) return Fail("unterminated CDATA");
+      } else if (Starts("</")) {
+        pos_ += 2;
+        const std::string end = Name();
+        SkipSpace();
+        if (end != e->name || pos_ >= s_.size() || s_[pos_] != '>')
+          return Fail("<" + e->name + "> closed by </" + end + ">");
+        ++pos_;
+        return e;
+      } else if (Starts("<?")) {
+        if (!SkipPast("?>")) return Fail("unterminated '<?'");
+      } else {
+        auto child = Element();
+        if (!child.ok()) return std::move(child).error();
+        e->children.push_back(std::move(*child));
+      }
+    }
+  }
+
+  const std::string& s_;
+  std::string origin_;
+  std::size_t pos_ = 0;
+};
+
+Result<std::string> ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return MakeError(ErrorCode::kIo, path + ": cannot open");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// ---- URDF ------------------------------------------------------------------------------------
+
+class UrdfParser {
+ public:
+  explicit UrdfParser(std::string origin) : origin_(std::move(origin)) {}
+
+  Error Fail(const std::string& where, const std::string& what) const {
+    return MakeError(ErrorCode::kInvalidValue, origin_ + ": " + where + ": " + what);
+  }
+
+  // A required attribute holding `count` whitespace-separated finite numbers.
+  Status Numbers(const XmlElement* e, const std::string& where, const char* key, double* out, int count,
+                 bool required = true) const {
+    const std::string* v = e != nullptr ? e->Attribute(key) : nullptr;
+    if (v == nullptr) return required ? Status(Fail(where, std::string("missing attribute '") + key + "'")) : Status();
+    std::istringstream ss(*v);
+    for (int i = 0; i < count; ++i) {
+      std::string tok;
+      if (!(ss >> tok))
+        return Fail(where + "." + key, "'" + *v + "' has fewer than " + std::to_string(count) + " numbers");
+      char* end = nullptr;
+      const double d = std::strtod(tok.c_str(), &end);
+      if (*end != '\0') return Fail(where + "." + key, "'" + tok + "' is not a number");
+      if (!std::isfinite(d)) return Fail(where + "." + key, "'" + tok + "' is not finite");
+      out[i] = d;
+    }
+    std::string extra;
+    if (ss >> extra) return Fail(where + "." + key, "'" + *v + "' has more than " + std::to_string(count) + " numbers");
+    return {};
+  }
+
+  Status Pose(const XmlElement* e, const std::string& where, UrdfPose* pose) const {
+    if (e == nullptr) return {};  // URDF: a missing origin is the identity
+    if (auto s = Numbers(e, where, "xyz", pose->xyz.data(), 3, false); !s) return s;
+    return Numbers(e, where, "rpy", pose->rpy.data(), 3, false);
+  }
+
+  Status Positive(double v, const std::string& field) const {
+    if (!(v > 0)) {
+      std::string what = "'";
+      what += Str(v);
+      what += "' is not a positive number";
+      return Fail(field, what);
+    }
+    return {};
+  }
+
+  static std::string Str(double v) {
+    std::ostringstream ss;
+    ss << v;
+    return ss.str();
+  }
+
+  Status Link(const XmlElement& e, UrdfLink* link) const {
+    const std::string* name = e.Attribute("name");
+    if (name == nullptr || name->empty())
+      return Fail("link (line " + std::to_string(e.line) + ")", "missing attribute 'name'");
+    link->name = *name;
+    const std::string where = "link '" + *name + "'";
+    if (const XmlElement* in = e.Child("inertial"); in != nullptr) {
+      link->has_inertial = true;
+      UrdfInertial& I = link->inertial;
+      if (auto s = Pose(in->Child("origin"), where + ".inertial.origin", &I.origin); !s) return s;
+      const XmlElement* mass = in->Child("mass");
+      if (mass == nullptr) return Fail(where + ".inertial", "missing element <mass>");
+      if (auto s = Numbers(mass, where + ".inertial.mass", "value", &I.mass_kg, 1); !s) return s;
+      if (auto s = Positive(I.mass_kg, where + ".inertial.mass.value"); !s) return s;
+      const XmlElement* in_t = in->Child("inertia");
+      if (in_t == nullptr) return Fail(where + ".inertial", "missing element <inertia>");
+      const std::string w = where + ".inertial.inertia";
+      double* fields[6] = {&I.ixx, &I.ixy, &I.ixz, &I.iyy, &I.iyz, &I.izz};
+      const char* keys[6] = {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"};
+      for (int k = 0; k < 6; ++k)
+        if (auto s = Numbers(in_t, w, keys[k], fields[k], 1); !s) return s;
+      for (int k : {0, 3, 5})
+        if (auto s = Positive(*fields[k], w + "." + keys[k]); !s) return s;
+      // Principal moments of a physical body satisfy the triangle inequality; check the diagonal.
+      if (I.ixx + I.iyy < I.izz || I.iyy + I.izz < I.ixx || I.ixx + I.izz < I.iyy)
+        return Fail(w, "moments ixx " + Str(I.ixx) + ", iyy " + Str(I.iyy) + ", izz " + Str(I.izz) +
+                           " violate the triangle inequality");
+    }
+    for (const auto& c : e.children) {
+      if (c->name != "collision") continue;
+      const XmlElement* geom = c->Child("geometry");
+      if (geom == nullptr) return Fail(where + ".collision", "missing element <geometry>");
+      if (const XmlElement* sphere = geom->Child("sphere"); sphere != nullptr) {
+        if (auto s = Numbers(sphere, where + ".collision.geometry.sphere", "radius", &link->sphere_radius_m, 1); !s)
+          return s;
+        if (auto s = Positive(link->sphere_radius_m, where + ".collision.geometry.sphere.radius"); !s) return s;
+      }
+    }
+    return {};
+  }
+
+  Status Joint(const XmlElement& e, const std::map<std::string, std::uint32_t>& links, UrdfJoint* j) const {
+    const std::string* name = e.Attribute("name");
+    if (name == nullptr || name->empty())
+      return Fail("joint (line " + std::to_string(e.line) + ")", "missing attribute 'name'");
+    j->name = *name;
+    const std::string where = "joint '" + *name + "'";
+    const std::string* type = e.Attribute("type");
+    if (type == nullptr) return Fail(where, "missing attribute 'type'");
+    if (*type == "revolute") {
+      j->type = UrdfJointType::kRevolute;
+    } else if (*type == "fixed") {
+      j->type = UrdfJointType::kFixed;
+    } else {
+      return Fail(where + ".type", "'" + *type + "' is not supported (revolute, fixed)");
+    }
+    for (const char* role : {"parent", "child"}) {
+      const XmlElement* r = e.Child(role);
+      if (r == nullptr) return Fail(where, std::string("missing element <") + role + ">");
+      const std::string* link = r->Attribute("link");
+      if (link == nullptr) return Fail(where + "." + role, "missing attribute 'link'");
+      const auto it = links.find(*link);
+      if (it == links.end()) return Fail(where + "." + role + ".link", "'" + *link + "' is not a link of this robot");
+      (std::string(role) == "parent" ? j->parent : j->child) = it->second;
+    }
+    if (j->parent == j->child) return Fail(where + ".child.link", "is the joint's parent link");
+    if (auto s = Pose(e.Child("origin"), where + ".origin", &j->origin); !s) return s;
+    if (j->type == UrdfJointType::kFixed) return {};
+
+    if (const XmlElement* axis = e.Child("axis"); axis != nullptr) {
+      if (auto s = Numbers(axis, where + ".axis", "xyz", j->axis.data(), 3); !s) return s;
+    }
+    const double n = std::sqrt(j->axis[0] * j->axis[0] + j->axis[1] * j->axis[1] + j->axis[2] * j->axis[2]);
+    if (!(n > 1e-9)) return Fail(where + ".axis.xyz", "is the zero vector");
+    for (double& a : j->axis) a /= n;
+
+    const XmlElement* limit = e.Child("limit");
+    if (limit == nullptr)
+      return Fail(where, "missing element <limit> (a revolute joint needs lower, upper, effort, velocity)");
+    const std::string w = where + ".limit";
+    if (auto s = Numbers(limit, w, "lower", &j->lower_rad, 1); !s) return s;
+    if (auto s = Numbers(limit, w, "upper", &j->upper_rad, 1); !s) return s;
+    if (auto s = Numbers(limit, w, "effort", &j->effort_nm, 1); !s) return s;
+    if (auto s = Numbers(limit, w, "velocity", &j->velocity_rad_s, 1); !s) return s;
+    if (!(j->lower_rad < j->upper_rad))
+      return Fail(w + ".lower", "'" + Str(j->lower_rad) + "' is not below upper '" + Str(j->upper_rad) + "'");
+    if (auto s = Positive(j->effort_nm, w + ".effort"); !s) return s;
+    if (auto s = Positive(j->velocity_rad_s, w + ".velocity"); !s) return s;
+    if (const XmlElement* dyn = e.Child("dynamics"); dyn != nullptr) {
+      if (auto s = Numbers(dyn, where + ".dynamics", "damping", &j->damping_nm_s_rad, 1, false); !s) return s;
+      if (auto s = Numbers(dyn, where + ".dynamics", "friction", &j->friction_nm, 1, false); !s) return s;
+      if (j->damping_nm_s_rad < 0)
+        return Fail(where + ".dynamics.damping", "'" + Str(j->damping_nm_s_rad) + "' is negative");
+      if (j->friction_nm < 0) return Fail(where + ".dynamics.friction", "'" + Str(j->friction_nm) + "' is negative");
+    }
+    return {};
+  }
+
+  Result<UrdfModel> Robot(const XmlElement& root) const {
+    if (root.name != "robot") return Fail("root element", "<" + root.name + "> is not <robot>");
+    UrdfModel m;
+    const std::string* name = root.Attribute("name");
+    if (name == nullptr || name->empty()) return Fail("robot", "missing attribute 'name'");
+    m.name = *name;
+    std::map<std::string, std::uint32_t> links;
+    for (const auto& c : root.children) {
+      if (c->name != "link") continue;
+      UrdfLink link;
+      if (auto s = Link(*c, &link); !s) return s.error();
+      if (links.count(link.name) != 0) return Fail("link '" + link.name + "'", "name used twice");
+      links[link.name] = static_cast<std::uint32_t>(m.links.size());
+      m.links.push_back(std::move(link));
+    }
+    if (m.links.empty()) return Fail("robot '" + m.name + "'", "has no <link>");
+    std::vector<UrdfJoint> joints;
+    std::set<std::string> joint_names;
+    std::vector<int> parent_joint(m.links.size(), -1);
+    for (const auto& c : root.children) {
+      if (c->name != "joint") continue;
+      UrdfJoint j;
+      if (auto s = Joint(*c, links, &j); !s) return s.error();
+      if (!joint_names.insert(j.name).second) return Fail("joint '" + j.name + "'", "name used twice");
+      if (parent_joint[j.child] >= 0)
+        return Fail("joint '" + j.name + "'.child.link",
+                    "'" + m.links[j.child].name + "' is already the child of joint '" +
+                        joints[static_cast<std::size_t>(parent_joint[j.child])].name + "'");
+      parent_joint[j.child] = static_cast<int>(joints.size());
+      joints.push_back(std::move(j));
+    }
+    int root_link = -1;
+    for (std::size_t l = 0; l < m.links.size(); ++l) {
+      if (parent_joint[l] >= 0) continue;
+      if (root_link >= 0)
+        return Fail("robot '" + m.name + "'", "links '" + m.links[static_cast<std::size_t>(root_link)].name +
+                                                  "' and '" + m.links[l].name +
+                                                  "' both have no parent joint (one tree expected)");
+      root_link = static_cast<int>(l);
+    }
+    if (root_link < 0) return Fail("robot '" + m.name + "'", "every link has a parent joint (the joints form a loop)");
+    m.root = static_cast<std::uint32_t>(root_link);
+    // Topological order: breadth-first from the root; joints never reached belong to a loop.
+    std::vector<bool> placed(joints.size(), false);
+    std::vector<std::uint32_t> frontier{m.root};
+    for (std::size_t k = 0; k < frontier.size(); ++k)
+      for (std::size_t j = 0; j < joints.size(); ++j)
+        if (!placed[j] && joints[j].parent == frontier[k]) {
+          placed[j] = true;
+          frontier.push_back(joints[j].child);
+          m.joints.push_back(joints[j]);
+        }
+    for (std::size_t j = 0; j < joints.size(); ++j)
+      if (!placed[j])
+        return Fail("joint '" + joints[j].name + "'", "is part of a loop, not reachable from the root link");
+    return m;
+  }
+
+ private:
+  std::string origin_;
+};
+
+std::string Base(const std::string& path) {
+  return std::filesystem::path(path).filename().string();
+}
+
+}  // namespace
+
+int UrdfModel::FindLink(const std::string& n) const noexcept {
+  for (std::size_t i = 0; i < links.size(); ++i)
+    if (links[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+int UrdfModel::FindJoint(const std::string& n) const noexcept {
+  for (std::size_t i = 0; i < joints.size(); ++i)
+    if (joints[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+double UrdfModel::TotalMassKg() const noexcept {
+  double m = 0;
+  for (const auto& l : links) m += l.has_inertial ? l.inertial.mass_kg : 0.0;
+  return m;
+}
+
+Result<UrdfModel> ParseUrdf(const std::string& xml_text, const std::string& origin) {
+  XmlReader reader(xml_text, origin);
+  auto doc = reader.Document();
+  if (!doc.ok()) return std::move(doc).error();
+  return UrdfParser(origin).Robot(**doc);
+}
+
+Result<UrdfModel> LoadUrdf(const std::string& path) {
+  auto text = ReadFile(path);
+  if (!text.ok()) return std::move(text).error();
+  return ParseUrdf(*text, Base(path));
+}
+
+Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, const std::string& origin, UrdfModel urdf,
+                                               const std::string& urdf_path) {
+  auto fail = [&](const std::string& where, const std::string& what) {
+    return MakeError(ErrorCode::kInvalidValue, origin + ": " + where + ": " + what);
+  };
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    return MakeError(ErrorCode::kFormat, origin + ": YAML: " + e.what());
+  }
+  if (!root.IsMap()) return fail("document", "is not a mapping");
+  static const std::set<std::string> kKnown = {"urdf", "joints", "default_pose", "stand", "gains"};
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (kKnown.count(key) == 0) return fail(key, "unknown field");
+  }
+  auto number = [&](const YAML::Node& parent, const std::string& where, const char* key, double* out) -> Status {
+    const YAML::Node v = parent[key];
+    if (!v) return fail(where, std::string("missing field '") + key + "'");
+    const std::string s = v.IsScalar() ? v.as<std::string>() : std::string();
+    char* end = nullptr;
+    const double d = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || !std::isfinite(d))
+      return fail(where + "." + key, "'" + s + "' is not a finite number");
+    *out = d;
+    return {};
+  };
+
+  RobotDescription d;
+  d.urdf = std::move(urdf);
+  d.urdf_path = urdf_path;
+  const YAML::Node joints = root["joints"];
+  if (!joints || !joints.IsSequence()) return fail("joints", "missing or not a list");
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const std::string name = joints[i].IsScalar() ? joints[i].as<std::string>() : std::string();
+    const std::string where = "joints[" + std::to_string(i) + "]";
+    const int j = d.urdf.FindJoint(name);
+    if (j < 0) return fail(where, "'" + name + "' is not a joint of " + Base(urdf_path));
+    if (d.urdf.joints[static_cast<std::size_t>(j)].type != UrdfJointType::kRevolute)
+      return fail(where, "'" + name + "' is not a revolute joint");
+    if (!seen.insert(name).second) return fail(where, "'" + name + "' listed twice");
+    d.joint_names.push_back(name);
+    d.joint.push_back(static_cast<std::uint32_t>(j));
+  }
+  for (const auto& j : d.urdf.joints)
+    if (j.type == UrdfJointType::kRevolute && seen.count(j.name) == 0)
+      return fail("joints", "revolute joint '" + j.name + "' of " + Base(urdf_path) + " is not listed");
+
+  const YAML::Node pose = root["default_pose"];
+  if (!pose || !pose.IsMap()) return fail("default_pose", "missing or not a mapping");
+  for (const auto& kv : pose) {
+    const std::string key = kv.first.as<std::string>();
+    if (seen.count(key) == 0) return fail("default_pose." + key, "is not an actuated joint");
+  }
+  d.default_q_rad.resize(d.joint.size());
+  for (std::size_t i = 0; i < d.joint.size(); ++i) {
+    if (auto s = number(pose, "default_pose", d.joint_names[i].c_str(), &d.default_q_rad[i]); !s) return s.error();
+    const UrdfJoint& j = d.joint_at(i);
+    if (d.default_q_rad[i] < j.lower_rad || d.default_q_rad[i] > j.upper_rad) {
+      std::ostringstream ss;
+      ss << "'" << d.default_q_rad[i] << "' is outside the joint's limits [" << j.lower_rad << ", " << j.upper_rad
+         << "]";
+      return fail("default_pose." + d.joint_names[i], ss.str());
+    }
+  }
+  const YAML::Node stand = root["stand"];
+  if (!stand || !stand.IsMap()) return fail("stand", "missing or not a mapping");
+  if (auto s = number(stand, "stand", "base_height_m", &d.stand_base_height_m); !s) return s.error();
+  if (!(d.stand_base_height_m > 0)) return fail("stand.base_height_m", "is not positive");
+  const YAML::Node gains = root["gains"];
+  if (!gains || !gains.IsMap()) return fail("gains", "missing or not a mapping");
+  if (auto s = number(gains, "gains", "kp_nm_rad", &d.kp_nm_rad); !s) return s.error();
+  if (auto s = number(gains, "gains", "kd_nm_s_rad", &d.kd_nm_s_rad); !s) return s.error();
+  if (auto s = number(gains, "gains", "damping_kd_nm_s_rad", &d.damping_kd_nm_s_rad); !s) return s.error();
+  if (d.kp_nm_rad < 0) return fail("gains.kp_nm_rad", "is negative");
+  if (d.kd_nm_s_rad < 0) return fail("gains.kd_nm_s_rad", "is negative");
+  if (!(d.damping_kd_nm_s_rad > 0)) return fail("gains.damping_kd_nm_s_rad", "is not positive");
+  return d;
+}
+
+Result<RobotDescription> LoadRobotDescription(const std::string& yaml_path) {
+  auto text = ReadFile(yaml_path);
+  if (!text.ok()) return std::move(text).error();
+  YAML::Node root;
+  try {
+    root = YAML::Load(*text);
+  } catch (const YAML::Exception& e) {
+    return MakeError(ErrorCode::kFormat, Base(yaml_path) + ": YAML: " + e.what());
+  }
+  if (!root.IsMap() || !root["urdf"] || !root["urdf"].IsScalar())
+    return MakeError(ErrorCode::kInvalidValue, Base(yaml_path) + ": urdf: missing field 'urdf'");
+  const std::string urdf_path =
+      (std::filesystem::path(yaml_path).parent_path() / root["urdf"].as<std::string>()).string();
+  auto urdf = LoadUrdf(urdf_path);
+  if (!urdf.ok()) return std::move(urdf).error();
+  return ParseRobotDescription(*text, Base(yaml_path), std::move(*urdf), urdf_path);
+}
+
+}  // namespace pbppo::robot

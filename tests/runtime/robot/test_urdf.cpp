@@ -1,0 +1,154 @@
+// URDF loader and robot description: the quadruped loads; bad files are refused with the field named.
+#include <doctest/doctest.h>
+
+#include <string>
+
+#include "runtime/robot/urdf.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo::robot;
+
+namespace {
+
+const char* kGood = R"(<?xml version="1.0"?>
+<!-- a two-link arm -->
+<robot name="arm">
+  <link name="base"/>
+  <link name="upper">
+    <inertial>
+      <origin xyz="0 0 -0.1" rpy="0 0 0"/>
+      <mass value="1.5"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.002"/>
+    </inertial>
+    <visual><geometry><box size="0.1 0.1 0.2"/></geometry></visual>
+  </link>
+  <link name="tip"><collision><geometry><sphere radius="0.02"/></geometry></collision></link>
+  <joint name="tip_fixed" type="fixed">
+    <parent link="upper"/><child link="tip"/>
+    <origin xyz="0 0 -0.2"/>
+  </joint>
+  <joint name="shoulder" type="revolute">
+    <parent link="base"/><child link="upper"/>
+    <origin xyz="0.1 0 0" rpy="0 0 0"/>
+    <axis xyz="0 2 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="5"/>
+    <dynamics damping="0.1"/>
+  </joint>
+</robot>
+)";
+
+std::string Replace(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  REQUIRE_MESSAGE(at != std::string::npos, from);
+  return s.replace(at, from.size(), to);
+}
+
+std::string ErrorOf(const std::string& xml) {
+  auto r = ParseUrdf(xml, "arm.urdf");
+  REQUIRE_FALSE(r.ok());
+  return r.error().message;
+}
+
+}  // namespace
+
+TEST_CASE("urdf: a small arm parses - joints in topological order - axis normalised") {
+  auto r = ParseUrdf(kGood, "arm.urdf");
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  CHECK(r->name == "arm");
+  REQUIRE(r->links.size() == 3);
+  REQUIRE(r->joints.size() == 2);
+  CHECK(r->links[r->root].name == "base");
+  CHECK(r->joints[0].name == "shoulder");  // the root's joint first, though listed second
+  CHECK(r->joints[1].name == "tip_fixed");
+  CHECK(r->joints[0].axis[1] == doctest::Approx(1.0));
+  CHECK(r->joints[0].damping_nm_s_rad == doctest::Approx(0.1));
+  CHECK(r->joints[1].origin.xyz[2] == doctest::Approx(-0.2));
+  CHECK(r->links[2].sphere_radius_m == doctest::Approx(0.02));
+  CHECK(r->TotalMassKg() == doctest::Approx(1.5));
+}
+
+TEST_CASE("urdf: bad files are refused naming the element and field") {
+  CHECK(ErrorOf(Replace(kGood, "effort=\"10\"", "effort=\"-1\"")) ==
+        "arm.urdf: joint 'shoulder'.limit.effort: '-1' is not a positive number");
+  CHECK(ErrorOf(Replace(kGood, "lower=\"-1\"", "lower=\"2\"")) ==
+        "arm.urdf: joint 'shoulder'.limit.lower: '2' is not below upper '1'");
+  CHECK(ErrorOf(Replace(kGood, " velocity=\"5\"", "")) ==
+        "arm.urdf: joint 'shoulder'.limit: missing attribute 'velocity'");
+  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=\"abc\"/>")) ==
+        "arm.urdf: link 'upper'.inertial.mass.value: 'abc' is not a number");
+  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=\"0\"/>")) ==
+        "arm.urdf: link 'upper'.inertial.mass.value: '0' is not a positive number");
+  CHECK(ErrorOf(Replace(kGood, "izz=\"0.002\"", "izz=\"0.5\"")) ==
+        "arm.urdf: link 'upper'.inertial.inertia: moments ixx 0.01, iyy 0.01, izz 0.5 violate the triangle inequality");
+  CHECK(ErrorOf(Replace(kGood, "iyy=\"0.01\"", "iyy=\"nan\"")) ==
+        "arm.urdf: link 'upper'.inertial.inertia.iyy: 'nan' is not finite");
+  CHECK(ErrorOf(Replace(kGood, "type=\"revolute\"", "type=\"prismatic\"")) ==
+        "arm.urdf: joint 'shoulder'.type: 'prismatic' is not supported (revolute, fixed)");
+  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/>", "<parent link=\"torso\"/>")) ==
+        "arm.urdf: joint 'shoulder'.parent.link: 'torso' is not a link of this robot");
+  CHECK(ErrorOf(Replace(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 0 0\"")) ==
+        "arm.urdf: joint 'shoulder'.axis.xyz: is the zero vector");
+  CHECK(ErrorOf(Replace(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 1\"")) ==
+        "arm.urdf: joint 'shoulder'.axis.xyz: '0 1' has fewer than 3 numbers");
+  CHECK(ErrorOf(Replace(kGood, "<link name=\"tip\">", "<link name=\"upper\">")) ==
+        "arm.urdf: link 'upper': name used twice");
+  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/><child link=\"upper\"/>",
+                        "<parent link=\"base\"/><child link=\"tip\"/>")) ==
+        "arm.urdf: joint 'shoulder'.child.link: 'tip' is already the child of joint 'tip_fixed'");
+  CHECK(ErrorOf(Replace(kGood, "<link name=\"base\"/>", "<link name=\"base\"/><link name=\"spare\"/>")) ==
+        "arm.urdf: robot 'arm': links 'base' and 'spare' both have no parent joint (one tree expected)");
+  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/>", "<parent link=\"tip\"/>")) ==
+        "arm.urdf: joint 'tip_fixed': is part of a loop, not reachable from the root link");
+}
+
+TEST_CASE("urdf: malformed XML is refused with the line") {
+  CHECK(ErrorOf(Replace(kGood, "</robot>", "")) == "arm.urdf:3: XML: element <robot> is not closed");
+  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=1.5/>")) ==
+        "arm.urdf:8: XML: attribute 'value' of <mass> is not quoted");
+  CHECK(ErrorOf(Replace(kGood, "</inertial>", "</inertia>")) == "arm.urdf:10: XML: <inertial> closed by </inertia>");
+  CHECK(ErrorOf("<robot name=\"a\"></robot><robot/>") == "arm.urdf:1: XML: a second root element");
+  CHECK(ErrorOf("<robt name=\"a\"/>") == "arm.urdf: root element: <robt> is not <robot>");
+}
+
+TEST_CASE("quadruped: URDF and description load - 12 actuated joints - 46.4 kg - default pose") {
+  auto d = LoadRobotDescription(pbppo::test::SourcePath("models/quadruped/quadruped.yaml"));
+  REQUIRE_MESSAGE(d.ok(), d.error().message);
+  CHECK(d->urdf.TotalMassKg() == doctest::Approx(46.4));
+  REQUIRE(d->joint_count() == 12);
+  CHECK(d->joint_names[0] == "LF_HAA");
+  CHECK(d->joint_names[11] == "RH_KFE");
+  const double want[12] = {0, 0.4, -0.8, 0, 0.4, -0.8, 0, -0.4, 0.8, 0, -0.4, 0.8};
+  for (std::size_t i = 0; i < 12; ++i) CHECK(d->default_q_rad[i] == want[i]);
+  CHECK(d->joint_at(2).effort_nm == 37.5);
+  CHECK(d->joint_at(1).effort_nm == 25.0);
+  CHECK(d->stand_base_height_m == 0.8);
+  CHECK(d->urdf.links[d->urdf.root].name == "base");
+}
+
+TEST_CASE("robot description: errors name the field") {
+  auto urdf = LoadUrdf(pbppo::test::SourcePath("models/quadruped/quadruped.urdf"));
+  REQUIRE(urdf.ok());
+  const std::string good = R"(urdf: quadruped.urdf
+joints: [LF_HAA, LF_HFE, LF_KFE, RF_HAA, RF_HFE, RF_KFE, LH_HAA, LH_HFE, LH_KFE, RH_HAA, RH_HFE, RH_KFE]
+default_pose: {LF_HAA: 0, LF_HFE: 0.4, LF_KFE: -0.8, RF_HAA: 0, RF_HFE: 0.4, RF_KFE: -0.8, LH_HAA: 0, LH_HFE: -0.4, LH_KFE: 0.8, RH_HAA: 0, RH_HFE: -0.4, RH_KFE: 0.8}
+stand: {base_height_m: 0.8}
+gains: {kp_nm_rad: 60, kd_nm_s_rad: 1.5, damping_kd_nm_s_rad: 2}
+)";
+  auto err = [&](const std::string& y) {
+    auto r = ParseRobotDescription(y, "q.yaml", *urdf, "quadruped.urdf");
+    REQUIRE_FALSE(r.ok());
+    return r.error().message;
+  };
+  REQUIRE(ParseRobotDescription(good, "q.yaml", *urdf, "quadruped.urdf").ok());
+  CHECK(err(Replace(good, "LF_KFE: -0.8", "LF_KFE: 1.0")) ==
+        "q.yaml: default_pose.LF_KFE: '1' is outside the joint's limits [-2.6, 0.3]");
+  CHECK(err(Replace(good, "RH_HFE, RH_KFE]", "RH_HFE, RH_KNEE]")) ==
+        "q.yaml: joints[11]: 'RH_KNEE' is not a joint of quadruped.urdf");
+  CHECK(err(Replace(good, "LF_HAA, LF_HFE, LF_KFE, ", "LF_HAA, LF_HFE, ")) ==
+        "q.yaml: joints: revolute joint 'LF_KFE' of quadruped.urdf is not listed");
+  CHECK(err(Replace(good, "LF_HFE, LF_KFE, RF_HAA", "LF_FOOT_FIXED, LF_KFE, RF_HAA")) ==
+        "q.yaml: joints[1]: 'LF_FOOT_FIXED' is not a revolute joint");
+  CHECK(err(Replace(good, "kp_nm_rad: 60", "kp_nm_rad: x")) == "q.yaml: gains.kp_nm_rad: 'x' is not a finite number");
+  CHECK(err(Replace(good, "stand:", "stands:")) == "q.yaml: stands: unknown field");
+  CHECK(err(Replace(good, "RH_HFE: -0.4, ", "")) == "q.yaml: default_pose: missing field 'RH_HFE'");
+}
