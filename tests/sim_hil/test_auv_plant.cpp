@@ -1,0 +1,185 @@
+// The AUV plant: speed tracking, depth keeping, determinism, one instance per thread.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "sim_hil/plants/auv_plant.hpp"
+
+using pbppo::sim::AuvParams;
+using pbppo::sim::AuvPlant;
+using pbppo::sim::AuvPose;
+using pbppo::sim::AuvState;
+
+namespace {
+
+AuvParams Params() {
+  auto p = pbppo::sim::LoadAuvParams(std::string(PBPPO_SOURCE_DIR) + "/models/auv/auv.yaml");
+  REQUIRE_MESSAGE(p.ok(), p.error().message);
+  return *p;
+}
+
+// A fixed command schedule: accelerate, turn both ways, slow down.
+std::vector<AuvState> Run(const AuvParams& params, int control_steps) {
+  auto plant = AuvPlant::Create(params);
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{5.0, 6.0, -5.0, 0.3});
+  std::vector<AuvState> out;
+  for (int k = 0; k < control_steps; ++k) {
+    const double v = k < 200 ? 1.2 : 0.4;
+    const double w = std::sin(0.01 * k) * 0.5;
+    plant->SetCommand(v, w);
+    plant->AdvanceControlPeriod();
+    out.push_back(plant->State());
+  }
+  return out;
+}
+
+bool BitEqual(const std::vector<AuvState>& a, const std::vector<AuvState>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (std::memcmp(&a[i], &b[i], sizeof(AuvState)) != 0) return false;
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("auv plant: reset pose is reported back") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{12.0, -3.0, -4.0, 2.5});
+  const AuvState& s = plant->State();
+  CHECK(s.x_m == doctest::Approx(12.0));
+  CHECK(s.y_m == doctest::Approx(-3.0));
+  CHECK(s.z_m == doctest::Approx(-4.0));
+  CHECK(s.yaw_rad == doctest::Approx(2.5));
+  CHECK(s.time_s == 0.0);
+  CHECK(s.u_mps == 0.0);
+}
+
+// The speed loops are PI with damping feed-forward, closed-loop time constants about 0.3 s
+// (surge) and 0.4 s (yaw); after 20 s the integrators have removed the steady error. 2 % of
+// the command is the bound: well inside what the task's reward can tell apart in one period.
+TEST_CASE("auv plant: constant command reaches the commanded surge speed and yaw rate") {
+  for (const auto& [v, w] : {std::pair{1.0, 0.0}, std::pair{1.0, 0.3}, std::pair{0.5, -0.4}, std::pair{1.5, 0.2}}) {
+    CAPTURE(v);
+    CAPTURE(w);
+    auto plant = AuvPlant::Create(Params());
+    REQUIRE(plant.ok());
+    plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
+    plant->SetCommand(v, w);
+    plant->Advance(20.0);
+    const AuvState& s = plant->State();
+    CHECK(s.time_s == doctest::Approx(20.0));
+    CHECK(std::abs(s.u_mps - v) < 0.02 * v);
+    CHECK(std::abs(s.r_radps - w) < 0.02 * std::abs(w) + 1e-3);
+    // Depth held within 5 cm, roll and pitch small.
+    CHECK(std::abs(s.z_m + 5.0) < 0.05);
+    CHECK(std::abs(s.roll_rad) < 0.05);
+    CHECK(std::abs(s.pitch_rad) < 0.05);
+  }
+}
+
+TEST_CASE("auv plant: surge response reaches 90 % within 3 s") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
+  plant->SetCommand(1.0, 0.0);
+  plant->Advance(3.0);
+  CHECK(plant->State().u_mps > 0.9);
+  CHECK(plant->State().u_mps < 1.1);
+}
+
+TEST_CASE("auv plant: near-neutral buoyancy with the depth loop keeps depth") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{20.0, 20.0, -5.0, 1.0});
+  double worst = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    plant->AdvanceControlPeriod();
+    worst = std::max(worst, std::abs(plant->State().z_m + 5.0));
+  }
+  CHECK(worst < 0.01);
+  CHECK(std::abs(plant->State().x_m - 20.0) < 0.01);
+  CHECK(std::abs(plant->State().yaw_rad - 1.0) < 1e-3);
+}
+
+TEST_CASE("auv plant: without thrust the positive buoyancy lifts the vehicle and it stays upright") {
+  AuvParams p = Params();
+  p.depth = {};  // depth loop off
+  auto plant = AuvPlant::Create(p);
+  REQUIRE(plant.ok());
+  // Start rolled by 0.3 rad: the metacentric height restores it.
+  plant->Reset(AuvPose{0.0, 0.0, -5.0, 0.0, 0.3, 0.0});
+  plant->Advance(30.0);
+  const AuvState& s = plant->State();
+  CHECK(s.z_m > -5.0);
+  // Net 1.5 N up against heave damping 100 N/(m/s): a slow rise, under 2 cm/s.
+  CHECK(s.w_mps > 0.0);
+  CHECK(s.w_mps < 0.02);
+  CHECK(std::abs(s.roll_rad) < 0.05);
+}
+
+TEST_CASE("auv plant: thrust limits bound the reachable speed") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
+  plant->SetCommand(100.0, 0.0);  // clamped to the controller's 1.5 m/s
+  plant->Advance(20.0);
+  CHECK(plant->State().u_mps == doctest::Approx(1.5).epsilon(0.02));
+  for (double t : plant->State().thrust_n) CHECK(std::abs(t) <= 40.0);
+}
+
+TEST_CASE("auv plant: same inputs give bit-identical outputs (both integrators)") {
+  for (auto integ : {pbppo::sim::AuvIntegrator::kRk2, pbppo::sim::AuvIntegrator::kSemiExplicitEuler}) {
+    AuvParams p = Params();
+    p.integrator = integ;
+    const auto a = Run(p, 400);
+    const auto b = Run(p, 400);
+    CHECK(BitEqual(a, b));
+    CHECK(std::abs(a.back().z_m + 5.0) < 0.05);
+  }
+}
+
+TEST_CASE("auv plant: two instances on two threads match a single-threaded run") {
+  const AuvParams p = Params();
+  const auto ref = Run(p, 300);
+  std::vector<AuvState> r1, r2;
+  std::thread t1([&] { r1 = Run(p, 300); });
+  std::thread t2([&] { r2 = Run(p, 300); });
+  t1.join();
+  t2.join();
+  CHECK(BitEqual(ref, r1));
+  CHECK(BitEqual(ref, r2));
+}
+
+TEST_CASE("auv plant: reset after a run restarts the same trajectory") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  auto once = [&] {
+    plant->Reset(AuvPose{1.0, 2.0, -3.0, 0.5});
+    plant->SetCommand(0.8, 0.2);
+    plant->Advance(5.0);
+    return plant->State();
+  };
+  const AuvState a = once();
+  const AuvState b = once();
+  CHECK(std::memcmp(&a, &b, sizeof a) == 0);
+}
+
+TEST_CASE("auv plant: bad parameters are refused naming the field") {
+  AuvParams p = Params();
+  p.control_period_s = 0.05;
+  p.physics_step_s = 0.02;
+  auto r = AuvPlant::Create(p);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("control_period_s") != std::string::npos);
+  p = Params();
+  p.mass_kg = -1.0;
+  r = AuvPlant::Create(p);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("hull.mass_kg") != std::string::npos);
+}
