@@ -111,10 +111,16 @@ class YamlFields {
   }
 
   static std::string Quote(const YAML::Node& v) {
-    if (v.IsScalar()) return "'" + v.as<std::string>() + "'";
-    YAML::Emitter e;
-    e << YAML::Flow << v;
-    return "'" + std::string(e.c_str()) + "'";
+    std::string q(1, '\'');
+    if (v.IsScalar()) {
+      q.append(v.as<std::string>());
+    } else {
+      YAML::Emitter e;
+      e << YAML::Flow << v;
+      q.append(e.c_str());
+    }
+    q.push_back('\'');
+    return q;
   }
 
  private:
