@@ -270,6 +270,7 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
     pose.yaw_rad = rng.Uniform(s.yaw_rad[0], s.yaw_rad[1]);
     if (Clearance(world_, pose.x_m, pose.y_m) >= config_.task.safe_distance_m + 0.5) break;
   }
+  physics_steps_ += plant_.physics_steps();
   plant_.Reset(pose);
   plant_.SetCommand(0.0, 0.0);
   target_ = 0;

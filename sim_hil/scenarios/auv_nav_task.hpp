@@ -107,6 +107,8 @@ class AuvNavTask {
   const AuvState& vehicle() const noexcept { return plant_.State(); }
   const World2d& world() const noexcept { return world_; }
   int target_index() const noexcept { return target_; }
+  // Physics steps since construction (the plant's counter restarts at every Reset).
+  std::uint64_t physics_steps() const noexcept { return physics_steps_ + plant_.physics_steps(); }
   const std::vector<double>& sonar_ranges() const noexcept { return sonar_; }
   // Physical commands of the last step (after the IO layout's scale, offset and limits).
   double commanded_speed_mps() const noexcept { return v_cmd_; }
@@ -132,6 +134,7 @@ class AuvNavTask {
   std::vector<double> sonar_;
   World2d world_;
   int target_ = 0;
+  std::uint64_t physics_steps_ = 0;  // of finished episodes
   double l_at_ = 0.0, phi_at_ = 0.0, clearance_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;

@@ -183,3 +183,30 @@ TEST_CASE("auv plant: bad parameters are refused naming the field") {
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message.find("hull.mass_kg") != std::string::npos);
 }
+
+// Step-size check: the 20 ms steps (controller at the same rate) against a converged 2 ms RK2 run over 40 s of changing
+// commands (the accuracy the task sees: positions feed l_AT, the sonar and collisions).
+TEST_CASE("auv plant: 20 ms steps agree with a converged 2 ms run") {
+  AuvParams ref_p = Params();
+  ref_p.physics_step_s = 0.002;
+  const auto ref = Run(ref_p, 400);
+  for (auto integ : {pbppo::sim::AuvIntegrator::kRk2, pbppo::sim::AuvIntegrator::kSemiExplicitEuler}) {
+    AuvParams p = Params();
+    p.integrator = integ;
+    const auto run = Run(p, 400);
+    double pos = 0.0, yaw = 0.0, speed = 0.0;
+    for (std::size_t k = 0; k < run.size(); ++k) {
+      pos = std::max(pos, std::hypot(run[k].x_m - ref[k].x_m, run[k].y_m - ref[k].y_m));
+      yaw = std::max(yaw, std::abs(run[k].yaw_rad - ref[k].yaw_rad));
+      speed = std::max(speed, std::abs(run[k].u_mps - ref[k].u_mps));
+    }
+    const bool rk2 = integ == pbppo::sim::AuvIntegrator::kRk2;
+    MESSAGE(std::string(rk2 ? "rk2" : "semi-explicit Euler"), ": max position error ", pos, " m, yaw ", yaw,
+            " rad, surge ", speed, " m/s over ", ref.back().time_s, " s");
+    // Measured: rk2 1.2 cm / 0.0044 rad; semi-explicit Euler 4.9 cm / 0.0097 rad. Both far below
+    // l_safe (1.2 m) and the target radius (1.5 m).
+    CHECK(pos < (rk2 ? 0.025 : 0.1));
+    CHECK(yaw < (rk2 ? 0.008 : 0.02));
+    CHECK(speed < 0.01);
+  }
+}

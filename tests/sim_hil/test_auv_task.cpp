@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "sim_hil/scenarios/auv_nav_task.hpp"
@@ -431,4 +432,82 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   auto t = LoadAuvTaskParams(scratch);
   REQUIRE_FALSE(t.ok());
   CHECK(t.error().message.find("task.safe_distnce_m: unknown field") != std::string::npos);
+}
+
+namespace {
+
+// Breadth-first search on a 0.2 m grid over cells whose centre keeps clearance >= l_safe + 0.1 m:
+// is there a collision-free path from `from` to within `radius` of `to`?
+bool Reachable(const World2d& w, double clearance, std::array<double, 2> from, std::array<double, 2> to,
+               double radius) {
+  constexpr double kCell = 0.2;
+  const Arena& a = w.arena;
+  const int nx = static_cast<int>((a.x_max_m - a.x_min_m) / kCell),
+            ny = static_cast<int>((a.y_max_m - a.y_min_m) / kCell);
+  auto cx = [&](int i) { return a.x_min_m + (i + 0.5) * kCell; };
+  auto cy = [&](int j) { return a.y_min_m + (j + 0.5) * kCell; };
+  std::vector<char> seen(static_cast<std::size_t>(nx * ny), 0);
+  std::vector<int> queue;
+  const int i0 = static_cast<int>((from[0] - a.x_min_m) / kCell), j0 = static_cast<int>((from[1] - a.y_min_m) / kCell);
+  queue.push_back(j0 * nx + i0);
+  seen[static_cast<std::size_t>(j0 * nx + i0)] = 1;
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    const int i = queue[head] % nx, j = queue[head] / nx;
+    if (std::hypot(cx(i) - to[0], cy(j) - to[1]) < radius) return true;
+    const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
+    for (int d = 0; d < 4; ++d) {
+      const int ni = i + di[d], nj = j + dj[d];
+      if (ni < 0 || nj < 0 || ni >= nx || nj >= ny) continue;
+      auto& s = seen[static_cast<std::size_t>(nj * nx + ni)];
+      if (s) continue;
+      s = 1;
+      if (Clearance(w, cx(ni), cy(nj)) >= clearance) queue.push_back(nj * nx + ni);
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("auv task: every layout stays solvable with its random obstacles (grid search)") {
+  for (const char* name : {"easy", "medium", "hard"}) {
+    CAPTURE(name);
+    const AuvTaskConfig c = Config(name);
+    AuvNavTask task = MakeTask(c);
+    std::vector<float> obs(22);
+    const double need = c.task.safe_distance_m + 0.1;
+    for (const auto& t : c.layout.targets) CHECK(Clearance(c.layout.world, t[0], t[1]) >= need);
+    for (std::uint64_t seed = 0; seed < 30; ++seed) {
+      CAPTURE(seed);
+      task.Reset(seed, obs.data());
+      std::array<double, 2> from{task.vehicle().x_m, task.vehicle().y_m};
+      for (const auto& t : c.layout.targets) {
+        CHECK(Reachable(task.world(), need, from, t, c.task.target_radius_m));
+        from = t;
+      }
+    }
+  }
+  // The search does find blocked passages: close the hard layout's left gap.
+  AuvTaskConfig c = Config("hard");
+  c.layout.world.boxes.push_back(Box{0.0, 10.0, 24.0, 26.0});
+  CHECK_FALSE(Reachable(c.layout.world, c.task.safe_distance_m + 0.1, {34.0, 20.0}, {6.0, 30.0}, 1.5));
+}
+
+TEST_CASE("auv task: two task instances on two threads give the single-threaded episode") {
+  const AuvTaskConfig c = Config("hard");
+  AuvNavTask ref_task = MakeTask(c);
+  const Episode ref = RunPilot(ref_task, 5, 400);
+  Episode e1, e2;
+  std::thread t1([&] {
+    AuvNavTask t = MakeTask(c);
+    e1 = RunPilot(t, 5, 400);
+  });
+  std::thread t2([&] {
+    AuvNavTask t = MakeTask(c);
+    e2 = RunPilot(t, 5, 400);
+  });
+  t1.join();
+  t2.join();
+  CHECK(e1.obs == ref.obs);
+  CHECK(e2.obs == ref.obs);
 }
