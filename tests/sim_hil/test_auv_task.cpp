@@ -114,28 +114,36 @@ TEST_CASE("auv task: all layouts and the IO layout load; sizes and hash come fro
   }
 }
 
+// The pilot is reactive (no planning), so it can be trapped; on the easy layout it succeeded in
+// 48 of 50 seeds when written (medium 0, hard 0: those need planning or learning). Required
+// here: at least 18 of 20 seeds, and the events, rewards and flags of every episode, successful
+// or not, as specified.
 TEST_CASE("auv task: the scripted pilot reaches the three targets of the easy layout in order") {
   const AuvTaskConfig c = Config("easy");
   AuvNavTask task = MakeTask(c);
-  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+  int successes = 0;
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
     CAPTURE(seed);
     const Episode e = RunPilot(task, seed);
     const AuvEpisodeStats& s = task.stats();
-    CHECK(s.success);
-    CHECK_FALSE(s.collided);
-    CHECK(s.targets_reached == 3);
-    CHECK(s.min_clearance_m > c.task.safe_distance_m);
+    successes += s.success ? 1 : 0;
+    CHECK(s.success != s.collided);  // the pilot never runs out of time on this layout
+    CHECK_FALSE(s.truncated);
+    CHECK(s.targets_reached == (s.success ? 3 : s.targets_reached));
     CHECK(s.steps == static_cast<long>(e.steps.size()));
     CHECK(s.time_s == doctest::Approx(0.1 * static_cast<double>(s.steps)));
-    // Events: targets 0, 1, 2 in order, each once, each step paying the goal reward.
+    if (s.success) CHECK(s.min_clearance_m > c.task.safe_distance_m);
+    // Events: targets 0, 1, 2 in order, each once, each such step paying the goal reward.
     std::vector<int> reached;
     double sum = 0.0;
     for (std::size_t k = 0; k < e.steps.size(); ++k) {
       const AuvStepResult& r = e.steps[k];
+      const bool last = k + 1 == e.steps.size();
       sum += r.reward;
       CHECK(r.reward == doctest::Approx(r.r_collision + r.r_goal + r.r_progress));
-      CHECK_FALSE(r.events.collision);
       CHECK_FALSE(r.truncated);
+      CHECK(r.events.collision == (last && s.collided));
+      CHECK(r.r_collision == (r.events.collision ? -500.0 : 0.0));
       if (r.events.target_reached >= 0) {
         reached.push_back(r.events.target_reached);
         CHECK(r.r_goal == 1000.0);
@@ -143,19 +151,21 @@ TEST_CASE("auv task: the scripted pilot reaches the three targets of the easy la
         CHECK(r.r_goal == 0.0);
       }
       // Only the last step ends the episode, and only its observation carries chi = 1.
-      const bool last = k + 1 == e.steps.size();
       CHECK(r.terminated == last);
       CHECK(e.obs[k + 1][kEnd] == (last ? 1.0f : 0.0f));
-      // The progress term is bounded by what one period of motion can change.
-      CHECK(r.r_progress > -0.2 - 5 * 0.16 - 2 * 0.06 - 1e-9);
-      CHECK(r.r_progress < -0.2 + 5 * 0.16 + 2 * 0.06 + 1e-9);
+      // The progress term is bounded by what one period of motion can change (0.15 m, 0.05 rad
+      // of turn plus the bearing change from 0.15 m of travel at >= 1.5 m from the target).
+      CHECK(std::abs(r.r_progress + 0.2) < 5 * 0.16 + 2 * 0.16);
     }
-    CHECK(reached == std::vector<int>{0, 1, 2});
-    CHECK(e.steps.back().events.all_targets);
+    CHECK(reached.size() == static_cast<std::size_t>(s.targets_reached));
+    for (std::size_t i = 0; i < reached.size(); ++i) CHECK(reached[i] == static_cast<int>(i));
+    CHECK(e.steps.back().events.all_targets == s.success);
     CHECK(sum == doctest::Approx(s.episode_return));
-    CHECK(s.episode_return > 3000.0);
+    if (s.success) CHECK(s.episode_return > 3000.0);
     CHECK(e.obs.front()[kEnd] == 0.0f);
   }
+  MESSAGE("scripted pilot on easy: ", successes, " of 20 seeds reached all three targets");
+  CHECK(successes >= 18);
 }
 
 TEST_CASE("auv task: the progress term follows l_AT and |phi_AT| exactly, and turning towards the target pays") {
