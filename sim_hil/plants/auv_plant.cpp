@@ -15,6 +15,9 @@ namespace {
 double Clamp(double x, double lo, double hi) {
   return std::min(std::max(x, lo), hi);
 }
+double Sign(double x) {
+  return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0;
+}
 
 // Thruster outputs held constant over one physics step (zero-order hold).
 struct Thrust {
@@ -246,6 +249,7 @@ struct AuvPlant::Impl {
     state.updU() = 0.0;
     thrust = Thrust{};
     i_surge = i_yaw = i_depth = 0.0;
+    sat_surge = sat_yaw = sat_depth = 0.0;
     v_cmd = w_cmd = 0.0;
     z_ref = pose.z_m;
     steps = 0;
@@ -261,25 +265,35 @@ struct AuvPlant::Impl {
     const SimTK::Vec3 v_b = ~R * v_g;
     const double z = body.getBodyOriginLocation(state)[2];
     const auto& p = params;
-    // Surge: feed-forward of the hull's damping at the commanded speed plus PI.
+    // Surge and yaw rate: feed-forward of the hull's damping at the commanded value plus PI.
+    // Conditional integration: an integrator does not grow while the previous step's output
+    // was saturated in the direction of its error (no wind-up during full-thrust manoeuvres).
     const double e_u = v_cmd - v_b[0];
-    i_surge = Clamp(i_surge + e_u * h, -p.surge.integral_limit, p.surge.integral_limit);
+    if (e_u * sat_surge <= 0.0) i_surge = Clamp(i_surge + e_u * h, -p.surge.integral_limit, p.surge.integral_limit);
     const double x_force = (p.damping_linear[0] + p.damping_quadratic[0] * std::abs(v_cmd)) * v_cmd + p.surge.kp * e_u +
                            p.surge.ki * i_surge;
     const double e_r = w_cmd - w_b[2];
-    i_yaw = Clamp(i_yaw + e_r * h, -p.yaw_rate.integral_limit, p.yaw_rate.integral_limit);
+    if (e_r * sat_yaw <= 0.0) i_yaw = Clamp(i_yaw + e_r * h, -p.yaw_rate.integral_limit, p.yaw_rate.integral_limit);
     const double n_moment = (p.damping_linear[5] + p.damping_quadratic[5] * std::abs(w_cmd)) * w_cmd +
                             p.yaw_rate.kp * e_r + p.yaw_rate.ki * i_yaw;
     // Depth: PID on the world depth error plus the net buoyancy as feed-forward.
     const double e_z = z_ref - z;
-    i_depth = Clamp(i_depth + e_z * h, -p.depth.integral_limit, p.depth.integral_limit);
+    if (e_z * sat_depth <= 0.0) i_depth = Clamp(i_depth + e_z * h, -p.depth.integral_limit, p.depth.integral_limit);
     const double z_force =
         p.depth.kp * e_z + p.depth.ki * i_depth - p.depth.kd * v_g[2] - (p.buoyancy_n - p.mass_kg * p.gravity_mps2);
-    // Allocation to the horizontal pair: X = Ts + Tp, N = d (Ts - Tp).
-    const double half_diff = n_moment / (2.0 * p.thruster_lateral_offset_m);
-    thrust.starboard_n = Clamp(0.5 * x_force + half_diff, -p.thrust_reverse_max_n, p.thrust_forward_max_n);
-    thrust.port_n = Clamp(0.5 * x_force - half_diff, -p.thrust_reverse_max_n, p.thrust_forward_max_n);
+    // Allocation to the horizontal pair, X = Ts + Tp, N = d (Ts - Tp), with yaw priority: the
+    // differential is kept (up to what the pair can give) and the common part is cut to fit, so
+    // a saturated turn slows the vehicle down instead of widening the turn.
+    const double fwd = p.thrust_forward_max_n, rev = p.thrust_reverse_max_n;
+    const double want_diff = n_moment / (2.0 * p.thruster_lateral_offset_m);
+    const double half_diff = Clamp(want_diff, -0.5 * (fwd + rev), 0.5 * (fwd + rev));
+    const double common = Clamp(0.5 * x_force, -rev + std::abs(half_diff), fwd - std::abs(half_diff));
+    thrust.starboard_n = common + half_diff;
+    thrust.port_n = common - half_diff;
     thrust.vertical_n = Clamp(z_force, -p.heave_thrust_max_n, p.heave_thrust_max_n);
+    sat_surge = Sign(0.5 * x_force - common);
+    sat_yaw = Sign(want_diff - half_diff);
+    sat_depth = Sign(z_force - thrust.vertical_n);
   }
 
   void Step() {
@@ -359,6 +373,8 @@ struct AuvPlant::Impl {
   Thrust thrust;
   double v_cmd = 0.0, w_cmd = 0.0, z_ref = 0.0;
   double i_surge = 0.0, i_yaw = 0.0, i_depth = 0.0;
+  // Sign of the last step's saturation per loop (+1 above the limit, -1 below, 0 within).
+  double sat_surge = 0.0, sat_yaw = 0.0, sat_depth = 0.0;
   std::uint64_t steps = 0;
   AuvState out;
 };

@@ -48,8 +48,8 @@ struct AuvParams {
   double thrust_reverse_max_n = 25.0;
   double heave_thrust_max_n = 30.0;
   // Low-level controller (runs every physics step, zero-order hold on thrust).
-  PidGains surge{150.0, 40.0, 0.0, 1.0};
-  PidGains yaw_rate{40.0, 10.0, 0.0, 1.0};
+  PidGains surge{150.0, 150.0, 0.0, 1.0};
+  PidGains yaw_rate{80.0, 40.0, 0.0, 1.0};
   PidGains depth{150.0, 10.0, 150.0, 1.0};
   double surge_speed_min_mps = -0.5;
   double surge_speed_max_mps = 1.5;

@@ -60,11 +60,13 @@ TEST_CASE("auv plant: reset pose is reported back") {
   CHECK(s.u_mps == 0.0);
 }
 
-// The speed loops are PI with damping feed-forward, closed-loop time constants about 0.3 s
-// (surge) and 0.4 s (yaw); after 20 s the integrators have removed the steady error. 2 % of
-// the command is the bound: well inside what the task's reward can tell apart in one period.
+// The speed loops are PI with damping feed-forward; a step reaches 90 % in about 1.3 s (surge,
+// thrust-limited) and 0.5 s (yaw rate), and after 20 s the integrators have removed the steady
+// error, including the skid load of a turn. 2 % of the command is the bound: below what one
+// control period of the task can tell apart (0.03 m/s changes l_AT by 3 mm per period).
 TEST_CASE("auv plant: constant command reaches the commanded surge speed and yaw rate") {
-  for (const auto& [v, w] : {std::pair{1.0, 0.0}, std::pair{1.0, 0.3}, std::pair{0.5, -0.4}, std::pair{1.5, 0.2}}) {
+  for (const auto& [v, w] : {std::pair{1.0, 0.0}, std::pair{1.0, 0.3}, std::pair{0.5, -0.4}, std::pair{1.5, 0.2},
+                             std::pair{1.5, -0.5}, std::pair{0.2, 0.5}}) {
     CAPTURE(v);
     CAPTURE(w);
     auto plant = AuvPlant::Create(Params());
@@ -83,14 +85,40 @@ TEST_CASE("auv plant: constant command reaches the commanded surge speed and yaw
   }
 }
 
-TEST_CASE("auv plant: surge response reaches 90 % within 3 s") {
+TEST_CASE("auv plant: step responses reach 90 % within 3 s and overshoot by under 5 %") {
   auto plant = AuvPlant::Create(Params());
   REQUIRE(plant.ok());
   plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
-  plant->SetCommand(1.0, 0.0);
-  plant->Advance(3.0);
-  CHECK(plant->State().u_mps > 0.9);
-  CHECK(plant->State().u_mps < 1.1);
+  plant->SetCommand(1.0, 0.4);
+  double u_max = 0.0, r_max = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    plant->AdvanceControlPeriod();
+    u_max = std::max(u_max, plant->State().u_mps);
+    r_max = std::max(r_max, plant->State().r_radps);
+    if (k == 29) {
+      CHECK(plant->State().u_mps > 0.9);
+      CHECK(plant->State().r_radps > 0.9 * 0.4);
+    }
+  }
+  CHECK(u_max < 1.05);
+  CHECK(r_max < 1.05 * 0.4);
+}
+
+// Full speed with the largest yaw rate needs more than the thruster pair can give (the turn
+// skids: the sway drift adds (m + a_u) v r to the surge load). The allocation keeps the yaw
+// rate and gives up surge speed.
+TEST_CASE("auv plant: a saturated turn keeps the yaw rate and slows down") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
+  plant->SetCommand(1.5, 0.6);
+  plant->Advance(20.0);
+  const AuvState& s = plant->State();
+  CHECK(s.r_radps == doctest::Approx(0.6).epsilon(0.02));
+  CHECK(s.u_mps < 1.49);
+  CHECK(s.u_mps > 1.3);
+  CHECK(s.thrust_n[0] == doctest::Approx(40.0));  // starboard at its limit
+  CHECK(s.v_mps < -0.1);                          // drifting outwards (to starboard) in a port turn
 }
 
 TEST_CASE("auv plant: near-neutral buoyancy with the depth loop keeps depth") {
@@ -197,16 +225,16 @@ TEST_CASE("auv plant: 20 ms steps agree with a converged 2 ms run") {
     double pos = 0.0, yaw = 0.0, speed = 0.0;
     for (std::size_t k = 0; k < run.size(); ++k) {
       pos = std::max(pos, std::hypot(run[k].x_m - ref[k].x_m, run[k].y_m - ref[k].y_m));
-      yaw = std::max(yaw, std::abs(run[k].yaw_rad - ref[k].yaw_rad));
+      yaw = std::max(yaw, std::abs(std::remainder(run[k].yaw_rad - ref[k].yaw_rad, 2.0 * 3.14159265358979323846)));
       speed = std::max(speed, std::abs(run[k].u_mps - ref[k].u_mps));
     }
     const bool rk2 = integ == pbppo::sim::AuvIntegrator::kRk2;
     MESSAGE(std::string(rk2 ? "rk2" : "semi-explicit Euler"), ": max position error ", pos, " m, yaw ", yaw,
             " rad, surge ", speed, " m/s over ", ref.back().time_s, " s");
-    // Measured: rk2 1.2 cm / 0.0044 rad; semi-explicit Euler 4.9 cm / 0.0097 rad. Both far below
+    // Measured: rk2 1.2 cm / 0.0045 rad; semi-explicit Euler 4.5 cm / 0.0095 rad. Both far below
     // l_safe (1.2 m) and the target radius (1.5 m).
     CHECK(pos < (rk2 ? 0.025 : 0.1));
     CHECK(yaw < (rk2 ? 0.008 : 0.02));
-    CHECK(speed < 0.01);
+    CHECK(speed < (rk2 ? 0.01 : 0.02));
   }
 }
