@@ -135,6 +135,27 @@ TEST_CASE("auv plant: near-neutral buoyancy with the depth loop keeps depth") {
   CHECK(std::abs(plant->State().yaw_rad - 1.0) < 1e-3);
 }
 
+TEST_CASE("auv plant: a new depth set-point is reached and held; Advance rounds to whole steps") {
+  auto plant = AuvPlant::Create(Params());
+  REQUIRE(plant.ok());
+  plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
+  plant->SetDepthSetpoint(-6.0);
+  plant->SetCommand(1.0, 0.0);
+  plant->Advance(30.0);
+  CHECK(plant->State().z_m == doctest::Approx(-6.0).epsilon(0.01));
+  CHECK(std::abs(plant->State().pitch_rad) < 0.05);
+  const std::uint64_t before = plant->physics_steps();
+  plant->Advance(0.051);  // 2.55 steps of 20 ms -> 3
+  CHECK(plant->physics_steps() - before == 3);
+  plant->Advance(0.001);  // at least one step
+  CHECK(plant->physics_steps() - before == 4);
+  plant->SetDepthSetpoint(std::nan(""));      // ignored
+  plant->SetCommand(std::nan(""), INFINITY);  // -> 0, 0
+  plant->Advance(20.0);
+  CHECK(std::abs(plant->State().u_mps) < 0.02);
+  CHECK(plant->State().z_m == doctest::Approx(-6.0).epsilon(0.01));
+}
+
 TEST_CASE("auv plant: without thrust the positive buoyancy lifts the vehicle and it stays upright") {
   AuvParams p = Params();
   p.depth = {};  // depth loop off

@@ -521,3 +521,43 @@ TEST_CASE("auv task: two task instances on two threads give the single-threaded 
   CHECK(e1.obs == ref.obs);
   CHECK(e2.obs == ref.obs);
 }
+
+TEST_CASE("auv task: observations are the signals through the IO layout, history included") {
+  AuvTaskConfig c = Config("medium");
+  AuvNavTask task = MakeTask(c);
+  std::vector<float> obs(22);
+  task.Reset(17, obs.data());
+  const float fwd[2] = {0.5f, 0.3f};
+  for (int k = 0; k < 20; ++k) (void)task.Step(fwd, obs.data());
+  const AuvState& s = task.vehicle();
+  for (int i = 0; i < 16; ++i) {
+    const double range = task.sonar_ranges()[static_cast<std::size_t>(i)];
+    CHECK(range == doctest::Approx(CastRay(task.world(), s.x_m, s.y_m, s.yaw_rad + 2 * kPi * i / 16, 15.0)));
+    CHECK(obs[static_cast<std::size_t>(i)] == doctest::Approx(std::min(range / 15.0, 1.0)).epsilon(1e-6));
+  }
+  CHECK(obs[20] == doctest::Approx(s.u_mps / 1.5).epsilon(1e-5));
+  CHECK(obs[21] == doctest::Approx(std::clamp(s.r_radps / 0.6, -1.5, 1.5)).epsilon(1e-5));
+  CHECK(obs[kYaw] == doctest::Approx(WrapAngle(s.yaw_rad) / kPi).epsilon(1e-6));
+
+  // History 3 on target_distance, and an offset: 24 inputs, the element shifts by one per step.
+  c.io.observations[16].history = 3;
+  c.io.observations[16].offset = 10.0;
+  AuvNavTask h = MakeTask(c);
+  CHECK(h.observation_size() == 24);
+  CHECK(h.io_layout_hash() != task.io_layout_hash());
+  std::vector<float> o(24);
+  h.Reset(17, o.data());
+  CHECK(o[16] == o[17]);  // filled with the reset value
+  CHECK(o[17] == o[18]);
+  std::vector<float> prev = o;
+  for (int k = 0; k < 5; ++k) {
+    (void)h.Step(fwd, o.data());
+    const AuvState& v = h.vehicle();
+    const auto& t = c.layout.targets[static_cast<std::size_t>(h.target_index())];
+    CHECK(o[16] == doctest::Approx((std::hypot(t[0] - v.x_m, t[1] - v.y_m) - 10.0) * 0.025).epsilon(1e-6));
+    CHECK(o[17] == prev[16]);
+    CHECK(o[18] == prev[17]);
+    CHECK(o[19] == doctest::Approx(WrapAngle(v.yaw_rad) / kPi).epsilon(1e-6));  // yaw follows at 19
+    prev = o;
+  }
+}
