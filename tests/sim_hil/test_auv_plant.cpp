@@ -136,7 +136,10 @@ TEST_CASE("auv plant: near-neutral buoyancy with the depth loop keeps depth") {
 }
 
 TEST_CASE("auv plant: a new depth set-point is reached and held; Advance rounds to whole steps") {
-  auto plant = AuvPlant::Create(Params());
+  AuvParams p = Params();
+  p.physics_step_s = 0.02;
+  p.control_period_s = 0.1;
+  auto plant = AuvPlant::Create(p);
   REQUIRE(plant.ok());
   plant->Reset(AuvPose{20.0, 20.0, -5.0, 0.0});
   plant->SetDepthSetpoint(-6.0);
