@@ -1,0 +1,349 @@
+#include "sim_hil/scenarios/auv_nav_task.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim_hil/common/yaml_fields.hpp"
+
+namespace pbppo::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Signals an IO layout can name; sonar_0 ... sonar_{n-1} follow after kCount.
+enum Signal : int {
+  kTargetDistance,  // l_AT, m
+  kYaw,             // theta, rad in (-pi, pi]
+  kTargetBearing,   // phi_AT relative to the heading, rad in (-pi, pi]
+  kEpisodeEnd,      // chi: 1 in the last observation of an episode
+  kSurgeSpeed,      // body u, m/s
+  kSwaySpeed,       // body v, m/s
+  kYawRate,         // body r, rad/s
+  kCosYaw,
+  kSinYaw,
+  kCosTargetBearing,
+  kSinTargetBearing,
+  kX,            // m
+  kY,            // m
+  kDepthError,   // depth - set-point, m
+  kClearance,    // nearest obstacle or wall, m
+  kTargetIndex,  // 0, 1, 2 ...
+  kCount
+};
+
+constexpr const char* kSignalNames[kCount] = {"target_distance",
+                                              "yaw",
+                                              "target_bearing",
+                                              "episode_end",
+                                              "surge_speed",
+                                              "sway_speed",
+                                              "yaw_rate",
+                                              "cos_yaw",
+                                              "sin_yaw",
+                                              "cos_target_bearing",
+                                              "sin_target_bearing",
+                                              "x",
+                                              "y",
+                                              "depth_error",
+                                              "clearance",
+                                              "target_index"};
+
+}  // namespace
+
+Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
+  auto doc = LoadYamlFile(auv_yaml);
+  if (!doc) return std::move(doc).error();
+  YamlFields f(auv_yaml);
+  YAML::Node n;
+  if (auto st = f.Map(*doc, "sonar", "", &n); !st) return st.error();
+  if (auto st = f.Keys(n, "sonar", {"beams", "fov_deg", "max_range_m"}); !st) return st.error();
+  SonarParams s;
+  long beams = 0;
+  double fov_deg = 0.0;
+  if (auto st = f.Integer(n, "beams", "sonar", 1, 256, &beams); !st) return st.error();
+  if (auto st = f.Number(n, "fov_deg", "sonar", 0.0, 360.0, &fov_deg); !st) return st.error();
+  if (auto st = f.Number(n, "max_range_m", "sonar", 0.1, 1000.0, &s.max_range_m); !st) return st.error();
+  s.beams = static_cast<int>(beams);
+  s.fov_rad = fov_deg * kPi / 180.0;
+  return s;
+}
+
+Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
+  auto doc = LoadYamlFile(auv_yaml);
+  if (!doc) return std::move(doc).error();
+  YamlFields f(auv_yaml);
+  YAML::Node n;
+  if (auto st = f.Map(*doc, "task", "", &n); !st) return st.error();
+  if (auto st = f.Keys(n, "task",
+                       {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights",
+                        "collision_penalty", "goal_reward", "step_penalty", "distance_gain", "bearing_gain"});
+      !st)
+    return st.error();
+  AuvTaskParams t;
+  if (auto st = f.Number(n, "depth_m", "task", 0.0, 1e4, &t.depth_m); !st) return st.error();
+  if (auto st = f.Number(n, "safe_distance_m", "task", 0.0, 100.0, &t.safe_distance_m); !st) return st.error();
+  if (auto st = f.Number(n, "target_radius_m", "task", 0.01, 100.0, &t.target_radius_m); !st) return st.error();
+  if (auto st = f.Number(n, "episode_time_s", "task", 1e-3, 1e6, &t.episode_time_s); !st) return st.error();
+  for (auto [k, out] : {std::pair<const char*, double*>{"collision_penalty", &t.collision_penalty},
+                        {"goal_reward", &t.goal_reward},
+                        {"step_penalty", &t.step_penalty},
+                        {"distance_gain", &t.distance_gain},
+                        {"bearing_gain", &t.bearing_gain}}) {
+    if (auto st = f.Number(n, k, "task", 0.0, 1e6, out); !st) return st.error();
+  }
+  YAML::Node w;
+  if (auto st = f.Map(n, "weights", "task", &w); !st) return st.error();
+  if (auto st = f.Keys(w, "task.weights", {"collision", "goal", "progress"}); !st) return st.error();
+  if (auto st = f.Number(w, "collision", "task.weights", 0.0, 1e6, &t.weight_collision); !st) return st.error();
+  if (auto st = f.Number(w, "goal", "task.weights", 0.0, 1e6, &t.weight_goal); !st) return st.error();
+  if (auto st = f.Number(w, "progress", "task.weights", 0.0, 1e6, &t.weight_progress); !st) return st.error();
+  return t;
+}
+
+Result<AuvTaskConfig> LoadAuvTaskConfig(const std::string& auv_yaml, const std::string& layout_yaml,
+                                        const std::string& io_layout_yaml) {
+  AuvTaskConfig c;
+  auto plant = LoadAuvParams(auv_yaml);
+  if (!plant) return std::move(plant).error();
+  c.plant = *plant;
+  auto sonar = LoadSonarParams(auv_yaml);
+  if (!sonar) return std::move(sonar).error();
+  c.sonar = *sonar;
+  auto task = LoadAuvTaskParams(auv_yaml);
+  if (!task) return std::move(task).error();
+  c.task = *task;
+  auto layout = LoadAuvLayout(layout_yaml);
+  if (!layout) return std::move(layout).error();
+  c.layout = std::move(*layout);
+  auto io = robot::LoadIoLayout(io_layout_yaml);
+  if (!io) return std::move(io).error();
+  c.io = std::move(*io);
+  return c;
+}
+
+std::vector<std::string> AuvNavTask::SignalNames() const {
+  std::vector<std::string> names(kSignalNames, kSignalNames + kCount);
+  for (int i = 0; i < config_.sonar.beams; ++i) names.push_back("sonar_" + std::to_string(i));
+  return names;
+}
+
+Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
+  auto plant = AuvPlant::Create(config.plant);
+  if (!plant) return std::move(plant).error();
+  if (config.sonar.beams < 1) return MakeError(ErrorCode::kInvalidValue, "sonar.beams must be >= 1");
+  if (config.layout.targets.empty())
+    return MakeError(ErrorCode::kInvalidValue, "layout '" + config.layout.name + "': no targets");
+  AuvNavTask t(config, std::move(*plant));
+  const std::string where = "io layout '" + config.io.robot + "'";
+  if (config.io.robot != "auv")
+    return MakeError(ErrorCode::kMismatch, where + ": robot is '" + config.io.robot + "', expected 'auv'");
+  const std::vector<std::string> names = t.SignalNames();
+  for (std::size_t i = 0; i < config.io.observations.size(); ++i) {
+    const auto& o = config.io.observations[i];
+    const auto it = std::find(names.begin(), names.end(), o.signal);
+    if (it == names.end()) {
+      std::string known;
+      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+      return MakeError(ErrorCode::kMismatch, where + ": observations[" + std::to_string(i) + "] '" + o.name +
+                                                 "': signal '" + o.signal + "' is not provided by the AUV task (" +
+                                                 known + ")");
+    }
+    t.obs_signal_.push_back(static_cast<int>(it - names.begin()));
+  }
+  if (config.io.actions.size() != 2)
+    return MakeError(ErrorCode::kMismatch, where + ": " + std::to_string(config.io.actions.size()) +
+                                               " actions, the AUV task takes 2 (surge_speed, yaw_rate)");
+  t.action_of_ = {-1, -1};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& a = config.io.actions[i];
+    const int slot = a.command == "surge_speed" ? 0 : a.command == "yaw_rate" ? 1 : -1;
+    if (slot < 0)
+      return MakeError(ErrorCode::kMismatch, where + ": actions[" + std::to_string(i) + "] '" + a.name +
+                                                 "': command '" + a.command + "' is not one of surge_speed, yaw_rate");
+    if (t.action_of_[static_cast<std::size_t>(slot)] >= 0)
+      return MakeError(ErrorCode::kMismatch,
+                       where + ": actions[" + std::to_string(i) + "]: command '" + a.command + "' appears twice");
+    t.action_of_[static_cast<std::size_t>(slot)] = static_cast<int>(i);
+  }
+  t.io_hash_ = config.io.Hash();
+  t.obs_size_ = config.io.observation_size();
+  t.last_obs_.assign(t.obs_size_, 0.0f);
+  t.signals_.assign(names.size(), 0.0);
+  t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
+  t.max_steps_ = std::lround(std::ceil(config.task.episode_time_s / config.plant.control_period_s - 1e-9));
+  t.world_ = config.layout.world;
+  t.world_.circles.reserve(config.layout.world.circles.size() +
+                           static_cast<std::size_t>(config.layout.random_obstacles.count[1]));
+  return t;
+}
+
+AuvNavTask::AuvNavTask(const AuvTaskConfig& config, AuvPlant plant) : config_(config), plant_(std::move(plant)) {}
+
+void AuvNavTask::PlaceRandomObstacles(Rng& rng) {
+  const AuvRandomObstacles& r = config_.layout.random_obstacles;
+  const AuvStartRegion& s = config_.layout.start;
+  const Arena& a = world_.arena;
+  const auto span = static_cast<std::uint64_t>(r.count[1] - r.count[0] + 1);
+  const int count = r.count[0] + static_cast<int>(rng.Below(span));
+  constexpr int kAttempts = 64;
+  for (int k = 0; k < count; ++k) {
+    for (int attempt = 0; attempt < kAttempts; ++attempt) {
+      const double radius = rng.Uniform(r.radius_m[0], r.radius_m[1]);
+      const double keep = radius + r.clearance_m;
+      if (a.x_max_m - a.x_min_m <= 2 * keep || a.y_max_m - a.y_min_m <= 2 * keep) break;
+      const double x = rng.Uniform(a.x_min_m + keep, a.x_max_m - keep);
+      const double y = rng.Uniform(a.y_min_m + keep, a.y_max_m - keep);
+      // Away from walls and obstacles (passages stay at least clearance_m wide) ...
+      bool ok = Clearance(world_, x, y) >= keep;
+      // ... from every target ...
+      for (const auto& t : config_.layout.targets) ok = ok && std::hypot(x - t[0], y - t[1]) >= keep;
+      // ... and from the start region (distance to a rectangle).
+      const double dx = std::max({s.x_m[0] - x, 0.0, x - s.x_m[1]});
+      const double dy = std::max({s.y_m[0] - y, 0.0, y - s.y_m[1]});
+      ok = ok && std::hypot(dx, dy) >= keep;
+      if (ok) {
+        world_.circles.push_back(Circle{x, y, radius});
+        ++stats_.random_obstacles;
+        break;
+      }
+    }
+  }
+}
+
+void AuvNavTask::Measure() {
+  const AuvState& s = plant_.State();
+  SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data());
+  const auto& t = config_.layout.targets[static_cast<std::size_t>(
+      std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
+  l_at_ = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
+  phi_at_ = WrapAngle(std::atan2(t[1] - s.y_m, t[0] - s.x_m) - s.yaw_rad);
+  clearance_ = Clearance(world_, s.x_m, s.y_m);
+}
+
+void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
+  const AuvState& s = plant_.State();
+  double* g = signals_.data();
+  g[kTargetDistance] = l_at_;
+  g[kYaw] = WrapAngle(s.yaw_rad);
+  g[kTargetBearing] = phi_at_;
+  g[kEpisodeEnd] = episode_end ? 1.0 : 0.0;
+  g[kSurgeSpeed] = s.u_mps;
+  g[kSwaySpeed] = s.v_mps;
+  g[kYawRate] = s.r_radps;
+  g[kCosYaw] = std::cos(s.yaw_rad);
+  g[kSinYaw] = std::sin(s.yaw_rad);
+  g[kCosTargetBearing] = std::cos(phi_at_);
+  g[kSinTargetBearing] = std::sin(phi_at_);
+  g[kX] = s.x_m;
+  g[kY] = s.y_m;
+  g[kDepthError] = -s.z_m - config_.task.depth_m;
+  g[kClearance] = clearance_;
+  g[kTargetIndex] = target_;
+  for (std::size_t i = 0; i < sonar_.size(); ++i) g[kCount + i] = sonar_[i];
+  // Through the IO layout: clamp((signal - offset) * scale, -clip, clip); history h occupies h
+  // consecutive inputs (now, one period ago, ...), filled with the first value at reset.
+  std::size_t k = 0;
+  for (std::size_t e = 0; e < config_.io.observations.size(); ++e) {
+    const auto& o = config_.io.observations[e];
+    const double v = (g[obs_signal_[e]] - o.offset) * o.scale;
+    const auto now = static_cast<float>(std::clamp(v, -o.clip, o.clip));
+    const std::size_t h = o.history;
+    for (std::size_t j = h - 1; j >= 1; --j) last_obs_[k + j] = first ? now : last_obs_[k + j - 1];
+    last_obs_[k] = now;
+    k += h;
+  }
+  std::copy(last_obs_.begin(), last_obs_.end(), obs);
+}
+
+void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
+  Rng rng(seed);
+  stats_ = AuvEpisodeStats{};
+  world_.circles.resize(config_.layout.world.circles.size());
+  PlaceRandomObstacles(rng);
+  // Start pose: uniform in the start region, redrawn while closer than l_safe + 0.5 m to anything.
+  const AuvStartRegion& s = config_.layout.start;
+  AuvPose pose;
+  pose.z_m = -config_.task.depth_m;
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    pose.x_m = rng.Uniform(s.x_m[0], s.x_m[1]);
+    pose.y_m = rng.Uniform(s.y_m[0], s.y_m[1]);
+    pose.yaw_rad = rng.Uniform(s.yaw_rad[0], s.yaw_rad[1]);
+    if (Clearance(world_, pose.x_m, pose.y_m) >= config_.task.safe_distance_m + 0.5) break;
+  }
+  physics_steps_ += plant_.physics_steps();
+  plant_.Reset(pose);
+  plant_.SetCommand(0.0, 0.0);
+  target_ = 0;
+  v_cmd_ = w_cmd_ = 0.0;
+  done_ = terminated_ = truncated_ = false;
+  Measure();
+  stats_.min_clearance_m = clearance_;
+  WriteObservation(false, true, obs);
+}
+
+AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
+  AuvStepResult r;
+  if (done_) {
+    r.terminated = terminated_;
+    r.truncated = truncated_;
+    std::copy(last_obs_.begin(), last_obs_.end(), obs);
+    return r;
+  }
+  // Action -> command through the IO layout: clamp(a * scale + offset, low, high).
+  double cmd[2];
+  for (std::size_t slot = 0; slot < 2; ++slot) {
+    const auto i = static_cast<std::size_t>(action_of_[slot]);
+    const auto& a = config_.io.actions[i];
+    double x = static_cast<double>(action[i]);
+    if (!std::isfinite(x)) {
+      x = 0.0;
+      ++stats_.nonfinite_actions;
+    }
+    cmd[slot] = std::clamp(x * a.scale + a.offset, a.low, a.high);
+  }
+  v_cmd_ = cmd[0];
+  w_cmd_ = cmd[1];
+  plant_.SetCommand(v_cmd_, w_cmd_);
+
+  const double l_prev = l_at_, phi_prev = phi_at_;
+  plant_.AdvanceControlPeriod();
+  ++stats_.steps;
+  Measure();
+  const AuvTaskParams& p = config_.task;
+  r.r_progress =
+      -p.step_penalty + p.distance_gain * (l_prev - l_at_) + p.bearing_gain * (std::abs(phi_prev) - std::abs(phi_at_));
+  stats_.min_clearance_m = std::min(stats_.min_clearance_m, clearance_);
+  if (clearance_ < p.safe_distance_m) {
+    r.r_collision = -p.collision_penalty;
+    r.events.collision = true;
+    stats_.collided = true;
+    r.terminated = true;
+  }
+  if (l_at_ < p.target_radius_m) {
+    r.r_goal = p.goal_reward;
+    r.events.target_reached = target_;
+    ++target_;
+    stats_.targets_reached = target_;
+    if (target_ == static_cast<int>(config_.layout.targets.size())) {
+      r.events.all_targets = true;
+      stats_.success = true;
+      r.terminated = true;
+    } else {
+      Measure();  // l_AT and phi now refer to the next target
+    }
+  }
+  if (!r.terminated && stats_.steps >= max_steps_) {
+    r.truncated = true;
+    stats_.truncated = true;
+  }
+  r.reward = p.weight_collision * r.r_collision + p.weight_goal * r.r_goal + p.weight_progress * r.r_progress;
+  stats_.episode_return += r.reward;
+  stats_.time_s = plant_.State().time_s;
+  done_ = r.terminated || r.truncated;
+  terminated_ = r.terminated;
+  truncated_ = r.truncated;
+  WriteObservation(done_, false, obs);
+  return r;
+}
+
+}  // namespace pbppo::sim

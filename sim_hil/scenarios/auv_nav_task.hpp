@@ -1,0 +1,144 @@
+// The AUV navigation task of the Pb-PPO paper (appendix): reach three targets in order in a
+// 40 m x 40 m arena without coming closer than l_safe to an obstacle or wall. One instance owns
+// one AuvPlant (one Simbody System), so use one instance per thread. The trainer's environment
+// wraps Reset/Step; the HIL simulator runs the same plant and the same reward.
+//
+// Reward (per control period): r = dc * r_c + dg * r_g + de * r_e with
+//   r_c = -collision_penalty        if clearance < l_safe (the episode terminates),
+//   r_g = +goal_reward              the first time l_AT < l_AT_max for the current target,
+//   r_e = -step_penalty + distance_gain * (l_AT(t-1) - l_AT(t)) + bearing_gain * (|phi(t-1)| - |phi(t)|),
+// where l_AT and phi (bearing to the target relative to the heading, wrapped to (-pi, pi]) are
+// both taken with respect to the target that was current at the start of the step.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/core/random.hpp"
+#include "runtime/core/result.hpp"
+#include "runtime/robot/io_layout.hpp"
+#include "sim_hil/plants/auv_plant.hpp"
+#include "sim_hil/scenarios/auv_layout.hpp"
+#include "sim_hil/scenarios/auv_sonar.hpp"
+
+namespace pbppo::sim {
+
+struct AuvTaskParams {
+  double depth_m = 5.0;
+  double safe_distance_m = 1.2;  // l_safe
+  double target_radius_m = 1.5;  // l_AT_max
+  double episode_time_s = 200.0;
+  double weight_collision = 1.0;  // delta_c
+  double weight_goal = 1.0;       // delta_g
+  double weight_progress = 1.0;   // delta_e
+  double collision_penalty = 500.0;
+  double goal_reward = 1000.0;
+  double step_penalty = 0.2;
+  double distance_gain = 5.0;
+  double bearing_gain = 2.0;
+};
+
+// Everything a task instance needs, loaded once and shared read-only between instances.
+struct AuvTaskConfig {
+  AuvParams plant;
+  SonarParams sonar;
+  AuvTaskParams task;
+  AuvLayout layout;
+  robot::IoLayout io;
+};
+
+// Reads the sonar and task sections of models/auv/auv.yaml.
+Result<SonarParams> LoadSonarParams(const std::string& auv_yaml);
+Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml);
+// models/auv/auv.yaml + a layout + models/auv/io_layout.yaml.
+Result<AuvTaskConfig> LoadAuvTaskConfig(const std::string& auv_yaml, const std::string& layout_yaml,
+                                        const std::string& io_layout_yaml);
+
+struct AuvStepEvents {
+  int target_reached = -1;  // index of the target reached in this step, or -1
+  bool collision = false;
+  bool all_targets = false;
+};
+
+struct AuvStepResult {
+  double reward = 0.0;
+  bool terminated = false;  // collision or all targets reached (a true end of the MDP)
+  bool truncated = false;   // time limit (bootstrap from the value of the last observation)
+  AuvStepEvents events;
+  // The three terms before weighting.
+  double r_collision = 0.0, r_goal = 0.0, r_progress = 0.0;
+};
+
+struct AuvEpisodeStats {
+  int targets_reached = 0;
+  bool collided = false;
+  bool success = false;  // every target reached
+  bool truncated = false;
+  long steps = 0;
+  double time_s = 0.0;
+  double episode_return = 0.0;
+  double min_clearance_m = 0.0;
+  long nonfinite_actions = 0;  // action elements replaced by 0 because they were NaN or inf
+  int random_obstacles = 0;
+};
+
+class AuvNavTask {
+ public:
+  // Checks that every observation signal and action command of the IO layout exists.
+  static Result<AuvNavTask> Create(const AuvTaskConfig& config);
+
+  int observation_size() const noexcept { return static_cast<int>(obs_size_); }
+  int action_size() const noexcept { return 2; }
+  const robot::IoLayout& io_layout() const noexcept { return config_.io; }
+  std::uint64_t io_layout_hash() const noexcept { return io_hash_; }
+  double control_period_s() const noexcept { return config_.plant.control_period_s; }
+  long max_episode_steps() const noexcept { return max_steps_; }
+
+  // New episode from `seed`: random start pose in the start region, random extra obstacles.
+  // Writes the first observation (observation_size() floats).
+  void Reset(std::uint64_t seed, float* obs);
+  // One control period with action [v, w] in policy units (mapped through the IO layout).
+  // After the episode has ended, returns zero reward with the same end flags until Reset.
+  AuvStepResult Step(const float* action, float* obs);
+
+  const AuvEpisodeStats& stats() const noexcept { return stats_; }
+  const AuvState& vehicle() const noexcept { return plant_.State(); }
+  const World2d& world() const noexcept { return world_; }
+  int target_index() const noexcept { return target_; }
+  // Physics steps since construction (the plant's counter restarts at every Reset).
+  std::uint64_t physics_steps() const noexcept { return physics_steps_ + plant_.physics_steps(); }
+  const std::vector<double>& sonar_ranges() const noexcept { return sonar_; }
+  // Physical commands of the last step (after the IO layout's scale, offset and limits).
+  double commanded_speed_mps() const noexcept { return v_cmd_; }
+  double commanded_yaw_rate_radps() const noexcept { return w_cmd_; }
+  // The names of every signal an IO layout may use.
+  std::vector<std::string> SignalNames() const;
+
+ private:
+  AuvNavTask(const AuvTaskConfig& config, AuvPlant plant);
+  void PlaceRandomObstacles(Rng& rng);
+  void Measure();  // sonar, l_AT, phi, clearance from the plant's state
+  void WriteObservation(bool episode_end, bool first, float* obs);
+
+  AuvTaskConfig config_;
+  AuvPlant plant_;
+  std::uint64_t io_hash_ = 0;
+  std::uint32_t obs_size_ = 0;
+  long max_steps_ = 0;
+  std::vector<int> obs_signal_;   // per IO observation element: index into signals_
+  std::array<int, 2> action_of_;  // action index of surge_speed and yaw_rate
+  std::vector<double> signals_;
+  std::vector<float> last_obs_;
+  std::vector<double> sonar_;
+  World2d world_;
+  int target_ = 0;
+  std::uint64_t physics_steps_ = 0;  // of finished episodes
+  double l_at_ = 0.0, phi_at_ = 0.0, clearance_ = 0.0;
+  double v_cmd_ = 0.0, w_cmd_ = 0.0;
+  bool done_ = false, terminated_ = false, truncated_ = false;
+  AuvEpisodeStats stats_;
+};
+
+}  // namespace pbppo::sim

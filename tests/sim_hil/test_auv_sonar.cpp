@@ -1,0 +1,102 @@
+// Sonar ray casting and clearance against hand-computed geometry.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "sim_hil/scenarios/auv_sonar.hpp"
+
+using namespace pbppo::sim;
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+TEST_CASE("sonar: walls of an empty arena at known distances") {
+  World2d w;  // arena [0, 40] x [0, 40]
+  SonarParams p{16, 2 * kPi, 50.0};
+  std::vector<double> r(16);
+  SonarScan(w, p, 10.0, 20.0, 0.0, r.data());
+  CHECK(r[0] == doctest::Approx(30.0));   // ahead: east wall
+  CHECK(r[4] == doctest::Approx(20.0));   // port (90 deg): north wall
+  CHECK(r[8] == doctest::Approx(10.0));   // astern: west wall
+  CHECK(r[12] == doctest::Approx(20.0));  // starboard: south wall
+  // 45 deg: the north wall at 20 / sin 45, nearer than the east wall at 30 / cos 45.
+  CHECK(r[2] == doctest::Approx(20.0 * std::sqrt(2.0)));
+  // Heading rotates the beams: facing north, beam 0 sees the north wall.
+  SonarScan(w, p, 10.0, 20.0, kPi / 2, r.data());
+  CHECK(r[0] == doctest::Approx(20.0));
+  CHECK(r[4] == doctest::Approx(10.0));
+}
+
+TEST_CASE("sonar: ranges are clipped at the maximum range") {
+  World2d w;
+  SonarParams p{16, 2 * kPi, 15.0};
+  std::vector<double> r(16);
+  SonarScan(w, p, 10.0, 20.0, 0.0, r.data());
+  CHECK(r[0] == 15.0);
+  CHECK(r[8] == doctest::Approx(10.0));
+  CHECK(CastRay(w, 10.0, 20.0, 0.0, 15.0) == 15.0);
+}
+
+TEST_CASE("sonar: an obstacle on a beam") {
+  World2d w;
+  w.circles.push_back(Circle{15.0, 20.0, 1.0});
+  w.boxes.push_back(Box{9.0, 11.0, 24.0, 30.0});
+  SonarParams p{16, 2 * kPi, 50.0};
+  std::vector<double> r(16);
+  SonarScan(w, p, 10.0, 20.0, 0.0, r.data());
+  CHECK(r[0] == doctest::Approx(4.0));  // circle surface at x = 14
+  CHECK(r[4] == doctest::Approx(4.0));  // box bottom at y = 24
+  CHECK(r[8] == doctest::Approx(10.0));
+  // A circle off the beam axis: centre 5 m away along (0.6, 0.8), radius 1 -> hit at 4 m.
+  CHECK(RayCircle(0.0, 0.0, 0.6, 0.8, Circle{3.0, 4.0, 1.0}) == doctest::Approx(4.0));
+  // Grazing at 1 m lateral offset, radius 1: tangent hit at 5 m; further off: a miss.
+  CHECK(RayCircle(0.0, 0.0, 1.0, 0.0, Circle{5.0, 1.0, 1.0}) == doctest::Approx(5.0));
+  CHECK(RayCircle(0.0, 0.0, 1.0, 0.0, Circle{5.0, 1.01, 1.0}) == kNoHit);
+  CHECK(RayCircle(0.0, 0.0, -1.0, 0.0, Circle{5.0, 0.0, 1.0}) == kNoHit);  // behind
+  CHECK(RayCircle(5.0, 0.2, 1.0, 0.0, Circle{5.0, 0.0, 1.0}) == 0.0);      // inside
+  // Box from a diagonal: (0, 0) towards 45 deg hits the box [2, 3] x [1, 5] at x = 2.
+  const double s = std::sqrt(0.5);
+  CHECK(RayBox(0.0, 0.0, s, s, Box{2.0, 3.0, 1.0, 5.0}) == doctest::Approx(2.0 * std::sqrt(2.0)));
+  CHECK(RayBox(0.0, 0.0, 1.0, 0.0, Box{2.0, 3.0, 1.0, 5.0}) == kNoHit);
+  CHECK(RayBox(0.0, 0.0, 0.0, 1.0, Box{-1.0, 1.0, 3.0, 5.0}) == doctest::Approx(3.0));  // axis-parallel
+}
+
+TEST_CASE("sonar: a forward fan spreads its beams evenly across the field of view") {
+  SonarParams fan{5, kPi / 2, 20.0};
+  CHECK(BeamAngle(fan, 0) == doctest::Approx(-kPi / 4));
+  CHECK(BeamAngle(fan, 2) == doctest::Approx(0.0));
+  CHECK(BeamAngle(fan, 4) == doctest::Approx(kPi / 4));
+  SonarParams ring{16, 2 * kPi, 20.0};
+  CHECK(BeamAngle(ring, 1) == doctest::Approx(kPi / 8));
+  CHECK(BeamAngle(ring, 12) == doctest::Approx(-kPi / 2));
+  World2d w;
+  std::vector<double> r(5);
+  SonarScan(w, fan, 20.0, 20.0, 0.0, r.data());
+  CHECK(r[2] == doctest::Approx(20.0));  // east wall 20 m ahead, at max range
+  CHECK(r[0] == doctest::Approx(20.0));  // clipped
+  CHECK(CastRay(w, 35.0, 20.0, -kPi / 4, 50.0) == doctest::Approx(5.0 * std::sqrt(2.0)));
+}
+
+TEST_CASE("sonar: clearance is the signed distance to the nearest surface") {
+  World2d w;
+  CHECK(Clearance(w, 1.0, 20.0) == doctest::Approx(1.0));
+  CHECK(Clearance(w, 20.0, 39.5) == doctest::Approx(0.5));
+  CHECK(Clearance(w, -1.0, 20.0) == doctest::Approx(-1.0));
+  w.circles.push_back(Circle{20.0, 20.0, 2.0});
+  CHECK(Clearance(w, 25.0, 20.0) == doctest::Approx(3.0));
+  CHECK(Clearance(w, 20.5, 20.0) == doctest::Approx(-1.5));
+  w.boxes.push_back(Box{5.0, 7.0, 5.0, 7.0});
+  CHECK(Clearance(w, 10.0, 11.0) == doctest::Approx(5.0));  // from the corner (7, 7): 3-4-5
+  CHECK(Clearance(w, 6.0, 9.0) == doctest::Approx(2.0));    // from the top face
+  CHECK(Clearance(w, 6.0, 6.5) == doctest::Approx(-0.5));   // inside, nearest face at y = 7
+}
+
+TEST_CASE("sonar: angle wrapping") {
+  CHECK(WrapAngle(3 * kPi / 2) == doctest::Approx(-kPi / 2));
+  CHECK(WrapAngle(-3 * kPi / 2) == doctest::Approx(kPi / 2));
+  CHECK(WrapAngle(kPi) == doctest::Approx(kPi));
+  CHECK(WrapAngle(-kPi) == doctest::Approx(kPi));
+  CHECK(WrapAngle(0.3) == 0.3);
+}
