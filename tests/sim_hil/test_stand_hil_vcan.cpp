@@ -211,7 +211,9 @@ TEST_CASE(
   CHECK(std::system(cmd.c_str()) == 0);
 }
 
-TEST_CASE("stand HIL: a motor stops answering - the supervisor damps within 3 ticks and names the motor") {
+TEST_CASE(
+    "stand HIL: a motor stops answering - the supervisor damps within 3 ticks and names the motor - e-stop "
+    "after 500") {
   sim::StandHilOptions h;
   h.silent_motor = 2;  // LF_KFE
   h.silent_from_tick = 1500;
@@ -243,6 +245,13 @@ TEST_CASE("stand HIL: a motor stops answering - the supervisor damps within 3 ti
   // The silent driver's watchdog cuts its torque.
   CHECK(rig.hil->motor(2).timeouts > 0);
   CHECK(rig.hil->plant().tau_nm(2) == 0.0);
+  // Still silent after 500 ticks: e-stop, every other driver is switched out of motor mode.
+  for (int k = 0; k < 450; ++k) rig.Tick();
+  REQUIRE(sup.mode == Mode::kEStop);
+  CHECK(sup.entered_tick[static_cast<int>(Mode::kEStop)] == 1500 + 500);
+  CHECK(sup.entered[static_cast<int>(Mode::kEStop)].channel == 2);
+  for (std::size_t m = 0; m < 12; ++m)
+    if (m != 2) CHECK_FALSE(rig.hil->motor(m).motor_mode);
 }
 
 TEST_CASE("stand HIL: 10% of frames dropped by the drivers - tracking degrades but stays safe") {
