@@ -2,14 +2,18 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/policy_model.hpp"
@@ -64,7 +68,8 @@ std::string Human(double v) {
 }  // namespace
 
 void AddTrainOptions(CLI::App& s, TrainOptions& o) {
-  s.add_option("--env", o.env, "Environment: pendulum");
+  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
+  s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
@@ -104,6 +109,7 @@ int Train(const TrainOptions& o) {
   trainer::TrainConfig c;
   c.env = o.env;
   c.models_dir = o.models;
+  c.layout = o.layout;
   if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
   c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
   c.seed = o.seed;
@@ -157,6 +163,7 @@ int Train(const TrainOptions& o) {
   {
     envs::EnvOptions eo;
     eo.models_dir = c.models_dir;
+    eo.layout = c.layout;
     if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
   }
 
@@ -171,9 +178,11 @@ int Train(const TrainOptions& o) {
     if (now - last_print < std::chrono::milliseconds(250) && p.env_steps < p.total_steps) return;
     last_print = now;
     printed = true;
-    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f  eps %.3f   ",
+    char success[32] = "";
+    if (std::isfinite(p.task_success)) std::snprintf(success, sizeof success, "  success %.0f%%", 100 * p.task_success);
+    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f%s  eps %.3f   ",
                  Human(static_cast<double>(p.env_steps)).c_str(), Human(static_cast<double>(p.total_steps)).c_str(),
-                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, p.epsilon);
+                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, p.epsilon);
     std::fflush(stderr);
   };
   std::fprintf(stderr, "pbppo train: %s, %s, seed %llu -> %s\n", c.env.c_str(), c.schedule.Describe().c_str(),
@@ -196,12 +205,87 @@ int Train(const TrainOptions& o) {
 
 void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("blob", o.blob, "Policy blob file")->required();
-  s.add_option("--env", o.env, "Environment: pendulum");
+  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
+  s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--episodes", o.episodes, "Episodes")->check(CLI::Range(1, 1000000));
   s.add_option("--seed", o.seed, "Seed for the initial states");
   s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
+  s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
+  s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");
   s.add_flag("--json", o.json, "Print JSON");
 }
+
+namespace {
+
+struct EpisodeTrace {
+  std::vector<std::array<double, 2>> xy;
+  std::vector<sim::Circle> circles;  // this episode's obstacles (fixed and random)
+  bool success = false, collided = false;
+};
+
+// Wilson score interval for a binomial proportion at 95 %.
+std::pair<double, double> Wilson95(double k, double n) {
+  const double z = 1.959963985, p = k / n, d = 1 + z * z / n;
+  const double c = (p + z * z / (2 * n)) / d, h = z * std::sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d;
+  return {std::max(0.0, c - h), std::min(1.0, c + h)};
+}
+
+std::string PlotTrajectories(const std::string& png, const sim::AuvTaskConfig& cfg,
+                             const std::vector<EpisodeTrace>& traces, const std::string& title) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return "gnuplot not found (tools/setup.sh installs it)";
+  const std::string base = png + ".d";
+  std::error_code ec;
+  std::filesystem::create_directories(base, ec);
+  if (ec) return "cannot create " + base + ": " + ec.message();
+  std::ofstream ob(base + "/obstacles.dat"), rnd(base + "/random.dat"), bx(base + "/boxes.dat"),
+      ok(base + "/success.dat"), bad(base + "/failure.dat"), tg(base + "/targets.dat"), st(base + "/starts.dat");
+  // The layout's obstacles come first in every episode's world; the rest are the episode's own.
+  const std::size_t fixed = cfg.layout.world.circles.size();
+  for (const auto& c : cfg.layout.world.circles) ob << c.x_m << ' ' << c.y_m << ' ' << c.radius_m << '\n';
+  for (const auto& t : traces)
+    for (std::size_t i = fixed; i < t.circles.size(); ++i)
+      rnd << t.circles[i].x_m << ' ' << t.circles[i].y_m << ' ' << t.circles[i].radius_m << '\n';
+  for (const auto& b : cfg.layout.world.boxes)
+    bx << b.x_min_m << ' ' << b.x_max_m << ' ' << b.y_min_m << ' ' << b.y_max_m << '\n';
+  for (std::size_t i = 0; i < cfg.layout.targets.size(); ++i)
+    tg << cfg.layout.targets[i][0] << ' ' << cfg.layout.targets[i][1] << ' ' << i + 1 << '\n';
+  for (const auto& t : traces) {
+    std::ofstream& f = t.success ? ok : bad;
+    for (const auto& p : t.xy) f << p[0] << ' ' << p[1] << '\n';
+    f << "\n\n";
+    if (!t.xy.empty()) st << t.xy.front()[0] << ' ' << t.xy.front()[1] << '\n';
+  }
+  ok << "nan nan\n";
+  bad << "nan nan\n";
+  ob << "nan nan nan\n";
+  rnd << "nan nan nan\n";
+  bx << "nan nan nan nan\n";
+  for (auto* f : {&ob, &rnd, &bx, &ok, &bad, &tg, &st}) f->close();
+  const auto& a = cfg.layout.world.arena;
+  std::ofstream gp(base + "/plot.gp");
+  gp << "set terminal pngcairo size 900,900\nset output '" << png << "'\nset size ratio -1\nset title '" << title
+     << "'\n"
+     << "set xrange [" << a.x_min_m - 1 << ':' << a.x_max_m + 1 << "]\nset yrange [" << a.y_min_m - 1 << ':'
+     << a.y_max_m + 1 << "]\nset xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside bottom center horizontal\n"
+     << "set object 1 rect from " << a.x_min_m << ',' << a.y_min_m << " to " << a.x_max_m << ',' << a.y_max_m
+     << " fs empty border lc rgb 'black' lw 2\n"
+     << "plot '" << base << "/random.dat' using 1:2:3 with circles fs transparent solid 0.12 noborder lc rgb "
+     << "'gray40' title 'random obstacles (all episodes)', '" << base
+     << "/obstacles.dat' using 1:2:3 with circles fs solid 0.6 noborder lc rgb 'gray20' title 'layout obstacles', '"
+     << base
+     << "/boxes.dat' using (($1+$2)/2):(($3+$4)/2):1:2:3:4 with boxxyerror fs solid 0.6 lc rgb 'gray20' notitle, '"
+     << base << "/success.dat' with lines lw 1 lc rgb '#2a9d3a' title 'success', '" << base
+     << "/failure.dat' with lines lw 1.5 lc rgb '#d62728' title 'failure', '" << base
+     << "/starts.dat' with points pt 7 ps 0.5 lc rgb 'blue' title 'start', '" << base
+     << "/targets.dat' using 1:2 with points pt 6 ps 3 lw 2 lc rgb 'orange' title 'targets', '' using 1:2:3 with "
+        "labels offset 1.5,1.5 notitle\n";
+  gp.close();
+  const std::string cmd = "gnuplot '" + base + "/plot.gp' 2>'" + base + "/gnuplot.log'";
+  if (std::system(cmd.c_str()) != 0) return "gnuplot failed: see " + base + "/gnuplot.log";
+  return "";
+}
+
+}  // namespace
 
 int Eval(const EvalOptions& o) {
   auto model = policy::PolicyModel::FromFile(o.blob);
@@ -211,6 +295,7 @@ int Eval(const EvalOptions& o) {
   }
   envs::EnvOptions eo;
   eo.models_dir = o.models;
+  eo.layout = o.layout;
   auto env = envs::MakeEnv(o.env, eo);
   if (!env) {
     std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
@@ -220,41 +305,106 @@ int Eval(const EvalOptions& o) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), st.error().message.c_str());
     return 1;
   }
+  auto* auv = dynamic_cast<envs::AuvNav*>(env->get());
+  if ((!o.plot.empty() || !o.trajectories.empty()) && auv == nullptr) {
+    std::fprintf(stderr, "pbppo eval: --plot and --trajectories need --env auv-nav (not '%s')\n", o.env.c_str());
+    return 2;
+  }
+  if (!o.plot.empty() && o.layout == "mixed") {
+    std::fprintf(stderr, "pbppo eval: --plot needs one layout (easy, medium or hard), not 'mixed'\n");
+    return 2;
+  }
   auto data = policy::MakePolicyData(model.value());
   if (!data) {
     std::fprintf(stderr, "pbppo eval: %s\n", data.error().message.c_str());
     return 1;
   }
   envs::Env& e = **env;
+  // The blob outputs commands (the layout's map applied); the environment takes policy units.
+  const auto& spec = model->description();
   Rng rng(o.seed);
   std::vector<float> obs(e.observation_size()), act(e.action_size());
   std::vector<double> returns;
+  std::vector<EpisodeTrace> traces;
+  std::ofstream traj;
+  if (!o.trajectories.empty()) {
+    traj.open(o.trajectories);
+    if (!traj) {
+      std::fprintf(stderr, "pbppo eval: --trajectories: cannot write '%s'\n", o.trajectories.c_str());
+      return 2;
+    }
+    traj << "episode,step,t_s,x_m,y_m,yaw_rad,v_cmd_mps,w_cmd_radps,target\n";
+  }
   std::uint64_t steps = 0, bad = 0;
+  int successes = 0, failures = 0, timeouts = 0, goals = 0;
+  double success_time = 0;
   for (int ep = 0; ep < o.episodes; ++ep) {
     e.Reset(rng, obs);
     double ret = 0;
+    EpisodeTrace tr;
+    long k = 0;
+    auto record = [&] {
+      if (auv == nullptr) return;
+      const auto& v = auv->task().vehicle();
+      tr.xy.push_back({v.x_m, v.y_m});
+      if (traj.is_open()) {
+        traj << ep << ',' << k << ',' << v.time_s << ',' << v.x_m << ',' << v.y_m << ',' << v.yaw_rad << ','
+             << auv->task().commanded_speed_mps() << ',' << auv->task().commanded_yaw_rate_radps() << ','
+             << auv->task().target_index() << '\n';
+      }
+    };
+    if (auv != nullptr) tr.circles = auv->task().world().circles;
+    record();
     for (;;) {
       std::copy(obs.begin(), obs.end(), data->observation().begin());
       if (policy::Forward(model.value(), data.value()) != policy::ForwardStatus::kOk) ++bad;
-      std::copy(data->action().begin(), data->action().end(), act.begin());
+      for (std::size_t j = 0; j < act.size(); ++j) {
+        const float scale = spec.action_scale[j];
+        act[j] = scale != 0.f ? (data->action()[j] - spec.action_offset[j]) / scale : 0.f;
+      }
       const envs::StepResult r = e.Step(act, obs);
       ret += r.reward;
       ++steps;
+      ++k;
+      record();
       if (r.terminated || r.truncated) break;
     }
     returns.push_back(ret);
+    const envs::EpisodeInfo info = e.episode_info();
+    if (info.available) {
+      successes += info.success;
+      failures += info.failure;
+      timeouts += !info.success && !info.failure;
+      goals += info.goals;
+      if (info.success) success_time += info.time_s;
+      tr.success = info.success;
+      tr.collided = info.failure;
+    }
+    if (auv != nullptr && !o.plot.empty()) traces.push_back(std::move(tr));
   }
+  const double n = static_cast<double>(returns.size());
   double mean = 0, var = 0;
   for (double r : returns) mean += r;
-  mean /= static_cast<double>(returns.size());
+  mean /= n;
   for (double r : returns) var += (r - mean) * (r - mean);
-  const double sd = std::sqrt(var / static_cast<double>(returns.size()));
+  const double sd = std::sqrt(var / n);
   const double lo = *std::min_element(returns.begin(), returns.end());
   const double hi = *std::max_element(returns.begin(), returns.end());
+  const bool task = e.episode_info().available;
+  const auto [ci_lo, ci_hi] = Wilson95(successes, n);
+  const double mean_time = successes > 0 ? success_time / successes : std::nan("");
+  std::string plot_note;
+  if (!o.plot.empty()) {
+    char title[200];
+    std::snprintf(title, sizeof title, "%s, %d episodes from seed %llu: %d successes, %d collisions, %d timeouts",
+                  e.name().c_str(), o.episodes, static_cast<unsigned long long>(o.seed), successes, failures, timeouts);
+    plot_note = PlotTrajectories(o.plot, auv->config(), traces, title);
+    if (!plot_note.empty()) std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+  }
   if (o.json) {
     nlohmann::json j;
     j["blob"] = o.blob;
-    j["env"] = o.env;
+    j["env"] = e.name();
     j["episodes"] = o.episodes;
     j["seed"] = o.seed;
     j["mean_return"] = mean;
@@ -263,12 +413,30 @@ int Eval(const EvalOptions& o) {
     j["max_return"] = hi;
     j["steps"] = steps;
     j["forward_problems"] = bad;
+    if (task) {
+      j["successes"] = successes;
+      j["success_rate"] = successes / n;
+      j["success_rate_ci95"] = {ci_lo, ci_hi};
+      j["collisions"] = failures;
+      j["timeouts"] = timeouts;
+      j["mean_goals"] = goals / n;
+      j["mean_success_time_s"] = successes > 0 ? nlohmann::json(mean_time) : nlohmann::json();
+    }
+    if (!o.plot.empty()) j["plot"] = plot_note.empty() ? o.plot : "";
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("%s on %s: %d episodes, seed %llu\n", o.blob.c_str(), o.env.c_str(), o.episodes,
+    std::printf("%s on %s: %d episodes, seed %llu\n", o.blob.c_str(), e.name().c_str(), o.episodes,
                 static_cast<unsigned long long>(o.seed));
+    if (task) {
+      std::printf(
+          "success %d/%d = %.1f%% (95%% CI %.1f-%.1f%%)  collisions %d  timeouts %d  targets/episode %.2f  "
+          "mean time (successes) %.1f s\n",
+          successes, o.episodes, 100 * successes / n, 100 * ci_lo, 100 * ci_hi, failures, timeouts, goals / n,
+          mean_time);
+    }
     std::printf("mean return %.2f  std %.2f  min %.2f  max %.2f  steps %llu  forward problems %llu\n", mean, sd, lo, hi,
                 static_cast<unsigned long long>(steps), static_cast<unsigned long long>(bad));
+    if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
   }
   return 0;
 }

@@ -12,6 +12,7 @@ namespace pbppo::cli {
 
 struct TrainOptions {
   std::string env = "pendulum";
+  std::string layout = "hard";
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";
@@ -51,6 +52,9 @@ int Train(const TrainOptions& o);
 struct EvalOptions {
   std::string blob;
   std::string env = "pendulum";
+  std::string layout = "hard";
+  std::string plot;          // PNG of the trajectories over the map (auv-nav)
+  std::string trajectories;  // CSV of every episode's trajectory (auv-nav)
   int episodes = 100;
   std::uint64_t seed = 7;
   std::string models;

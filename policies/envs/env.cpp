@@ -2,12 +2,13 @@
 
 #include <cstdlib>
 
+#include "policies/envs/auv_nav.hpp"
 #include "policies/envs/pendulum.hpp"
 
 namespace pbppo::envs {
 
 std::vector<std::string> EnvNames() {
-  return {"pendulum"};
+  return {"pendulum", "auv-nav"};
 }
 
 std::string DefaultModelsDir() {
@@ -21,6 +22,11 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
+    if (!env) return std::move(env).error();
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
+  if (name == "auv-nav") {
+    auto env = AuvNav::Make(dir, options.layout);
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }

@@ -24,6 +24,15 @@ struct StepResult {
   bool truncated = false;   // a time limit: the episode was cut, bootstrap from the final state
 };
 
+// What a task-style environment knows about its current (or just ended) episode.
+struct EpisodeInfo {
+  bool available = false;  // false: the environment has no notion of success
+  bool success = false;    // the task was completed
+  bool failure = false;    // it ended in a failure (e.g. a collision)
+  int goals = 0;           // sub-goals reached (e.g. targets)
+  double time_s = 0.0;     // simulated time of the episode
+};
+
 class Env {
  public:
   virtual ~Env() = default;
@@ -44,13 +53,18 @@ class Env {
   // caller must Reset() before the next Step().
   virtual StepResult Step(std::span<const float> action, std::span<float> observation) = 0;
 
-  // An independent copy in the same configuration (state included), for parallel workers.
+  // An independent copy in the same configuration, for parallel workers. Environments whose
+  // state cannot be copied (a Simbody system) return a fresh instance: Reset() it before use.
   virtual std::unique_ptr<Env> Clone() const = 0;
+
+  virtual EpisodeInfo episode_info() const noexcept { return {}; }
 };
 
 struct EnvOptions {
   // Folder holding models/<robot>/io_layout.yaml; empty: the source tree's models/ folder.
   std::string models_dir;
+  // Obstacle layout of tasks that have several (auv-nav: easy, medium, hard).
+  std::string layout = "hard";
 };
 
 // The names MakeEnv() knows.

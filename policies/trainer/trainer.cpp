@@ -11,6 +11,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 #include "policies/envs/env.hpp"
 #include "policies/trainer/adam.hpp"
@@ -76,7 +77,7 @@ class Trainer {
     int e0 = 0, e1 = 0;
     Mat<float> x;
     typename Mlp<float>::Workspace ws;
-    std::vector<std::pair<long, double>> episodes;  // (index t*N+e, return)
+    std::vector<std::tuple<long, double, int>> episodes;  // (index t*N+e, return, success: 1, 0, -1 n/a)
   };
 
   void Setup();
@@ -120,6 +121,7 @@ class Trainer {
   std::vector<std::uint8_t> term_, trunc_;
   std::vector<double> rollout_returns_;
   std::deque<double> last100_;
+  std::deque<int> success100_;  // task success of the last 100 training episodes (where known)
   double clip_fraction_ = 0;
 };
 
@@ -268,7 +270,9 @@ void Trainer::RolloutWorker(Worker& w) {
       ep_return_[static_cast<std::size_t>(e)] += r.reward;
       if (r.terminated || r.truncated) {
         if (!r.terminated) NormalizeInto(raw, trunc_obs_.col(i).data());
-        w.episodes.emplace_back(i, ep_return_[static_cast<std::size_t>(e)]);
+        const envs::EpisodeInfo info = env.episode_info();
+        w.episodes.emplace_back(i, ep_return_[static_cast<std::size_t>(e)],
+                                info.available ? (info.success ? 1 : 0) : -1);
         ep_return_[static_cast<std::size_t>(e)] = 0;
         env.Reset(rng, {raw, static_cast<std::size_t>(d_)});
       }
@@ -282,14 +286,18 @@ void Trainer::CollectRollout() {
   pool_.Run([&](int w) {
     if (w < static_cast<int>(workers_.size())) RolloutWorker(workers_[static_cast<std::size_t>(w)]);
   });
-  std::vector<std::pair<long, double>> eps;
+  std::vector<std::tuple<long, double, int>> eps;
   for (auto& w : workers_) eps.insert(eps.end(), w.episodes.begin(), w.episodes.end());
   std::sort(eps.begin(), eps.end());
   rollout_returns_.clear();
-  for (const auto& [i, r] : eps) {
+  for (const auto& [i, r, ok] : eps) {
     rollout_returns_.push_back(r);
     last100_.push_back(r);
     if (last100_.size() > 100) last100_.pop_front();
+    if (ok >= 0) {
+      success100_.push_back(ok);
+      if (success100_.size() > 100) success100_.pop_front();
+    }
   }
   if (c_.normalize_observations) obs_rms_.Update(raw_obs_.data(), static_cast<long>(T_) * N_);
   if (c_.scale_rewards) {
@@ -500,9 +508,8 @@ policy::PolicySpec Trainer::Freeze(double final_return) const {
     s.layers.push_back(std::move(L));
   }
   s.action_head = policy::ActionHead::kLinear;  // the Gaussian mean
+  // The layout's action map (scale, offset, command limits): the blob outputs commands.
   robot::ApplyLayoutToSpec(proto_->layout(), s);
-  s.action_low.assign(proto_->action_low().begin(), proto_->action_low().end());
-  s.action_high.assign(proto_->action_high().begin(), proto_->action_high().end());
   s.provenance.trainer_version = std::string("pbppo-rt ") + PBPPO_VERSION;
   s.provenance.git_revision = GitRevision();
   s.provenance.environment = proto_->name();
@@ -526,7 +533,9 @@ double Trainer::FreezeCheck(const policy::PolicySpec& spec) {
     const policy::ReferenceOutput ref = policy::ReferenceForward(spec, raw);
     for (int j = 0; j < a_; ++j) {
       const auto q = static_cast<std::size_t>(j);
-      const double mine = std::clamp(mu(j, 0), spec.action_low[q], spec.action_high[q]);
+      const double a = std::clamp(mu(j, 0), proto_->action_low()[q], proto_->action_high()[q]);
+      const double mine = std::clamp(a * spec.action_scale[q] + spec.action_offset[q],
+                                     static_cast<double>(spec.action_low[q]), static_cast<double>(spec.action_high[q]));
       // The trainer's float forward rounds like the runtime's: allow twice the bound, plus 1e-6.
       const double bound = 2.0 * ref.error_bound[q] + 1e-6;
       worst = std::max(worst, std::fabs(mine - ref.action[q]) / bound);
@@ -539,7 +548,7 @@ std::string Trainer::CsvHeader() const {
   std::ostringstream h;
   h << "iteration,env_steps,eval_steps,total_steps,arm,epsilon,feedback,feedback_before,improved,success_rate,"
        "train_return,train_return_100,episodes,approx_kl,clip_fraction,explained_variance,entropy,policy_loss,"
-       "value_loss,grad_norm,log_std_mean,steps_per_second";
+       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100";
   for (std::size_t i = 0; i < c_.schedule.arms.size(); ++i)
     h << ",arm" << i << "_epsilon,arm" << i << "_value,arm" << i << "_bonus,arm" << i << "_count";
   h << "\n";
@@ -553,7 +562,8 @@ std::string Trainer::CsvRow(const IterationStats& s) const {
     << ',' << s.epsilon << ',' << s.feedback << ',' << s.feedback_before << ',' << (s.improved ? 1 : 0) << ','
     << s.success_rate << ',' << s.train_return << ',' << s.train_return_100 << ',' << s.episodes << ',' << s.approx_kl
     << ',' << s.clip_fraction << ',' << s.explained_variance << ',' << s.entropy << ',' << s.policy_loss << ','
-    << s.value_loss << ',' << s.grad_norm << ',' << s.log_std_mean << ',' << s.steps_per_second;
+    << s.value_loss << ',' << s.grad_norm << ',' << s.log_std_mean << ',' << s.steps_per_second << ','
+    << s.task_success_100;
   for (const auto& a : s.arms) r << ',' << a.epsilon << ',' << a.value << ',' << a.bonus << ',' << a.count;
   r << "\n";
   return r.str();
@@ -574,8 +584,14 @@ std::string Trainer::Plots(const std::vector<IterationStats>& its) {
      << "set output '" << dir << "/epsilon.png'\nset ylabel 'clip bound'\n"
      << "plot '" << dir << "/log.csv' using 2:6 with steps title 'chosen epsilon'\n"
      << "set output '" << dir << "/arms.png'\nset xlabel 'arm (clip bound)'\nset ylabel 'pulls'\nset style fill solid\n"
-     << "set boxwidth 0.6\nunset key\n"
+     << "set boxwidth 0.6\nunset key\nset xrange [-0.5:" << na - 0.5 << "]\nset yrange [0:*]\n"
      << "plot '" << dir << "/arms.dat' using 0:2:xtic(1) with boxes\n";
+  const bool task = !its.empty() && std::isfinite(its.back().task_success_100);
+  if (task) {
+    gp << "set output '" << dir << "/success.png'\nset key\nset autoscale x\nset xtics auto\nset yrange [0:1]\n"
+       << "set xlabel 'environment steps'\nset ylabel 'fraction'\nplot '" << dir
+       << "/log.csv' using 2:23 with lines title 'task success (last 100 training episodes)'\n";
+  }
   std::ostringstream arms;
   std::vector<int> pulls(static_cast<std::size_t>(na), 0);
   for (const auto& s : its) pulls[static_cast<std::size_t>(s.arm)]++;
@@ -586,7 +602,7 @@ std::string Trainer::Plots(const std::vector<IterationStats>& its) {
   }
   const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>'" + dir + "/gnuplot.log'";
   if (std::system(cmd.c_str()) != 0) return "plots failed: see " + dir + "/gnuplot.log";
-  return "plots: " + dir + "/return.png, epsilon.png, arms.png";
+  return "plots: " + dir + "/return.png, epsilon.png, arms.png" + (task ? ", success.png" : "");
 }
 
 Status Trainer::WriteCheckpoint(double final_return, std::uint64_t env_steps) {
@@ -695,6 +711,13 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     st.env_steps = env_steps;
     st.eval_steps = eval_steps;
     st.train_return_100 = mean100();
+    if (success100_.empty()) {
+      st.task_success_100 = kNaN;
+    } else {
+      double ok = 0;
+      for (int x : success100_) ok += x;
+      st.task_success_100 = ok / static_cast<double>(success100_.size());
+    }
     const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
     st.steps_per_second = elapsed > 0 ? static_cast<double>(env_steps) / elapsed : 0;
     if (csv.is_open()) {
@@ -714,6 +737,7 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
               ? static_cast<double>(c_.total_steps > env_steps ? c_.total_steps - env_steps : 0) / st.steps_per_second
               : 0;
       p.mean_return = st.train_return_100;
+      p.task_success = st.task_success_100;
       p.epsilon = st.epsilon;
       progress(p);
     }
@@ -762,6 +786,8 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
         feedback_count > 0 ? nlohmann::json(static_cast<double>(improved_count) / feedback_count) : nlohmann::json();
     std::vector<int> pulls(c_.schedule.arms.size(), 0);
     for (const auto& s : res.iterations) pulls[static_cast<std::size_t>(s.arm)]++;
+    if (!res.iterations.empty() && std::isfinite(res.iterations.back().task_success_100))
+      j["task_success_100"] = res.iterations.back().task_success_100;
     j["arms"] = c_.schedule.arms;
     j["arm_pulls"] = pulls;
     j["blob"] = c_.out_dir + "/policy.blob";
@@ -778,6 +804,7 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   if (auto st = config.Validate(); !st) return st.error();
   envs::EnvOptions eo;
   eo.models_dir = config.models_dir;
+  eo.layout = config.layout;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,8 @@ namespace pbppo::trainer {
 
 struct TrainConfig {
   std::string env = "pendulum";
-  std::string models_dir;  // empty: envs::DefaultModelsDir()
+  std::string models_dir;       // empty: envs::DefaultModelsDir()
+  std::string layout = "hard";  // obstacle layout of environments that have several (auv-nav)
   std::uint64_t seed = 1;
   std::uint64_t total_steps = 200000;  // training environment steps (evaluation steps are extra)
   int num_envs = 1;
@@ -62,7 +64,8 @@ struct Progress {
   std::uint64_t total_steps = 0;  // the budget
   double steps_per_second = 0;
   double eta_seconds = 0;
-  double mean_return = 0;  // last 100 training episodes
+  double mean_return = 0;                                          // last 100 training episodes
+  double task_success = std::numeric_limits<double>::quiet_NaN();  // fraction of them that completed the task
   double epsilon = 0;
 };
 
@@ -76,6 +79,7 @@ struct IterationStats {
   double success_rate = 0;
   double train_return = 0;      // mean of episodes completed in this iteration's rollout
   double train_return_100 = 0;  // mean of the last 100 training episodes
+  double task_success_100 = 0;  // fraction of the last 100 training episodes that completed the task (NaN: n/a)
   int episodes = 0;
   double approx_kl = 0, clip_fraction = 0, explained_variance = 0, entropy = 0;
   double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;

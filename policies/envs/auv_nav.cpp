@@ -1,0 +1,101 @@
+#include "policies/envs/auv_nav.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pbppo::envs {
+
+Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name) {
+  std::vector<std::string> names;
+  if (layout_name == "mixed") {
+    names = {"easy", "medium", "hard"};
+  } else if (layout_name == "easy" || layout_name == "medium" || layout_name == "hard") {
+    names = {layout_name};
+  } else {
+    return MakeError(ErrorCode::kInvalidValue,
+                     "auv-nav: layout '" + layout_name + "' unknown (easy, medium, hard, mixed)");
+  }
+  const std::string dir = models_dir + "/auv/";
+  std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs;
+  for (const auto& n : names) {
+    auto cfg = sim::LoadAuvTaskConfig(dir + "auv.yaml", dir + "layouts/" + n + ".yaml", dir + "io_layout.yaml");
+    if (!cfg) return std::move(cfg).error();
+    configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
+  }
+  return Make(std::move(configs), "auv-nav:" + layout_name);
+}
+
+Result<std::unique_ptr<AuvNav>> AuvNav::Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
+                                             const std::string& name) {
+  if (configs.empty()) return MakeError(ErrorCode::kInvalidValue, "auv-nav: no layout");
+  std::vector<sim::AuvNavTask> tasks;
+  for (const auto& config : configs) {
+    if (config->io.Hash() != configs[0]->io.Hash())
+      return MakeError(ErrorCode::kMismatch, "auv-nav: layouts '" + configs[0]->layout.name + "' and '" +
+                                                 config->layout.name + "' come with different io layouts");
+    auto task = sim::AuvNavTask::Create(*config);
+    if (!task) return std::move(task).error();
+    tasks.push_back(std::move(task).value());
+  }
+  // The policy acts in [-1, 1]; the layout's map must cover exactly the command range there,
+  // otherwise part of the action box would be dead (clipped) or part of the commands unreachable.
+  for (const auto& a : configs[0]->io.actions) {
+    const double lo = a.offset - std::fabs(a.scale), hi = a.offset + std::fabs(a.scale);
+    if (a.scale == 0.0 || std::fabs(lo - a.low) > 1e-6 * (1 + std::fabs(a.low)) ||
+        std::fabs(hi - a.high) > 1e-6 * (1 + std::fabs(a.high))) {
+      return MakeError(ErrorCode::kMismatch, "auv-nav: io layout action '" + a.name +
+                                                 "': scale and offset must map [-1, 1] onto [low, high] = [" +
+                                                 std::to_string(a.low) + ", " + std::to_string(a.high) + "]");
+    }
+  }
+  return std::unique_ptr<AuvNav>(new AuvNav(std::move(configs), std::move(tasks), name));
+}
+
+AuvNav::AuvNav(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs, std::vector<sim::AuvNavTask> tasks,
+               std::string name)
+    : configs_(std::move(configs)), tasks_(std::move(tasks)), name_(std::move(name)) {}
+
+std::uint32_t AuvNav::observation_size() const noexcept {
+  return static_cast<std::uint32_t>(tasks_[0].observation_size());
+}
+
+std::uint32_t AuvNav::max_episode_steps() const noexcept {
+  return static_cast<std::uint32_t>(tasks_[0].max_episode_steps());
+}
+
+void AuvNav::Reset(Rng& rng, std::span<float> observation) {
+  current_ = tasks_.size() > 1 ? static_cast<std::size_t>(rng.Below(tasks_.size())) : 0;
+  tasks_[current_].Reset(rng.Next(), observation.data());
+}
+
+StepResult AuvNav::Step(std::span<const float> action, std::span<float> observation) {
+  float a[2];
+  for (std::size_t i = 0; i < 2; ++i)
+    a[i] = std::isfinite(action[i]) ? std::clamp(action[i], low_[i], high_[i]) : action[i];
+  const sim::AuvStepResult r = tasks_[current_].Step(a, observation.data());
+  StepResult s;
+  s.reward = r.reward;
+  s.terminated = r.terminated;
+  s.truncated = r.truncated;
+  return s;
+}
+
+std::unique_ptr<Env> AuvNav::Clone() const {
+  // Create() succeeded for the same configurations when this instance was made.
+  std::vector<sim::AuvNavTask> tasks;
+  for (const auto& c : configs_) tasks.push_back(std::move(sim::AuvNavTask::Create(*c)).value());
+  return std::unique_ptr<Env>(new AuvNav(configs_, std::move(tasks), name_));
+}
+
+EpisodeInfo AuvNav::episode_info() const noexcept {
+  const sim::AuvEpisodeStats& s = tasks_[current_].stats();
+  EpisodeInfo e;
+  e.available = true;
+  e.success = s.success;
+  e.failure = s.collided;
+  e.goals = s.targets_reached;
+  e.time_s = s.time_s;
+  return e;
+}
+
+}  // namespace pbppo::envs

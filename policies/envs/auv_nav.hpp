@@ -1,0 +1,55 @@
+// The AUV navigation task (sim_hil/scenarios/auv_nav_task: Simbody plant, sonar, the paper's
+// reward) as a training environment. Actions are in policy units, [-1, 1] per element; the IO
+// layout (models/auv/io_layout.yaml) maps them to [v, omega] commands, the same map the blob
+// carries and the controller applies. One task instance (one Simbody System) per environment:
+// Clone() builds a fresh instance from the shared configuration and the caller Reset()s it.
+// Layout "mixed" draws easy, medium or hard (uniformly) for every episode: one policy for all.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "policies/envs/env.hpp"
+#include "sim_hil/scenarios/auv_nav_task.hpp"
+
+namespace pbppo::envs {
+
+class AuvNav final : public Env {
+ public:
+  // `layout_name`: easy, medium or hard (models/<dir>/auv/layouts/<name>.yaml), or mixed.
+  static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name);
+  // One task per configuration; with several, each episode draws one uniformly.
+  static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
+                                              const std::string& name);
+
+  const std::string& name() const noexcept override { return name_; }
+  std::uint32_t observation_size() const noexcept override;
+  std::uint32_t action_size() const noexcept override { return 2; }
+  std::span<const float> action_low() const noexcept override { return {low_.data(), 2}; }
+  std::span<const float> action_high() const noexcept override { return {high_.data(), 2}; }
+  std::uint32_t max_episode_steps() const noexcept override;
+  const robot::IoLayout& layout() const noexcept override { return configs_[0]->io; }
+
+  void Reset(Rng& rng, std::span<float> observation) override;
+  StepResult Step(std::span<const float> action, std::span<float> observation) override;
+  std::unique_ptr<Env> Clone() const override;
+  EpisodeInfo episode_info() const noexcept override;
+
+  // The task of the current episode and its configuration.
+  const sim::AuvNavTask& task() const noexcept { return tasks_[current_]; }
+  const sim::AuvTaskConfig& config() const noexcept { return *configs_[current_]; }
+
+ private:
+  AuvNav(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs, std::vector<sim::AuvNavTask> tasks,
+         std::string name);
+
+  std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs_;
+  std::vector<sim::AuvNavTask> tasks_;
+  std::size_t current_ = 0;
+  std::string name_;
+  std::array<float, 2> low_{-1.f, -1.f};
+  std::array<float, 2> high_{1.f, 1.f};
+};
+
+}  // namespace pbppo::envs

@@ -1,0 +1,120 @@
+// The auv-nav training environment: the AUV task behind the Env interface, with the IO layout's
+// action map, layouts by name, mixed layouts, clones and episode information.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "policies/envs/auv_nav.hpp"
+
+namespace pbppo::envs {
+namespace {
+
+std::unique_ptr<Env> Make(const std::string& layout) {
+  EnvOptions o;
+  o.layout = layout;
+  auto env = MakeEnv("auv-nav", o);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  return std::move(env).value();
+}
+
+TEST_CASE("auv-nav has the IO layout's sizes, names and policy-unit action bounds") {
+  auto env = Make("hard");
+  CHECK(env->name() == "auv-nav:hard");
+  CHECK(env->observation_size() == env->layout().observation_size());
+  CHECK(env->observation_size() == 22);
+  CHECK(env->action_size() == 2);
+  CHECK(env->action_low()[0] == -1.f);
+  CHECK(env->action_high()[1] == 1.f);
+  CHECK(env->max_episode_steps() == 2000);
+  CHECK(env->layout().robot == "auv");
+}
+
+TEST_CASE("actions in policy units are mapped through the layout to speed commands") {
+  auto env = Make("easy");
+  auto* auv = dynamic_cast<AuvNav*>(env.get());
+  REQUIRE(auv != nullptr);
+  Rng rng(3);
+  std::vector<float> obs(env->observation_size());
+  env->Reset(rng, obs);
+  const float full[2] = {1.f, -1.f};
+  env->Step(full, obs);
+  CHECK(auv->task().commanded_speed_mps() == doctest::Approx(1.5));
+  CHECK(auv->task().commanded_yaw_rate_radps() == doctest::Approx(-0.5));
+  const float beyond[2] = {7.f, 0.5f};  // clipped to the action box first
+  env->Step(beyond, obs);
+  CHECK(auv->task().commanded_speed_mps() == doctest::Approx(1.5));
+  CHECK(auv->task().commanded_yaw_rate_radps() == doctest::Approx(0.25));
+  const float stop[2] = {-1.f, 0.f};
+  env->Step(stop, obs);
+  CHECK(auv->task().commanded_speed_mps() == doctest::Approx(0.0));
+  // Accelerating forward for 2 s shows up in the surge-speed observation.
+  for (int i = 0; i < 20; ++i) env->Step(full, obs);
+  CHECK(obs[20] > 0.3f);
+}
+
+TEST_CASE("same rng gives the same episode; clones are independent instances") {
+  auto a = Make("medium");
+  auto b = a->Clone();
+  Rng ra(11), rb(11);
+  std::vector<float> oa(a->observation_size()), ob(b->observation_size());
+  a->Reset(ra, oa);
+  b->Reset(rb, ob);
+  CHECK(oa == ob);
+  Rng noise(5);
+  double ret_a = 0, ret_b = 0;
+  for (int t = 0; t < 300; ++t) {
+    const float act[2] = {static_cast<float>(noise.Uniform(-1, 1)), static_cast<float>(noise.Uniform(-1, 1))};
+    const StepResult x = a->Step(act, oa);
+    const StepResult y = b->Step(act, ob);
+    ret_a += x.reward;
+    ret_b += y.reward;
+    REQUIRE(oa == ob);
+    REQUIRE(x.terminated == y.terminated);
+    if (x.terminated || x.truncated) break;
+  }
+  CHECK(ret_a == ret_b);
+}
+
+TEST_CASE("driving into an obstacle ends the episode as a collision; the info says so") {
+  auto env = Make("easy");
+  Rng rng(2);
+  std::vector<float> obs(env->observation_size());
+  env->Reset(rng, obs);
+  CHECK(env->episode_info().available);
+  CHECK_FALSE(env->episode_info().success);
+  StepResult r;
+  const float circle[2] = {1.f, 0.15f};  // a wide full-speed circle ends on a wall or an obstacle
+  int steps = 0;
+  for (; steps < 2000; ++steps) {
+    r = env->Step(circle, obs);
+    if (r.terminated || r.truncated) break;
+  }
+  REQUIRE(r.terminated);
+  CHECK(env->episode_info().failure);
+  CHECK(r.reward < -400);
+  CHECK(obs[19] == 1.f);  // chi, the episode-end flag
+}
+
+TEST_CASE("layout 'mixed' draws every layout; unknown layouts are refused by name") {
+  auto env = Make("mixed");
+  auto* auv = dynamic_cast<AuvNav*>(env.get());
+  Rng rng(9);
+  std::vector<float> obs(env->observation_size());
+  std::set<std::string> seen;
+  for (int i = 0; i < 30; ++i) {
+    env->Reset(rng, obs);
+    seen.insert(auv->config().layout.name);
+  }
+  CHECK(seen.size() == 3);
+  EnvOptions o;
+  o.layout = "labyrinth";
+  auto bad = MakeEnv("auv-nav", o);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("layout 'labyrinth' unknown") != std::string::npos);
+}
+
+}  // namespace
+}  // namespace pbppo::envs
