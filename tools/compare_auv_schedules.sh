@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Clip-schedule comparison on auv-nav (hard layout): fixed:0.2 against the three Pb-PPO schedules
+# (pbppo-paper wi-ad, pbppo-reference, pbppo), 5 seeds each, equal total environment steps: the
+# bandits take `rollout` feedback (mean return of the episodes finished in the next rollout), which
+# costs no extra steps, so every run uses exactly STEPS environment steps. After training, each
+# policy is evaluated deterministically on 100 hard episodes from seed 900001 (not a training seed).
+# Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot.
+# Usage: tools/compare_auv_schedules.sh [OUT_DIR=runs/compare_auv]
+#   (PBPPO=path/to/pbppo, STEPS=1.5e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100 may be set)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="${1:-$root/runs/compare_auv}"
+pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+steps="${STEPS:-1.5e6}"
+seeds="${SEEDS:-1 2 3 4 5}"
+threads="${THREADS:-2}"
+episodes="${EPISODES:-100}"
+if [ ! -x "$pbppo" ]; then
+  echo "compare_auv_schedules: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
+  exit 2
+fi
+schedules=("fixed:0.2" "pbppo-paper:wi-ad" "pbppo-reference" "pbppo")
+common=(--env auv-nav --layout hard --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10
+  --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --arms 0.05:0.4:6 --feedback rollout --steps "$steps")
+mkdir -p "$out"
+for seed in $seeds; do
+  for s in "${schedules[@]}"; do
+    name="${s//:/_}_seed$seed"
+    run="$out/$name"
+    if [ -f "$run/eval.json" ]; then
+      echo "$name: done before, kept"
+      continue
+    fi
+    echo "$name: training ($steps steps)"
+    "$pbppo" train "${common[@]}" --schedule "$s" --seed "$seed" --quiet --out "$run" > "$run.txt" 2>&1
+    "$pbppo" eval "$run/policy.blob" --env auv-nav --layout hard --episodes "$episodes" --seed 900001 --json \
+      > "$run/eval.json"
+    python3 -c 'import json,sys; e=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2]));
+print("  last-100 return %.1f, eval success %.0f%%, eval return %.1f, steps %d" % (s["final_return_last100"],
+ 100*e["success_rate"], e["mean_return"], s["env_steps"] + s["eval_steps"]))' "$run/eval.json" "$run/summary.json"
+  done
+done
+python3 "$root/tools/summarise_schedules.py" "$out" "$root/docs/results/auv_hard_schedules.md" "${schedules[@]}"

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Trains the shipped AUV navigation policy and writes its report: one policy for all three
+# obstacle layouts (`--layout mixed`: every episode draws easy, medium or hard), then 200
+# deterministic evaluation episodes per layout from seeds that training never uses, with the
+# trajectory plots. Copies the blob, its golden vectors and the report to policies/frozen/auv_nav/.
+# Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]   (PBPPO=path/to/pbppo, STEPS, SEED, THREADS)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="${1:-$root/runs/train_auv}"
+pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+steps="${STEPS:-12e6}"
+seed="${SEED:-1}"
+threads="${THREADS:-2}"
+frozen="$root/policies/frozen/auv_nav"
+if [ ! -x "$pbppo" ]; then
+  echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
+  exit 2
+fi
+mkdir -p "$out"
+"$pbppo" train --env auv-nav --layout mixed --schedule fixed:0.2 --steps "$steps" --seed "$seed" \
+  --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10 --lr 3e-4 --gamma 0.99 \
+  --normalize-obs --scale-rewards --hidden 128-128 --out "$out"
+"$root/tools/eval_auv.sh" "$out/policy.blob" "$out"
+mkdir -p "$frozen/report"
+cp "$out/policy.blob" "$frozen/auv_nav.blob"
+cp "$out/policy.golden" "$frozen/auv_nav.golden"
+cp "$out"/{summary.json,log.csv,return.png,success.png,epsilon.png} "$frozen/report/"
+cp "$out"/eval_{easy,medium,hard}.{json,png} "$frozen/report/"
+echo "shipped: $frozen"
