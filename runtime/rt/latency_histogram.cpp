@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <utility>
 
 namespace pbppo::rt {
 namespace {
@@ -77,15 +78,29 @@ std::int64_t LatencySnapshot::Quantile(double q) const noexcept {
   if (count_ == 0) return 0;
   q = std::clamp(std::isnan(q) ? 0.0 : q, 0.0, 1.0);
   const auto rank = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::ceil(q * static_cast<double>(count_))));
+  // Exact extremes where min and max lie in the first and last non-empty buckets (a snapshot
+  // taken while recording may see a bucket before the min or max of the same record).
+  std::uint32_t first = 0, last = 0;
+  for (std::uint32_t b = 0; b < buckets_.size(); ++b) {
+    if (buckets_[b] == 0) continue;
+    if (buckets_[first] == 0) first = b;
+    last = b;
+  }
+  const auto bounds = [](std::uint32_t b) {
+    return std::pair{LatencyHistogram::BucketLower(b),
+                     LatencyHistogram::BucketLower(b) + LatencyHistogram::BucketWidth(b) - 1};
+  };
+  const std::int64_t lo = LatencyHistogram::BucketOf(min_ns_) == first ? min_ns_ : bounds(first).first;
+  const std::int64_t hi = LatencyHistogram::BucketOf(max_ns_) == last ? max_ns_ : bounds(last).second;
   std::uint64_t seen = 0;
   for (std::uint32_t b = 0; b < buckets_.size(); ++b) {
     seen += buckets_[b];
     if (seen >= rank) {
       const std::int64_t mid = LatencyHistogram::BucketLower(b) + LatencyHistogram::BucketWidth(b) / 2;
-      return std::clamp(mid, min_ns_, std::max(min_ns_, max_ns_));
+      return std::clamp(mid, lo, std::max(lo, hi));
     }
   }
-  return max_ns_;
+  return hi;
 }
 
 LatencyStats LatencySnapshot::Stats() const noexcept {

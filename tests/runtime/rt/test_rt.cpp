@@ -78,15 +78,17 @@ TEST_CASE("latency histogram: recording allocates nothing") {
 
 TEST_CASE("latency histogram: a reader takes consistent snapshots while the writer records") {
   LatencyHistogram h;
-  std::atomic<bool> done{false};
+  std::atomic<bool> done{false}, reading{false};
   constexpr std::int64_t kN = 300000;
   std::thread writer([&] {
+    while (!reading.load()) std::this_thread::yield();
     for (std::int64_t i = 1; i <= kN; ++i) h.Record(1000 + (i % 5000));
     done.store(true);
   });
   std::uint64_t last = 0;
   int snapshots = 0;
-  while (!done.load()) {
+  reading.store(true);
+  while (!done.load() || snapshots == 0) {
     const LatencySnapshot s = h.Snapshot();
     CHECK(s.count() >= last);  // monotonic
     last = s.count();
