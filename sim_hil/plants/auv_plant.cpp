@@ -136,9 +136,9 @@ Result<AuvParams> LoadAuvParams(const std::string& path) {
   if (!doc) return std::move(doc).error();
   const YAML::Node root = *doc;
   YamlFields f(path);
-  if (auto st = f.Keys(
-          root, "",
-          {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task", "description"});
+  if (auto st = f.Keys(root, "",
+                       {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task",
+                        "description", "supervisor"});
       !st)
     return st.error();
   AuvParams p;

@@ -1,52 +1,16 @@
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
+#include "runtime/robot/auv_signals.hpp"
 #include "sim_hil/common/yaml_fields.hpp"
 
 namespace pbppo::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Signals an IO layout can name; sonar_0 ... sonar_{n-1} follow after kCount.
-enum Signal : int {
-  kTargetDistance,  // l_AT, m
-  kYaw,             // theta, rad in (-pi, pi]
-  kTargetBearing,   // phi_AT relative to the heading, rad in (-pi, pi]
-  kEpisodeEnd,      // chi: 1 in the last observation of an episode
-  kSurgeSpeed,      // body u, m/s
-  kSwaySpeed,       // body v, m/s
-  kYawRate,         // body r, rad/s
-  kCosYaw,
-  kSinYaw,
-  kCosTargetBearing,
-  kSinTargetBearing,
-  kX,            // m
-  kY,            // m
-  kDepthError,   // depth - set-point, m
-  kClearance,    // nearest obstacle or wall, m
-  kTargetIndex,  // 0, 1, 2 ...
-  kCount
-};
-
-constexpr const char* kSignalNames[kCount] = {"target_distance",
-                                              "yaw",
-                                              "target_bearing",
-                                              "episode_end",
-                                              "surge_speed",
-                                              "sway_speed",
-                                              "yaw_rate",
-                                              "cos_yaw",
-                                              "sin_yaw",
-                                              "cos_target_bearing",
-                                              "sin_target_bearing",
-                                              "x",
-                                              "y",
-                                              "depth_error",
-                                              "clearance",
-                                              "target_index"};
 
 }  // namespace
 
@@ -122,9 +86,7 @@ Result<AuvTaskConfig> LoadAuvTaskConfig(const std::string& auv_yaml, const std::
 }
 
 std::vector<std::string> AuvNavTask::SignalNames() const {
-  std::vector<std::string> names(kSignalNames, kSignalNames + kCount);
-  for (int i = 0; i < config_.sonar.beams; ++i) names.push_back("sonar_" + std::to_string(i));
-  return names;
+  return robot::AuvSignalNames(static_cast<std::uint32_t>(config_.sonar.beams));
 }
 
 Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
@@ -137,19 +99,14 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   const std::string where = "io layout '" + config.io.robot + "'";
   if (config.io.robot != "auv")
     return MakeError(ErrorCode::kMismatch, where + ": robot is '" + config.io.robot + "', expected 'auv'");
+  if (config.sonar.beams > static_cast<int>(robot::kAuvMaxSonarBeams))
+    return MakeError(ErrorCode::kInvalidValue, "sonar.beams " + std::to_string(config.sonar.beams) +
+                                                   " exceeds the sensor sample's " +
+                                                   std::to_string(robot::kAuvMaxSonarBeams));
   const std::vector<std::string> names = t.SignalNames();
-  for (std::size_t i = 0; i < config.io.observations.size(); ++i) {
-    const auto& o = config.io.observations[i];
-    const auto it = std::find(names.begin(), names.end(), o.signal);
-    if (it == names.end()) {
-      std::string known;
-      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      return MakeError(ErrorCode::kMismatch, where + ": observations[" + std::to_string(i) + "] '" + o.name +
-                                                 "': signal '" + o.signal + "' is not provided by the AUV task (" +
-                                                 known + ")");
-    }
-    t.obs_signal_.push_back(static_cast<int>(it - names.begin()));
-  }
+  auto builder = robot::ObservationBuilder::Create(config.io, names);
+  if (!builder) return std::move(builder).error();
+  t.observe_ = std::move(*builder);
   if (config.io.actions.size() != 2)
     return MakeError(ErrorCode::kMismatch, where + ": " + std::to_string(config.io.actions.size()) +
                                                " actions, the AUV task takes 2 (surge_speed, yaw_rate)");
@@ -165,6 +122,7 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
                        where + ": actions[" + std::to_string(i) + "]: command '" + a.command + "' appears twice");
     t.action_of_[static_cast<std::size_t>(slot)] = static_cast<int>(i);
   }
+  t.act_ = robot::ActionMapper::Create(config.io);
   t.io_hash_ = config.io.Hash();
   t.obs_size_ = config.io.observation_size();
   t.last_obs_.assign(t.obs_size_, 0.0f);
@@ -221,37 +179,25 @@ void AuvNavTask::Measure() {
 }
 
 void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
+  // The controller's path too: the signal table (robot::AuvSignals) through the IO layout
+  // (robot::ObservationBuilder). The plant's yaw is not wrapped; the yaw signal is.
   const AuvState& s = plant_.State();
-  double* g = signals_.data();
-  g[kTargetDistance] = l_at_;
-  g[kYaw] = WrapAngle(s.yaw_rad);
-  g[kTargetBearing] = phi_at_;
-  g[kEpisodeEnd] = episode_end ? 1.0 : 0.0;
-  g[kSurgeSpeed] = s.u_mps;
-  g[kSwaySpeed] = s.v_mps;
-  g[kYawRate] = s.r_radps;
-  g[kCosYaw] = std::cos(s.yaw_rad);
-  g[kSinYaw] = std::sin(s.yaw_rad);
-  g[kCosTargetBearing] = std::cos(phi_at_);
-  g[kSinTargetBearing] = std::sin(phi_at_);
-  g[kX] = s.x_m;
-  g[kY] = s.y_m;
-  g[kDepthError] = -s.z_m - config_.task.depth_m;
-  g[kClearance] = clearance_;
-  g[kTargetIndex] = target_;
-  for (std::size_t i = 0; i < sonar_.size(); ++i) g[kCount + i] = sonar_[i];
-  // Through the IO layout: clamp((signal - offset) * scale, -clip, clip); history h occupies h
-  // consecutive inputs (now, one period ago, ...), filled with the first value at reset.
-  std::size_t k = 0;
-  for (std::size_t e = 0; e < config_.io.observations.size(); ++e) {
-    const auto& o = config_.io.observations[e];
-    const double v = (g[obs_signal_[e]] - o.offset) * o.scale;
-    const auto now = static_cast<float>(std::clamp(v, -o.clip, o.clip));
-    const std::size_t h = o.history;
-    for (std::size_t j = h - 1; j >= 1; --j) last_obs_[k + j] = first ? now : last_obs_[k + j - 1];
-    last_obs_[k] = now;
-    k += h;
-  }
+  robot::AuvSignalInputs in;
+  in.x_m = s.x_m;
+  in.y_m = s.y_m;
+  in.depth_m = -s.z_m;
+  in.yaw_rad = s.yaw_rad;
+  in.surge_mps = s.u_mps;
+  in.sway_mps = s.v_mps;
+  in.yaw_rate_radps = s.r_radps;
+  in.target_distance_m = l_at_;
+  in.target_bearing_rad = phi_at_;
+  in.clearance_m = clearance_;
+  in.target_index = target_;
+  in.episode_end = episode_end;
+  robot::AuvSignals(in, config_.task.depth_m, sonar_.data(), static_cast<std::uint32_t>(sonar_.size()),
+                    signals_.data());
+  observe_.Build(signals_.data(), first, last_obs_.data());
   std::copy(last_obs_.begin(), last_obs_.end(), obs);
 }
 
@@ -291,18 +237,9 @@ AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
   }
   // Action -> command through the IO layout: clamp(a * scale + offset, low, high).
   double cmd[2];
-  for (std::size_t slot = 0; slot < 2; ++slot) {
-    const auto i = static_cast<std::size_t>(action_of_[slot]);
-    const auto& a = config_.io.actions[i];
-    double x = static_cast<double>(action[i]);
-    if (!std::isfinite(x)) {
-      x = 0.0;
-      ++stats_.nonfinite_actions;
-    }
-    cmd[slot] = std::clamp(x * a.scale + a.offset, a.low, a.high);
-  }
-  v_cmd_ = cmd[0];
-  w_cmd_ = cmd[1];
+  stats_.nonfinite_actions += std::popcount(act_.Map(action, cmd));
+  v_cmd_ = cmd[static_cast<std::size_t>(action_of_[0])];
+  w_cmd_ = cmd[static_cast<std::size_t>(action_of_[1])];
   plant_.SetCommand(v_cmd_, w_cmd_);
 
   const double l_prev = l_at_, phi_prev = phi_at_;

@@ -19,6 +19,7 @@
 #include "runtime/core/random.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "runtime/robot/observation_builder.hpp"
 #include "sim_hil/plants/auv_plant.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
@@ -127,9 +128,10 @@ class AuvNavTask {
   std::uint64_t io_hash_ = 0;
   std::uint32_t obs_size_ = 0;
   long max_steps_ = 0;
-  std::vector<int> obs_signal_;   // per IO observation element: index into signals_
+  robot::ObservationBuilder observe_;
+  robot::ActionMapper act_;
   std::array<int, 2> action_of_;  // action index of surge_speed and yaw_rate
-  std::vector<double> signals_;
+  std::vector<double> signals_;   // robot::AuvSignalNames order
   std::vector<float> last_obs_;
   std::vector<double> sonar_;
   World2d world_;

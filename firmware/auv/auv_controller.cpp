@@ -1,0 +1,271 @@
+#include "firmware/auv/auv_controller.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+
+#include "runtime/policy/blob.hpp"
+#include "runtime/robot/auv_signals.hpp"
+#include "runtime/rt/tick_clock.hpp"
+
+namespace pbppo::firmware {
+namespace {
+
+// Field reader for auv.yaml: errors name the file and the field and quote the value.
+class Fields {
+ public:
+  Fields(std::string path, YAML::Node root) : path_(std::move(path)), root_(std::move(root)) {}
+
+  Status Number(const char* section, const char* key, double lo, double hi, double* out) const {
+    const YAML::Node v = root_[section] ? root_[section][key] : YAML::Node();
+    const std::string where = path_ + ": " + section + "." + key;
+    if (!v) return MakeError(ErrorCode::kInvalidValue, where + ": missing");
+    if (!v.IsScalar()) return MakeError(ErrorCode::kInvalidValue, where + ": expected a number");
+    return Check(where, v.as<std::string>(), lo, hi, out);
+  }
+  Status Count(const char* section, const char* key, double lo, double hi, std::uint32_t* out) const {
+    double d = 0;
+    if (auto st = Number(section, key, lo, hi, &d); !st) return st;
+    if (d != std::floor(d))
+      return MakeError(ErrorCode::kInvalidValue,
+                       path_ + ": " + section + "." + key + ": " + Fmt(d) + " is not an integer");
+    *out = static_cast<std::uint32_t>(d);
+    return {};
+  }
+  Status Pair(const char* section, const char* key, double lo, double hi, double* a, double* b) const {
+    const YAML::Node v = root_[section] ? root_[section][key] : YAML::Node();
+    const std::string where = path_ + ": " + section + "." + key;
+    if (!v) return MakeError(ErrorCode::kInvalidValue, where + ": missing");
+    if (!v.IsSequence() || v.size() != 2) return MakeError(ErrorCode::kInvalidValue, where + ": expected [low, high]");
+    if (auto st = Check(where + "[0]", v[0].as<std::string>(), lo, hi, a); !st) return st;
+    if (auto st = Check(where + "[1]", v[1].as<std::string>(), lo, hi, b); !st) return st;
+    if (*a >= *b) return MakeError(ErrorCode::kInvalidValue, where + ": low " + Fmt(*a) + " >= high " + Fmt(*b));
+    return {};
+  }
+
+ private:
+  static std::string Fmt(double d) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", d);
+    return buf;
+  }
+  static Status Check(const std::string& where, const std::string& text, double lo, double hi, double* out) {
+    char* end = nullptr;
+    const double d = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(d))
+      return MakeError(ErrorCode::kInvalidValue, where + ": '" + text + "' is not a finite number");
+    if (d < lo || d > hi)
+      return MakeError(ErrorCode::kInvalidValue, where + ": " + text + " outside [" + Fmt(lo) + ", " + Fmt(hi) + "]");
+    *out = d;
+    return {};
+  }
+  std::string path_;
+  YAML::Node root_;
+};
+
+}  // namespace
+
+Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    return MakeError(ErrorCode::kIo, path + ": cannot open");
+  } catch (const YAML::Exception& e) {
+    return MakeError(ErrorCode::kFormat,
+                     path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root["supervisor"] || !root["supervisor"].IsMap())
+    return MakeError(ErrorCode::kInvalidValue, path + ": missing section 'supervisor'");
+  const Fields f(path, root);
+  AuvControllerConfig c;
+  safety::AuvSupervisorConfig& s = c.supervisor;
+  double accel = 0, yaw_accel = 0, stop = 0, stop_yaw = 0, beams = 0;
+  const char* S = "supervisor";
+  for (const Status& st : {
+           f.Number("simulation", "control_period_s", 1e-4, 10.0, &c.control_period_s),
+           f.Number("task", "depth_m", 0.0, 1e4, &c.depth_setpoint_m),
+           f.Number("sonar", "beams", 1, robot::kAuvMaxSonarBeams, &beams),
+           f.Number("sonar", "max_range_m", 0.1, 1000.0, &s.sonar_max_m),
+           f.Pair(S, "surge_speed_mps", -10.0, 10.0, &s.v_min_mps, &s.v_max_mps),
+           f.Number(S, "yaw_rate_max_radps", 0.0, 10.0, &s.w_max_radps),
+           f.Number(S, "degraded_surge_max_mps", 0.0, 10.0, &s.degraded_v_max_mps),
+           f.Number(S, "surge_accel_max_mps2", 1e-6, 100.0, &accel),
+           f.Number(S, "yaw_accel_max_radps2", 1e-6, 100.0, &yaw_accel),
+           f.Number(S, "stop_decel_mps2", 1e-6, 1000.0, &stop),
+           f.Number(S, "stop_yaw_decel_radps2", 1e-6, 1000.0, &stop_yaw),
+           f.Count(S, "stale_degraded_ticks", 0, 1e6, &s.stale_degraded_ticks),
+           f.Count(S, "stale_safe_stop_ticks", 1, 1e6, &s.stale_safe_stop_ticks),
+           f.Count(S, "lost_peer_ticks", 1, 1e6, &s.lost_peer_ticks),
+           f.Count(S, "invalid_safe_stop", 1, 1e6, &s.invalid_safe_stop),
+           f.Count(S, "overrun_degraded", 1, 1e6, &s.overrun_degraded),
+           f.Count(S, "overrun_safe_stop", 1, 1e6, &s.overrun_safe_stop),
+           f.Number(S, "speed_max_mps", 0.0, 1e3, &s.speed_max_mps),
+           f.Number(S, "rate_max_radps", 0.0, 1e3, &s.rate_max_radps),
+           f.Pair(S, "depth_range_m", -1e4, 1e5, &s.depth_min_m, &s.depth_max_m),
+       }) {
+    if (!st) return st.error();
+  }
+  s.sonar_beams = static_cast<std::uint32_t>(beams);
+  s.sonar_max_m *= 1.0001;  // a range reading at exactly the maximum is valid
+  s.dv_max_mps = accel * c.control_period_s;
+  s.dw_max_radps = yaw_accel * c.control_period_s;
+  s.stop_dv_mps = stop * c.control_period_s;
+  s.stop_dw_radps = stop_yaw * c.control_period_s;
+  char why[256];
+  if (!safety::ValidateAuvSupervisorConfig(s, why, sizeof why))
+    return MakeError(ErrorCode::kInvalidValue, path + ": " + why +
+                                                   " (rates are the yaml's per-second values times "
+                                                   "simulation.control_period_s)");
+  return c;
+}
+
+AuvController::AuvController(AuvControllerConfig config, robot::IoLayout layout, policy::PolicyModel model,
+                             robot::ObservationBuilder builder)
+    : config_(std::move(config)), layout_(std::move(layout)), model_(std::move(model)), builder_(std::move(builder)) {}
+
+Result<std::unique_ptr<AuvController>> AuvController::Create(const std::string& auv_yaml,
+                                                             const std::string& io_layout_yaml,
+                                                             const std::string& blob_path) {
+  auto config = LoadAuvControllerConfig(auv_yaml);
+  if (!config) return std::move(config).error();
+  auto layout = robot::LoadIoLayout(io_layout_yaml);
+  if (!layout) return std::move(layout).error();
+  auto model = policy::PolicyModel::FromFile(blob_path);
+  if (!model) return std::move(model).error();
+  auto c = Create(*config, *layout, std::move(*model));
+  if (!c) return MakeError(c.error().code, blob_path + " on " + io_layout_yaml + ": " + c.error().message);
+  return c;
+}
+
+Result<std::unique_ptr<AuvController>> AuvController::Create(const AuvControllerConfig& config,
+                                                             const robot::IoLayout& layout, policy::PolicyModel model) {
+  char why[256];
+  if (!safety::ValidateAuvSupervisorConfig(config.supervisor, why, sizeof why))
+    return MakeError(ErrorCode::kInvalidValue, why);
+  if (layout.robot != "auv")
+    return MakeError(ErrorCode::kMismatch, "io layout: robot is '" + layout.robot + "', expected 'auv'");
+  if (auto st = robot::CheckPolicyMatchesLayout(model.description(), layout); !st) return st.error();
+  auto builder = robot::ObservationBuilder::Create(layout, robot::AuvSignalNames(config.supervisor.sonar_beams));
+  if (!builder) return std::move(builder).error();
+  std::int32_t v = -1, w = -1;
+  for (std::size_t i = 0; i < layout.actions.size(); ++i) {
+    const std::string& cmd = layout.actions[i].command;
+    std::int32_t* slot = cmd == "surge_speed" ? &v : cmd == "yaw_rate" ? &w : nullptr;
+    if (slot == nullptr || *slot >= 0)
+      return MakeError(ErrorCode::kMismatch,
+                       "io layout 'auv': actions[" + std::to_string(i) + "] '" + layout.actions[i].name +
+                           "': command '" + cmd +
+                           (slot == nullptr ? "' is not one of surge_speed, yaw_rate" : "' appears twice"));
+    *slot = static_cast<std::int32_t>(i);
+  }
+  if (v < 0 || w < 0)
+    return MakeError(ErrorCode::kMismatch,
+                     std::string("io layout 'auv': no action with command ") + (v < 0 ? "surge_speed" : "yaw_rate"));
+  std::unique_ptr<AuvController> c(new AuvController(config, layout, std::move(model), std::move(*builder)));
+  auto data = policy::MakePolicyData(c->model_);
+  if (!data) return std::move(data).error();
+  c->data_.emplace(std::move(*data));
+  c->v_index_ = static_cast<std::uint32_t>(v);
+  c->w_index_ = static_cast<std::uint32_t>(w);
+  c->signals_.assign(robot::kAuvSignalCapacity, 0.0);
+  c->obs_.assign(c->builder_.observation_size(), 0.0f);
+  return c;
+}
+
+void AuvController::Arm() noexcept {
+  if (!armed_) first_armed_tick_ = true;
+  armed_ = true;
+}
+
+bool AuvController::ResetSupervisor() noexcept {
+  if (!safety::ResetAuvSupervisor(sup_, armed_)) return false;
+  estop_request_.store(false, std::memory_order_relaxed);
+  return true;
+}
+
+void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tick, robot::AuvCommand& out) noexcept {
+  const std::int64_t t0 = rt::MonotonicNs();
+  ++ticks_;
+  // Observe: a new sample resets the age; the signal table through the IO layout.
+  if (latest != nullptr && (!have_sample_ || latest->tick != sample_.tick || latest->stamp_ns != sample_.stamp_ns)) {
+    sample_ = *latest;
+    have_sample_ = true;
+    sample_age_ = 0;
+  } else if (sample_age_ < 0xffffffffu) {
+    ++sample_age_;
+  }
+  const char* field = "";
+  double value = 0;
+  const bool valid = have_sample_ && safety::CheckAuvSample(config_.supervisor, sample_, &field, &value) == 0;
+  if (armed_ && valid) {
+    robot::AuvSignalsFromSample(sample_, config_.depth_setpoint_m, signals_.data());
+    builder_.Build(signals_.data(), first_armed_tick_, obs_.data());
+    first_armed_tick_ = false;
+  }
+  const std::int64_t t1 = rt::MonotonicNs();
+  // Infer (only armed, and only once an observation exists).
+  double v = 0.0, w = 0.0;
+  if (armed_ && !first_armed_tick_) {
+    std::span<float> in = data_->observation();
+    for (std::size_t i = 0; i < in.size(); ++i) in[i] = obs_[i];
+    const policy::ForwardStatus fs = policy::Forward(model_, *data_);
+    const std::span<const float> a = data_->action();
+    v = static_cast<double>(a[v_index_]);
+    w = static_cast<double>(a[w_index_]);
+    if (fs != policy::ForwardStatus::kOk && std::isfinite(v) && std::isfinite(w)) v = std::nan("");
+    ++policy_runs_;
+  }
+  const std::int64_t t2 = rt::MonotonicNs();
+  // Supervise.
+  safety::AuvSupervisorInput in;
+  in.v_mps = v;
+  in.w_radps = w;
+  in.sample = have_sample_ ? &sample_ : nullptr;
+  in.sample_age_ticks = sample_age_;
+  in.peer_lost = peer_lost_;
+  in.consecutive_deadline_misses = deadline_misses_in_row_;
+  in.estop_request = estop_request_.load(std::memory_order_relaxed);
+  decision_ = safety::SuperviseAuv(config_.supervisor, in, sup_);
+  sup_ = decision_.state;
+  if (!armed_) {  // disarmed: nothing moves (the supervisor still watches and latches)
+    sup_.v_mps = sup_.w_radps = 0.0;
+    decision_.v_mps = decision_.w_radps = 0.0;
+  }
+  out.tick = tick;
+  out.answers = have_sample_ ? sample_.tick : 0;
+  out.surge_speed_mps = decision_.v_mps;
+  out.yaw_rate_radps = decision_.w_radps;
+  out.mode = static_cast<std::uint8_t>(sup_.mode);
+  const std::int64_t t3 = rt::MonotonicNs();
+  out.stamp_ns = t3;
+  profiler_.Record(rt::Stage::kObserve, t1 - t0);
+  profiler_.Record(rt::Stage::kInfer, t2 - t1);
+  profiler_.Record(rt::Stage::kSupervise, t3 - t2);
+}
+
+void AuvController::ShutdownCommand(std::uint64_t tick, robot::AuvCommand& out) const noexcept {
+  out.tick = tick;
+  out.stamp_ns = rt::MonotonicNs();
+  out.answers = have_sample_ ? sample_.tick : 0;
+  out.surge_speed_mps = 0.0;
+  out.yaw_rate_radps = 0.0;
+  out.mode = static_cast<std::uint8_t>(safety::AuvMode::kEStop);
+}
+
+robot::AuvControllerStatus AuvController::Status() const {
+  robot::AuvControllerStatus s;
+  s.tick = ticks_;
+  s.mode = static_cast<std::uint8_t>(sup_.mode);
+  s.cause = sup_.latched_cause;
+  s.deadline_misses = profiler_.deadline_misses();
+  s.stale_samples = sup_.cause_ticks[4];
+  s.invalid_samples = sup_.cause_ticks[3];
+  s.limited_commands = sup_.cause_ticks[0] + sup_.cause_ticks[1];
+  const rt::LatencyStats t = profiler_.histogram(rt::Stage::kTick).Snapshot().Stats();
+  s.tick_median_us = static_cast<double>(t.p50_ns) / 1000.0;
+  s.tick_max_us = static_cast<double>(t.max_ns) / 1000.0;
+  return s;
+}
+
+}  // namespace pbppo::firmware
