@@ -86,6 +86,7 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--minibatch", o.minibatch, "Minibatch size");
   s.add_option("--epochs", o.epochs, "Epochs per iteration");
   s.add_option("--lr", o.lr, "Adam learning rate");
+  s.add_flag("--anneal-lr", o.anneal_lr, "Decay the learning rate linearly to 0 over the budget");
   s.add_option("--gamma", o.gamma, "Discount");
   s.add_option("--gae-lambda", o.gae_lambda, "GAE lambda");
   s.add_option("--ent-coef", o.ent_coef, "Entropy coefficient");
@@ -119,6 +120,7 @@ int Train(const TrainOptions& o) {
   c.minibatch = o.minibatch;
   c.epochs = o.epochs;
   c.learning_rate = o.lr;
+  c.anneal_lr = o.anneal_lr;
   c.gamma = o.gamma;
   c.gae_lambda = o.gae_lambda;
   c.ent_coef = o.ent_coef;

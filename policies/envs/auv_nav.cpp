@@ -8,7 +8,8 @@ namespace pbppo::envs {
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name) {
   std::vector<std::string> names;
   if (layout_name == "mixed") {
-    names = {"easy", "medium", "hard"};
+    // Hard twice: it needs the most experience (a serpentine of three corridors).
+    names = {"easy", "medium", "hard", "hard"};
   } else if (layout_name == "easy" || layout_name == "medium" || layout_name == "hard") {
     names = {layout_name};
   } else {

@@ -3,7 +3,8 @@
 // layout (models/auv/io_layout.yaml) maps them to [v, omega] commands, the same map the blob
 // carries and the controller applies. One task instance (one Simbody System) per environment:
 // Clone() builds a fresh instance from the shared configuration and the caller Reset()s it.
-// Layout "mixed" draws easy, medium or hard (uniformly) for every episode: one policy for all.
+// Layout "mixed" draws a layout for every episode (easy 1/4, medium 1/4, hard 1/2): one policy for
+// all three.
 #pragma once
 
 #include <memory>

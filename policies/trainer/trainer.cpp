@@ -104,6 +104,7 @@ class Trainer {
   // Eigen-aligned storage: vectorised code then sees the same alignment on every run.
   Vec<float> pp_, pv_, gp_, gv_;
   Adam<float> adam_p_, adam_v_;
+  double lr_now_ = 0;  // this iteration's learning rate (annealed or constant)
   Rng rng_;
   std::vector<std::unique_ptr<envs::Env>> envs_;
   std::vector<Rng> env_rng_;
@@ -402,8 +403,8 @@ void Trainer::Update(double eps, IterationStats& st) {
       }
       const auto [norm, scale] = clip_scale(k);
       gnorm += norm;
-      adam_p_.Step(pp_.data(), gp_.data(), c_.learning_rate, scale);
-      if (sequential_value) adam_v_.Step(pv_.data(), gv_.data(), c_.learning_rate, scale);
+      adam_p_.Step(pp_.data(), gp_.data(), lr_now_, scale);
+      if (sequential_value) adam_v_.Step(pv_.data(), gv_.data(), lr_now_, scale);
     }
   };
   auto value_loop = [&](ValueWorkspace<float>& wsv) {
@@ -424,7 +425,7 @@ void Trainer::Update(double eps, IterationStats& st) {
       sync.ArriveAndWait();
       const auto [norm, scale] = clip_scale(k);
       (void)norm;
-      adam_v_.Step(pv_.data(), gv_.data(), c_.learning_rate, scale);
+      adam_v_.Step(pv_.data(), gv_.data(), lr_now_, scale);
     }
   };
   PolicyWorkspace<float> wsp;
@@ -548,7 +549,7 @@ std::string Trainer::CsvHeader() const {
   std::ostringstream h;
   h << "iteration,env_steps,eval_steps,total_steps,arm,epsilon,feedback,feedback_before,improved,success_rate,"
        "train_return,train_return_100,episodes,approx_kl,clip_fraction,explained_variance,entropy,policy_loss,"
-       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100";
+       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100,learning_rate";
   for (std::size_t i = 0; i < c_.schedule.arms.size(); ++i)
     h << ",arm" << i << "_epsilon,arm" << i << "_value,arm" << i << "_bonus,arm" << i << "_count";
   h << "\n";
@@ -563,7 +564,7 @@ std::string Trainer::CsvRow(const IterationStats& s) const {
     << s.success_rate << ',' << s.train_return << ',' << s.train_return_100 << ',' << s.episodes << ',' << s.approx_kl
     << ',' << s.clip_fraction << ',' << s.explained_variance << ',' << s.entropy << ',' << s.policy_loss << ','
     << s.value_loss << ',' << s.grad_norm << ',' << s.log_std_mean << ',' << s.steps_per_second << ','
-    << s.task_success_100;
+    << s.task_success_100 << ',' << s.learning_rate;
   for (const auto& a : s.arms) r << ',' << a.epsilon << ',' << a.value << ',' << a.bonus << ',' << a.count;
   r << "\n";
   return r.str();
@@ -683,6 +684,9 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     st.arm = schedule->Choose();
     st.arms = schedule->arms();
     st.epsilon = schedule->epsilon(st.arm);
+    // Linear annealing to zero over the budget (CleanRL's anneal_lr), counted in iterations.
+    lr_now_ = c_.anneal_lr ? c_.learning_rate * (1.0 - static_cast<double>(it) / iterations) : c_.learning_rate;
+    st.learning_rate = lr_now_;
     Update(st.epsilon, st);
 
     const bool stopping = c_.stop != nullptr && c_.stop->load();
@@ -782,6 +786,8 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     j["threads"] = c_.threads;
     j["envs"] = c_.num_envs;
     j["rollout"] = c_.rollout_steps;
+    j["learning_rate"] = c_.learning_rate;
+    j["anneal_lr"] = c_.anneal_lr;
     j["success_rate"] =
         feedback_count > 0 ? nlohmann::json(static_cast<double>(improved_count) / feedback_count) : nlohmann::json();
     std::vector<int> pulls(c_.schedule.arms.size(), 0);

@@ -29,6 +29,7 @@ struct TrainConfig {
   int minibatch = 64;
   int epochs = 10;
   double learning_rate = 3e-4;
+  bool anneal_lr = false;  // linear decay of the learning rate to 0 over the budget
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;
@@ -84,6 +85,7 @@ struct IterationStats {
   double approx_kl = 0, clip_fraction = 0, explained_variance = 0, entropy = 0;
   double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;
   double steps_per_second = 0;
+  double learning_rate = 0;
   std::vector<ArmState> arms;
 };
 

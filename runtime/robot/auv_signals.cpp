@@ -24,7 +24,9 @@ constexpr const char* kNames[kAuvSonarSignal0] = {"target_distance",
                                                   "y",
                                                   "depth_error",
                                                   "clearance",
-                                                  "target_index"};
+                                                  "target_index",
+                                                  "target_x",
+                                                  "target_y"};
 
 }  // namespace
 
@@ -58,6 +60,8 @@ void AuvSignals(const AuvSignalInputs& in, double depth_setpoint_m, const double
   g[kAuvDepthError] = in.depth_m - depth_setpoint_m;
   g[kAuvClearance] = in.clearance_m;
   g[kAuvTargetIndex] = in.target_index;
+  g[kAuvTargetX] = in.target_x_m;
+  g[kAuvTargetY] = in.target_y_m;
   const std::uint32_t n = std::min(sonar_beams, kAuvMaxSonarBeams);
   for (std::uint32_t i = 0; i < n; ++i) g[kAuvSonarSignal0 + i] = sonar_m[i];
 }
@@ -75,6 +79,8 @@ void AuvSignalsFromSample(const AuvSensorSample& s, double depth_setpoint_m, dou
   in.target_bearing_rad = s.target_bearing_rad;
   in.clearance_m = s.clearance_m;
   in.target_index = s.target_index;
+  in.target_x_m = s.target_x_m;
+  in.target_y_m = s.target_y_m;
   in.episode_end = s.episode_end;
   const std::uint32_t n = std::min(s.sonar_beams, kAuvMaxSonarBeams);
   std::array<double, kAuvMaxSonarBeams> sonar{};

@@ -30,6 +30,8 @@ enum AuvSignal : std::uint32_t {
   kAuvDepthError,   // depth - set-point, m (positive: too deep)
   kAuvClearance,    // nearest obstacle or wall, m
   kAuvTargetIndex,  // 0, 1, 2 ...
+  kAuvTargetX,      // current target in the world frame, m
+  kAuvTargetY,
   kAuvSonarSignal0
 };
 
@@ -46,6 +48,7 @@ struct AuvSignalInputs {
   double surge_mps = 0, sway_mps = 0, yaw_rate_radps = 0;
   double target_distance_m = 0, target_bearing_rad = 0, clearance_m = 0;
   std::int32_t target_index = 0;
+  double target_x_m = 0, target_y_m = 0;
   bool episode_end = false;
 };
 

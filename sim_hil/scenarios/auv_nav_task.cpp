@@ -194,6 +194,10 @@ void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
   in.target_bearing_rad = phi_at_;
   in.clearance_m = clearance_;
   in.target_index = target_;
+  const auto& tgt = config_.layout.targets[static_cast<std::size_t>(
+      std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
+  in.target_x_m = tgt[0];
+  in.target_y_m = tgt[1];
   in.episode_end = episode_end;
   robot::AuvSignals(in, config_.task.depth_m, sonar_.data(), static_cast<std::uint32_t>(sonar_.size()),
                     signals_.data());
