@@ -561,3 +561,53 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
     prev = o;
   }
 }
+
+TEST_CASE("auv task: StepCommand with the mapped physical command is Step bit for bit") {
+  const AuvTaskConfig c = Config("medium");
+  AuvNavTask a = MakeTask(c), b = MakeTask(c);
+  std::vector<float> oa(22), ob(22);
+  a.Reset(11, oa.data());
+  b.Reset(11, ob.data());
+  for (int k = 0; k < 150; ++k) {
+    const float act[2] = {static_cast<float>(std::sin(0.05 * k)), static_cast<float>(std::cos(0.03 * k))};
+    const AuvStepResult ra = a.Step(act, oa.data());
+    // Through models/auv/io_layout.yaml: v = 0.75 a + 0.75, omega = 0.5 a.
+    const AuvStepResult rb =
+        b.StepCommand(0.75 * static_cast<double>(act[0]) + 0.75, 0.5 * static_cast<double>(act[1]), ob.data());
+    REQUIRE(ra.reward == rb.reward);
+    REQUIRE(ra.terminated == rb.terminated);
+    REQUIRE(oa == ob);
+    REQUIRE(a.vehicle().x_m == b.vehicle().x_m);
+    REQUIRE(a.vehicle().yaw_rad == b.vehicle().yaw_rad);
+  }
+  CHECK(b.commanded_speed_mps() == a.commanded_speed_mps());
+  // Non-finite physical commands: 0 and counted.
+  b.StepCommand(std::nan(""), INFINITY, ob.data());
+  CHECK(b.stats().nonfinite_actions == 2);
+  CHECK(b.commanded_speed_mps() == 0.0);
+}
+
+TEST_CASE("auv task: FillSensorSample reports the vehicle, sonar and target the task measures") {
+  AuvNavTask task = MakeTask(Config("easy"));
+  std::vector<float> obs(22);
+  task.Reset(3, obs.data());
+  for (int k = 0; k < 20; ++k) task.StepCommand(1.0, 0.2, obs.data());
+  pbppo::robot::AuvSensorSample s;
+  task.FillSensorSample(s);
+  CHECK(s.tick == 20);
+  CHECK(s.stamp_ns == 2'000'000'000);
+  CHECK(s.x_m == task.vehicle().x_m);
+  CHECK(s.y_m == task.vehicle().y_m);
+  CHECK(s.depth_m == doctest::Approx(5.0).epsilon(0.01));
+  CHECK(s.surge_mps == task.vehicle().u_mps);
+  CHECK(s.yaw_rate_radps == task.vehicle().r_radps);
+  REQUIRE(s.sonar_beams == 16);
+  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == static_cast<float>(task.sonar_ranges()[i]));
+  CHECK(s.target_index == task.target_index());
+  CHECK(s.target_distance_m == doctest::Approx(std::hypot(s.target_x_m - s.x_m, s.target_y_m - s.y_m)));
+  CHECK(static_cast<float>(s.target_distance_m / 40.0) == obs[kDist]);
+  CHECK(static_cast<float>(s.target_bearing_rad / kPi) == obs[kBearing]);
+  CHECK(s.clearance_m > 1.2);
+  CHECK_FALSE(s.mission_complete);
+  CHECK_FALSE(s.episode_end);
+}
