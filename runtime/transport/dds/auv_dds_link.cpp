@@ -213,10 +213,14 @@ Error Fail(const std::string& what) {
   return MakeError(ErrorCode::kInvalidValue, "dds: " + what);
 }
 
+// Reliable, and transient-local: discovery is not symmetric (our writer may know a reader before
+// that reader knows our writer, and a volatile reader drops what was written before it matched),
+// so the first lock-step sample or command written right after matching would otherwise be lost.
+// A reader that joins late gets the writer's last `depth` messages.
 fdds::DataWriterQos WriterQos(std::int32_t depth) {
   fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
   q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
-  q.durability().kind = fdds::VOLATILE_DURABILITY_QOS;
+  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = depth;
   q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
@@ -226,7 +230,7 @@ fdds::DataWriterQos WriterQos(std::int32_t depth) {
 fdds::DataReaderQos ReaderQos(std::int32_t depth) {
   fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
   q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
-  q.durability().kind = fdds::VOLATILE_DURABILITY_QOS;
+  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = depth;
   return q;
