@@ -177,17 +177,13 @@ struct AuvDdsLink::Impl {
     robot::AuvCommand c;
     for (;;) {
       wake.try_acquire_for(std::chrono::milliseconds(50));
+      // Read before draining: whatever was pushed before the stop request is still written.
+      const bool stopping = stop.load(std::memory_order_acquire);
       while (outbox->TryPop(&c)) {
         ToDds(c, &msg);
         CountWrite(main_writer->write(&msg));
       }
-      if (stop.load(std::memory_order_acquire)) {
-        while (outbox->TryPop(&c)) {
-          ToDds(c, &msg);
-          CountWrite(main_writer->write(&msg));
-        }
-        return;
-      }
+      if (stopping) return;
     }
   }
 
