@@ -8,6 +8,7 @@
 #include <memory>
 #include <thread>
 
+#include "runtime/core/alloc_probe.hpp"
 #include "runtime/transport/dds/auv_dds_link.hpp"
 #include "runtime/transport/dds/auv_message_check.hpp"
 #include "tests/support/dds_domain.hpp"
@@ -276,4 +277,28 @@ TEST_CASE("dds link: bad options name the option and the value") {
   r = AuvDdsLink::Create(AuvDdsRole::kVehicle, o);
   REQUIRE_FALSE(r.ok());
   CHECK(r.error().message.find("no_such_profile") != std::string::npos);
+}
+
+TEST_CASE("dds link: the tick's calls (ReadSample, PushCommand) do not allocate in the calling thread") {
+  Pair p(test::TestDomain(6), /*queue=*/64);
+  REQUIRE(p.vehicle->PublishSample(Distinct(1)).ok());
+  REQUIRE(p.controller->WaitForSample(0, 5 * kSecond));
+  dds::AuvSensorInput in;
+  robot::AuvCommand c;
+  std::uint64_t allocations = 0, seen = 0, pushed = 0;
+  {
+    AllocationScope scope;
+    for (std::uint64_t k = 0; k < 2000; ++k) {
+      if (p.controller->ReadSample(&in) != 0) ++seen;
+      c.tick = k;
+      c.answers = in.sample.tick;
+      if (p.controller->PushCommand(c)) ++pushed;
+    }
+    allocations = scope.count();
+  }
+  CHECK(allocations == 0);
+  CHECK(seen == 2000);
+  CHECK(pushed > 0);
+  // Meanwhile the writer thread did the DDS writes.
+  CHECK(Eventually([&] { return p.controller->counters().written == pushed; }));
 }
