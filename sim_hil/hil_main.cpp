@@ -1,5 +1,10 @@
 // pbppo-hil: the HIL simulator program.
 //
+//   pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]
+//             [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]
+//
+// The AUV navigation task over DDS (sim_hil/auv_hil.hpp).
+//
 //   pbppo-hil quadruped --stand --can vcan0,vcan1 [--lockstep] [--duration S]
 //             [--robot models/quadruped/quadruped.yaml] [--can-map models/quadruped/can_map.yaml]
 //             [--drop-rate P --drop-burst N --seed S] [--silent-motor JOINT --silent-from S]
@@ -24,6 +29,7 @@
 
 #include "runtime/robot/can_map.hpp"
 #include "runtime/robot/urdf.hpp"
+#include "sim_hil/auv_hil.hpp"
 #include "sim_hil/quadruped_stand_hil.hpp"
 
 namespace {
@@ -43,7 +49,8 @@ std::vector<std::string> Split(const std::string& s) {
 
 int Usage(const char* why) {
   std::fprintf(stderr,
-               "pbppo-hil: %s\nusage: pbppo-hil quadruped --stand --can IF0,IF1 [--lockstep] [--duration S]\n"
+               "pbppo-hil: %s\nusage: pbppo-hil auv ... (pbppo-hil auv --help)\n       pbppo-hil quadruped --stand "
+               "--can IF0,IF1 [--lockstep] [--duration S]\n"
                "         [--robot FILE] [--can-map FILE] [--drop-rate P] [--drop-burst N] [--seed N]\n"
                "         [--silent-motor JOINT] [--silent-from S]\n",
                why);
@@ -54,7 +61,23 @@ int Usage(const char* why) {
 
 int main(int argc, char** argv) {
   using namespace pbppo;
-  if (argc < 2 || std::strcmp(argv[1], "quadruped") != 0) return Usage("the first argument must be 'quadruped'");
+  if (argc >= 2 && std::strcmp(argv[1], "auv") == 0) {
+    const std::vector<std::string> args(argv + 2, argv + argc);
+    if (args.size() == 1 && (args[0] == "--help" || args[0] == "-h")) {
+      std::printf("usage: %s", sim::AuvHilUsage().c_str());
+      return 0;
+    }
+    auto o = sim::ParseAuvHilArgs(args);
+    if (!o.ok()) {
+      std::fprintf(stderr, "pbppo-hil auv: %s\nusage: %s", o.error().message.c_str(), sim::AuvHilUsage().c_str());
+      return 2;
+    }
+    signal(SIGINT, OnSignal);
+    signal(SIGTERM, OnSignal);
+    return sim::RunAuvHil(*o, g_stop);
+  }
+  if (argc < 2 || std::strcmp(argv[1], "quadruped") != 0)
+    return Usage("the first argument must be 'auv' or 'quadruped'");
   std::string robot_path = "models/quadruped/quadruped.yaml", map_path = "models/quadruped/can_map.yaml";
   std::string silent_joint;
   double duration_s = 0, silent_from_s = 0;

@@ -1,11 +1,48 @@
 #!/usr/bin/env bash
-# The main job: installs what is missing, builds the optimised configuration, then measures the
-# policy inference latency on the three reference shapes and prints the table.
+# The main job: installs what is missing, builds, then runs the AUV end to end: the Simbody HIL
+# simulator (pbppo-hil auv, hard layout, lock-step) and the controller (pbppo-controller) with the
+# shipped policy as two processes over Fast DDS on loopback. Prints the mission result (targets,
+# collisions, time), the controller's supervisor counts and its latency table; writes the
+# trajectory plot, the events and the latency profile (JSON + PNG) into build/results/demo/.
+# DEMO_LAYOUT=easy|medium|hard and DEMO_SEED=N choose the scenario.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+layout="${DEMO_LAYOUT:-hard}"
+seed="${DEMO_SEED:-3}"
+out=build/results/demo
 bash tools/setup.sh >/dev/null
 cmake --preset default >/dev/null
-cmake --build --preset default -j "$(nproc)" --target pbppo_bench_inference pbppo >/dev/null
-mkdir -p build/results
-build/default/bench/pbppo_bench_inference --kernel all --calls 1000000 --json build/results/inference.json
-echo "JSON: build/results/inference.json"
+cmake --build --preset default -j "$(nproc)" --target pbppo-hil pbppo-controller pbppo >/dev/null
+mkdir -p "$out"
+rm -f "$out"/*
+domain=$((20 + $$ % 200))
+blob=policies/frozen/auv_nav/auv_nav.blob
+echo "== AUV HIL demo: layout $layout, seed $seed, policy $blob, DDS domain $domain (loopback, lock-step)"
+build/default/sim_hil/pbppo-hil auv --layout "$layout" --seed "$seed" --lockstep --domain "$domain" \
+  --trajectory "$out/trajectory.csv" --plot "$out/trajectory.png" --events "$out/events.json" \
+  > "$out/hil.txt" 2> "$out/hil.err" &
+hil=$!
+trap 'kill $hil 2>/dev/null || true' EXIT
+set +e
+build/default/firmware/pbppo-controller --robot models/auv/auv.yaml --policy "$blob" --transport dds --lockstep \
+  --domain "$domain" --profile "$out/profile.json" --profile-plot "$out/profile.png" --quiet \
+  > "$out/controller.txt" 2> "$out/controller.err"
+crc=$?
+wait $hil
+hrc=$?
+set -e
+trap - EXIT
+echo
+echo "-- vehicle (pbppo-hil auv) --"
+cat "$out/hil.txt"
+echo
+echo "-- controller (pbppo-controller) --"
+cat "$out/controller.txt"
+grep -v '^$' "$out/controller.err" "$out/hil.err" 2>/dev/null | sed 's/^/   /' || true
+echo
+echo "files: $out/trajectory.png (trajectory over the map), $out/profile.png (latency histograms),"
+echo "       $out/profile.json, $out/events.json, $out/trajectory.csv"
+if [ "$crc" -ne 0 ] || [ "$hrc" -ne 0 ]; then
+  echo "demo: controller exited $crc, simulator exited $hrc" >&2
+  exit 1
+fi

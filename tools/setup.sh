@@ -13,6 +13,8 @@ PACKAGES=(
   libsimbody-dev
   # plots
   gnuplot-nox
+  # DDS: Fast DDS 2.9 with its CDR library, and the IDL code generator (a Java program)
+  libfastrtps-dev libfastcdr-dev fastddsgen default-jre-headless
   # CAN: tools, DBC decoding (python3-yaml: tools/gen_can_dbc.py), and the QEMU runner for the vcan tests (kernel has no AF_CAN)
   can-utils python3-can python3-canmatrix python3-yaml
   qemu-system-x86 busybox-static kmod cpio xz-utils

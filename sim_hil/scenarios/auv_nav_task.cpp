@@ -232,6 +232,14 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
 }
 
 AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
+  if (done_) return StepCommand(0.0, 0.0, obs);
+  // Action -> command through the IO layout: clamp(a * scale + offset, low, high).
+  double cmd[2];
+  stats_.nonfinite_actions += std::popcount(act_.Map(action, cmd));
+  return StepCommand(cmd[static_cast<std::size_t>(action_of_[0])], cmd[static_cast<std::size_t>(action_of_[1])], obs);
+}
+
+AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_radps, float* obs) {
   AuvStepResult r;
   if (done_) {
     r.terminated = terminated_;
@@ -239,11 +247,14 @@ AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
     std::copy(last_obs_.begin(), last_obs_.end(), obs);
     return r;
   }
-  // Action -> command through the IO layout: clamp(a * scale + offset, low, high).
-  double cmd[2];
-  stats_.nonfinite_actions += std::popcount(act_.Map(action, cmd));
-  v_cmd_ = cmd[static_cast<std::size_t>(action_of_[0])];
-  w_cmd_ = cmd[static_cast<std::size_t>(action_of_[1])];
+  for (double* c : {&surge_speed_mps, &yaw_rate_radps}) {
+    if (!std::isfinite(*c)) {
+      *c = 0.0;
+      ++stats_.nonfinite_actions;
+    }
+  }
+  v_cmd_ = surge_speed_mps;
+  w_cmd_ = yaw_rate_radps;
   plant_.SetCommand(v_cmd_, w_cmd_);
 
   const double l_prev = l_at_, phi_prev = phi_at_;
@@ -285,6 +296,38 @@ AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
   truncated_ = r.truncated;
   WriteObservation(done_, false, obs);
   return r;
+}
+
+void AuvNavTask::FillSensorSample(robot::AuvSensorSample& out) const {
+  const AuvState& s = plant_.State();
+  out.tick = static_cast<std::uint64_t>(stats_.steps);
+  out.stamp_ns = std::llround(s.time_s * 1e9);
+  out.x_m = s.x_m;
+  out.y_m = s.y_m;
+  out.depth_m = -s.z_m;
+  out.roll_rad = s.roll_rad;
+  out.pitch_rad = s.pitch_rad;
+  out.yaw_rad = WrapAngle(s.yaw_rad);
+  out.surge_mps = s.u_mps;
+  out.sway_mps = s.v_mps;
+  out.heave_mps = s.w_mps;
+  out.roll_rate_radps = s.p_radps;
+  out.pitch_rate_radps = s.q_radps;
+  out.yaw_rate_radps = s.r_radps;
+  const std::size_t beams = std::min<std::size_t>(sonar_.size(), robot::kAuvMaxSonarBeams);
+  out.sonar_beams = static_cast<std::uint32_t>(beams);
+  out.sonar_m.fill(0.0f);
+  for (std::size_t i = 0; i < beams; ++i) out.sonar_m[i] = static_cast<float>(sonar_[i]);
+  const int last = static_cast<int>(config_.layout.targets.size()) - 1;
+  const auto& t = config_.layout.targets[static_cast<std::size_t>(std::min(target_, last))];
+  out.target_index = target_;
+  out.target_x_m = t[0];
+  out.target_y_m = t[1];
+  out.target_distance_m = l_at_;
+  out.target_bearing_rad = phi_at_;
+  out.clearance_m = clearance_;
+  out.mission_complete = stats_.success;
+  out.episode_end = done_;
 }
 
 }  // namespace pbppo::sim

@@ -18,6 +18,7 @@
 
 #include "runtime/core/random.hpp"
 #include "runtime/core/result.hpp"
+#include "runtime/robot/auv_messages.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "sim_hil/plants/auv_plant.hpp"
@@ -103,6 +104,15 @@ class AuvNavTask {
   // One control period with action [v, w] in policy units (mapped through the IO layout).
   // After the episode has ended, returns zero reward with the same end flags until Reset.
   AuvStepResult Step(const float* action, float* obs);
+  // One control period with a physical command: surge speed (m/s) and yaw rate (rad/s), as a
+  // controller sends them over DDS (the HIL simulator). No IO-layout mapping; the plant clamps
+  // to its controller's limits; non-finite values are replaced by 0 and counted in
+  // stats().nonfinite_actions. Step(action) maps the action through the IO layout, then calls this.
+  AuvStepResult StepCommand(double surge_speed_mps, double yaw_rate_radps, float* obs);
+  // The vehicle's current state as the sensor sample the HIL publishes: pose, body velocities,
+  // sonar (at most robot::kAuvMaxSonarBeams beams), the current target, clearance, flags.
+  // tick = control periods since Reset and stamp_ns = simulated time; callers may restamp.
+  void FillSensorSample(robot::AuvSensorSample& out) const;
 
   const AuvEpisodeStats& stats() const noexcept { return stats_; }
   const AuvState& vehicle() const noexcept { return plant_.State(); }

@@ -120,7 +120,7 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
   other.observations[16].history = 2;
   c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "history.blob"));
   REQUIRE_FALSE(c.ok());
-  CHECK(c.error().message.find("the policy takes 30 observations, the layout gives 29") != std::string::npos);
+  CHECK(c.error().message.find("the policy takes 28 observations, the layout gives 27") != std::string::npos);
   other = Layout();
   std::swap(other.observations[0], other.observations[1]);
   c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "order.blob"));

@@ -106,7 +106,7 @@ TEST_CASE("auv task: all layouts and the IO layout load; sizes and hash come fro
     CHECK(c.layout.name == name);
     CHECK(c.layout.targets.size() == 3);
     AuvNavTask t = MakeTask(c);
-    CHECK(t.observation_size() == 29);
+    CHECK(t.observation_size() == 27);
     CHECK(t.action_size() == 2);
     CHECK(t.io_layout_hash() == c.io.Hash());
     CHECK(t.io_layout().ObservationNames()[kBearing] == "target_bearing");
@@ -172,7 +172,7 @@ TEST_CASE("auv task: the progress term follows l_AT and |phi_AT| exactly, and tu
   AuvTaskConfig c = Config("easy");
   c.layout = Layout(kOpenLayout);  // start at (20, 20) facing +x, target at (5, 35): phi = 135 deg
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(29);
+  std::vector<float> obs(27);
   task.Reset(7, obs.data());
   auto measure = [&] {
     const AuvState& s = task.vehicle();
@@ -206,7 +206,7 @@ TEST_CASE("auv task: a collision terminates with -500 and later steps change not
   AuvTaskConfig c = Config("easy");
   c.layout = Layout(kOpenLayout);  // the circle at (30, 20) r 2 lies 8 m dead ahead
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(29);
+  std::vector<float> obs(27);
   task.Reset(3, obs.data());
   CHECK(obs[0] == doctest::Approx(8.0 / 15.0).epsilon(1e-5));  // bow beam sees the circle
   const float ahead[2] = {1.0f, 0.0f};
@@ -243,7 +243,7 @@ TEST_CASE("auv task: the time limit truncates without terminating") {
   c.task.episode_time_s = 5.0;
   AuvNavTask task = MakeTask(c);
   CHECK(task.max_episode_steps() == 50);
-  std::vector<float> obs(29);
+  std::vector<float> obs(27);
   task.Reset(11, obs.data());
   const float stop[2] = {-1.0f, 0.0f};  // v = 0
   for (int k = 1; k <= 50; ++k) {
@@ -274,7 +274,7 @@ TEST_CASE("auv task: same seed, same episode bit for bit; other seeds move start
   // The same instance reset with the same seed repeats itself too.
   const Episode ea2 = RunPilot(a, 42, 300);
   CHECK(ea2.obs.back() == ea.obs.back());
-  std::vector<float> o1(29), o2(29);
+  std::vector<float> o1(27), o2(27);
   a.Reset(1, o1.data());
   const double x1 = a.vehicle().x_m;
   b.Reset(2, o2.data());
@@ -288,7 +288,7 @@ TEST_CASE("auv task: random starts and random obstacles respect the layout's rul
     const AuvTaskConfig c = Config(name);
     AuvNavTask task = MakeTask(c);
     const auto& r = c.layout.random_obstacles;
-    std::vector<float> obs(29);
+    std::vector<float> obs(27);
     int total = 0;
     for (std::uint64_t seed = 0; seed < 60; ++seed) {
       task.Reset(seed, obs.data());
@@ -320,7 +320,7 @@ TEST_CASE("auv task: random starts and random obstacles respect the layout's rul
 
 TEST_CASE("auv task: non-finite actions are replaced by zero and counted") {
   AuvNavTask task = MakeTask(Config("easy"));
-  std::vector<float> obs(29);
+  std::vector<float> obs(27);
   task.Reset(5, obs.data());
   const float bad[2] = {std::nanf(""), INFINITY};
   const AuvStepResult r = task.Step(bad, obs.data());
@@ -484,7 +484,7 @@ TEST_CASE("auv task: every layout stays solvable with its random obstacles (grid
     CAPTURE(name);
     const AuvTaskConfig c = Config(name);
     AuvNavTask task = MakeTask(c);
-    std::vector<float> obs(29);
+    std::vector<float> obs(27);
     const double need = c.task.safe_distance_m + 0.1;
     for (const auto& t : c.layout.targets) CHECK(Clearance(c.layout.world, t[0], t[1]) >= need);
     for (std::uint64_t seed = 0; seed < 30; ++seed) {
@@ -525,7 +525,7 @@ TEST_CASE("auv task: two task instances on two threads give the single-threaded 
 TEST_CASE("auv task: observations are the signals through the IO layout, history included") {
   AuvTaskConfig c = Config("medium");
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(29);
+  std::vector<float> obs(27);
   task.Reset(17, obs.data());
   const float fwd[2] = {0.5f, 0.3f};
   for (int k = 0; k < 20; ++k) (void)task.Step(fwd, obs.data());
@@ -539,13 +539,13 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
   CHECK(obs[21] == doctest::Approx(std::clamp(s.r_radps / 0.6, -1.5, 1.5)).epsilon(1e-5));
   CHECK(obs[kYaw] == doctest::Approx(WrapAngle(s.yaw_rad) / kPi).epsilon(1e-6));
 
-  // History 3 on target_distance, and an offset: 31 inputs, the element shifts by one per step.
+  // History 3 on target_distance, and an offset: 29 inputs, the element shifts by one per step.
   c.io.observations[16].history = 3;
   c.io.observations[16].offset = 10.0;
   AuvNavTask h = MakeTask(c);
-  CHECK(h.observation_size() == 31);
+  CHECK(h.observation_size() == 29);
   CHECK(h.io_layout_hash() != task.io_layout_hash());
-  std::vector<float> o(31);
+  std::vector<float> o(29);
   h.Reset(17, o.data());
   CHECK(o[16] == o[17]);  // filled with the reset value
   CHECK(o[17] == o[18]);
@@ -560,4 +560,54 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
     CHECK(o[19] == doctest::Approx(WrapAngle(v.yaw_rad) / kPi).epsilon(1e-6));  // yaw follows at 19
     prev = o;
   }
+}
+
+TEST_CASE("auv task: StepCommand with the mapped physical command is Step bit for bit") {
+  const AuvTaskConfig c = Config("medium");
+  AuvNavTask a = MakeTask(c), b = MakeTask(c);
+  std::vector<float> oa(27), ob(27);
+  a.Reset(11, oa.data());
+  b.Reset(11, ob.data());
+  for (int k = 0; k < 150; ++k) {
+    const float act[2] = {static_cast<float>(std::sin(0.05 * k)), static_cast<float>(std::cos(0.03 * k))};
+    const AuvStepResult ra = a.Step(act, oa.data());
+    // Through models/auv/io_layout.yaml: v = 0.75 a + 0.75, omega = 0.5 a.
+    const AuvStepResult rb =
+        b.StepCommand(0.75 * static_cast<double>(act[0]) + 0.75, 0.5 * static_cast<double>(act[1]), ob.data());
+    REQUIRE(ra.reward == rb.reward);
+    REQUIRE(ra.terminated == rb.terminated);
+    REQUIRE(oa == ob);
+    REQUIRE(a.vehicle().x_m == b.vehicle().x_m);
+    REQUIRE(a.vehicle().yaw_rad == b.vehicle().yaw_rad);
+  }
+  CHECK(b.commanded_speed_mps() == a.commanded_speed_mps());
+  // Non-finite physical commands: 0 and counted.
+  b.StepCommand(std::nan(""), INFINITY, ob.data());
+  CHECK(b.stats().nonfinite_actions == 2);
+  CHECK(b.commanded_speed_mps() == 0.0);
+}
+
+TEST_CASE("auv task: FillSensorSample reports the vehicle, sonar and target the task measures") {
+  AuvNavTask task = MakeTask(Config("easy"));
+  std::vector<float> obs(27);
+  task.Reset(3, obs.data());
+  for (int k = 0; k < 20; ++k) task.StepCommand(1.0, 0.2, obs.data());
+  pbppo::robot::AuvSensorSample s;
+  task.FillSensorSample(s);
+  CHECK(s.tick == 20);
+  CHECK(s.stamp_ns == 2'000'000'000);
+  CHECK(s.x_m == task.vehicle().x_m);
+  CHECK(s.y_m == task.vehicle().y_m);
+  CHECK(s.depth_m == doctest::Approx(5.0).epsilon(0.01));
+  CHECK(s.surge_mps == task.vehicle().u_mps);
+  CHECK(s.yaw_rate_radps == task.vehicle().r_radps);
+  REQUIRE(s.sonar_beams == 16);
+  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == static_cast<float>(task.sonar_ranges()[i]));
+  CHECK(s.target_index == task.target_index());
+  CHECK(s.target_distance_m == doctest::Approx(std::hypot(s.target_x_m - s.x_m, s.target_y_m - s.y_m)));
+  CHECK(static_cast<float>(s.target_distance_m / 40.0) == obs[kDist]);
+  CHECK(static_cast<float>(s.target_bearing_rad / kPi) == obs[kBearing]);
+  CHECK(s.clearance_m > 1.2);
+  CHECK_FALSE(s.mission_complete);
+  CHECK_FALSE(s.episode_end);
 }

@@ -1,0 +1,420 @@
+#include "sim_hil/auv_hil.hpp"
+
+#include <time.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "runtime/robot/auv_messages.hpp"
+#include "runtime/transport/dds/auv_dds_link.hpp"
+#include "sim_hil/scenarios/auv_nav_task.hpp"
+
+namespace pbppo::sim {
+namespace {
+
+constexpr std::int64_t kNsPerS = 1'000'000'000;
+
+Error FlagError(const std::string& flag, const std::string& value, const std::string& why) {
+  return MakeError(ErrorCode::kInvalidValue, flag + " '" + value + "': " + why);
+}
+
+bool ParseU64(const std::string& s, std::uint64_t* out) {
+  if (s.empty() || s[0] == '-' || s[0] == '+') return false;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(s.c_str(), &end, 10);
+  if (errno != 0 || end == s.c_str() || *end != '\0') return false;
+  *out = v;
+  return true;
+}
+
+bool ParseDouble(const std::string& s, double* out) {
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (errno != 0 || end == s.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
+
+struct Row {
+  double t_s, x_m, y_m, yaw_rad, v_cmd, w_cmd, u_mps, r_radps;
+  int target;
+  double clearance_m;
+};
+
+struct TargetEvent {
+  int index;
+  double t_s, x_m, y_m;
+};
+
+struct CollisionEvent {
+  double t_s, x_m, y_m, clearance_m;
+};
+
+struct Recorder {
+  std::vector<Row> rows;
+  std::vector<TargetEvent> targets;
+  std::vector<CollisionEvent> collisions;
+
+  void Record(const AuvNavTask& task, double v_cmd, double w_cmd) {
+    const AuvState& s = task.vehicle();
+    robot::AuvSensorSample m;
+    task.FillSensorSample(m);
+    rows.push_back(
+        Row{s.time_s, s.x_m, s.y_m, m.yaw_rad, v_cmd, w_cmd, s.u_mps, s.r_radps, task.target_index(), m.clearance_m});
+  }
+  void Events(const AuvNavTask& task, const AuvStepResult& r) {
+    const AuvState& s = task.vehicle();
+    if (r.events.target_reached >= 0) targets.push_back(TargetEvent{r.events.target_reached, s.time_s, s.x_m, s.y_m});
+    if (r.events.collision) {
+      robot::AuvSensorSample m;
+      task.FillSensorSample(m);
+      collisions.push_back(CollisionEvent{s.time_s, s.x_m, s.y_m, m.clearance_m});
+    }
+  }
+};
+
+Status WriteTrajectory(const std::string& path, const std::vector<Row>& rows) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return MakeError(ErrorCode::kIo, "--trajectory '" + path + "': cannot write");
+  std::fprintf(f, "t_s,x_m,y_m,yaw_rad,v_cmd_mps,w_cmd_radps,u_mps,r_radps,target,clearance_m\n");
+  for (const Row& r : rows)
+    std::fprintf(f, "%.3f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%.9g\n", r.t_s, r.x_m, r.y_m, r.yaw_rad, r.v_cmd,
+                 r.w_cmd, r.u_mps, r.r_radps, r.target, r.clearance_m);
+  if (std::fclose(f) != 0) return MakeError(ErrorCode::kIo, "--trajectory '" + path + "': write failed");
+  return {};
+}
+
+struct RunSummary {
+  AuvHilOutcome outcome = AuvHilOutcome::kError;
+  std::uint64_t ticks = 0, applied = 0, ignored = 0, overruns = 0;
+  dds::AuvLinkCounters link;
+  double wall_s = 0;
+};
+
+Status WriteEvents(const std::string& path, const AuvHilOptions& o, const AuvNavTask& task, const Recorder& rec,
+                   const RunSummary& sum) {
+  std::ofstream f(path);
+  if (!f) return MakeError(ErrorCode::kIo, "--events '" + path + "': cannot write");
+  const AuvEpisodeStats& st = task.stats();
+  f << "{\n  \"layout\": \"" << o.layout << "\",\n  \"seed\": " << o.seed << ",\n  \"mode\": \""
+    << (o.lockstep ? "lockstep" : "realtime") << "\",\n  \"outcome\": \"" << ToString(sum.outcome)
+    << "\",\n  \"targets_reached\": [";
+  for (std::size_t i = 0; i < rec.targets.size(); ++i) {
+    const auto& e = rec.targets[i];
+    f << (i ? ", " : "") << "{\"index\": " << e.index << ", \"t_s\": " << e.t_s << ", \"x_m\": " << e.x_m
+      << ", \"y_m\": " << e.y_m << "}";
+  }
+  f << "],\n  \"collisions\": [";
+  for (std::size_t i = 0; i < rec.collisions.size(); ++i) {
+    const auto& e = rec.collisions[i];
+    f << (i ? ", " : "") << "{\"t_s\": " << e.t_s << ", \"x_m\": " << e.x_m << ", \"y_m\": " << e.y_m
+      << ", \"clearance_m\": " << e.clearance_m << "}";
+  }
+  f << "],\n  \"steps\": " << st.steps << ",\n  \"time_s\": " << st.time_s
+    << ",\n  \"episode_return\": " << st.episode_return << ",\n  \"min_clearance_m\": " << st.min_clearance_m
+    << ",\n  \"random_obstacles\": " << st.random_obstacles << ",\n  \"commands\": {\"applied\": " << sum.applied
+    << ", \"ignored\": " << sum.ignored << ", \"received\": " << sum.link.received
+    << ", \"invalid\": " << sum.link.invalid << ", \"dropped_full\": " << sum.link.dropped_full
+    << "},\n  \"samples_written\": " << sum.link.written << ",\n  \"overruns\": " << sum.overruns << "\n}\n";
+  if (!f.good()) return MakeError(ErrorCode::kIo, "--events '" + path + "': write failed");
+  return {};
+}
+
+// The trajectory over the layout with gnuplot: walls, boxes and circles (fixed and this episode's
+// random ones), targets numbered with their acceptance circles, the start point.
+Status WritePlot(const AuvHilOptions& o, const AuvTaskConfig& cfg, const AuvNavTask& task, AuvHilOutcome outcome) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
+    return MakeError(ErrorCode::kUnsupported, "--plot '" + o.plot_png + "': gnuplot not found (tools/setup.sh)");
+  const World2d& w = task.world();
+  const Arena& a = w.arena;
+  std::ostringstream gp;
+  gp << "set terminal png size 800,800\nset output '" << o.plot_png << "'\n"
+     << "set datafile separator ','\nset size ratio -1\nset grid\nset termoption noenhanced\nset key below\n"
+     << "set title 'AUV HIL: layout " << o.layout << ", seed " << o.seed << ", " << ToString(outcome) << "'\n"
+     << "set xlabel 'x (m)'\nset ylabel 'y (m)'\n"
+     << "set xrange [" << a.x_min_m - 1 << ":" << a.x_max_m + 1 << "]\nset yrange [" << a.y_min_m - 1 << ":"
+     << a.y_max_m + 1 << "]\n";
+  int obj = 1;
+  gp << "set object " << obj++ << " rect from " << a.x_min_m << "," << a.y_min_m << " to " << a.x_max_m << ","
+     << a.y_max_m << " fs empty border lc rgb 'black' lw 3 front\n";
+  for (const Box& b : w.boxes)
+    gp << "set object " << obj++ << " rect from " << b.x_min_m << "," << b.y_min_m << " to " << b.x_max_m << ","
+       << b.y_max_m << " fc rgb 'gray40' fs solid 0.6 border lc rgb 'black'\n";
+  const std::size_t fixed = cfg.layout.world.circles.size();
+  for (std::size_t i = 0; i < w.circles.size(); ++i) {
+    const Circle& c = w.circles[i];
+    gp << "set object " << obj++ << " circle at " << c.x_m << "," << c.y_m << " size " << c.radius_m << " fc rgb '"
+       << (i < fixed ? "gray40" : "brown") << "' fs solid 0.6 border lc rgb 'black'\n";
+  }
+  for (std::size_t i = 0; i < cfg.layout.targets.size(); ++i) {
+    const auto& t = cfg.layout.targets[i];
+    gp << "set object " << obj++ << " circle at " << t[0] << "," << t[1] << " size " << cfg.task.target_radius_m
+       << " fs empty border lc rgb 'forest-green' lw 2\n"
+       << "set label " << i + 1 << " '" << i + 1 << "' at " << t[0] << "," << t[1]
+       << " center font ',14' tc rgb 'forest-green' front\n";
+  }
+  gp << "plot '" << o.trajectory_csv << "' using 2:3 skip 1 with lines lw 2 lc rgb 'blue' title 'trajectory', "
+     << "'' using 2:3 skip 1 every ::0::0 with points pt 7 ps 1.5 lc rgb 'blue' title 'start'\n";
+  const std::string script = o.plot_png + ".gp";
+  {
+    std::ofstream f(script);
+    f << gp.str();
+    if (!f.good()) return MakeError(ErrorCode::kIo, "--plot '" + o.plot_png + "': cannot write " + script);
+  }
+  const std::string cmd = "gnuplot '" + script + "' 2>'" + o.plot_png + ".log'";
+  if (std::system(cmd.c_str()) != 0)
+    return MakeError(ErrorCode::kIo, "--plot '" + o.plot_png + "': gnuplot failed, see " + o.plot_png + ".log");
+  return {};
+}
+
+void AddNs(timespec* t, std::int64_t ns) {
+  std::int64_t n = t->tv_nsec + ns;
+  t->tv_sec += static_cast<time_t>(n / kNsPerS);
+  t->tv_nsec = static_cast<long>(n % kNsPerS);
+}
+
+}  // namespace
+
+const char* ToString(AuvHilOutcome o) noexcept {
+  switch (o) {
+    case AuvHilOutcome::kSuccess: return "success";
+    case AuvHilOutcome::kCollision: return "collision";
+    case AuvHilOutcome::kTimeLimit: return "time_limit";
+    case AuvHilOutcome::kMaxTime: return "max_time";
+    case AuvHilOutcome::kStopped: return "stopped";
+    case AuvHilOutcome::kControllerLost: return "controller_lost";
+    case AuvHilOutcome::kError: return "error";
+  }
+  return "?";
+}
+
+std::string AuvHilUsage() {
+  return "pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]\n"
+         "              [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]\n"
+         "              [--models DIR] [--peer-timeout S] [--command-timeout S]\n";
+}
+
+Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
+  AuvHilOptions o;
+  bool have_seed = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--lockstep") {
+      o.lockstep = true;
+      continue;
+    }
+    if (a == "--realtime") {
+      o.lockstep = false;
+      continue;
+    }
+    if (i + 1 >= args.size()) return MakeError(ErrorCode::kInvalidValue, a + ": unknown option or missing value");
+    const std::string& v = args[++i];
+    double d = 0;
+    std::uint64_t u = 0;
+    if (a == "--layout") {
+      if (v != "easy" && v != "medium" && v != "hard") return FlagError(a, v, "not one of easy, medium, hard");
+      o.layout = v;
+    } else if (a == "--seed") {
+      if (!ParseU64(v, &u)) return FlagError(a, v, "not a non-negative integer");
+      o.seed = u;
+      have_seed = true;
+    } else if (a == "--domain") {
+      if (!ParseU64(v, &u) || u > 232) return FlagError(a, v, "not a DDS domain id in 0..232");
+      o.domain_id = static_cast<int>(u);
+    } else if (a == "--max-time") {
+      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
+      o.max_time_s = d;
+    } else if (a == "--peer-timeout") {
+      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
+      o.peer_timeout_s = d;
+    } else if (a == "--command-timeout") {
+      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
+      o.command_timeout_s = d;
+    } else if (a == "--trajectory") {
+      o.trajectory_csv = v;
+    } else if (a == "--plot") {
+      o.plot_png = v;
+    } else if (a == "--events") {
+      o.events_json = v;
+    } else if (a == "--models") {
+      o.models_dir = v;
+    } else {
+      return MakeError(ErrorCode::kInvalidValue, "unknown option " + a);
+    }
+  }
+  if (!have_seed) return MakeError(ErrorCode::kInvalidValue, "--seed is required");
+  return o;
+}
+
+int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
+  auto fail = [](const std::string& why) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "pbppo-hil auv: %s\n", why.c_str());
+    return 1;
+  };
+  const std::string m = o.models_dir + "/";
+  auto cfg = LoadAuvTaskConfig(m + "auv.yaml", m + "layouts/" + o.layout + ".yaml", m + "io_layout.yaml");
+  if (!cfg) return fail(cfg.error().message);
+  if (cfg->sonar.beams > static_cast<int>(robot::kAuvMaxSonarBeams))
+    return fail(m + "auv.yaml: sonar.beams " + std::to_string(cfg->sonar.beams) + " exceeds the DDS sample's " +
+                std::to_string(robot::kAuvMaxSonarBeams));
+  auto task_r = AuvNavTask::Create(*cfg);
+  if (!task_r) return fail(task_r.error().message);
+  AuvNavTask& task = *task_r;
+  // The plot needs the trajectory file; write it beside the picture when none was asked for.
+  AuvHilOptions opt = o;
+  if (!opt.plot_png.empty() && opt.trajectory_csv.empty()) opt.trajectory_csv = opt.plot_png + ".csv";
+
+  dds::AuvDdsOptions lo;
+  lo.profile_file = m + "dds_profile.xml";
+  lo.domain_id = o.domain_id;
+  auto link_r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kVehicle, lo);
+  if (!link_r) return fail(link_r.error().message);
+  dds::AuvDdsLink& link = **link_r;
+
+  std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
+  task.Reset(o.seed, obs.data());
+  const double period_s = task.control_period_s();
+  const auto period_ns = static_cast<std::int64_t>(std::llround(period_s * 1e9));
+  const long max_ticks =
+      o.max_time_s > 0 ? static_cast<long>(std::ceil(o.max_time_s / period_s - 1e-9)) : task.max_episode_steps();
+
+  std::printf("pbppo-hil auv: layout %s, seed %llu, %s, domain %d, %d random obstacles; waiting for the controller\n",
+              o.layout.c_str(), static_cast<unsigned long long>(o.seed), o.lockstep ? "lock-step" : "real-time",
+              o.domain_id, task.stats().random_obstacles);
+  std::fflush(stdout);
+
+  RunSummary sum;
+  Recorder rec;
+  rec.rows.reserve(static_cast<std::size_t>(std::min<long>(max_ticks, task.max_episode_steps())) + 1);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Wait for the controller: its sensor reader matched to our writer and its command writer to our reader.
+  bool peer = false;
+  for (double waited = 0; !peer && waited < o.peer_timeout_s && !stop.load(); waited += 0.1)
+    peer = link.WaitForPeer(kNsPerS / 10);
+  if (!peer) {
+    sum.outcome = stop.load() ? AuvHilOutcome::kStopped : AuvHilOutcome::kControllerLost;
+    if (!stop.load())
+      return fail("no controller matched on domain " + std::to_string(o.domain_id) + " within " +
+                  std::to_string(o.peer_timeout_s) + " s");
+  }
+
+  robot::AuvSensorSample sample;
+  double v_cmd = 0, w_cmd = 0;
+  std::uint64_t tick = 0;
+  auto publish = [&](bool last) -> bool {
+    task.FillSensorSample(sample);
+    sample.tick = tick;
+    if (last) sample.episode_end = true;
+    auto st = link.PublishSample(sample);
+    if (!st) std::fprintf(stderr, "pbppo-hil auv: %s\n", st.error().message.c_str());
+    return st.ok();
+  };
+  bool io_ok = true;
+  if (peer) {
+    rec.Record(task, 0.0, 0.0);
+    io_ok = publish(false);
+    timespec next{};
+    clock_gettime(CLOCK_MONOTONIC, &next);
+    while (io_ok) {
+      if (stop.load()) {
+        sum.outcome = AuvHilOutcome::kStopped;
+        break;
+      }
+      dds::AuvCommandInput in;
+      bool have = false;
+      if (o.lockstep) {
+        // The command answering the sample of `tick`; others are counted and ignored.
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.command_timeout_s);
+        while (!have && !stop.load() && std::chrono::steady_clock::now() < deadline) {
+          if (!link.WaitForCommand(&in, kNsPerS / 10)) continue;
+          if (in.command.answers == tick)
+            have = true;
+          else
+            ++sum.ignored;
+        }
+        if (stop.load()) continue;
+        if (!have) {
+          sum.outcome = AuvHilOutcome::kControllerLost;
+          break;
+        }
+        v_cmd = in.command.surge_speed_mps;
+        w_cmd = in.command.yaw_rate_radps;
+      } else {
+        AddNs(&next, period_ns);
+        timespec now{};
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if (now.tv_sec > next.tv_sec || (now.tv_sec == next.tv_sec && now.tv_nsec > next.tv_nsec)) ++sum.overruns;
+        clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+        while (link.PopCommand(&in)) {
+          have = true;
+          v_cmd = in.command.surge_speed_mps;
+          w_cmd = in.command.yaw_rate_radps;
+        }
+      }
+      if (have) ++sum.applied;
+      const AuvStepResult r = task.StepCommand(v_cmd, w_cmd, obs.data());
+      ++tick;
+      rec.Record(task, task.commanded_speed_mps(), task.commanded_yaw_rate_radps());
+      rec.Events(task, r);
+      const bool max_time = static_cast<long>(tick) >= max_ticks && !r.terminated && !r.truncated;
+      const bool end = r.terminated || r.truncated || max_time;
+      io_ok = publish(end);
+      if (end) {
+        sum.outcome = task.stats().success    ? AuvHilOutcome::kSuccess
+                      : task.stats().collided ? AuvHilOutcome::kCollision
+                      : r.truncated           ? AuvHilOutcome::kTimeLimit
+                                              : AuvHilOutcome::kMaxTime;
+        break;
+      }
+    }
+    link.Flush(kNsPerS);  // the last sample reaches the controller before we leave
+  }
+  sum.ticks = tick;
+  sum.link = link.counters();
+  sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!io_ok) sum.outcome = AuvHilOutcome::kError;
+
+  const AuvEpisodeStats& st = task.stats();
+  std::printf(
+      "pbppo-hil auv: %s after %.1f s simulated (%llu ticks, %.2f s wall): %d/%zu targets, return %.1f, min clearance "
+      "%.2f m\n  commands: applied %llu, ignored %llu, received %llu, invalid %llu; samples written %llu; overruns "
+      "%llu\n",
+      ToString(sum.outcome), st.time_s, static_cast<unsigned long long>(sum.ticks), sum.wall_s, st.targets_reached,
+      cfg->layout.targets.size(), st.episode_return, st.min_clearance_m, static_cast<unsigned long long>(sum.applied),
+      static_cast<unsigned long long>(sum.ignored), static_cast<unsigned long long>(sum.link.received),
+      static_cast<unsigned long long>(sum.link.invalid), static_cast<unsigned long long>(sum.link.written),
+      static_cast<unsigned long long>(sum.overruns));
+  for (const auto& e : rec.targets) std::printf("  target %d reached at %.1f s\n", e.index + 1, e.t_s);
+  for (const auto& e : rec.collisions)
+    std::printf("  collision at %.1f s at (%.2f, %.2f), clearance %.2f m\n", e.t_s, e.x_m, e.y_m, e.clearance_m);
+
+  int rc = (sum.outcome == AuvHilOutcome::kError || sum.outcome == AuvHilOutcome::kControllerLost) ? 1 : 0;
+  std::fflush(stdout);
+  if (sum.outcome == AuvHilOutcome::kControllerLost)
+    std::fprintf(stderr, "pbppo-hil auv: no command answering tick %llu within %.1f s\n",
+                 static_cast<unsigned long long>(tick), o.command_timeout_s);
+  if (!opt.trajectory_csv.empty())
+    if (auto s = WriteTrajectory(opt.trajectory_csv, rec.rows); !s) rc = fail(s.error().message);
+  if (!opt.events_json.empty())
+    if (auto s = WriteEvents(opt.events_json, opt, task, rec, sum); !s) rc = fail(s.error().message);
+  if (!opt.plot_png.empty()) {
+    if (auto s = WritePlot(opt, *cfg, task, sum.outcome); !s)
+      rc = fail(s.error().message);
+    else
+      std::printf("  plot: %s\n", opt.plot_png.c_str());
+  }
+  std::fflush(stdout);
+  return rc;
+}
+
+}  // namespace pbppo::sim

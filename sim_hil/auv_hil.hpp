@@ -1,0 +1,49 @@
+// The AUV HIL simulator over DDS: sim::AuvNavTask (Simbody plant, sonar, targets) as the vehicle
+// side of dds::AuvDdsLink. It publishes a sensor sample per control period and applies the
+// physical commands ([v, omega]) the controller sends back.
+//
+//  lock-step: sample 0 after reset (once the controller has matched); then for each command
+//    whose `answers` equals the tick of the last sample: apply it, advance one control period,
+//    publish the sample of tick + 1. Commands answering other ticks are ignored and counted. The
+//    run depends only on the seed and the commands, never on the machine's speed.
+//  real-time: one period per control period of wall time (absolute deadlines); each period
+//    applies the newest command received (zero before the first) and publishes a sample.
+//
+// The run ends at mission complete, collision, the task's time limit, --max-time, a stop
+// request (SIGINT/SIGTERM) or, in lock-step, when the controller stays silent too long.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+
+namespace pbppo::sim {
+
+struct AuvHilOptions {
+  std::string layout = "easy";  // easy | medium | hard
+  std::uint64_t seed = 0;
+  bool lockstep = true;
+  int domain_id = 0;
+  double max_time_s = 0.0;                            // simulated seconds; 0: the task's episode limit only
+  std::string trajectory_csv, plot_png, events_json;  // empty: not written
+  std::string models_dir = "models/auv";              // auv.yaml, layouts/, io_layout.yaml, dds_profile.xml
+  double peer_timeout_s = 30.0;                       // waiting for the controller to appear
+  double command_timeout_s = 10.0;                    // lock-step: longest wait for the next command
+};
+
+// Parses the arguments after `pbppo-hil auv`; errors name the flag and the value.
+Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args);
+std::string AuvHilUsage();
+
+enum class AuvHilOutcome { kSuccess, kCollision, kTimeLimit, kMaxTime, kStopped, kControllerLost, kError };
+const char* ToString(AuvHilOutcome o) noexcept;
+
+// Runs one episode; prints a summary to stdout. Returns the process exit code: 0 when the episode
+// ran to one of its ends (success, collision, time limits) or was stopped, and every requested
+// output was written; 1 otherwise (the reason printed to stderr).
+int RunAuvHil(const AuvHilOptions& options, const std::atomic<bool>& stop);
+
+}  // namespace pbppo::sim

@@ -1,0 +1,251 @@
+// The AUV HIL simulator as a separate process (`pbppo-hil auv`) driven over DDS by a scripted
+// controller in this test through dds::AuvDdsLink (controller side), on the loopback profile
+// models/auv/dds_profile.xml and a domain of this test's own.
+#include <doctest/doctest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "runtime/transport/dds/auv_dds_link.hpp"
+#include "tests/support/dds_domain.hpp"
+
+extern char** environ;
+
+using namespace pbppo;
+
+namespace {
+
+constexpr std::int64_t kSecond = 1'000'000'000;
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// pbppo-hil auv as a child process; stdout and stderr go to `log`.
+struct Hil {
+  pid_t pid = -1;
+  std::string log;
+  Hil(const std::vector<std::string>& extra, const std::string& log_path) : log(log_path) {
+    std::vector<std::string> args = {PBPPO_HIL_EXE, "auv", "--models", test::SourcePath("models/auv")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&fa);
+    REQUIRE_MESSAGE(rc == 0, "cannot start ", args[0]);
+  }
+  // Exit code, or 128 + signal; -1 if it did not end within the timeout.
+  int Wait(std::int64_t timeout_ns = 20 * kSecond) {
+    const std::int64_t end = dds::MonotonicNs() + timeout_ns;
+    int status = 0;
+    while (dds::MonotonicNs() < end) {
+      if (waitpid(pid, &status, WNOHANG) == pid) {
+        pid = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return -1;
+  }
+  ~Hil() {
+    if (pid > 0) {
+      kill(pid, SIGKILL);
+      waitpid(pid, nullptr, 0);
+    }
+  }
+};
+
+std::unique_ptr<dds::AuvDdsLink> Controller(int domain) {
+  dds::AuvDdsOptions o;
+  o.profile_file = test::DdsProfile();
+  o.domain_id = domain;
+  auto r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, o);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  return std::move(*r);
+}
+
+// Lock-step scripted controller: answers every new sample with 1 m/s and a yaw rate turning
+// towards the target (a pure function of the sample, so runs repeat exactly) until the
+// vehicle's episode ends or `max_ticks` samples were answered. Returns the last sample.
+robot::AuvSensorSample Drive(dds::AuvDdsLink& link, std::uint64_t max_ticks, bool send_stray_first) {
+  REQUIRE(link.WaitForPeer(20 * kSecond));
+  if (send_stray_first) {
+    robot::AuvCommand stray;
+    stray.answers = 999'999;  // answers no sample: the simulator must ignore it
+    stray.surge_speed_mps = 1.5;
+    stray.yaw_rate_radps = -0.5;
+    REQUIRE(link.PushCommand(stray));
+  }
+  std::uint64_t version = 0;
+  dds::AuvSensorInput in;
+  for (std::uint64_t k = 0;; ++k) {
+    REQUIRE_MESSAGE(link.WaitForSample(version, 10 * kSecond), "no sample after tick ", k);
+    version = link.ReadSample(&in);
+    REQUIRE(in.flags == 0);
+    REQUIRE(in.sample.tick == k);  // lock-step: one sample per answered tick, none skipped
+    if (in.sample.episode_end || k >= max_ticks) return in.sample;
+    robot::AuvCommand c;
+    c.tick = k + 1;
+    c.answers = in.sample.tick;
+    c.surge_speed_mps = 1.0;
+    c.yaw_rate_radps = std::clamp(in.sample.target_bearing_rad, -0.5, 0.5);
+    REQUIRE(link.PushCommand(c));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("auv hil: lock-step runs with the same seed give identical trajectories, stray commands ignored") {
+  const std::string dir = test::ScratchDir("auv_hil_lockstep");
+  std::string csv[2];
+  for (int run = 0; run < 2; ++run) {
+    const int domain = test::TestDomain(20 + run);
+    csv[run] = dir + "/traj" + std::to_string(run) + ".csv";
+    const std::string events = dir + "/events" + std::to_string(run) + ".json";
+    Hil hil({"--layout", "easy", "--seed", "7", "--lockstep", "--domain", std::to_string(domain), "--max-time", "30",
+             "--trajectory", csv[run], "--events", events},
+            dir + "/hil" + std::to_string(run) + ".log");
+    auto link = Controller(domain);
+    const robot::AuvSensorSample last = Drive(*link, 100000, /*send_stray_first=*/run == 1);
+    CHECK(last.episode_end);
+    REQUIRE_MESSAGE(hil.Wait() == 0, ReadFile(hil.log));
+    const std::string log = ReadFile(hil.log);
+    INFO(log);
+    CHECK(log.find(run == 1 ? "ignored 1" : "ignored 0") != std::string::npos);
+    const std::string ev = ReadFile(events);
+    CHECK(ev.find("\"seed\": 7") != std::string::npos);
+    CHECK(ev.find("\"index\": 0") != std::string::npos);  // steering to the target reaches the first one
+    CHECK(ev.find("\"mode\": \"lockstep\"") != std::string::npos);
+  }
+  const std::string a = ReadFile(csv[0]), b = ReadFile(csv[1]);
+  REQUIRE(!a.empty());
+  CHECK(a == b);
+  // 30 s at 10 Hz: the header, tick 0 and up to 300 periods (fewer if the episode ended).
+  const auto lines = std::count(a.begin(), a.end(), '\n');
+  CHECK(lines >= 100);
+  CHECK(lines <= 302);
+  // The last row applied the controller's speed (column v_cmd_mps).
+  std::stringstream last_row(a.substr(a.rfind('\n', a.size() - 2) + 1));
+  std::string field;
+  for (int col = 0; col < 5; ++col) std::getline(last_row, field, ',');
+  CHECK(field == "1");
+}
+
+TEST_CASE("auv hil: a killed simulator is seen by the controller as a lost peer and an ageing sample") {
+  const std::string dir = test::ScratchDir("auv_hil_kill");
+  const int domain = test::TestDomain(30);
+  Hil hil({"--layout", "easy", "--seed", "1", "--domain", std::to_string(domain)}, dir + "/hil.log");
+  auto link = Controller(domain);
+  Drive(*link, 20, false);
+  CHECK(link->Peer().matched_writers == 1);
+  kill(hil.pid, SIGKILL);
+  CHECK(hil.Wait() == 128 + SIGKILL);
+  // No goodbye from a killed process: the participant's lease (2 s in the profile) runs out.
+  const std::int64_t end = dds::MonotonicNs() + 8 * kSecond;
+  while (link->Peer().matched_writers > 0 && dds::MonotonicNs() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const dds::AuvPeerView p = link->Peer();
+  CHECK(p.matched_writers == 0);
+  CHECK(p.matched_readers == 0);
+  CHECK(p.last_receive_age_ns > kSecond);
+}
+
+TEST_CASE("auv hil: SIGTERM ends a run cleanly with its outputs written") {
+  const std::string dir = test::ScratchDir("auv_hil_term");
+  const int domain = test::TestDomain(40);
+  const std::string csv = dir + "/traj.csv", events = dir + "/events.json";
+  Hil hil(
+      {"--layout", "hard", "--seed", "3", "--domain", std::to_string(domain), "--trajectory", csv, "--events", events},
+      dir + "/hil.log");
+  auto link = Controller(domain);
+  Drive(*link, 15, false);
+  kill(hil.pid, SIGTERM);
+  REQUIRE_MESSAGE(hil.Wait() == 0, ReadFile(hil.log));
+  CHECK(ReadFile(hil.log).find("stopped") != std::string::npos);
+  const std::string traj = ReadFile(csv);
+  CHECK(std::count(traj.begin(), traj.end(), '\n') >= 16);  // header + ticks 0..14 at least
+  CHECK(ReadFile(events).find("\"outcome\": \"stopped\"") != std::string::npos);
+}
+
+TEST_CASE("auv hil: bad flags are refused naming the flag and the value") {
+  const std::string dir = test::ScratchDir("auv_hil_flags");
+  struct Case {
+    std::vector<std::string> args;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {{"--layout", "twisty", "--seed", "1"}, "--layout 'twisty'"},
+      {{"--layout", "easy", "--seed", "-4"}, "--seed '-4'"},
+      {{"--layout", "easy", "--seed", "1", "--domain", "300"}, "--domain '300'"},
+      {{"--layout", "easy", "--seed", "1", "--max-time", "abc"}, "--max-time 'abc'"},
+      {{"--layout", "easy", "--seed", "1", "--frobnicate", "2"}, "--frobnicate"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    Hil hil(cases[i].args, dir + "/case" + std::to_string(i) + ".log");
+    CHECK(hil.Wait() == 2);
+    CHECK_MESSAGE(ReadFile(hil.log).find(cases[i].expect) != std::string::npos, ReadFile(hil.log));
+  }
+}
+
+TEST_CASE("auv hil: real-time mode runs at the control period, applies commands and plots the run") {
+  const std::string dir = test::ScratchDir("auv_hil_realtime");
+  const int domain = test::TestDomain(50);
+  const std::string png = dir + "/run.png", csv = dir + "/traj.csv";
+  Hil hil({"--layout", "hard", "--seed", "2", "--realtime", "--domain", std::to_string(domain), "--max-time", "1.5",
+           "--trajectory", csv, "--plot", png},
+          dir + "/hil.log");
+  auto link = Controller(domain);
+  REQUIRE(link->WaitForPeer(20 * kSecond));
+  std::uint64_t version = 0, samples = 0;
+  dds::AuvSensorInput in;
+  const std::int64_t t0 = dds::MonotonicNs();
+  std::int64_t t_end = t0;
+  while (link->WaitForSample(version, 5 * kSecond)) {
+    version = link->ReadSample(&in);
+    ++samples;
+    robot::AuvCommand c;
+    c.answers = in.sample.tick;
+    c.surge_speed_mps = 0.5;
+    REQUIRE(link->PushCommand(c));
+    if (in.sample.episode_end) {
+      t_end = dds::MonotonicNs();
+      break;
+    }
+  }
+  REQUIRE(in.sample.episode_end);
+  CHECK(in.sample.tick == 15);
+  // Paced by the wall clock: 15 periods of 0.1 s after the first sample.
+  const double wall_s = static_cast<double>(t_end - t0) * 1e-9;
+  CHECK(wall_s > 1.3);
+  CHECK(wall_s < 3.0);
+  CHECK(samples >= 10);
+  REQUIRE_MESSAGE(hil.Wait() == 0, ReadFile(hil.log));
+  const std::string log = ReadFile(hil.log);
+  INFO(log);
+  CHECK(log.find("max_time") != std::string::npos);
+  // Commands arrived and moved the vehicle: the last rows carry v_cmd 0.5.
+  const std::string traj = ReadFile(csv);
+  CHECK(traj.find(",0.5,0,") != std::string::npos);
+  const std::string img = ReadFile(png);
+  REQUIRE(img.size() > 1000);
+  CHECK(img.substr(1, 3) == "PNG");
+}
