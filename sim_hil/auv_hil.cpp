@@ -95,7 +95,7 @@ Status WriteTrajectory(const std::string& path, const std::vector<Row>& rows) {
 
 struct RunSummary {
   AuvHilOutcome outcome = AuvHilOutcome::kError;
-  std::uint64_t ticks = 0, applied = 0, ignored = 0, overruns = 0;
+  std::uint64_t ticks = 0, applied = 0, ignored = 0, overruns = 0, faulty_samples = 0;
   dds::AuvLinkCounters link;
   double wall_s = 0;
 };
@@ -124,7 +124,8 @@ Status WriteEvents(const std::string& path, const AuvHilOptions& o, const AuvNav
     << ",\n  \"random_obstacles\": " << st.random_obstacles << ",\n  \"commands\": {\"applied\": " << sum.applied
     << ", \"ignored\": " << sum.ignored << ", \"received\": " << sum.link.received
     << ", \"invalid\": " << sum.link.invalid << ", \"dropped_full\": " << sum.link.dropped_full
-    << "},\n  \"samples_written\": " << sum.link.written << ",\n  \"overruns\": " << sum.overruns << "\n}\n";
+    << "},\n  \"faulty_samples\": " << sum.faulty_samples << ",\n  \"samples_written\": " << sum.link.written
+    << ",\n  \"overruns\": " << sum.overruns << "\n}\n";
   if (!f.good()) return MakeError(ErrorCode::kIo, "--events '" + path + "': write failed");
   return {};
 }
@@ -200,7 +201,7 @@ const char* ToString(AuvHilOutcome o) noexcept {
 std::string AuvHilUsage() {
   return "pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]\n"
          "              [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]\n"
-         "              [--models DIR] [--peer-timeout S] [--command-timeout S]\n";
+         "              [--models DIR] [--peer-timeout S] [--command-timeout S] [--fault nan|range@SECONDS]\n";
 }
 
 Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
@@ -247,6 +248,13 @@ Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
       o.events_json = v;
     } else if (a == "--models") {
       o.models_dir = v;
+    } else if (a == "--fault") {
+      const auto at = v.find('@');
+      const std::string kind = v.substr(0, at);
+      if (at == std::string::npos || (kind != "nan" && kind != "range") || !ParseDouble(v.substr(at + 1), &d) || d < 0)
+        return FlagError(a, v, "not KIND@SECONDS with KIND nan or range");
+      o.fault = kind;
+      o.fault_time_s = d;
     } else {
       return MakeError(ErrorCode::kInvalidValue, "unknown option " + a);
     }
@@ -315,6 +323,15 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
     task.FillSensorSample(sample);
     sample.tick = tick;
     if (last) sample.episode_end = true;
+    if (!o.fault.empty() && task.vehicle().time_s >= o.fault_time_s) {
+      ++sum.faulty_samples;
+      if (o.fault == "nan") {
+        sample.yaw_rad = std::nan("");
+        sample.surge_mps = std::nan("");
+      } else {
+        sample.surge_mps = 99.0;
+      }
+    }
     auto st = link.PublishSample(sample);
     if (!st) std::fprintf(stderr, "pbppo-hil auv: %s\n", st.error().message.c_str());
     return st.ok();

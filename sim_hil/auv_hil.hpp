@@ -32,6 +32,11 @@ struct AuvHilOptions {
   std::string models_dir = "models/auv";              // auv.yaml, layouts/, io_layout.yaml, dds_profile.xml
   double peer_timeout_s = 30.0;                       // waiting for the controller to appear
   double command_timeout_s = 10.0;                    // lock-step: longest wait for the next command
+  // Fault injection for tests of the controller's supervisor: from simulated time fault_time_s on,
+  // every published sample carries the fault: "nan" (yaw and surge speed NaN) or "range" (surge
+  // speed 99 m/s, beyond any plausible value). Empty: none.
+  std::string fault;
+  double fault_time_s = 0.0;
 };
 
 // Parses the arguments after `pbppo-hil auv`; errors name the flag and the value.

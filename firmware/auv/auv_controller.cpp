@@ -228,6 +228,15 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
   in.estop_request = estop_request_.load(std::memory_order_relaxed);
   decision_ = safety::SuperviseAuv(config_.supervisor, in, sup_);
   sup_ = decision_.state;
+  if (decision_.transition) {
+    if (change_count_ < kMaxModeChanges) {
+      ModeChange& c = changes_[change_count_];
+      c.tick = tick;
+      c.mode = sup_.mode;
+      safety::DescribeAuv(decision_, c.reason, sizeof c.reason);
+    }
+    ++change_count_;
+  }
   if (!armed_) {  // disarmed: nothing moves (the supervisor still watches and latches)
     sup_.v_mps = sup_.w_radps = 0.0;
     decision_.v_mps = decision_.w_radps = 0.0;

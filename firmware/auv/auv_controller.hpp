@@ -10,6 +10,8 @@
 // zero again; ResetSupervisor() brings a latched mode back to nominal, only while disarmed.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -79,6 +81,18 @@ class AuvController {
   // Counters and median/max tick time (reads the profiler: not for the tick thread).
   robot::AuvControllerStatus Status() const;
 
+  // Every rise of the supervisor's mode (the first kMaxModeChanges), recorded in the tick with
+  // its reason; read them after the loop.
+  struct ModeChange {
+    std::uint64_t tick = 0;
+    safety::AuvMode mode = safety::AuvMode::kNominal;
+    char reason[120] = {};
+  };
+  static constexpr std::size_t kMaxModeChanges = 16;
+  std::span<const ModeChange> mode_changes() const noexcept {
+    return {changes_.data(), std::min<std::size_t>(change_count_, kMaxModeChanges)};
+  }
+
  private:
   AuvController(AuvControllerConfig config, robot::IoLayout layout, policy::PolicyModel model,
                 robot::ObservationBuilder builder);
@@ -92,6 +106,8 @@ class AuvController {
   std::vector<double> signals_;
   std::vector<float> obs_;
   robot::AuvSensorSample sample_{};
+  std::array<ModeChange, kMaxModeChanges> changes_{};
+  std::size_t change_count_ = 0;
   bool have_sample_ = false;
   std::uint32_t sample_age_ = 0;
   safety::AuvSupervisorState sup_;

@@ -27,6 +27,7 @@
 
 #include "firmware/auv/auv_controller.hpp"
 #include "firmware/auv/controller_loop.hpp"
+#include "runtime/core/alloc_probe.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/rt/tick_clock.hpp"
 #include "runtime/rt/tick_profiler.hpp"
@@ -205,7 +206,14 @@ int main(int argc, char** argv) {
     }
   });
 
-  const firmware::LoopResult r = firmware::RunAuvControlLoop(c, view, *clock, lo);
+  // Every heap allocation of this (the control) thread while the loop runs is counted.
+  std::uint64_t loop_allocations = 0;
+  firmware::LoopResult r;
+  {
+    AllocationScope scope;
+    r = firmware::RunAuvControlLoop(c, view, *clock, lo);
+    loop_allocations = scope.count();
+  }
   done.store(true);
   clock->Stop();
   if (pacer.joinable()) pacer.join();
@@ -225,9 +233,14 @@ int main(int argc, char** argv) {
   for (std::size_t i = 0; i < safety::kAuvCauseCount; ++i)
     std::printf("%s%s %llu", i ? ", " : "", safety::AuvCauseName(1u << i),
                 static_cast<unsigned long long>(sup.cause_ticks[i]));
-  std::printf("\nlink: send failures %llu, stopped by %s\n", static_cast<unsigned long long>(r.send_failures),
+  std::printf("\n");
+  for (const auto& m : c.mode_changes())
+    std::printf("mode change: tick %llu: %s\n", static_cast<unsigned long long>(m.tick), m.reason);
+  std::printf("control thread heap allocations during the loop: %llu\n",
+              static_cast<unsigned long long>(loop_allocations));
+  std::printf("link: send failures %llu, stopped by %s\n", static_cast<unsigned long long>(r.send_failures),
               episode_end.load() ? "the vehicle's episode end" : (r.stopped ? "a signal or --duration" : "--ticks"));
-  std::printf("real-time set-up: %s\n", rs.Summary().c_str());
+  std::printf("%s\n", rs.Summary().c_str());
   std::printf("%s", rt::FormatText(report).c_str());
   (void)st;
   if (!profile_json.empty()) {
