@@ -87,6 +87,7 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--epochs", o.epochs, "Epochs per iteration");
   s.add_option("--lr", o.lr, "Adam learning rate");
   s.add_flag("--anneal-lr", o.anneal_lr, "Decay the learning rate linearly to 0 over the budget");
+  s.add_flag("--keep-best", o.keep_best, "Also write best.blob: the policy of the best last-100-episode return");
   s.add_option("--gamma", o.gamma, "Discount");
   s.add_option("--gae-lambda", o.gae_lambda, "GAE lambda");
   s.add_option("--ent-coef", o.ent_coef, "Entropy coefficient");
@@ -121,6 +122,7 @@ int Train(const TrainOptions& o) {
   c.epochs = o.epochs;
   c.learning_rate = o.lr;
   c.anneal_lr = o.anneal_lr;
+  c.keep_best = o.keep_best;
   c.gamma = o.gamma;
   c.gae_lambda = o.gae_lambda;
   c.ent_coef = o.ent_coef;

@@ -29,6 +29,7 @@ struct TrainOptions {
   int epochs = 10;
   double lr = 3e-4;
   bool anneal_lr = false;
+  bool keep_best = false;
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;

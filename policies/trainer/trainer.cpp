@@ -90,7 +90,8 @@ class Trainer {
   double Evaluate(int iteration, std::uint64_t* steps);
   policy::PolicySpec Freeze(double final_return) const;
   double FreezeCheck(const policy::PolicySpec& spec);
-  Status WriteCheckpoint(double final_return, std::uint64_t env_steps);
+  Status WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name = "policy.blob");
+  double best_return_ = -std::numeric_limits<double>::infinity();
   std::string CsvHeader() const;
   std::string CsvRow(const IterationStats& s) const;
   std::string Plots(const std::vector<IterationStats>& its);
@@ -606,11 +607,11 @@ std::string Trainer::Plots(const std::vector<IterationStats>& its) {
   return "plots: " + dir + "/return.png, epsilon.png, arms.png" + (task ? ", success.png" : "");
 }
 
-Status Trainer::WriteCheckpoint(double final_return, std::uint64_t env_steps) {
+Status Trainer::WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name) {
   if (c_.out_dir.empty()) return {};
   policy::PolicySpec spec = Freeze(final_return);
   spec.provenance.env_steps = env_steps;
-  const std::string blob = c_.out_dir + "/policy.blob";
+  const std::string blob = c_.out_dir + "/" + name;
   if (auto st = policy::WriteBlobFile(blob, spec); !st) return st;
   return policy::WriteGoldenFile(policy::GoldenPathFor(blob), policy::MakeGoldenVectors(spec, 32, c_.seed));
 }
@@ -659,6 +660,12 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
   auto last_checkpoint = Clock::now();
 
   for (int it = 0; it < iterations; ++it) {
+    // --keep-best: the parameters that collected the best last-100-episode return so far (these
+    // episodes were collected by this and the few previous iterations' policies).
+    if (c_.keep_best && last100_.size() >= 100 && mean100() > best_return_) {
+      best_return_ = mean100();
+      if (auto s = WriteCheckpoint(best_return_, env_steps, "best.blob"); !s) return s.error();
+    }
     IterationStats st;
     st.iteration = it;
     st.train_return = rollout_return;

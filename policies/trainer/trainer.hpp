@@ -30,6 +30,7 @@ struct TrainConfig {
   int epochs = 10;
   double learning_rate = 3e-4;
   bool anneal_lr = false;  // linear decay of the learning rate to 0 over the budget
+  bool keep_best = false;  // also write best.blob: the policy of the best last-100-episode return
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;
