@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# The AUV end to end (label dds): pbppo-hil auv and pbppo-controller as two processes over Fast DDS
+# on loopback with the shipped policy.
+#   1. start-up refusals: corrupted blob, a blob for another IO layout, a blob for a layout that
+#      differs only in a scale, unreadable files, bad flags;
+#   2. lock-step: two runs with the same seed give identical trajectories; the controller's tick
+#      makes no heap allocation over the whole run;
+#   3. the shipped policy completes the mission on fixed seeds of the layouts in MISSIONS;
+#   4. NaN and out-of-range samples (the simulator's fault injection): the supervisor degrades,
+#      then holds a safe-stop, and its counters show it;
+#   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause.
+# usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
+set -euo pipefail
+hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
+rm -rf "$work"
+mkdir -p "$work"
+cd "$src"
+blob=policies/frozen/auv_nav/auv_nav.blob
+robot=models/auv/auv.yaml
+# Missions the shipped policy must complete: "layout:seed ...".
+missions=${PBPPO_AUV_MISSIONS:-$(cat policies/frozen/auv_nav/test_missions.txt)}
+domain=$((100 + $$ % 100))
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+expect() {  # expect FILE PATTERN
+  grep -Eq -- "$2" "$1" || { cat "$1"; fail "'$2' not found in $1"; }
+}
+
+echo "== 1: start-up refusals"
+cp "$blob" "$work/corrupt.blob"
+printf '\x55' | dd of="$work/corrupt.blob" bs=1 seek=200 conv=notrunc status=none
+rc=0
+"$ctl" --robot "$robot" --policy "$work/corrupt.blob" --transport dds --domain "$domain" >"$work/r1.log" 2>&1 || rc=$?
+[ "$rc" -ne 0 ] || fail "a corrupted blob was accepted"
+expect "$work/r1.log" "corrupt.blob"
+rc=0
+"$ctl" --robot "$robot" --policy tests/data/blobs/p3.blob --transport dds --domain "$domain" >"$work/r2.log" 2>&1 || rc=$?
+[ "$rc" -ne 0 ] || fail "a blob for another layout was accepted"
+expect "$work/r2.log" "does not fit robot layout 'auv'"
+# Same names, one scale changed: only the layout hash differs.
+cp -r models "$work/models"
+sed -i 's/name: yaw_rate, signal: yaw_rate, unit: rad\/s, scale: 1.66666667/name: yaw_rate, signal: yaw_rate, unit: rad\/s, scale: 1.5/' \
+  "$work/models/auv/io_layout.yaml"
+"$pbppo" train --models "$work/models" --env auv-nav --layout easy --steps 2048 --envs 2 --rollout 1024 --epochs 1 \
+  --no-plots --quiet --out "$work/other" >/dev/null
+rc=0
+"$ctl" --robot "$robot" --policy "$work/other/policy.blob" --transport dds --domain "$domain" >"$work/r3.log" 2>&1 || rc=$?
+[ "$rc" -ne 0 ] || fail "a blob trained for another layout hash was accepted"
+expect "$work/r3.log" "layout hash"
+rc=0
+"$ctl" --robot "$work/none.yaml" --policy "$blob" --transport dds >"$work/r4.log" 2>&1 || rc=$?
+[ "$rc" -ne 0 ] || fail "a missing robot file was accepted"
+expect "$work/r4.log" "none.yaml"
+rc=0
+"$ctl" --robot "$robot" --policy "$blob" --transport can >"$work/r5.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "--transport can: exit $rc"
+expect "$work/r5.log" "--transport: 'can' unknown"
+cat "$work"/r[1-5].log | sed 's/^/   /'
+
+run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to completion
+  local name=$1 layout=$2 seed=$3
+  shift 3
+  "$hil" auv --layout "$layout" --seed "$seed" --lockstep --domain "$domain" --trajectory "$work/$name.csv" \
+    --events "$work/$name.json" "$@" >"$work/$name.hil.log" 2>&1 &
+  local pid=$!
+  local rc=0
+  "$ctl" --robot "$robot" --policy "$blob" --transport dds --lockstep --domain "$domain" --quiet \
+    >"$work/$name.ctl.log" 2>&1 || rc=$?
+  wait "$pid" || fail "$name: pbppo-hil exited $?: $(cat "$work/$name.hil.log")"
+  [ "$rc" -eq 0 ] || fail "$name: pbppo-controller exited $rc: $(cat "$work/$name.ctl.log")"
+}
+
+echo "== 2: lock-step determinism, no allocation in the tick"
+run_pair det1 hard 11 --max-time 40
+run_pair det2 hard 11 --max-time 40
+cmp "$work/det1.csv" "$work/det2.csv" || fail "two lock-step runs with the same seed differ"
+[ "$(wc -l <"$work/det1.csv")" -gt 300 ] || fail "det1: short trajectory"
+expect "$work/det1.ctl.log" "control thread heap allocations during the loop: 0$"
+expect "$work/det1.ctl.log" "final mode nominal"
+echo "   identical trajectories ($(wc -l <"$work/det1.csv") rows), 0 allocations in the control thread"
+
+echo "== 3: missions of the shipped policy: $missions"
+for m in $missions; do
+  layout=${m%%:*} seed=${m##*:}
+  run_pair "mission_${layout}_$seed" "$layout" "$seed"
+  expect "$work/mission_${layout}_$seed.hil.log" "success after .* 3/3 targets"
+  expect "$work/mission_${layout}_$seed.ctl.log" "final mode nominal"
+  sed -n 2p "$work/mission_${layout}_$seed.hil.log" | sed "s/^/   $layout seed $seed: /"
+  head -1 "$work/mission_${layout}_$seed.hil.log" >/dev/null
+done
+
+echo "== 4: NaN and out-of-range samples"
+run_pair nan easy 5 --fault nan@3 --max-time 12
+expect "$work/nan.ctl.log" "mode change: tick 30: degraded: invalid sensor sample: (yaw_rad|surge_mps) = nan"
+expect "$work/nan.ctl.log" "mode change: tick 32: safe-stop: invalid sensor sample"
+expect "$work/nan.ctl.log" "invalid sensor sample [1-9][0-9]"
+# Holding: the commands the simulator applied after the fault ramp to zero and stay there.
+awk -F, 'NR > 1 && $1 >= 4.0 && ($5 != 0 || $6 != 0) {bad = 1} END {exit bad}' "$work/nan.csv" ||
+  fail "commands after the safe-stop were not zero"
+run_pair range easy 5 --fault range@3 --max-time 6
+expect "$work/range.ctl.log" "degraded: invalid sensor sample: surge_mps = 99"
+expect "$work/range.ctl.log" "safe-stop: invalid sensor sample"
+grep -E "mode change|supervisor:" "$work/nan.ctl.log" "$work/range.ctl.log" | sed 's/^/   /'
+
+echo "== 5: the simulator is killed mid-run (real time, 10 Hz)"
+"$hil" auv --layout hard --seed 2 --realtime --domain "$domain" >"$work/kill.hil.log" 2>&1 &
+hpid=$!
+"$ctl" --robot "$robot" --policy "$blob" --transport dds --domain "$domain" --quiet >"$work/kill.ctl.log" 2>&1 &
+cpid=$!
+sleep 3
+kill -KILL "$hpid"
+wait "$hpid" 2>/dev/null || true
+sleep 1.5
+kill -TERM "$cpid"
+rc=0
+wait "$cpid" || rc=$?
+[ "$rc" -eq 0 ] || fail "controller exited $rc after SIGTERM: $(cat "$work/kill.ctl.log")"
+expect "$work/kill.ctl.log" "degraded: stale sensor sample: age 2 ticks > 1"
+expect "$work/kill.ctl.log" "safe-stop: stale sensor sample: age 3 ticks > 2"
+grep -E "mode change|final mode" "$work/kill.ctl.log" | sed 's/^/   /'
+echo "auv end to end: all checks passed"
