@@ -251,6 +251,14 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
   profiler_.Record(rt::Stage::kObserve, t1 - t0);
   profiler_.Record(rt::Stage::kInfer, t2 - t1);
   profiler_.Record(rt::Stage::kSupervise, t3 - t2);
+  robot::AuvControllerStatus st;
+  st.tick = ticks_;
+  st.mode = static_cast<std::uint8_t>(sup_.mode);
+  st.cause = sup_.latched_cause;
+  st.stale_samples = sup_.cause_ticks[4];
+  st.invalid_samples = sup_.cause_ticks[3];
+  st.limited_commands = sup_.cause_ticks[0] + sup_.cause_ticks[1];
+  status_box_.Write(st);
 }
 
 void AuvController::ShutdownCommand(std::uint64_t tick, robot::AuvCommand& out) const noexcept {
@@ -264,13 +272,8 @@ void AuvController::ShutdownCommand(std::uint64_t tick, robot::AuvCommand& out) 
 
 robot::AuvControllerStatus AuvController::Status() const {
   robot::AuvControllerStatus s;
-  s.tick = ticks_;
-  s.mode = static_cast<std::uint8_t>(sup_.mode);
-  s.cause = sup_.latched_cause;
+  (void)status_box_.Read(&s);  // version 0: no tick yet, the zero status
   s.deadline_misses = profiler_.deadline_misses();
-  s.stale_samples = sup_.cause_ticks[4];
-  s.invalid_samples = sup_.cause_ticks[3];
-  s.limited_commands = sup_.cause_ticks[0] + sup_.cause_ticks[1];
   const rt::LatencyStats t = profiler_.histogram(rt::Stage::kTick).Snapshot().Stats();
   s.tick_median_us = static_cast<double>(t.p50_ns) / 1000.0;
   s.tick_max_us = static_cast<double>(t.max_ns) / 1000.0;

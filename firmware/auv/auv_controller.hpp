@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/core/latest_mailbox.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/auv_messages.hpp"
@@ -78,7 +79,8 @@ class AuvController {
   std::uint32_t sample_age_ticks() const noexcept { return sample_age_; }
   std::uint64_t ticks() const noexcept { return ticks_; }
   std::uint64_t policy_runs() const noexcept { return policy_runs_; }
-  // Counters and median/max tick time (reads the profiler: not for the tick thread).
+  // Counters (published by the tick through a mailbox) and median/max tick time (from the
+  // profiler's atomics): callable from one other thread while the tick runs; not for the tick.
   robot::AuvControllerStatus Status() const;
 
   // Every rise of the supervisor's mode (the first kMaxModeChanges), recorded in the tick with
@@ -106,6 +108,8 @@ class AuvController {
   std::vector<double> signals_;
   std::vector<float> obs_;
   robot::AuvSensorSample sample_{};
+  // The tick's counters for Status() on another thread (single reader).
+  mutable LatestMailbox<robot::AuvControllerStatus> status_box_;
   std::array<ModeChange, kMaxModeChanges> changes_{};
   std::size_t change_count_ = 0;
   bool have_sample_ = false;
