@@ -5,7 +5,8 @@
 #     wake-up jitter, deadline misses; JSON + PNG profile.
 #  2. A lock-step run (hard layout) to the end of its episode: simulated seconds per wall second.
 # Quiet the machine first: other load shows up as jitter. Writes into OUT_DIR (build/results/rt).
-# Usage: tools/bench_auv_rt.sh [OUT_DIR]   (DURATION=60, BLOB=policies/frozen/auv_nav/auv_nav.blob)
+# Usage: tools/bench_auv_rt.sh [OUT_DIR]   (DURATION=60, POLL_US=200 (0: the tick wakes the DDS writer),
+#   BLOB=policies/frozen/auv_nav/auv_nav.blob)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/build/results/rt}"
@@ -20,7 +21,7 @@ echo "== 1: real time, controller at 1000 Hz for ${duration} s (vehicle at 10 Hz
 "$hil" auv --layout hard --seed 3 --realtime --domain "$domain" --max-time $((duration + 30)) >"$out/rt.hil.log" 2>&1 &
 hpid=$!
 "$ctl" --robot models/auv/auv.yaml --policy "$blob" --transport dds --domain "$domain" --period-ms 1 \
-  --duration "$duration" --quiet --profile "$out/rt_profile.json" --profile-plot "$out/rt_profile.png" | tee "$out/rt.ctl.log"
+  --duration "$duration" --writer-poll-us "${POLL_US:-200}" --quiet --profile "$out/rt_profile.json" --profile-plot "$out/rt_profile.png" | tee "$out/rt.ctl.log"
 kill -INT "$hpid" 2>/dev/null || true
 wait "$hpid" || true
 echo

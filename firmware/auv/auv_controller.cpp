@@ -124,11 +124,28 @@ AuvController::AuvController(AuvControllerConfig config, robot::IoLayout layout,
                              robot::ObservationBuilder builder)
     : config_(std::move(config)), layout_(std::move(layout)), model_(std::move(model)), builder_(std::move(builder)) {}
 
+AuvControllerConfig ForTickPeriod(const AuvControllerConfig& c, double tick_period_s) {
+  AuvControllerConfig r = c;
+  const double k = tick_period_s / c.control_period_s;  // ticks per control period = 1 / k
+  auto periods = [&](std::uint32_t n) {
+    return static_cast<std::uint32_t>(std::min(1e6, std::ceil(static_cast<double>(n) / k)));
+  };
+  r.supervisor.stale_degraded_ticks = periods(c.supervisor.stale_degraded_ticks);
+  r.supervisor.stale_safe_stop_ticks = periods(c.supervisor.stale_safe_stop_ticks);
+  r.supervisor.lost_peer_ticks = periods(c.supervisor.lost_peer_ticks);
+  r.supervisor.dv_max_mps = c.supervisor.dv_max_mps * k;
+  r.supervisor.dw_max_radps = c.supervisor.dw_max_radps * k;
+  r.supervisor.stop_dv_mps = c.supervisor.stop_dv_mps * k;
+  r.supervisor.stop_dw_radps = c.supervisor.stop_dw_radps * k;
+  return r;
+}
+
 Result<std::unique_ptr<AuvController>> AuvController::Create(const std::string& auv_yaml,
                                                              const std::string& io_layout_yaml,
-                                                             const std::string& blob_path) {
+                                                             const std::string& blob_path, double tick_period_s) {
   auto config = LoadAuvControllerConfig(auv_yaml);
   if (!config) return std::move(config).error();
+  if (tick_period_s > 0) *config = ForTickPeriod(*config, tick_period_s);
   auto layout = robot::LoadIoLayout(io_layout_yaml);
   if (!layout) return std::move(layout).error();
   auto model = policy::PolicyModel::FromFile(blob_path);

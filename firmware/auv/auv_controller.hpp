@@ -40,11 +40,16 @@ struct AuvControllerConfig {
 // Reads the supervisor, simulation.control_period_s, sonar and task.depth_m sections of auv.yaml.
 // Errors name the file and the field and quote the value.
 Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& auv_yaml);
+// The same limits for a controller ticking every tick_period_s instead of every control period:
+// sample ages counted in ticks scale up (stale after the same time), rate limits per tick scale
+// down (the same accelerations).
+AuvControllerConfig ForTickPeriod(const AuvControllerConfig& config, double tick_period_s);
 
 class AuvController {
  public:
+  // tick_period_s > 0: the controller ticks at that period (ForTickPeriod); 0: the control period.
   static Result<std::unique_ptr<AuvController>> Create(const std::string& auv_yaml, const std::string& io_layout_yaml,
-                                                       const std::string& blob_path);
+                                                       const std::string& blob_path, double tick_period_s = 0);
   // From loaded pieces: refuses a policy trained for another layout (names the first
   // difference) and a layout that is not the AUV's (unknown signal, missing command).
   static Result<std::unique_ptr<AuvController>> Create(const AuvControllerConfig& config, const robot::IoLayout& layout,

@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
   bool lockstep = false, no_mlock = false, quiet = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500;
+  std::int64_t writer_poll_us = -1;
   std::uint64_t max_ticks = 0;
   app.add_option("--robot", robot_yaml, "Robot description (models/auv/auv.yaml)")->required();
   app.add_option("--policy", blob, "Frozen policy blob")->required();
@@ -108,6 +109,10 @@ int main(int argc, char** argv) {
   app.add_option("--status-every-s", status_every_s, "Status publication and progress line period")
       ->check(CLI::Range(0.05, 3600.0));
   app.add_flag("--quiet", quiet, "No progress line");
+  app.add_option("--writer-poll-us", writer_poll_us,
+                 "DDS writer thread polls for commands every N us, so the tick makes no system call (0: the "
+                 "tick wakes it; default: 200 free-running, 0 in lock-step)")
+      ->check(CLI::Range(-1, 1000000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -118,7 +123,8 @@ int main(int argc, char** argv) {
   if (dds_profile.empty()) dds_profile = (std::filesystem::path(robot_yaml).parent_path() / "dds_profile.xml").string();
 
   // Everything is loaded and checked before anything moves.
-  auto controller = firmware::AuvController::Create(robot_yaml, io_yaml, blob);
+  // Sample ages and rate limits are per tick: a tick period other than the control period scales them.
+  auto controller = firmware::AuvController::Create(robot_yaml, io_yaml, blob, lockstep ? 0.0 : period_ms * 1e-3);
   if (!controller) return Fail(controller.error().message);
   firmware::AuvController& c = **controller;
   const double period_s = period_ms > 0 ? period_ms * 1e-3 : c.config().control_period_s;
@@ -126,6 +132,7 @@ int main(int argc, char** argv) {
   dds::AuvDdsOptions dopt;
   dopt.domain_id = domain;
   dopt.profile_file = dds_profile;
+  dopt.writer_poll_us = writer_poll_us >= 0 ? writer_poll_us : (lockstep ? 0 : 200);
   auto link = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, dopt);
   if (!link) return Fail(link.error().message);
   if (!quiet) std::fprintf(stderr, "pbppo-controller: waiting for the vehicle on DDS domain %d\n", domain);

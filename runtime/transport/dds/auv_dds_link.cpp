@@ -97,6 +97,7 @@ struct AuvDdsLink::Impl {
   // Controller: tick -> writer thread.
   std::unique_ptr<SpscQueue<robot::AuvCommand>> outbox;
   std::counting_semaphore<> wake{0};
+  std::int64_t poll_us = 0;
   std::atomic<bool> stop{false};
   std::thread writer_thread;
 
@@ -176,7 +177,11 @@ struct AuvDdsLink::Impl {
     pbppo_idl::auv::Command msg;
     robot::AuvCommand c;
     for (;;) {
-      wake.try_acquire_for(std::chrono::milliseconds(50));
+      if (poll_us > 0) {
+        std::this_thread::sleep_for(std::chrono::microseconds(poll_us));
+      } else {
+        wake.try_acquire_for(std::chrono::milliseconds(50));
+      }
       // Read before draining: whatever was pushed before the stop request is still written.
       const bool stopping = stop.load(std::memory_order_acquire);
       while (outbox->TryPop(&c)) {
@@ -237,6 +242,8 @@ fdds::DataReaderQos ReaderQos(std::int32_t depth) {
 Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const AuvDdsOptions& o) {
   if (o.domain_id < 0 || o.domain_id > 232)
     return Fail("domain_id " + std::to_string(o.domain_id) + " is outside 0..232");
+  if (o.writer_poll_us < 0 || o.writer_poll_us > 1000000)
+    return Fail("writer_poll_us " + std::to_string(o.writer_poll_us) + " is outside 0..1000000");
   if (o.command_queue_capacity < 1 || o.command_queue_capacity > 65536)
     return Fail("command_queue_capacity " + std::to_string(o.command_queue_capacity) + " is outside 1..65536");
   if (o.command_inbox_capacity < 1 || o.command_inbox_capacity > 65536)
@@ -288,6 +295,7 @@ Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const Au
   m.status_reader_listener.is_main = false;
   if (controller) {
     m.outbox = std::make_unique<SpscQueue<robot::AuvCommand>>(o.command_queue_capacity);
+    m.poll_us = o.writer_poll_us;
   } else {
     m.inbox = std::make_unique<SpscQueue<AuvCommandInput>>(o.command_inbox_capacity);
   }
@@ -324,7 +332,7 @@ std::uint64_t AuvDdsLink::ReadSample(AuvSensorInput* out) noexcept {
 bool AuvDdsLink::PushCommand(const robot::AuvCommand& command) noexcept {
   if (impl_->role != AuvDdsRole::kController) return false;
   if (!impl_->outbox->TryPush(command)) return false;
-  impl_->wake.release();
+  if (impl_->poll_us == 0) impl_->wake.release();
   return true;
 }
 

@@ -39,6 +39,10 @@ struct AuvDdsOptions {
   std::size_t command_queue_capacity = 16;             // controller: tick -> writer thread
   std::size_t command_inbox_capacity = 256;            // vehicle: listener -> simulator
   std::int32_t history_depth = 32;                     // KEEP_LAST depth of the reliable writers/readers
+  // Controller: how the writer thread learns of a command. 0: PushCommand wakes it (a futex
+  // system call in the tick, lowest delivery latency); > 0: the writer polls the queue every
+  // writer_poll_us and the tick makes no system call (delivery up to that much later).
+  std::int64_t writer_poll_us = 0;
 };
 
 struct AuvLinkCounters {
