@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 
 namespace pbppo::safety {
 namespace {
@@ -83,18 +84,24 @@ bool ValidateAuvSupervisorConfig(const AuvSupervisorConfig& c, char* why, std::s
     if (size > 0) std::snprintf(why, size, "supervisor: %s = %g: %s", field, v, rule);
     return false;
   };
+  // Every number must be finite. The first eight (command limits and rates) are physical
+  // quantities of an AUV: a magnitude beyond kAuvLimitBound is a unit or typing error, and such
+  // magnitudes would also make the rate limits inexact in doubles.
   const struct {
     const char* name;
     double v;
-  } finite[] = {{"v_min_mps", c.v_min_mps},           {"v_max_mps", c.v_max_mps},
-                {"w_max_radps", c.w_max_radps},       {"degraded_v_max_mps", c.degraded_v_max_mps},
-                {"dv_max_mps", c.dv_max_mps},         {"dw_max_radps", c.dw_max_radps},
-                {"stop_dv_mps", c.stop_dv_mps},       {"stop_dw_radps", c.stop_dw_radps},
-                {"sonar_max_m", c.sonar_max_m},       {"speed_max_mps", c.speed_max_mps},
-                {"rate_max_radps", c.rate_max_radps}, {"position_max_m", c.position_max_m},
-                {"depth_min_m", c.depth_min_m},       {"depth_max_m", c.depth_max_m}};
-  for (const auto& f : finite) {
+  } numbers[] = {{"v_min_mps", c.v_min_mps},           {"v_max_mps", c.v_max_mps},
+                 {"w_max_radps", c.w_max_radps},       {"degraded_v_max_mps", c.degraded_v_max_mps},
+                 {"dv_max_mps", c.dv_max_mps},         {"dw_max_radps", c.dw_max_radps},
+                 {"stop_dv_mps", c.stop_dv_mps},       {"stop_dw_radps", c.stop_dw_radps},
+                 {"sonar_max_m", c.sonar_max_m},       {"speed_max_mps", c.speed_max_mps},
+                 {"rate_max_radps", c.rate_max_radps}, {"position_max_m", c.position_max_m},
+                 {"depth_min_m", c.depth_min_m},       {"depth_max_m", c.depth_max_m}};
+  constexpr std::size_t kBounded = 8;
+  for (std::size_t i = 0; i < std::size(numbers); ++i) {
+    const auto& f = numbers[i];
     if (!Finite(f.v)) return fail(f.name, f.v, "not finite");
+    if (i < kBounded && std::abs(f.v) > kAuvLimitBound) return fail(f.name, f.v, "magnitude must be <= 1000");
   }
   if (c.v_min_mps > 0.0) return fail("v_min_mps", c.v_min_mps, "must be <= 0 (stopping must be allowed)");
   if (c.v_max_mps < 0.0 || c.v_max_mps <= c.v_min_mps)

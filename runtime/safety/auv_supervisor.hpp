@@ -53,6 +53,8 @@ enum AuvCause : std::uint32_t {
   kAuvCauseEStopRequest = 1u << 7,
 };
 inline constexpr std::size_t kAuvCauseCount = 8;
+// The largest magnitude a command limit or rate in AuvSupervisorConfig may have (m/s, rad/s).
+inline constexpr double kAuvLimitBound = 1000.0;
 
 const char* ToString(AuvMode mode) noexcept;
 // The name of one cause bit ("stale sensor sample"); "none" for 0, "several" for more bits.

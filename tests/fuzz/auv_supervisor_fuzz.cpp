@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -52,9 +53,25 @@ class Bytes {
   std::size_t n_;
 };
 
-void Require(bool ok) {
-  if (!ok) std::abort();
+// Aborts with the failed condition, its line and the tick's numbers, so a crash input explains
+// itself when replayed.
+struct TickTrace {
+  int tick = 0;
+  double v_prev = 0.0, w_prev = 0.0, v = 0.0, w = 0.0, in_v = 0.0, in_w = 0.0;
+  int mode_before = 0, mode_after = 0;
+};
+TickTrace g_trace;
+
+void Fail(const char* what, int line) {
+  const TickTrace& t = g_trace;
+  std::fprintf(stderr,
+               "auv_supervisor_fuzz:%d: invariant failed: %s\n  tick %d mode %d -> %d, input v=%.17g "
+               "w=%.17g, previous v=%.17g w=%.17g, command v=%.17g w=%.17g\n",
+               line, what, t.tick, t.mode_before, t.mode_after, t.in_v, t.in_w, t.v_prev, t.w_prev, t.v, t.w);
+  std::abort();
 }
+
+#define Require(cond) ((cond) ? (void)0 : Fail(#cond, __LINE__))
 
 }  // namespace
 
@@ -105,6 +122,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::isfinite(s.w_radps) ? std::fmin(std::fmax(s.w_radps, -c.w_max_radps), c.w_max_radps) : 0.0;
     const AuvMode before = static_cast<std::uint8_t>(s.mode) > 3 ? AuvMode::kEStop : s.mode;
     const AuvDecision d = SuperviseAuv(c, in, s);
+    g_trace = {tick,
+               v_prev,
+               w_prev,
+               d.v_mps,
+               d.w_radps,
+               in.v_mps,
+               in.w_radps,
+               static_cast<int>(before),
+               static_cast<int>(d.state.mode)};
     Require(std::isfinite(d.v_mps) && std::isfinite(d.w_radps));
     Require(d.v_mps >= c.v_min_mps && d.v_mps <= c.v_max_mps);
     Require(d.w_radps >= -c.w_max_radps && d.w_radps <= c.w_max_radps);

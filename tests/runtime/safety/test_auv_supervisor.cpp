@@ -59,6 +59,17 @@ TEST_CASE("auv supervisor: the default configuration validates; bad ones are ref
   c.stop_dv_mps = 0.05;
   CHECK_FALSE(ValidateAuvSupervisorConfig(c, why, sizeof why));
   CHECK(std::string(why).find("stop_dv_mps = 0.05: must be >= dv_max_mps") != std::string::npos);
+  // Magnitudes no vehicle has (a unit error) are refused; the fuzzer found that limits near
+  // DBL_MAX make a ramp step of stop_dv inexact.
+  c = AuvSupervisorConfig{};
+  c.v_max_mps = 1.4e306;
+  c.stop_dv_mps = 5e303;
+  CHECK_FALSE(ValidateAuvSupervisorConfig(c, why, sizeof why));
+  CHECK(std::string(why) == "supervisor: v_max_mps = 1.4e+306: magnitude must be <= 1000");
+  c = AuvSupervisorConfig{};
+  c.stop_dw_radps = 2000.0;
+  CHECK_FALSE(ValidateAuvSupervisorConfig(c, why, sizeof why));
+  CHECK(std::string(why) == "supervisor: stop_dw_radps = 2000: magnitude must be <= 1000");
 }
 
 TEST_CASE("auv supervisor: command limits and rate limits, counted per cause") {
