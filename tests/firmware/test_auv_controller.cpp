@@ -70,7 +70,7 @@ robot::AuvSensorSample Sample(std::uint64_t tick) {
 
 }  // namespace
 
-TEST_CASE("auv controller: configuration from auv.yaml; bad fields named with their value") {
+TEST_CASE("auv controller: configuration from auv.yaml - bad fields named with their value") {
   auto c = firmware::LoadAuvControllerConfig(kAuvYaml);
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   CHECK(c->control_period_s == 0.1);
@@ -189,7 +189,7 @@ TEST_CASE("auv controller: the tick observes the sample through the layout, infe
   CHECK(c->supervisor().mode == safety::AuvMode::kNominal);
 }
 
-TEST_CASE("auv controller: 100,000 ticks allocate nothing; the profiler saw every stage") {
+TEST_CASE("auv controller: 100,000 ticks allocate nothing - the profiler saw every stage") {
   auto c = MakeController(test::ScratchDir("auv_controller_alloc"));
   c->Arm();
   robot::AuvCommand cmd;
@@ -362,7 +362,7 @@ TEST_CASE("auv control loop: the transport reporting the peer lost e-stops at on
                         << c->supervisor().cause_ticks[5] << " ticks " << c->supervisor().ticks);
 }
 
-TEST_CASE("auv control loop: free-running clock; SIGTERM sends the safe command and ends the loop") {
+TEST_CASE("auv control loop: free-running clock - SIGTERM sends the safe command and ends the loop") {
   auto c = MakeController(test::ScratchDir("auv_loop_signal"));
   TestLink link;
   firmware::ClearLoopStop();

@@ -135,7 +135,7 @@ TEST_CASE("auv plant: near-neutral buoyancy with the depth loop keeps depth") {
   CHECK(std::abs(plant->State().yaw_rad - 1.0) < 1e-3);
 }
 
-TEST_CASE("auv plant: a new depth set-point is reached and held; Advance rounds to whole steps") {
+TEST_CASE("auv plant: a new depth set-point is reached and held - Advance rounds to whole steps") {
   AuvParams p = Params();
   p.physics_step_s = 0.02;
   p.control_period_s = 0.1;

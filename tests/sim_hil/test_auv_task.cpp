@@ -99,7 +99,7 @@ obstacles:
 
 }  // namespace
 
-TEST_CASE("auv task: all layouts and the IO layout load; sizes and hash come from the files") {
+TEST_CASE("auv task: all layouts and the IO layout load - sizes and hash come from the files") {
   for (const char* name : {"easy", "medium", "hard"}) {
     CAPTURE(name);
     const AuvTaskConfig c = Config(name);
@@ -261,7 +261,7 @@ TEST_CASE("auv task: the time limit truncates without terminating") {
   CHECK_FALSE(task.Step(stop, obs.data()).truncated);
 }
 
-TEST_CASE("auv task: same seed, same episode bit for bit; other seeds move start and obstacles") {
+TEST_CASE("auv task: same seed, same episode bit for bit - other seeds move start and obstacles") {
   const AuvTaskConfig c = Config("medium");
   AuvNavTask a = MakeTask(c);
   AuvNavTask b = MakeTask(c);

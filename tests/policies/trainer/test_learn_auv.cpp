@@ -15,7 +15,7 @@
 namespace pbppo::trainer {
 namespace {
 
-TEST_CASE("PPO learns auv-nav easy on a small budget; the frozen blob reaches targets") {
+TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches targets") {
   TrainConfig c;
   c.env = "auv-nav";
   c.layout = "easy";

@@ -73,7 +73,7 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   CHECK(r->final_return > -600);  // real progress, far above random
 }
 
-TEST_CASE("a bandit run writes the log, summary, blob and golden vectors; the runtime loads the blob") {
+TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the runtime loads the blob") {
   const std::string out = test::ScratchDir("trainer_files") + "/run";
   TrainConfig c = Small();
   c.schedule = ParseSchedule("pbppo", {0.1, 0.2, 0.3}).value();

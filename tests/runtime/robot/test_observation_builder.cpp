@@ -69,7 +69,7 @@ TEST_CASE("observation builder: an unknown signal is refused naming the element 
         std::string::npos);
 }
 
-TEST_CASE("action mapper: scale, offset, limits; non-finite elements flagged and taken as 0") {
+TEST_CASE("action mapper: scale, offset, limits - non-finite elements flagged and taken as 0") {
   const ActionMapper m = ActionMapper::Create(Layout());
   double cmd[2];
   float a[2] = {0.5f, -3.0f};

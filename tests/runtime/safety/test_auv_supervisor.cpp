@@ -44,7 +44,7 @@ AuvDecision Run(const AuvSupervisorConfig& c, const AuvSupervisorInput& in, AuvS
 
 }  // namespace
 
-TEST_CASE("auv supervisor: the default configuration validates; bad ones are refused naming the field") {
+TEST_CASE("auv supervisor: the default configuration validates - bad ones are refused naming the field") {
   char why[200];
   AuvSupervisorConfig c;
   CHECK(ValidateAuvSupervisorConfig(c, why, sizeof why));
@@ -92,7 +92,7 @@ TEST_CASE("auv supervisor: command limits and rate limits, counted per cause") {
   CHECK(s.mode == AuvMode::kNominal);
 }
 
-TEST_CASE("auv supervisor: a stale sample degrades, then stops; the reason names the age") {
+TEST_CASE("auv supervisor: a stale sample degrades, then stops - the reason names the age") {
   const AuvSupervisorConfig c;
   const AuvSensorSample sample = GoodSample();
   AuvSupervisorState s;
@@ -194,7 +194,7 @@ TEST_CASE("auv supervisor: the mode comes back down only by a reset while disarm
   CHECK(Run(c, in, s, 1).v_mps == doctest::Approx(0.1));
 }
 
-TEST_CASE("auv supervisor: random hostile inputs keep the command finite and within limits; no allocation") {
+TEST_CASE("auv supervisor: random hostile inputs keep the command finite and within limits - no allocation") {
   const AuvSupervisorConfig c;
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-10, 10);
