@@ -13,6 +13,7 @@ namespace pbppo::cli {
 struct TrainOptions {
   std::string env = "pendulum";
   std::string layout = "hard";
+  double exploring_starts = 0.0;
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";

@@ -64,6 +64,11 @@ std::uint32_t AuvNav::max_episode_steps() const noexcept {
   return static_cast<std::uint32_t>(tasks_[0].max_episode_steps());
 }
 
+void AuvNav::set_exploring_starts(double probability) noexcept {
+  exploring_starts_ = probability;
+  for (auto& t : tasks_) t.set_exploring_starts(probability);
+}
+
 void AuvNav::Reset(Rng& rng, std::span<float> observation) {
   current_ = tasks_.size() > 1 ? static_cast<std::size_t>(rng.Below(tasks_.size())) : 0;
   tasks_[current_].Reset(rng.Next(), observation.data());
@@ -85,13 +90,15 @@ std::unique_ptr<Env> AuvNav::Clone() const {
   // Create() succeeded for the same configurations when this instance was made.
   std::vector<sim::AuvNavTask> tasks;
   for (const auto& c : configs_) tasks.push_back(std::move(sim::AuvNavTask::Create(*c)).value());
-  return std::unique_ptr<Env>(new AuvNav(configs_, std::move(tasks), name_));
+  auto env = std::unique_ptr<AuvNav>(new AuvNav(configs_, std::move(tasks), name_));
+  env->set_exploring_starts(exploring_starts_);
+  return env;
 }
 
 EpisodeInfo AuvNav::episode_info() const noexcept {
   const sim::AuvEpisodeStats& s = tasks_[current_].stats();
   EpisodeInfo e;
-  e.available = true;
+  e.available = !s.exploring_start;
   e.success = s.success;
   e.failure = s.collided;
   e.goals = s.targets_reached;

@@ -37,6 +37,10 @@ class AuvNav final : public Env {
   std::unique_ptr<Env> Clone() const override;
   EpisodeInfo episode_info() const noexcept override;
 
+  // Training only: see sim::AuvNavTask::set_exploring_starts. Such episodes report no task success
+  // (episode_info().available is false): success counts only episodes from the layout's start.
+  void set_exploring_starts(double probability) noexcept;
+
   // The task of the current episode and its configuration.
   const sim::AuvNavTask& task() const noexcept { return tasks_[current_]; }
   const sim::AuvTaskConfig& config() const noexcept { return *configs_[current_]; }
@@ -48,6 +52,7 @@ class AuvNav final : public Env {
   std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs_;
   std::vector<sim::AuvNavTask> tasks_;
   std::size_t current_ = 0;
+  double exploring_starts_ = 0.0;
   std::string name_;
   std::array<float, 2> low_{-1.f, -1.f};
   std::array<float, 2> high_{1.f, 1.f};

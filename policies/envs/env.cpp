@@ -28,6 +28,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
   if (name == "auv-nav") {
     auto env = AuvNav::Make(dir, options.layout);
     if (!env) return std::move(env).error();
+    (*env)->set_exploring_starts(options.exploring_starts);
     return std::unique_ptr<Env>(std::move(env).value());
   }
   std::string known;

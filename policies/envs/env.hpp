@@ -65,6 +65,8 @@ struct EnvOptions {
   std::string models_dir;
   // Obstacle layout of tasks that have several (auv-nav: easy, medium, hard).
   std::string layout = "hard";
+  // auv-nav, training only: probability of an exploring start (sim::AuvNavTask::set_exploring_starts).
+  double exploring_starts = 0.0;
 };
 
 // The names MakeEnv() knows.

@@ -92,6 +92,7 @@ class Trainer {
   double FreezeCheck(const policy::PolicySpec& spec);
   Status WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name = "policy.blob");
   double best_return_ = -std::numeric_limits<double>::infinity();
+  double best_success_ = -1.0;  // -1: no task success known
   std::string CsvHeader() const;
   std::string CsvRow(const IterationStats& s) const;
   std::string Plots(const std::vector<IterationStats>& its);
@@ -136,6 +137,10 @@ Status TrainConfig::Validate() const {
   if (threads < 1 || threads > 256) return Invalid("--threads", std::to_string(threads) + " is not in [1, 256]");
   if (minibatch < 2) return Invalid("--minibatch", std::to_string(minibatch) + " is below 2");
   if (epochs < 1) return Invalid("--epochs", std::to_string(epochs) + " is not positive");
+  if (!(exploring_starts >= 0 && exploring_starts <= 1))
+    return Invalid("--exploring-starts", std::to_string(exploring_starts) + " is not in [0, 1]");
+  if (exploring_starts > 0 && env != "auv-nav")
+    return Invalid("--exploring-starts", "only auv-nav has exploring starts, not '" + env + "'");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");
   if (!(gamma > 0 && gamma <= 1)) return Invalid("--gamma", std::to_string(gamma) + " is not in (0, 1]");
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
@@ -660,11 +665,21 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
   auto last_checkpoint = Clock::now();
 
   for (int it = 0; it < iterations; ++it) {
-    // --keep-best: the parameters that collected the best last-100-episode return so far (these
-    // episodes were collected by this and the few previous iterations' policies).
-    if (c_.keep_best && last100_.size() >= 100 && mean100() > best_return_) {
-      best_return_ = mean100();
-      if (auto s = WriteCheckpoint(best_return_, env_steps, "best.blob"); !s) return s.error();
+    // --keep-best: the parameters that collected the best last-100-episode task success (or, for
+    // environments without one, return) so far (these episodes were collected by this and the few
+    // previous iterations' policies).
+    if (c_.keep_best && last100_.size() >= 100) {
+      double success = -1.0;
+      if (success100_.size() >= 100) {
+        success = 0.0;
+        for (int x : success100_) success += x;
+        success /= static_cast<double>(success100_.size());
+      }
+      if (success > best_success_ || (success == best_success_ && mean100() > best_return_)) {
+        best_success_ = success;
+        best_return_ = mean100();
+        if (auto s = WriteCheckpoint(best_return_, env_steps, "best.blob"); !s) return s.error();
+      }
     }
     IterationStats st;
     st.iteration = it;
@@ -780,6 +795,7 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     res.plots_note = c_.plots ? Plots(res.iterations) : "plots skipped: --no-plots";
     nlohmann::json j;
     j["env"] = proto_->name();
+    if (c_.exploring_starts > 0) j["exploring_starts"] = c_.exploring_starts;
     j["seed"] = c_.seed;
     j["schedule"] = c_.schedule.Describe();
     j["iterations"] = res.iterations.size();
@@ -818,6 +834,7 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   envs::EnvOptions eo;
   eo.models_dir = config.models_dir;
   eo.layout = config.layout;
+  eo.exploring_starts = config.exploring_starts;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

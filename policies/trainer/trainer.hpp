@@ -19,8 +19,9 @@ namespace pbppo::trainer {
 
 struct TrainConfig {
   std::string env = "pendulum";
-  std::string models_dir;       // empty: envs::DefaultModelsDir()
-  std::string layout = "hard";  // obstacle layout of environments that have several (auv-nav)
+  std::string models_dir;         // empty: envs::DefaultModelsDir()
+  std::string layout = "hard";    // obstacle layout of environments that have several (auv-nav)
+  double exploring_starts = 0.0;  // auv-nav: probability of an episode starting anywhere (training only)
   std::uint64_t seed = 1;
   std::uint64_t total_steps = 200000;  // training environment steps (evaluation steps are extra)
   int num_envs = 1;
@@ -30,7 +31,9 @@ struct TrainConfig {
   int epochs = 10;
   double learning_rate = 3e-4;
   bool anneal_lr = false;  // linear decay of the learning rate to 0 over the budget
-  bool keep_best = false;  // also write best.blob: the policy of the best last-100-episode return
+  // Also write best.blob: the policy of the best last-100-episode task success where the
+  // environment reports one (ties: the better return), otherwise of the best return.
+  bool keep_best = false;
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;

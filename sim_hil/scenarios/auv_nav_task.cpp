@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <numbers>
 
 #include "runtime/robot/auv_signals.hpp"
 #include "sim_hil/common/yaml_fields.hpp"
@@ -168,6 +169,26 @@ void AuvNavTask::PlaceRandomObstacles(Rng& rng) {
   }
 }
 
+void AuvNavTask::ExploringStart(Rng& rng, AuvPose& pose) {
+  const auto n = static_cast<std::uint64_t>(config_.layout.targets.size());
+  const int target = static_cast<int>(rng.Below(n));
+  const auto& t = config_.layout.targets[static_cast<std::size_t>(target)];
+  const Arena& a = world_.arena;
+  const double keep = config_.task.safe_distance_m + 1.0;
+  for (int attempt = 0; attempt < 256; ++attempt) {
+    const double x = rng.Uniform(a.x_min_m, a.x_max_m), y = rng.Uniform(a.y_min_m, a.y_max_m);
+    const double yaw = rng.Uniform(-std::numbers::pi, std::numbers::pi);
+    if (Clearance(world_, x, y) < keep || std::hypot(x - t[0], y - t[1]) < config_.task.target_radius_m + 3.0) continue;
+    pose.x_m = x;
+    pose.y_m = y;
+    pose.yaw_rad = yaw;
+    target_ = target;
+    stats_.exploring_start = true;
+    return;
+  }
+  // No free spot found (a crowded layout): the ordinary start drawn above stands.
+}
+
 void AuvNavTask::Measure() {
   const AuvState& s = plant_.State();
   SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data());
@@ -220,10 +241,13 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
     pose.yaw_rad = rng.Uniform(s.yaw_rad[0], s.yaw_rad[1]);
     if (Clearance(world_, pose.x_m, pose.y_m) >= config_.task.safe_distance_m + 0.5) break;
   }
+  target_ = 0;
+  if (exploring_starts_ > 0.0 && rng.Uniform(0.0, 1.0) < exploring_starts_) ExploringStart(rng, pose);
   physics_steps_ += plant_.physics_steps();
   plant_.Reset(pose);
   plant_.SetCommand(0.0, 0.0);
-  target_ = 0;
+  stats_.first_target = target_;
+  stats_.targets_reached = target_;
   v_cmd_ = w_cmd_ = 0.0;
   done_ = terminated_ = truncated_ = false;
   Measure();

@@ -84,6 +84,8 @@ struct AuvEpisodeStats {
   double min_clearance_m = 0.0;
   long nonfinite_actions = 0;  // action elements replaced by 0 because they were NaN or inf
   int random_obstacles = 0;
+  int first_target = 0;          // index of the target the episode started with
+  bool exploring_start = false;  // started anywhere in the arena (training only, set_exploring_starts)
 };
 
 class AuvNavTask {
@@ -101,6 +103,12 @@ class AuvNavTask {
   // New episode from `seed`: random start pose in the start region, random extra obstacles.
   // Writes the first observation (observation_size() floats).
   void Reset(std::uint64_t seed, float* obs);
+  // Training only: with this probability an episode starts anywhere in the free part of the
+  // arena (clearance >= l_safe + 1 m, away from its first target), with a random heading and a
+  // random current target (the earlier ones count as visited), instead of in the layout's start
+  // region. Exploring starts give later legs as much experience as the first. 0 (the default,
+  // and what evaluation and the HIL use) leaves Reset's random sequence exactly as without it.
+  void set_exploring_starts(double probability) noexcept { exploring_starts_ = probability; }
   // One control period with action [v, w] in policy units (mapped through the IO layout).
   // After the episode has ended, returns zero reward with the same end flags until Reset.
   AuvStepResult Step(const float* action, float* obs);
@@ -130,6 +138,7 @@ class AuvNavTask {
  private:
   AuvNavTask(const AuvTaskConfig& config, AuvPlant plant);
   void PlaceRandomObstacles(Rng& rng);
+  void ExploringStart(Rng& rng, AuvPose& pose);
   void Measure();  // sonar, l_AT, phi, clearance from the plant's state
   void WriteObservation(bool episode_end, bool first, float* obs);
 
@@ -150,6 +159,7 @@ class AuvNavTask {
   double l_at_ = 0.0, phi_at_ = 0.0, clearance_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;
+  double exploring_starts_ = 0.0;
   AuvEpisodeStats stats_;
 };
 

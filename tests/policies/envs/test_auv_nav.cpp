@@ -2,6 +2,7 @@
 // action map, layouts by name, mixed layouts, clones and episode information.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <string>
@@ -55,7 +56,7 @@ TEST_CASE("actions in policy units are mapped through the layout to speed comman
   CHECK(obs[20] > 0.3f);
 }
 
-TEST_CASE("same rng gives the same episode; clones are independent instances") {
+TEST_CASE("same rng gives the same episode - clones are independent instances") {
   auto a = Make("medium");
   auto b = a->Clone();
   Rng ra(11), rb(11);
@@ -78,7 +79,7 @@ TEST_CASE("same rng gives the same episode; clones are independent instances") {
   CHECK(ret_a == ret_b);
 }
 
-TEST_CASE("driving into an obstacle ends the episode as a collision; the info says so") {
+TEST_CASE("driving into an obstacle ends the episode as a collision - the info says so") {
   auto env = Make("easy");
   Rng rng(2);
   std::vector<float> obs(env->observation_size());
@@ -98,7 +99,7 @@ TEST_CASE("driving into an obstacle ends the episode as a collision; the info sa
   CHECK(obs[19] == 1.f);  // chi, the episode-end flag
 }
 
-TEST_CASE("layout 'mixed' draws every layout; unknown layouts are refused by name") {
+TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by name") {
   auto env = Make("mixed");
   auto* auv = dynamic_cast<AuvNav*>(env.get());
   Rng rng(9);
@@ -114,6 +115,52 @@ TEST_CASE("layout 'mixed' draws every layout; unknown layouts are refused by nam
   auto bad = MakeEnv("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("layout 'labyrinth' unknown") != std::string::npos);
+}
+
+TEST_CASE("exploring starts: anywhere free, any current target - success counted only from the layout's start") {
+  EnvOptions o;
+  o.layout = "hard";
+  o.exploring_starts = 1.0;
+  auto made = MakeEnv("auv-nav", o);
+  REQUIRE(made.ok());
+  auto env = std::move(made).value();
+  auto clone = env->Clone();  // clones keep the setting
+  auto* auv = dynamic_cast<AuvNav*>(clone.get());
+  REQUIRE(auv != nullptr);
+  Rng rng(21);
+  std::vector<float> obs(clone->observation_size());
+  std::set<int> targets;
+  double x_min = 1e9, x_max = -1e9, y_min = 1e9, y_max = -1e9;
+  for (int i = 0; i < 60; ++i) {
+    clone->Reset(rng, obs);
+    const auto& t = auv->task();
+    CHECK(t.stats().exploring_start);
+    CHECK_FALSE(clone->episode_info().available);
+    CHECK(t.stats().targets_reached == t.target_index());
+    targets.insert(t.target_index());
+    x_min = std::min(x_min, t.vehicle().x_m);
+    x_max = std::max(x_max, t.vehicle().x_m);
+    y_min = std::min(y_min, t.vehicle().y_m);
+    y_max = std::max(y_max, t.vehicle().y_m);
+    // Free space: clear of every obstacle by more than l_safe.
+    CHECK(t.stats().min_clearance_m >= auv->config().task.safe_distance_m + 1.0 - 1e-9);
+  }
+  CHECK(targets.size() == 3);
+  // All three corridors of the hard layout (y 0-14, 16-24, 26-40) and both halves in x.
+  CHECK(y_min < 14.0);
+  CHECK(y_max > 26.0);
+  CHECK(x_min < 15.0);
+  CHECK(x_max > 25.0);
+
+  // The default (0) keeps the layout's start region and the random sequence of before.
+  auto plain = Make("hard");
+  auto* p = dynamic_cast<AuvNav*>(plain.get());
+  Rng r1(21);
+  plain->Reset(r1, obs);
+  CHECK_FALSE(p->task().stats().exploring_start);
+  CHECK(p->task().target_index() == 0);
+  CHECK(p->task().vehicle().x_m <= 5.0);
+  CHECK(plain->episode_info().available);
 }
 
 }  // namespace
