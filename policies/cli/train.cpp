@@ -7,7 +7,9 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -23,10 +25,29 @@ namespace pbppo::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
+std::atomic<std::int64_t> g_first_sigint_ns{0};
+static_assert(std::atomic<std::int64_t>::is_always_lock_free, "used from a signal handler");
 
+std::int64_t MonotonicNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);  // async-signal-safe
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+// The first SIGINT asks for a clean stop (log, summary, checkpoint). A second one ends the process at
+// once, but only when it comes more than a second later: `timeout -s INT` and a terminal's job control
+// can deliver the same interrupt twice (to the process and to its group), which must not kill the run.
 extern "C" void OnSigint(int) {
-  g_stop.store(true);
-  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends the process at once
+  const std::int64_t now = MonotonicNs();
+  const std::int64_t first = g_first_sigint_ns.load();
+  if (first == 0) {
+    g_first_sigint_ns.store(now);
+    g_stop.store(true);
+    return;
+  }
+  if (now - first < 1'000'000'000) return;
+  std::signal(SIGINT, SIG_DFL);
+  std::raise(SIGINT);
 }
 
 int Fail(const std::string& msg, int rc = 2) {
@@ -177,6 +198,7 @@ int Train(const TrainOptions& o) {
   }
 
   g_stop.store(false);
+  g_first_sigint_ns.store(0);
   c.stop = &g_stop;
   auto previous = std::signal(SIGINT, OnSigint);
   auto last_print = std::chrono::steady_clock::now() - std::chrono::seconds(1);

@@ -109,18 +109,30 @@ expect_in("${ERR}" "--out is required")
 run(1 ${PBPPO} train --steps 2048 --rollout 1024 --out ${WORK}/run1/summary.json/x --quiet)
 expect_in("${ERR}" "--out")
 
-# Ctrl-C: a clean stop with the log, the summary and a checkpoint blob.
-find_program(TIMEOUT timeout)
-if(TIMEOUT)
-  run(130 ${TIMEOUT} --preserve-status -s INT 2 ${PBPPO} train --steps 1e9 --no-plots --quiet --out ${WORK}/int)
-  expect_in("${ERR}" "interrupted")
-  file(READ ${WORK}/int/summary.json summary)
-  string(JSON stopped GET "${summary}" interrupted)
-  if(NOT stopped)
-    message(FATAL_ERROR "summary does not say interrupted")
-  endif()
-  run(0 ${PBPPO} eval ${WORK}/int/policy.blob --episodes 2)
+# Ctrl-C: a clean stop with the log, the summary and a checkpoint blob. The interrupt is delivered twice
+# within a second, as `timeout -s INT` can (to the process, then to its group): that is still one Ctrl-C.
+# (auv-nav with long rollouts, so that the second comes while the run is still finishing its iteration.)
+file(WRITE ${WORK}/int.sh [=[
+"$1" train --env auv-nav --envs 4 --rollout 4096 --steps 1e9 --no-plots --quiet --out "$2" 2> "$2.err" &
+p=$!
+while ! grep -q 'pbppo train:' "$2.err" 2> /dev/null; do sleep 0.1; done
+sleep 1
+kill -INT $p
+sleep 0.1
+kill -INT $p
+wait $p
+rc=$?
+cat "$2.err" >&2
+exit $rc
+]=])
+run(130 sh ${WORK}/int.sh ${PBPPO} ${WORK}/int)
+expect_in("${ERR}" "interrupted")
+file(READ ${WORK}/int/summary.json summary)
+string(JSON stopped GET "${summary}" interrupted)
+if(NOT stopped)
+  message(FATAL_ERROR "summary does not say interrupted")
 endif()
+run(0 ${PBPPO} eval ${WORK}/int/policy.blob --env auv-nav --episodes 2)
 # auv-nav: a tiny run, evaluation with the task's figures, the trajectory plot and CSV, bad inputs.
 run(0 ${PBPPO} train --env auv-nav --layout medium --schedule pbppo --arms 0.1,0.3 --feedback rollout --steps 4096
     --envs 4 --rollout 512 --minibatch 256 --epochs 1 --no-plots --quiet --out ${WORK}/auv)
