@@ -6,6 +6,7 @@
 // cost of an empty timed region is subtracted, and the distribution over N calls is reported
 // with the allocations per call and the weight-streaming bound: parameter bytes / 64 bytes per
 // cycle at the core clock measured here.
+#include <immintrin.h>
 #include <x86intrin.h>
 
 #include <algorithm>
@@ -91,6 +92,33 @@ __attribute__((noinline)) float StreamOnce(const float* p, std::size_t n) {
   for (float a : acc) s += a;
   return s;
 }
+
+#if defined(__x86_64__)
+// The same read with eight AVX-512 registers and aligned 64-byte loads (n a multiple of 32):
+// on AVX-512 machines the fastest plain read found here, about 10 % faster than the loop above.
+__attribute__((noinline, target("avx512f"))) float StreamOnceAvx512(const float* p, std::size_t n) {
+  __m512 a0 = _mm512_setzero_ps(), a1 = a0, a2 = a0, a3 = a0, a4 = a0, a5 = a0, a6 = a0, a7 = a0;
+  std::size_t i = 0;
+  for (; i + 128 <= n; i += 128) {
+    a0 = _mm512_add_ps(a0, _mm512_load_ps(p + i));
+    a1 = _mm512_add_ps(a1, _mm512_load_ps(p + i + 16));
+    a2 = _mm512_add_ps(a2, _mm512_load_ps(p + i + 32));
+    a3 = _mm512_add_ps(a3, _mm512_load_ps(p + i + 48));
+    a4 = _mm512_add_ps(a4, _mm512_load_ps(p + i + 64));
+    a5 = _mm512_add_ps(a5, _mm512_load_ps(p + i + 80));
+    a6 = _mm512_add_ps(a6, _mm512_load_ps(p + i + 96));
+    a7 = _mm512_add_ps(a7, _mm512_load_ps(p + i + 112));
+  }
+  for (; i + 16 <= n; i += 16) a0 = _mm512_add_ps(a0, _mm512_load_ps(p + i));
+  const __m512 s = _mm512_add_ps(_mm512_add_ps(_mm512_add_ps(a0, a1), _mm512_add_ps(a2, a3)),
+                                 _mm512_add_ps(_mm512_add_ps(a4, a5), _mm512_add_ps(a6, a7)));
+  alignas(64) float lanes[16];
+  _mm512_store_ps(lanes, s);
+  float sum = 0;
+  for (float v : lanes) sum += v;
+  return sum;
+}
+#endif
 
 struct Stats {
   double median, p99, p999, max, mean;
@@ -193,15 +221,24 @@ int main(int argc, char** argv) {
     pbppo::AlignedBlock block(n_floats * sizeof(float));
     auto* floats = reinterpret_cast<float*>(block.data());
     for (std::size_t i = 0; i < n_floats; ++i) floats[i] = 1e-3f;
-    std::vector<double> read_ticks(100000);
-    volatile float sink = 0;
-    for (int w = 0; w < 5000; ++w) sink = sink + StreamOnce(floats, n_floats);
-    for (double& t : read_ticks) {
-      const std::uint64_t t0 = Stamp();
-      sink = sink + StreamOnce(floats, n_floats);
-      t = static_cast<double>(Stamp() - t0) - overhead_ticks;
+    // The read floor: the faster (by median) of the plain loops this machine can run.
+    std::vector<float (*)(const float*, std::size_t)> readers = {StreamOnce};
+#if defined(__x86_64__)
+    if (__builtin_cpu_supports("avx512f")) readers.push_back(StreamOnceAvx512);
+#endif
+    Stats r{};
+    for (auto* read : readers) {
+      std::vector<double> read_ticks(100000);
+      volatile float sink = 0;
+      for (int w = 0; w < 5000; ++w) sink = sink + read(floats, n_floats);
+      for (double& t : read_ticks) {
+        const std::uint64_t t0 = Stamp();
+        sink = sink + read(floats, n_floats);
+        t = static_cast<double>(Stamp() - t0) - overhead_ticks;
+      }
+      const Stats rs = Summarise(read_ticks);
+      if (read == readers.front() || rs.median < r.median) r = rs;
     }
-    const Stats r = Summarise(read_ticks);
     for (Kernel k : kernels) {
       auto model = PolicyModel::FromBlob(*bytes, {.kernel = k});
       if (!model) {
@@ -239,7 +276,10 @@ int main(int argc, char** argv) {
       std::printf("%-5s %-9s %-22s %9.3f %9.3f %9.3f %9.2f %9.3f %8.2g %8.3f %8.2f %8.3f %6.2f%s\n", shape.name,
                   ToString(k), layers.c_str(), s.median * us, s.p99 * us, s.p999 * us, s.max * us, s.mean * us,
                   static_cast<double>(allocations) / static_cast<double>(calls), bound_us, s.median * us / bound_us,
-                  r.median * us, shape.target_us, meets ? "" : " (missed)");
+                  r.median * us, shape.target_us,
+                  meets                             ? ""
+                  : shape.target_us < r.median * us ? " (missed: target below the read floor)"
+                                                    : " (missed)");
       char row[512];
       std::snprintf(
           row, sizeof row,
@@ -254,7 +294,10 @@ int main(int argc, char** argv) {
   }
   json += "\n  ]\n}\n";
   std::printf("\nbound: parameter bytes / (64 bytes per cycle x core clock); x bound = median / bound\n");
-  std::printf("read: median time to merely read as many bytes as the parameters, timed the same way\n");
+  std::printf(
+      "read: median time to merely read as many bytes as the parameters, timed the same way (the faster of a\n"
+      "      compiler-vectorised loop and an 8-register AVX-512 loop): a forward pass whose parameters stream from\n"
+      "      L2 cannot beat it\n");
   if (!json_path.empty()) {
     if (auto st = WriteFileAtomic(json_path, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()}); !st) {
       std::fprintf(stderr, "%s\n", st.error().message.c_str());
