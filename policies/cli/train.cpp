@@ -128,6 +128,9 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_flag("--no-plots", o.no_plots, "Do not run gnuplot");
   s.add_option("--checkpoint-seconds", o.checkpoint_seconds, "Seconds between checkpoint blobs");
   s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
+  s.add_option("--init", o.init,
+               "Start from this blob's policy and observation normaliser (same IO layout, --hidden and "
+               "--activation; value network and log-std start fresh), e.g. to continue on a harder layout");
   s.add_flag("--quiet", o.quiet, "No progress line");
 }
 
@@ -156,6 +159,7 @@ int Train(const TrainOptions& o) {
   c.clip_vf = o.clip_vf;
   c.log_std_init = o.log_std_init;
   c.normalize_observations = o.normalize_obs;
+  c.init_blob = o.init;
   c.scale_rewards = o.scale_rewards;
   c.normalize_advantages = !o.no_adv_norm;
   c.plots = !o.no_plots;

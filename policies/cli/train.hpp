@@ -47,6 +47,7 @@ struct TrainOptions {
   bool no_plots = false;
   double checkpoint_seconds = 30;
   std::string models;
+  std::string init;  // --init BLOB
   bool quiet = false;
 };
 void AddTrainOptions(CLI::App& sub, TrainOptions& o);

@@ -81,6 +81,7 @@ class Trainer {
   };
 
   void Setup();
+  Status LoadInit();
   void NormalizeInto(const float* raw, float* out) const;
   void FreezeNormalizer();
   void CollectRollout();
@@ -153,6 +154,10 @@ Status TrainConfig::Validate() const {
   if (schedule.arms.empty()) return Invalid("--arms", "no clip bound");
   for (double a : schedule.arms)
     if (!(a >= 0 && a <= 1)) return Invalid("--arms", "clip bound " + std::to_string(a) + " is outside [0, 1]");
+  if (!init_blob.empty() && normalize_observations)
+    return Invalid("--init", "'" + init_blob +
+                                 "' brings its frozen observation normaliser; --normalize-obs would re-learn it "
+                                 "under the blob's weights (leave it off)");
   if (schedule.eval_episodes < 1)
     return Invalid("--eval-episodes", std::to_string(schedule.eval_episodes) + " is below 1");
   return {};
@@ -219,6 +224,58 @@ void Trainer::Setup() {
   last_values_.assign(static_cast<std::size_t>(N_), 0.f);
   term_.assign(static_cast<std::size_t>(B), 0);
   trunc_.assign(static_cast<std::size_t>(B), 0);
+}
+
+Status Trainer::LoadInit() {
+  auto blob = policy::ReadBlobFile(c_.init_blob);
+  if (!blob) return MakeError(blob.error().code, "--init: " + blob.error().message);
+  const policy::PolicySpec& s = *blob;
+  const robot::IoLayout& layout = proto_->layout();
+  if (s.io_layout_hash != layout.Hash()) {
+    const std::vector<std::string> names = layout.ObservationNames();
+    std::string diff =
+        "input count " + std::to_string(s.observation_names.size()) + " vs " + std::to_string(names.size());
+    for (std::size_t i = 0; i < std::min(names.size(), s.observation_names.size()); ++i) {
+      if (names[i] != s.observation_names[i]) {
+        diff = "input " + std::to_string(i) + " is '" + s.observation_names[i] + "' in the blob, '" + names[i] +
+               "' in the layout";
+        break;
+      }
+    }
+    if (s.observation_names.size() == names.size() && diff.rfind("input count", 0) == 0)
+      diff = "same names, other scales, offsets, clips or actions";
+    char hashes[96];
+    std::snprintf(hashes, sizeof hashes, "IO layout hash 0x%016llx, %s's is 0x%016llx",
+                  static_cast<unsigned long long>(s.io_layout_hash), proto_->name().c_str(),
+                  static_cast<unsigned long long>(layout.Hash()));
+    return Invalid("--init", "'" + c_.init_blob + "' has " + hashes + " (" + diff + ")");
+  }
+  if (s.layers.size() != pol_.mean.layers())
+    return Invalid("--init", "'" + c_.init_blob + "' has " + std::to_string(s.layers.size()) +
+                                 " layers, --hidden gives " + std::to_string(pol_.mean.layers()));
+  for (std::size_t l = 0; l < s.layers.size(); ++l) {
+    const policy::DenseLayer& L = s.layers[l];
+    const std::string where = "'" + c_.init_blob + "' layer " + std::to_string(l) + " ";
+    if (static_cast<int>(L.in) != pol_.mean.in(l) || static_cast<int>(L.out) != pol_.mean.out(l))
+      return Invalid("--init", where + "is " + std::to_string(L.in) + "x" + std::to_string(L.out) +
+                                   ", --hidden gives " + std::to_string(pol_.mean.in(l)) + "x" +
+                                   std::to_string(pol_.mean.out(l)));
+    if (L.activation != pol_.mean.activation(l))
+      return Invalid("--init", where + "has activation " + policy::ToString(L.activation) + ", the trainer " +
+                                   policy::ToString(pol_.mean.activation(l)) + " (--activation)");
+  }
+  for (std::size_t l = 0; l < s.layers.size(); ++l) {
+    const policy::DenseLayer& L = s.layers[l];
+    auto W = pol_.mean.W(pp_.data(), l);
+    for (std::uint32_t o = 0; o < L.out; ++o)
+      for (std::uint32_t i = 0; i < L.in; ++i) W(o, i) = L.weight[o * L.in + i];
+    auto b = pol_.mean.b(pp_.data(), l);
+    for (std::uint32_t o = 0; o < L.out; ++o) b[o] = L.bias[o];
+  }
+  obs_mean_ = s.obs_mean;
+  obs_inv_std_ = s.obs_inv_std;
+  obs_clip_ = s.obs_clip;
+  return {};
 }
 
 void Trainer::NormalizeInto(const float* raw, float* out) const {
@@ -623,6 +680,9 @@ Status Trainer::WriteCheckpoint(double final_return, std::uint64_t env_steps, co
 
 Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& progress) {
   Setup();
+  if (!c_.init_blob.empty()) {
+    if (auto st = LoadInit(); !st) return st.error();
+  }
   TrainResult res;
   const auto t0 = Clock::now();
   std::ofstream csv;
@@ -797,6 +857,7 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     j["env"] = proto_->name();
     if (c_.exploring_starts > 0) j["exploring_starts"] = c_.exploring_starts;
     j["seed"] = c_.seed;
+    if (!c_.init_blob.empty()) j["init"] = c_.init_blob;
     j["schedule"] = c_.schedule.Describe();
     j["iterations"] = res.iterations.size();
     j["env_steps"] = env_steps;

@@ -47,6 +47,9 @@ struct TrainConfig {
   double log_std_init = 0.0;
   bool normalize_observations = false;
   bool scale_rewards = false;
+  // Warm start: the policy network and observation normaliser of this blob (same IO layout,
+  // widths and activation; the value network and log-std start fresh). Empty: orthogonal init.
+  std::string init_blob;
   ScheduleConfig schedule = [] {
     ScheduleConfig c;
     c.mode = ScheduleMode::kFixed;

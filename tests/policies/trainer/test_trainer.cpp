@@ -2,6 +2,7 @@
 // it writes (log, summary, blob + golden vectors that the runtime loads), and its errors.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -57,7 +58,8 @@ TEST_CASE("same seed and thread count give a bit-identical run") {
   }
 }
 
-TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)") {
+// rl-zoo's Pendulum settings on a small budget.
+TrainConfig RlZoo() {
   TrainConfig c;
   c.num_envs = 4;
   c.rollout_steps = 1024;
@@ -65,6 +67,11 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   c.learning_rate = 1e-3;
   c.total_steps = 61440;
   c.seed = 1;
+  return c;
+}
+
+TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)") {
+  TrainConfig c = RlZoo();
   auto r = Train(c);
   REQUIRE(r.ok());
   const double first = r->iterations.front().train_return;
@@ -160,6 +167,67 @@ TEST_CASE("a stop request ends the run cleanly with a blob") {
   CHECK(r->interrupted);
   CHECK(r->iterations.size() == 1);
   CHECK(policy::ReadBlobFile(out + "/policy.blob").ok());
+}
+
+TEST_CASE("--init starts from a trained blob's policy and normaliser; mismatches are refused") {
+  const std::string dir = test::ScratchDir("trainer_init");
+  // A learned Pendulum policy (rl-zoo settings as above), with a running normaliser.
+  TrainConfig a = RlZoo();
+  a.normalize_observations = true;
+  auto ra = Train(a);
+  REQUIRE(ra.ok());
+  MESSAGE("trained last-100 return " << ra->final_return);
+  REQUIRE(ra->final_return > -750);
+  const std::string blob = dir + "/a.blob";
+  REQUIRE(policy::WriteBlobFile(blob, ra->spec).ok());
+
+  // Warm start with a learning rate too small to move anything: the first rollout is already
+  // the learned policy's (a random one scores below -900), and the frozen result is the blob.
+  TrainConfig b = Small();
+  b.seed = 9;
+  b.learning_rate = 1e-12;
+  b.total_steps = 1024;
+  b.init_blob = blob;
+  b.log_std_init = -2.0;
+  auto rb = Train(b);
+  REQUIRE(rb.ok());
+  MESSAGE("warm-started first rollout return " << rb->iterations.front().train_return);
+  CHECK(rb->iterations.front().train_return > -700);
+  REQUIRE(rb->spec.layers.size() == ra->spec.layers.size());
+  float worst = 0;
+  for (std::size_t l = 0; l < ra->spec.layers.size(); ++l) {
+    for (std::size_t i = 0; i < ra->spec.layers[l].weight.size(); ++i)
+      worst = std::max(worst, std::abs(rb->spec.layers[l].weight[i] - ra->spec.layers[l].weight[i]));
+    for (std::size_t i = 0; i < ra->spec.layers[l].bias.size(); ++i)
+      worst = std::max(worst, std::abs(rb->spec.layers[l].bias[i] - ra->spec.layers[l].bias[i]));
+  }
+  CHECK(worst < 1e-6f);
+  CHECK(rb->spec.obs_mean == ra->spec.obs_mean);
+  CHECK(rb->spec.obs_inv_std == ra->spec.obs_inv_std);
+
+  auto error_of = [&](TrainConfig c) {
+    auto r = Train(c);
+    REQUIRE_FALSE(r.ok());
+    return r.error().message;
+  };
+  TrainConfig c = b;
+  c.policy_hidden = {32};
+  CHECK(error_of(c).find("--init: '" + blob + "' has 3 layers, --hidden gives 2") != std::string::npos);
+  c = b;
+  c.policy_hidden = {64, 32};
+  CHECK(error_of(c).find("layer 1 is 64x64, --hidden gives 64x32") != std::string::npos);
+  c = b;
+  c.activation = policy::Activation::kElu;
+  CHECK(error_of(c).find("layer 0 has activation tanh") != std::string::npos);
+  c = b;
+  c.normalize_observations = true;
+  CHECK(error_of(c).find("--init:") != std::string::npos);
+  c = b;
+  c.init_blob = dir + "/missing.blob";
+  CHECK(error_of(c).find("--init: " + dir + "/missing.blob") != std::string::npos);
+  c = b;
+  c.init_blob = test::SourcePath("policies/frozen/auv_nav/auv_nav.blob");
+  CHECK(error_of(c).find("IO layout hash") != std::string::npos);
 }
 
 }  // namespace
