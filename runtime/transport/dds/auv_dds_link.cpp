@@ -225,6 +225,7 @@ fdds::DataWriterQos WriterQos(std::int32_t depth) {
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = depth;
   q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
+  q.data_sharing().off();  // see ReaderQos
   return q;
 }
 
@@ -234,6 +235,13 @@ fdds::DataReaderQos ReaderQos(std::int32_t depth) {
   q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = depth;
+  // No data-sharing (shared-memory delivery between participants on one host): Fast DDS 2.9's
+  // DataSharingListener can spin forever on a sample it rejects, and deleting the reader then
+  // hangs joining that thread (seen here: a test process at 100 % CPU in
+  // DataSharingListener::process_new_data while ~DataReaderImpl waited; fixed upstream in
+  // eProsima/Fast-DDS#6490, not in Debian's 2.9). Samples take the loopback UDP transport of the
+  // profile, like between machines.
+  q.data_sharing().off();
   return q;
 }
 
