@@ -169,7 +169,7 @@ TEST_CASE("a stop request ends the run cleanly with a blob") {
   CHECK(policy::ReadBlobFile(out + "/policy.blob").ok());
 }
 
-TEST_CASE("--init starts from a trained blob's policy and normaliser; mismatches are refused") {
+TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches are refused") {
   const std::string dir = test::ScratchDir("trainer_init");
   // A learned Pendulum policy (rl-zoo settings as above), with a running normaliser.
   TrainConfig a = RlZoo();
