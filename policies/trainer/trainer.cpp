@@ -22,6 +22,7 @@
 #include "policies/trainer/worker_pool.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
+#include "runtime/robot/io_layout.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -230,26 +231,8 @@ Status Trainer::LoadInit() {
   auto blob = policy::ReadBlobFile(c_.init_blob);
   if (!blob) return MakeError(blob.error().code, "--init: " + blob.error().message);
   const policy::PolicySpec& s = *blob;
-  const robot::IoLayout& layout = proto_->layout();
-  if (s.io_layout_hash != layout.Hash()) {
-    const std::vector<std::string> names = layout.ObservationNames();
-    std::string diff =
-        "input count " + std::to_string(s.observation_names.size()) + " vs " + std::to_string(names.size());
-    for (std::size_t i = 0; i < std::min(names.size(), s.observation_names.size()); ++i) {
-      if (names[i] != s.observation_names[i]) {
-        diff = "input " + std::to_string(i) + " is '" + s.observation_names[i] + "' in the blob, '" + names[i] +
-               "' in the layout";
-        break;
-      }
-    }
-    if (s.observation_names.size() == names.size() && diff.rfind("input count", 0) == 0)
-      diff = "same names, other scales, offsets, clips or actions";
-    char hashes[96];
-    std::snprintf(hashes, sizeof hashes, "IO layout hash 0x%016llx, %s's is 0x%016llx",
-                  static_cast<unsigned long long>(s.io_layout_hash), proto_->name().c_str(),
-                  static_cast<unsigned long long>(layout.Hash()));
-    return Invalid("--init", "'" + c_.init_blob + "' has " + hashes + " (" + diff + ")");
-  }
+  if (auto st = robot::CheckPolicyMatchesLayout(s, proto_->layout()); !st)
+    return Invalid("--init", "'" + c_.init_blob + "': " + st.error().message);
   if (s.layers.size() != pol_.mean.layers())
     return Invalid("--init", "'" + c_.init_blob + "' has " + std::to_string(s.layers.size()) +
                                  " layers, --hidden gives " + std::to_string(pol_.mean.layers()));
