@@ -44,8 +44,13 @@ double Sane(double v, double lo, double hi) noexcept {
   return std::isfinite(v) ? std::clamp(v, lo, hi) : 0.0;
 }
 
+// One rate-limited step from `from` towards `to`. The result always lies between the two (so
+// inside any limits both respect) and is `to` itself once within reach: `from + (to - from)`
+// can round past `to` (from -7.97 towards 0.1 it gives 0.10000000000000053).
 double Toward(double from, double to, double step) noexcept {
-  return from + std::clamp(to - from, -step, step);
+  if (to > from) return std::min(to, from + step);
+  if (to < from) return std::max(to, from - step);
+  return to;
 }
 
 bool Finite(double v) noexcept {

@@ -92,6 +92,28 @@ TEST_CASE("auv supervisor: command limits and rate limits, counted per cause") {
   CHECK(s.mode == AuvMode::kNominal);
 }
 
+TEST_CASE("auv supervisor: a rate step that reaches the limit lands on it exactly, never an ulp past it") {
+  // Found by fuzz_run.auv_supervisor: -7.97 + (0.1 - -7.97) is 0.10000000000000053 in doubles.
+  AuvSupervisorConfig c;
+  c.v_min_mps = -8.0;
+  c.v_max_mps = 0.1;
+  c.degraded_v_max_mps = 0.05;
+  c.dv_max_mps = c.stop_dv_mps = 10.0;
+  char why[200];
+  REQUIRE(ValidateAuvSupervisorConfig(c, why, sizeof why));
+  const AuvSensorSample sample = GoodSample();
+  AuvSupervisorState s;
+  s.v_mps = -7.97;
+  const AuvSupervisorInput in{.v_mps = 5.0, .w_radps = 0.0, .sample = &sample};
+  const AuvDecision d = SuperviseAuv(c, in, s);
+  CHECK(d.v_mps == 0.1);
+  CHECK((d.causes & kAuvCauseCommandLimit) != 0);
+  CHECK((d.causes & kAuvCauseRateLimit) == 0);  // within one step: not rate limited
+  s.v_mps = 0.1;
+  const AuvSupervisorInput back{.v_mps = -9.0, .w_radps = 0.0, .sample = &sample};
+  CHECK(SuperviseAuv(c, back, s).v_mps == -8.0);
+}
+
 TEST_CASE("auv supervisor: a stale sample degrades, then stops - the reason names the age") {
   const AuvSupervisorConfig c;
   const AuvSensorSample sample = GoodSample();
