@@ -39,7 +39,7 @@ stage "tests: ThreadSanitizer"
 ctest --preset tsan -j "$jobs" -L unit
 
 stage "libFuzzer build (preset fuzz, clang-19), corpus replay and a short fuzzing run"
-cmake --preset fuzz -DPBPPO_FUZZ_SECONDS=30 >/dev/null
+cmake --preset fuzz >/dev/null
 targets=()
 for corpus in tests/fuzz/corpus/*/; do
   name=$(basename "$corpus")
