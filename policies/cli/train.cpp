@@ -94,6 +94,10 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--exploring-starts", o.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
                "target (success is counted only from the layout's start)");
+  s.add_option(
+      "--progress", o.progress,
+      "auv-nav: the reward's progress term: euclidean (the paper: straight-line distance and bearing to "
+      "the target) or geodesic (shortest path around obstacles); default: models/auv/auv.yaml's task.progress");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
@@ -140,6 +144,7 @@ int Train(const TrainOptions& o) {
   c.models_dir = o.models;
   c.layout = o.layout;
   c.exploring_starts = o.exploring_starts;
+  c.progress = o.progress;
   if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
   c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
   c.seed = o.seed;
@@ -198,6 +203,7 @@ int Train(const TrainOptions& o) {
     eo.models_dir = c.models_dir;
     eo.layout = c.layout;
     eo.exploring_starts = c.exploring_starts;
+    eo.progress = c.progress;
     if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
   }
 

@@ -14,6 +14,7 @@ struct TrainOptions {
   std::string env = "pendulum";
   std::string layout = "hard";
   double exploring_starts = 0.0;
+  std::string progress;
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";

@@ -19,7 +19,9 @@ namespace pbppo::envs {
 class AuvNav final : public Env {
  public:
   // `layout_name`: easy, medium or hard (models/<dir>/auv/layouts/<name>.yaml), or mixed.
-  static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name);
+  // progress: "euclidean" or "geodesic" replaces auv.yaml's task.progress; empty keeps it.
+  static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name,
+                                              const std::string& progress = "");
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);

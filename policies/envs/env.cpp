@@ -19,6 +19,9 @@ std::string DefaultModelsDir() {
 Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options) {
   const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
   if (name == "pendulum") {
+    if (!options.progress.empty())
+      return MakeError(ErrorCode::kInvalidValue,
+                       "progress: only auv-nav has a progress term to choose, not 'pendulum'");
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
@@ -26,7 +29,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     return std::unique_ptr<Env>(std::move(env).value());
   }
   if (name == "auv-nav") {
-    auto env = AuvNav::Make(dir, options.layout);
+    auto env = AuvNav::Make(dir, options.layout, options.progress);
     if (!env) return std::move(env).error();
     (*env)->set_exploring_starts(options.exploring_starts);
     return std::unique_ptr<Env>(std::move(env).value());

@@ -67,6 +67,9 @@ struct EnvOptions {
   std::string layout = "hard";
   // auv-nav, training only: probability of an exploring start (sim::AuvNavTask::set_exploring_starts).
   double exploring_starts = 0.0;
+  // auv-nav: the reward's progress term, "euclidean" or "geodesic" (sim::AuvTaskParams::progress);
+  // empty: as models/auv/auv.yaml says.
+  std::string progress;
 };
 
 // The names MakeEnv() knows.

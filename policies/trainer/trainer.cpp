@@ -143,6 +143,10 @@ Status TrainConfig::Validate() const {
     return Invalid("--exploring-starts", std::to_string(exploring_starts) + " is not in [0, 1]");
   if (exploring_starts > 0 && env != "auv-nav")
     return Invalid("--exploring-starts", "only auv-nav has exploring starts, not '" + env + "'");
+  if (!progress.empty() && progress != "euclidean" && progress != "geodesic")
+    return Invalid("--progress", "'" + progress + "' is not euclidean or geodesic");
+  if (!progress.empty() && env != "auv-nav")
+    return Invalid("--progress", "only auv-nav has a progress term to choose, not '" + env + "'");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");
   if (!(gamma > 0 && gamma <= 1)) return Invalid("--gamma", std::to_string(gamma) + " is not in (0, 1]");
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
@@ -839,6 +843,7 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     nlohmann::json j;
     j["env"] = proto_->name();
     if (c_.exploring_starts > 0) j["exploring_starts"] = c_.exploring_starts;
+    if (!c_.progress.empty()) j["progress"] = c_.progress;
     j["seed"] = c_.seed;
     if (!c_.init_blob.empty()) j["init"] = c_.init_blob;
     j["schedule"] = c_.schedule.Describe();
@@ -879,6 +884,7 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   eo.models_dir = config.models_dir;
   eo.layout = config.layout;
   eo.exploring_starts = config.exploring_starts;
+  eo.progress = config.progress;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

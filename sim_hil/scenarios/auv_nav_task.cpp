@@ -12,8 +12,16 @@ namespace pbppo::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Geodesic progress: grid spacing (the narrowest passage of the layouts leaves 1.6 m of free
+// space: six nodes across) and how far ahead along the path its bearing looks.
+constexpr double kGeodesicCellM = 0.25;
+constexpr double kGeodesicLookaheadM = 2.0;
 
 }  // namespace
+
+const char* ToString(AuvTaskParams::Progress p) noexcept {
+  return p == AuvTaskParams::Progress::kGeodesic ? "geodesic" : "euclidean";
+}
 
 Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
   auto doc = LoadYamlFile(auv_yaml);
@@ -39,9 +47,10 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   YamlFields f(auv_yaml);
   YAML::Node n;
   if (auto st = f.Map(*doc, "task", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "task",
-                       {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights",
-                        "collision_penalty", "goal_reward", "step_penalty", "distance_gain", "bearing_gain"});
+  if (auto st =
+          f.Keys(n, "task",
+                 {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights", "collision_penalty",
+                  "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress"});
       !st)
     return st.error();
   AuvTaskParams t;
@@ -55,6 +64,16 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
                         {"distance_gain", &t.distance_gain},
                         {"bearing_gain", &t.bearing_gain}}) {
     if (auto st = f.Number(n, k, "task", 0.0, 1e6, out); !st) return st.error();
+  }
+  if (n["progress"]) {  // optional: the paper's euclidean by default
+    std::string progress;
+    if (auto st = f.Text(n, "progress", "task", &progress); !st) return st.error();
+    if (progress == "euclidean")
+      t.progress = AuvTaskParams::Progress::kEuclidean;
+    else if (progress == "geodesic")
+      t.progress = AuvTaskParams::Progress::kGeodesic;
+    else
+      return f.Fail("task.progress", "'" + progress + "' is not euclidean or geodesic");
   }
   YAML::Node w;
   if (auto st = f.Map(n, "weights", "task", &w); !st) return st.error();
@@ -197,6 +216,22 @@ void AuvNavTask::Measure() {
   l_at_ = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
   phi_at_ = WrapAngle(std::atan2(t[1] - s.y_m, t[0] - s.x_m) - s.yaw_rad);
   clearance_ = Clearance(world_, s.x_m, s.y_m);
+  progress_l_ = l_at_;
+  progress_phi_ = phi_at_;
+  if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
+    if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
+    if (geodesic_target_ != target_) {
+      geodesic_->Compute(world_, config_.task.safe_distance_m, t[0], t[1]);
+      geodesic_target_ = target_;
+    }
+    // Outside the free space (only at a collision) or walled off: the straight line stands.
+    const double g = geodesic_->Distance(s.x_m, s.y_m);
+    const double a = geodesic_->PathAngle(s.x_m, s.y_m, kGeodesicLookaheadM);
+    if (std::isfinite(g) && std::isfinite(a)) {
+      progress_l_ = g;
+      progress_phi_ = WrapAngle(a - s.yaw_rad);
+    }
+  }
 }
 
 void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
@@ -231,6 +266,7 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   stats_ = AuvEpisodeStats{};
   world_.circles.resize(config_.layout.world.circles.size());
   PlaceRandomObstacles(rng);
+  geodesic_target_ = -1;  // the world changed
   // Start pose: uniform in the start region, redrawn while closer than l_safe + 0.5 m to anything.
   const AuvStartRegion& s = config_.layout.start;
   AuvPose pose;
@@ -281,13 +317,13 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
   w_cmd_ = yaw_rate_radps;
   plant_.SetCommand(v_cmd_, w_cmd_);
 
-  const double l_prev = l_at_, phi_prev = phi_at_;
+  const double l_prev = progress_l_, phi_prev = progress_phi_;
   plant_.AdvanceControlPeriod();
   ++stats_.steps;
   Measure();
   const AuvTaskParams& p = config_.task;
-  r.r_progress =
-      -p.step_penalty + p.distance_gain * (l_prev - l_at_) + p.bearing_gain * (std::abs(phi_prev) - std::abs(phi_at_));
+  r.r_progress = -p.step_penalty + p.distance_gain * (l_prev - progress_l_) +
+                 p.bearing_gain * (std::abs(phi_prev) - std::abs(progress_phi_));
   stats_.min_clearance_m = std::min(stats_.min_clearance_m, clearance_);
   if (clearance_ < p.safe_distance_m) {
     r.r_collision = -p.collision_penalty;

@@ -8,11 +8,15 @@
 //   r_g = +goal_reward              the first time l_AT < l_AT_max for the current target,
 //   r_e = -step_penalty + distance_gain * (l_AT(t-1) - l_AT(t)) + bearing_gain * (|phi(t-1)| - |phi(t)|),
 // where l_AT and phi (bearing to the target relative to the heading, wrapped to (-pi, pi]) are
-// both taken with respect to the target that was current at the start of the step.
+// both taken with respect to the target that was current at the start of the step. With
+// task.progress: geodesic, r_e takes the shortest-path distance through the free space instead
+// of l_AT, and the bearing of that path's direction instead of phi (not in the paper: it stops
+// paying for progress into dead ends).
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +26,7 @@
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "sim_hil/plants/auv_plant.hpp"
+#include "sim_hil/scenarios/auv_geodesic.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
 
@@ -40,7 +45,15 @@ struct AuvTaskParams {
   double step_penalty = 0.2;
   double distance_gain = 5.0;
   double bearing_gain = 2.0;
+  // The distance and bearing of r_e: "euclidean" (the paper: straight line to the target) or
+  // "geodesic" (the shortest path through the free space, see auv_geodesic.hpp). The
+  // observation's target distance and bearing stay straight-line (what a vehicle measures).
+  enum class Progress { kEuclidean, kGeodesic };
+  Progress progress = Progress::kEuclidean;
 };
+
+// "euclidean" / "geodesic".
+const char* ToString(AuvTaskParams::Progress p) noexcept;
 
 // Everything a task instance needs, loaded once and shared read-only between instances.
 struct AuvTaskConfig {
@@ -157,6 +170,11 @@ class AuvNavTask {
   int target_ = 0;
   std::uint64_t physics_steps_ = 0;  // of finished episodes
   double l_at_ = 0.0, phi_at_ = 0.0, clearance_ = 0.0;
+  // Geodesic progress: the field of the current target (computed when the target changes) and
+  // r_e's distance and bearing; equal to l_at_ and phi_at_ in euclidean mode.
+  std::optional<GeodesicField> geodesic_;
+  int geodesic_target_ = -1;
+  double progress_l_ = 0.0, progress_phi_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;
   double exploring_starts_ = 0.0;

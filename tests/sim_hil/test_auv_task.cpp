@@ -442,6 +442,60 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   auto t = LoadAuvTaskParams(scratch);
   REQUIRE_FALSE(t.ok());
   CHECK(t.error().message.find("task.safe_distnce_m: unknown field") != std::string::npos);
+  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  progress: spline");
+  t = LoadAuvTaskParams(scratch);
+  REQUIRE_FALSE(t.ok());
+  CHECK(t.error().message.find("task.progress: 'spline' is not euclidean or geodesic") != std::string::npos);
+  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  progress: geodesic");
+  t = LoadAuvTaskParams(scratch);
+  REQUIRE(t.ok());
+  CHECK(t->progress == AuvTaskParams::Progress::kGeodesic);
+  CHECK(Config("hard").task.progress == AuvTaskParams::Progress::kEuclidean);  // the shipped file: the paper's
+}
+
+TEST_CASE("auv task: geodesic progress pays for the way round a wall, not for running at it") {
+  // A wall across the arena, open on the right (x 30-40); the target straight above the start.
+  const char* walled = R"(
+name: walled
+arena: {x_min_m: 0, x_max_m: 40, y_min_m: 0, y_max_m: 40}
+start: {x_m: [5, 5], y_m: [8, 8], yaw_deg: [YAW, YAW]}
+targets: [[5, 30]]
+obstacles:
+  - {type: box, x_min_m: 0, x_max_m: 30, y_min_m: 14, y_max_m: 16}
+)";
+  // The summed progress term of 30 periods (3 s) at full speed ahead from the start.
+  auto progress = [&](AuvTaskParams::Progress mode, const char* yaw) {
+    AuvTaskConfig c = Config("easy");
+    std::string text = walled;
+    text.replace(text.find("YAW"), 3, yaw);
+    text.replace(text.find("YAW"), 3, yaw);
+    c.layout = Layout(text);
+    c.task.progress = mode;
+    AuvNavTask task = MakeTask(c);
+    std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
+    task.Reset(1, obs.data());
+    double sum = 0.0;
+    for (int k = 0; k < 30; ++k) {
+      const AuvStepResult r = task.StepCommand(1.5, 0.0, obs.data());
+      REQUIRE_FALSE(r.terminated);
+      sum += r.r_progress;
+    }
+    return sum;
+  };
+  using P = AuvTaskParams::Progress;
+  // Straight at the wall (north): the straight line pays; along the shortest path (east, round
+  // the wall's end, at most 15 degrees up from here) the vehicle hardly moves.
+  const double north_euclidean = progress(P::kEuclidean, "90"), north_geodesic = progress(P::kGeodesic, "90");
+  CAPTURE(north_euclidean);
+  CAPTURE(north_geodesic);
+  CHECK(north_euclidean > 5.0);
+  CHECK(north_geodesic < 0.15 * north_euclidean);
+  // East, towards the gap: the other way round.
+  const double east_euclidean = progress(P::kEuclidean, "0"), east_geodesic = progress(P::kGeodesic, "0");
+  CAPTURE(east_euclidean);
+  CAPTURE(east_geodesic);
+  CHECK(east_euclidean < 0.0);
+  CHECK(east_geodesic > 5.0);
 }
 
 namespace {

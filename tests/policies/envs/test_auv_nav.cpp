@@ -117,6 +117,37 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
   CHECK(bad.error().message.find("layout 'labyrinth' unknown") != std::string::npos);
 }
 
+TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
+  EnvOptions o;
+  o.layout = "mixed";
+  o.progress = "geodesic";
+  auto made = MakeEnv("auv-nav", o);
+  REQUIRE(made.ok());
+  auto* auv = dynamic_cast<AuvNav*>(made->get());
+  REQUIRE(auv != nullptr);
+  Rng rng(3);
+  std::vector<float> obs((*made)->observation_size());
+  std::set<std::string> seen;
+  for (int i = 0; i < 40; ++i) {
+    (*made)->Reset(rng, obs);
+    CHECK(auv->config().task.progress == sim::AuvTaskParams::Progress::kGeodesic);
+    seen.insert(auv->config().layout.name);
+  }
+  CHECK(seen.size() == 3);
+  o.progress = "";
+  auto plain = MakeEnv("auv-nav", o);
+  REQUIRE(plain.ok());
+  CHECK(dynamic_cast<AuvNav*>(plain->get())->config().task.progress == sim::AuvTaskParams::Progress::kEuclidean);
+  o.progress = "manhattan";
+  auto bad = MakeEnv("auv-nav", o);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message == "auv-nav: progress 'manhattan' unknown (euclidean, geodesic)");
+  o.progress = "geodesic";
+  bad = MakeEnv("pendulum", o);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("only auv-nav has a progress term") != std::string::npos);
+}
+
 TEST_CASE("exploring starts: anywhere free, any current target - success counted only from the layout's start") {
   EnvOptions o;
   o.layout = "hard";

@@ -147,6 +147,13 @@ TEST_CASE("trainer errors name the field and value") {
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);
   c = Small();
+  c.progress = "geodesic";  // Small() is pendulum
+  CHECK(Train(c).error().message.find("--progress: only auv-nav has a progress term to choose, not 'pendulum'") !=
+        std::string::npos);
+  c.env = "auv-nav";
+  c.progress = "crow-flies";
+  CHECK(Train(c).error().message.find("--progress: 'crow-flies' is not euclidean or geodesic") != std::string::npos);
+  c = Small();
   const std::string dir = test::ScratchDir("trainer_unwritable");
   std::ofstream(dir + "/file") << "x";
   c.out_dir = dir + "/file/run";

@@ -1,0 +1,129 @@
+#include "sim_hil/scenarios/auv_geodesic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+namespace pbppo::sim {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr int kDi[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+constexpr int kDj[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+
+}  // namespace
+
+GeodesicField::GeodesicField(const Arena& arena, double cell_m) : arena_(arena), cell_(cell_m) {
+  nx_ = static_cast<int>(std::floor((arena.x_max_m - arena.x_min_m) / cell_m)) + 1;
+  ny_ = static_cast<int>(std::floor((arena.y_max_m - arena.y_min_m) / cell_m)) + 1;
+  const auto n = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
+  dist_.assign(n, kInf);
+  free_.assign(n, 0);
+  heap_.reserve(2 * n);
+}
+
+void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, double goal_y) {
+  goal_x_ = goal_x;
+  goal_y_ = goal_y;
+  for (int j = 0; j < ny_; ++j) {
+    for (int i = 0; i < nx_; ++i) {
+      const double x = arena_.x_min_m + i * cell_, y = arena_.y_min_m + j * cell_;
+      free_[Index(i, j)] = Clearance(world, x, y) >= keep_m ? 1 : 0;
+    }
+  }
+  std::fill(dist_.begin(), dist_.end(), kInf);
+  heap_.clear();
+  // Min-heap on distance (std::greater on the pair puts the smallest first).
+  const auto push = [&](float d, int index) {
+    heap_.emplace_back(d, index);
+    std::push_heap(heap_.begin(), heap_.end(), std::greater<>{});
+  };
+  const int gi = static_cast<int>(std::lround((goal_x - arena_.x_min_m) / cell_));
+  const int gj = static_cast<int>(std::lround((goal_y - arena_.y_min_m) / cell_));
+  for (int j = gj - 2; j <= gj + 2; ++j) {
+    for (int i = gi - 2; i <= gi + 2; ++i) {
+      if (i < 0 || j < 0 || i >= nx_ || j >= ny_ || !free_[Index(i, j)]) continue;
+      const float d =
+          static_cast<float>(std::hypot(arena_.x_min_m + i * cell_ - goal_x, arena_.y_min_m + j * cell_ - goal_y));
+      if (d < dist_[Index(i, j)]) {
+        dist_[Index(i, j)] = d;
+        push(d, Index(i, j));
+      }
+    }
+  }
+  const float straight = static_cast<float>(cell_), diagonal = static_cast<float>(cell_ * std::sqrt(2.0));
+  while (!heap_.empty()) {
+    std::pop_heap(heap_.begin(), heap_.end(), std::greater<>{});
+    const auto [d, index] = heap_.back();
+    heap_.pop_back();
+    if (d > dist_[static_cast<std::size_t>(index)]) continue;  // a stale entry
+    const int i = index % nx_, j = index / nx_;
+    for (int k = 0; k < 8; ++k) {
+      const int a = i + kDi[k], b = j + kDj[k];
+      if (a < 0 || b < 0 || a >= nx_ || b >= ny_) continue;
+      const int n = Index(a, b);
+      if (!free_[static_cast<std::size_t>(n)]) continue;
+      // A diagonal step may not cut the corner of a blocked node.
+      if (k >= 4 && (!free_[Index(a, j)] || !free_[Index(i, b)])) continue;
+      const float nd = d + (k < 4 ? straight : diagonal);
+      if (nd < dist_[static_cast<std::size_t>(n)]) {
+        dist_[static_cast<std::size_t>(n)] = nd;
+        push(nd, n);
+      }
+    }
+  }
+}
+
+int GeodesicField::BestNode(double x, double y, int radius, double* total) const noexcept {
+  const double fi = (x - arena_.x_min_m) / cell_, fj = (y - arena_.y_min_m) / cell_;
+  const int i0 = static_cast<int>(std::floor(fi)), j0 = static_cast<int>(std::floor(fj));
+  int best = -1;
+  double best_total = std::numeric_limits<double>::infinity();
+  for (int j = j0 + 1 - radius; j <= j0 + radius; ++j) {
+    for (int i = i0 + 1 - radius; i <= i0 + radius; ++i) {
+      if (i < 0 || j < 0 || i >= nx_ || j >= ny_) continue;
+      const float d = dist_[Index(i, j)];
+      if (!std::isfinite(d)) continue;
+      const double t = d + std::hypot(arena_.x_min_m + i * cell_ - x, arena_.y_min_m + j * cell_ - y);
+      if (t < best_total) {
+        best_total = t;
+        best = Index(i, j);
+      }
+    }
+  }
+  *total = best_total;
+  return best;
+}
+
+double GeodesicField::Distance(double x, double y) const noexcept {
+  double total = 0;
+  if (BestNode(x, y, 1, &total) >= 0) return total;
+  BestNode(x, y, 3, &total);
+  return total;
+}
+
+double GeodesicField::PathAngle(double x, double y, double lookahead_m) const noexcept {
+  double total = 0;
+  int node = BestNode(x, y, 1, &total);
+  if (node < 0) node = BestNode(x, y, 3, &total);
+  if (node < 0) return std::numeric_limits<double>::quiet_NaN();
+  if (total <= lookahead_m) return std::atan2(goal_y_ - y, goal_x_ - x);
+  const int steps = std::max(1, static_cast<int>(std::lround(lookahead_m / cell_)));
+  for (int s = 0; s < steps; ++s) {
+    const int i = node % nx_, j = node / nx_;
+    int next = node;
+    for (int k = 0; k < 8; ++k) {
+      const int a = i + kDi[k], b = j + kDj[k];
+      if (a < 0 || b < 0 || a >= nx_ || b >= ny_) continue;
+      if (dist_[Index(a, b)] < dist_[next]) next = Index(a, b);
+    }
+    if (next == node) break;
+    node = next;
+  }
+  const double px = arena_.x_min_m + (node % nx_) * cell_, py = arena_.y_min_m + (node / nx_) * cell_;
+  if (std::hypot(px - x, py - y) < 1e-6) return std::atan2(goal_y_ - y, goal_x_ - x);
+  return std::atan2(py - y, px - x);
+}
+
+}  // namespace pbppo::sim

@@ -1,0 +1,59 @@
+// Shortest-path ("geodesic") distance to a goal through the free space of a World2d, for the
+// AUV task's optional progress term (task.progress: geodesic). The paper's progress term rewards
+// the decrease of the straight-line distance to the target, which pays a vehicle for running into
+// a dead end that points at the target; the geodesic distance decreases only along paths that
+// lead there.
+//
+// A grid of nodes spaced `cell_m` over the arena; a node is free when its clearance is at least
+// `keep_m` (l_safe: where the vehicle may be without colliding). Dijkstra over the 8-neighbour
+// graph (edge lengths cell and cell * sqrt 2) from the free nodes within reach of the goal gives
+// each free node its distance. Storage is allocated once; Compute reuses it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "sim_hil/scenarios/auv_sonar.hpp"
+
+namespace pbppo::sim {
+
+class GeodesicField {
+ public:
+  // Sizes the grid for the arena; cell_m > 0.
+  GeodesicField(const Arena& arena, double cell_m);
+
+  // Distances to (goal_x, goal_y) through the free nodes of `world`. The goal's nearest free
+  // nodes (within two cells) are the sources, at their straight-line distance from the goal.
+  void Compute(const World2d& world, double keep_m, double goal_x, double goal_y);
+
+  // The distance from (x, y): the least over the four surrounding nodes of (node's distance +
+  // straight-line distance to it); without a reachable node among them, the nearest reachable
+  // node within two cells; otherwise infinity (the point is walled off from the goal).
+  double Distance(double x, double y) const noexcept;
+
+  // The direction of the shortest path from (x, y), as the world-frame angle towards the point
+  // reached by following the steepest descent over `lookahead_m` (or towards the goal when it is
+  // nearer). NaN where Distance is infinite.
+  double PathAngle(double x, double y, double lookahead_m) const noexcept;
+
+  int nx() const noexcept { return nx_; }
+  int ny() const noexcept { return ny_; }
+  double node_distance(int i, int j) const noexcept { return dist_[Index(i, j)]; }
+
+ private:
+  std::size_t Index(int i, int j) const noexcept { return static_cast<std::size_t>(j * nx_ + i); }
+  // The node of least (distance + offset) near (x, y), or -1.
+  int BestNode(double x, double y, int radius, double* total) const noexcept;
+
+  Arena arena_;
+  double cell_ = 0.25;
+  int nx_ = 0, ny_ = 0;
+  double goal_x_ = 0.0, goal_y_ = 0.0;
+  std::vector<float> dist_;
+  std::vector<std::uint8_t> free_;
+  std::vector<std::pair<float, std::int32_t>> heap_;
+};
+
+}  // namespace pbppo::sim

@@ -1,0 +1,78 @@
+// The geodesic distance field of the AUV task's optional progress term: the straight line in an
+// empty arena, the detour around a wall, the dead end of the hard layout, walled-off points.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+
+#include "sim_hil/scenarios/auv_geodesic.hpp"
+#include "sim_hil/scenarios/auv_layout.hpp"
+
+using namespace pbppo::sim;
+
+TEST_CASE("geodesic field: in an empty arena it is the straight line, within the 8-neighbour grid's error") {
+  World2d w;  // [0, 40] x [0, 40]
+  GeodesicField f(w.arena, 0.25);
+  CHECK(f.nx() == 161);
+  CHECK(f.ny() == 161);
+  f.Compute(w, 1.2, 20.0, 20.0);
+  for (const auto& [x, y] : {std::pair{5.0, 5.0}, {35.0, 20.0}, {20.0, 33.3}, {8.1, 30.7}, {20.1, 20.0}}) {
+    const double straight = std::hypot(x - 20.0, y - 20.0);
+    const double g = f.Distance(x, y);
+    CAPTURE(x);
+    CAPTURE(y);
+    CHECK(g >= straight - 1e-6);
+    CHECK(g <= straight * 1.0824 + 0.25);  // 8 directions: at most 8.24 % longer
+    // The path heads straight for the goal (within the grid's 22.5 degree sectors).
+    const double a = f.PathAngle(x, y, 2.0);
+    const double direct = std::atan2(20.0 - y, 20.0 - x);
+    CHECK(std::abs(std::remainder(a - direct, 2 * 3.14159265358979323846)) < 0.41);
+  }
+  // Within 2.5 cells of the boundary walls the vehicle would collide: no node there is free,
+  // and the nearest reachable node is more than three cells away.
+  CHECK(std::isinf(f.Distance(0.2, 20.0)));
+  CHECK(std::isnan(f.PathAngle(0.2, 20.0, 2.0)));
+}
+
+TEST_CASE("geodesic field: a wall with a gap makes the way round the wall the distance") {
+  World2d w;
+  w.boxes.push_back(Box{0.0, 30.0, 19.0, 21.0});  // a wall across, open for x in [30, 40]
+  GeodesicField f(w.arena, 0.25);
+  f.Compute(w, 1.2, 10.0, 30.0);
+  // From (10, 10) straight up is 20 m; round the wall's end, 1.2 m off its corners, about 48 m
+  // (the grid's 8 directions make it up to 8 % longer).
+  const double g = f.Distance(10.0, 10.0);
+  CHECK(g > 47.0);
+  CHECK(g < 48.0 * 1.0824 + 2.0);  // and round the corners on grid nodes
+  // The path leads to the right, towards the gap (the straight line would go up at the wall).
+  CHECK(std::cos(f.PathAngle(10.0, 10.0, 2.0)) > 0.7);
+  // A point walled in (a closed box around it) is unreachable.
+  World2d closed;
+  closed.boxes = {Box{5.0, 15.0, 5.0, 6.0}, Box{5.0, 15.0, 14.0, 15.0}, Box{5.0, 6.0, 5.0, 15.0},
+                  Box{14.0, 15.0, 5.0, 15.0}};
+  f.Compute(closed, 1.2, 30.0, 30.0);
+  CHECK(std::isinf(f.Distance(10.0, 10.0)));
+  CHECK(std::isfinite(f.Distance(20.0, 20.0)));
+}
+
+TEST_CASE("geodesic field: on the hard layout the way from T1 to T2 passes below the circle at (18, 21)") {
+  auto layout = LoadAuvLayout(std::string(PBPPO_SOURCE_DIR) + "/models/auv/layouts/hard.yaml");
+  REQUIRE_MESSAGE(layout.ok(), (layout.ok() ? std::string() : layout.error().message));
+  const auto& t = layout->targets;
+  REQUIRE(t.size() == 3);
+  GeodesicField f(layout->world.arena, 0.25);
+  f.Compute(layout->world, 1.2, t[1][0], t[1][1]);
+  // The straight line from T1 (34, 20) to T2 (6, 30) is 29.7 m; the way is along the middle
+  // corridor, below the circle, and up through the left gap: about 36 m.
+  const double straight = std::hypot(t[0][0] - t[1][0], t[0][1] - t[1][1]);
+  const double g = f.Distance(t[0][0], t[0][1]);
+  CHECK(g > straight + 4.0);
+  CHECK(g < straight + 12.0);
+  // At (22, 22.5), where the straight line to T2 points up and to the left, into the 2 m gap
+  // between the circle and the upper wall (impassable with l_safe 1.2 m on each side), the path
+  // points down and to the left, below the circle.
+  CHECK(std::sin(std::atan2(t[1][1] - 22.5, t[1][0] - 22.0)) > 0.3);
+  const double a = f.PathAngle(22.0, 22.5, 2.0);
+  CHECK(std::sin(a) < 0.0);
+  CHECK(std::cos(a) < 0.0);
+}
