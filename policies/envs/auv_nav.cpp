@@ -7,7 +7,8 @@ namespace pbppo::envs {
 
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
                                              const std::string& progress) {
-  if (!progress.empty() && progress != "euclidean" && progress != "geodesic")
+  sim::AuvTaskParams::Progress mode{};
+  if (!progress.empty() && !sim::ParseAuvProgress(progress, &mode))
     return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress '" + progress + "' unknown (euclidean, geodesic)");
   std::vector<std::string> names;
   if (layout_name == "mixed") {
@@ -24,9 +25,7 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
   for (const auto& n : names) {
     auto cfg = sim::LoadAuvTaskConfig(dir + "auv.yaml", dir + "layouts/" + n + ".yaml", dir + "io_layout.yaml");
     if (!cfg) return std::move(cfg).error();
-    if (!progress.empty())
-      cfg->task.progress =
-          progress == "geodesic" ? sim::AuvTaskParams::Progress::kGeodesic : sim::AuvTaskParams::Progress::kEuclidean;
+    if (!progress.empty()) cfg->task.progress = mode;
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
   return Make(std::move(configs), "auv-nav:" + layout_name);

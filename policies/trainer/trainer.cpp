@@ -23,6 +23,7 @@
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -143,7 +144,7 @@ Status TrainConfig::Validate() const {
     return Invalid("--exploring-starts", std::to_string(exploring_starts) + " is not in [0, 1]");
   if (exploring_starts > 0 && env != "auv-nav")
     return Invalid("--exploring-starts", "only auv-nav has exploring starts, not '" + env + "'");
-  if (!progress.empty() && progress != "euclidean" && progress != "geodesic")
+  if (sim::AuvTaskParams::Progress mode{}; !progress.empty() && !sim::ParseAuvProgress(progress, &mode))
     return Invalid("--progress", "'" + progress + "' is not euclidean or geodesic");
   if (!progress.empty() && env != "auv-nav")
     return Invalid("--progress", "only auv-nav has a progress term to choose, not '" + env + "'");

@@ -29,8 +29,8 @@ class GeodesicField {
   void Compute(const World2d& world, double keep_m, double goal_x, double goal_y);
 
   // The distance from (x, y): the least over the four surrounding nodes of (node's distance +
-  // straight-line distance to it); without a reachable node among them, the nearest reachable
-  // node within two cells; otherwise infinity (the point is walled off from the goal).
+  // straight-line distance to it); without a reachable node among them, the best reachable
+  // node within three cells; otherwise infinity (the point is walled off from the goal).
   double Distance(double x, double y) const noexcept;
 
   // The direction of the shortest path from (x, y), as the world-frame angle towards the point
@@ -40,7 +40,6 @@ class GeodesicField {
 
   int nx() const noexcept { return nx_; }
   int ny() const noexcept { return ny_; }
-  double node_distance(int i, int j) const noexcept { return dist_[Index(i, j)]; }
 
  private:
   std::size_t Index(int i, int j) const noexcept { return static_cast<std::size_t>(j * nx_ + i); }

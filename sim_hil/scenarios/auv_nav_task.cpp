@@ -19,8 +19,15 @@ constexpr double kGeodesicLookaheadM = 2.0;
 
 }  // namespace
 
-const char* ToString(AuvTaskParams::Progress p) noexcept {
-  return p == AuvTaskParams::Progress::kGeodesic ? "geodesic" : "euclidean";
+bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noexcept {
+  if (name == "euclidean") {
+    *out = AuvTaskParams::Progress::kEuclidean;
+  } else if (name == "geodesic") {
+    *out = AuvTaskParams::Progress::kGeodesic;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
@@ -68,11 +75,7 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   if (n["progress"]) {  // optional: the paper's euclidean by default
     std::string progress;
     if (auto st = f.Text(n, "progress", "task", &progress); !st) return st.error();
-    if (progress == "euclidean")
-      t.progress = AuvTaskParams::Progress::kEuclidean;
-    else if (progress == "geodesic")
-      t.progress = AuvTaskParams::Progress::kGeodesic;
-    else
+    if (!ParseAuvProgress(progress, &t.progress))
       return f.Fail("task.progress", "'" + progress + "' is not euclidean or geodesic");
   }
   YAML::Node w;

@@ -52,8 +52,8 @@ struct AuvTaskParams {
   Progress progress = Progress::kEuclidean;
 };
 
-// "euclidean" / "geodesic".
-const char* ToString(AuvTaskParams::Progress p) noexcept;
+// "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).
+bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noexcept;
 
 // Everything a task instance needs, loaded once and shared read-only between instances.
 struct AuvTaskConfig {
