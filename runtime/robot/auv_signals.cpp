@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace pbppo::robot {
 namespace {
@@ -26,7 +27,8 @@ constexpr const char* kNames[kAuvSonarSignal0] = {"target_distance",
                                                   "clearance",
                                                   "target_index",
                                                   "target_x",
-                                                  "target_y"};
+                                                  "target_y",
+                                                  "nearest_echo"};
 
 }  // namespace
 
@@ -63,7 +65,12 @@ void AuvSignals(const AuvSignalInputs& in, double depth_setpoint_m, const double
   g[kAuvTargetX] = in.target_x_m;
   g[kAuvTargetY] = in.target_y_m;
   const std::uint32_t n = std::min(sonar_beams, kAuvMaxSonarBeams);
-  for (std::uint32_t i = 0; i < n; ++i) g[kAuvSonarSignal0 + i] = sonar_m[i];
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::uint32_t i = 0; i < n; ++i) {
+    g[kAuvSonarSignal0 + i] = sonar_m[i];
+    nearest = std::min(nearest, sonar_m[i]);
+  }
+  g[kAuvNearestEcho] = nearest;
 }
 
 void AuvSignalsFromSample(const AuvSensorSample& s, double depth_setpoint_m, double* signals) noexcept {

@@ -28,10 +28,11 @@ enum AuvSignal : std::uint32_t {
   kAuvX,            // m
   kAuvY,            // m
   kAuvDepthError,   // depth - set-point, m (positive: too deep)
-  kAuvClearance,    // nearest obstacle or wall, m
+  kAuvClearance,    // nearest obstacle or wall, m: the simulator's exact value (no vehicle sensor gives it)
   kAuvTargetIndex,  // 0, 1, 2 ...
   kAuvTargetX,      // current target in the world frame, m
   kAuvTargetY,
+  kAuvNearestEcho,  // shortest sonar range over all beams, m (+inf without beams)
   kAuvSonarSignal0
 };
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "runtime/robot/auv_signals.hpp"
@@ -44,8 +45,9 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   auto c = sim::LoadAuvTaskConfig(kModel + "auv.yaml", kModel + "layouts/medium.yaml", kModel + "io_layout.yaml");
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   // Every signal of the table, some with history, on top of the shipped layout.
-  for (const char* sig : {"cos_yaw", "sin_yaw", "x", "y", "depth_error", "clearance", "target_index", "sway_speed",
-                          "cos_target_bearing", "sin_target_bearing"}) {
+  for (const char* sig :
+       {"yaw", "cos_yaw", "sin_yaw", "x", "y", "depth_error", "clearance", "target_index", "sway_speed",
+        "cos_target_bearing", "sin_target_bearing", "nearest_echo", "target_x", "target_y"}) {
     robot::ObservationElement e;
     e.name = sig;
     e.signal = sig;
@@ -61,6 +63,10 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   auto builder = robot::ObservationBuilder::Create(c->io, robot::AuvSignalNames(16));
   REQUIRE_MESSAGE(builder.ok(), builder.error().message);
   REQUIRE(builder->observation_size() == n);
+  std::vector<std::string> signal_of;  // the signal behind each input
+  for (const auto& e : c->io.observations)
+    for (std::uint32_t h = 0; h < e.history; ++h) signal_of.push_back(e.signal);
+  REQUIRE(signal_of.size() == n);
 
   std::vector<float> task_obs(n), ctrl_obs(n);
   std::vector<double> g(robot::kAuvSignalCapacity);
@@ -77,11 +83,15 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
     robot::AuvSignalsFromSample(s, c->task.depth_m, g.data());
     builder->Build(g.data(), k == 0, ctrl_obs.data());
     for (std::size_t i = 0; i < n; ++i) {
-      if (i < 16) {
+      CAPTURE(signal_of[i]);
+      if (signal_of[i].rfind("sonar_", 0) == 0) {
         // The sample carries sonar ranges as float (as on the wire): at most one float step apart.
         CHECK(UlpDistance(ctrl_obs[i], task_obs[i]) <= 1);
         sonar_ulp += ctrl_obs[i] != task_obs[i];
-      } else if (i == 22 || i == 23 || i == 24 || i == 25) {
+      } else if (signal_of[i] == "nearest_echo") {
+        // The shortest of those float ranges, scaled.
+        CHECK(ctrl_obs[i] == doctest::Approx(task_obs[i]).epsilon(1e-6));
+      } else if (signal_of[i] == "cos_yaw" || signal_of[i] == "sin_yaw") {
         // cos/sin of the wrapped yaw (the sample's) against the task's unwrapped yaw.
         CHECK(ctrl_obs[i] == doctest::Approx(task_obs[i]).epsilon(1e-6));
       } else {

@@ -115,3 +115,39 @@ actions:
   CHECK(obs[4] == 0.5f);
   CHECK(obs[5] == doctest::Approx(3.5 - 2 * 3.14159265358979323846));
 }
+
+TEST_CASE("AUV signals: nearest_echo is the shortest sonar range, +inf (the element's clip) without a sonar") {
+  auto l = ParseIoLayout(R"(
+robot: auv
+observations:
+  - {name: e, signal: nearest_echo, scale: 0.2, clip: 1.0}
+actions:
+  - {name: v, command: surge_speed}
+)",
+                         "auv.yaml");
+  REQUIRE(l.ok());
+  auto b = ObservationBuilder::Create(*l, AuvSignalNames(4));
+  REQUIRE_MESSAGE(b.ok(), b.error().message);
+  AuvSensorSample s;
+  s.sonar_beams = 4;
+  s.sonar_m[0] = 15.0f;
+  s.sonar_m[1] = 3.5f;
+  s.sonar_m[2] = 2.5f;
+  s.sonar_m[3] = 9.0f;
+  s.sonar_m[4] = 0.5f;  // beyond the sample's beam count: not a range
+  double g[kAuvSignalCapacity];
+  float obs[1];
+  AuvSignalsFromSample(s, 5.0, g);
+  CHECK(g[kAuvNearestEcho] == 2.5);
+  b->Build(g, true, obs);
+  CHECK(obs[0] == doctest::Approx(0.5));
+  s.sonar_m[3] = 0.25f;
+  AuvSignalsFromSample(s, 5.0, g);
+  b->Build(g, false, obs);
+  CHECK(obs[0] == doctest::Approx(0.05));
+  s.sonar_beams = 0;
+  AuvSignalsFromSample(s, 5.0, g);
+  CHECK(std::isinf(g[kAuvNearestEcho]));
+  b->Build(g, false, obs);
+  CHECK(obs[0] == 1.0f);
+}
