@@ -36,7 +36,8 @@ Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
   YamlFields f(auv_yaml);
   YAML::Node n;
   if (auto st = f.Map(*doc, "sonar", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "sonar", {"beams", "fov_deg", "max_range_m"}); !st) return st.error();
+  if (auto st = f.Keys(n, "sonar", {"beams", "fov_deg", "max_range_m", "beam_width_deg", "rays_per_beam"}); !st)
+    return st.error();
   SonarParams s;
   long beams = 0;
   double fov_deg = 0.0;
@@ -45,6 +46,17 @@ Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
   if (auto st = f.Number(n, "max_range_m", "sonar", 0.1, 1000.0, &s.max_range_m); !st) return st.error();
   s.beams = static_cast<int>(beams);
   s.fov_rad = fov_deg * kPi / 180.0;
+  // Optional: a thin ray per beam by default.
+  if (n["beam_width_deg"]) {
+    double width_deg = 0.0;
+    if (auto st = f.Number(n, "beam_width_deg", "sonar", 0.0, 90.0, &width_deg); !st) return st.error();
+    s.beam_width_rad = width_deg * kPi / 180.0;
+  }
+  if (n["rays_per_beam"]) {
+    long rays = 0;
+    if (auto st = f.Integer(n, "rays_per_beam", "sonar", 1, 64, &rays); !st) return st.error();
+    s.rays_per_beam = static_cast<int>(rays);
+  }
   return s;
 }
 

@@ -65,7 +65,17 @@ double BeamAngle(const SonarParams& p, int i) noexcept {
 }
 
 void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges) noexcept {
-  for (int i = 0; i < p.beams; ++i) ranges[i] = CastRay(w, x, y, yaw + BeamAngle(p, i), p.max_range_m);
+  const int rays = p.beam_width_rad > 0.0 ? std::max(p.rays_per_beam, 1) : 1;
+  const double slice = p.beam_width_rad / rays;
+  for (int i = 0; i < p.beams; ++i) {
+    const double axis = yaw + BeamAngle(p, i);
+    double r = p.max_range_m;
+    for (int k = 0; k < rays; ++k) {
+      const double offset = rays == 1 ? 0.0 : -0.5 * p.beam_width_rad + (k + 0.5) * slice;
+      r = std::min(r, CastRay(w, x, y, axis + offset, p.max_range_m));
+    }
+    ranges[i] = r;
+  }
 }
 
 double Clearance(const World2d& w, double x, double y) noexcept {

@@ -32,6 +32,11 @@ struct SonarParams {
   int beams = 16;
   double fov_rad = 6.283185307179586;  // 2 pi: evenly around; less: a forward fan
   double max_range_m = 15.0;
+  // A beam's width: it reports the nearest echo within +-width/2 of its axis, found with
+  // rays_per_beam rays at the centres of equal slices of the width. Width 0 (or one ray): a thin
+  // ray along the axis.
+  double beam_width_rad = 0.0;
+  int rays_per_beam = 1;
 };
 
 constexpr double kNoHit = std::numeric_limits<double>::infinity();
@@ -48,7 +53,7 @@ double CastRay(const World2d& w, double ox, double oy, double angle_rad, double 
 // Beam i's angle relative to the heading: full circle i * 2 pi / n (beam 0 ahead, counter-
 // clockwise); a fan -fov/2 + i * fov / (n - 1) (a single beam looks straight ahead).
 double BeamAngle(const SonarParams& p, int i) noexcept;
-// ranges[i] for every beam from pose (x, y, yaw).
+// ranges[i] for every beam from pose (x, y, yaw): the shortest of the beam's rays.
 void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges) noexcept;
 
 // Signed distance from the point to the nearest obstacle surface or wall (negative inside an

@@ -63,6 +63,39 @@ TEST_CASE("sonar: an obstacle on a beam") {
   CHECK(RayBox(0.0, 0.0, 0.0, 1.0, Box{-1.0, 1.0, 3.0, 5.0}) == doctest::Approx(3.0));  // axis-parallel
 }
 
+TEST_CASE("sonar: a beam with a width reports the nearest echo within it - thin rays miss what lies between") {
+  World2d w;
+  // A 0.4 m column 5 m away, 11.25 deg off the bow: half-way between beams 0 and 1 of a ring of 16.
+  const double bearing = kPi / 16, d = 5.0;
+  w.circles.push_back(Circle{20.0 + d * std::cos(bearing), 20.0 + d * std::sin(bearing), 0.4});
+  SonarParams thin{16, 2 * kPi, 15.0};
+  std::vector<double> r(16);
+  SonarScan(w, thin, 20.0, 20.0, 0.0, r.data());
+  CHECK(r[0] == doctest::Approx(15.0));  // both neighbouring beams pass it by
+  CHECK(r[1] == doctest::Approx(15.0));
+  SonarParams wide = thin;
+  wide.beam_width_rad = 2 * kPi / 16;  // the beams tile the circle
+  wide.rays_per_beam = 5;              // rays at -9, -4.5, 0, 4.5, 9 deg off each axis
+  SonarScan(w, wide, 20.0, 20.0, 0.0, r.data());
+  // Beam 1's ray at -9 deg passes 2.25 deg off the column's centre: 5 sin(2.25 deg) = 0.2 m.
+  const double off = d * std::sin(kPi / 16 - 0.4 * kPi / 8);
+  CHECK(r[1] == doctest::Approx(d * std::cos(kPi / 16 - 0.4 * kPi / 8) - std::sqrt(0.16 - off * off)));
+  CHECK(r[0] == doctest::Approx(r[1]));  // the mirror ray of beam 0, +9 deg
+  for (int i = 2; i < 16; ++i) CHECK(r[static_cast<std::size_t>(i)] < 15.0 + 1e-12);
+  // Each range is the shortest of the beam's rays; one ray (or width 0) is the thin beam.
+  for (int i = 0; i < 16; ++i) {
+    double shortest = 15.0;
+    for (int k = 0; k < 5; ++k)
+      shortest = std::min(shortest, CastRay(w, 20.0, 20.0, BeamAngle(wide, i) + (k - 2) * 0.2 * kPi / 8, 15.0));
+    CHECK(r[static_cast<std::size_t>(i)] == shortest);
+  }
+  wide.rays_per_beam = 1;
+  std::vector<double> one(16);
+  SonarScan(w, wide, 20.0, 20.0, 0.0, one.data());
+  SonarScan(w, thin, 20.0, 20.0, 0.0, r.data());
+  CHECK(one == r);
+}
+
 TEST_CASE("sonar: a forward fan spreads its beams evenly across the field of view") {
   SonarParams fan{5, kPi / 2, 20.0};
   CHECK(BeamAngle(fan, 0) == doctest::Approx(-kPi / 4));
