@@ -97,7 +97,8 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option(
       "--progress", o.progress,
       "auv-nav: the reward's progress term: euclidean (the paper: straight-line distance and bearing to "
-      "the target) or geodesic (shortest path around obstacles); default: models/auv/auv.yaml's task.progress");
+      "the target) or geodesic (shortest path around obstacles), for every layout or per layout as "
+      "LAYOUT=MODE,... (e.g. hard=geodesic; the others keep it); default: models/auv/auv.yaml's task.progress");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");

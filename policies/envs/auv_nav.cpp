@@ -5,11 +5,41 @@
 
 namespace pbppo::envs {
 
+Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const std::string& spec,
+                                                                        const std::string& layout) {
+  auto bad = [&](const std::string& why) { return MakeError(ErrorCode::kInvalidValue, "'" + spec + "': " + why); };
+  std::optional<sim::AuvTaskParams::Progress> result;
+  if (spec.empty()) return result;
+  if (spec.find('=') == std::string::npos) {
+    sim::AuvTaskParams::Progress mode{};
+    if (!sim::ParseAuvProgress(spec, &mode)) return bad("unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
+    return std::optional{mode};
+  }
+  std::vector<std::string> seen;
+  std::size_t start = 0;
+  while (start <= spec.size()) {
+    const std::size_t end = std::min(spec.find(',', start), spec.size());
+    const std::string part = spec.substr(start, end - start);
+    const std::size_t eq = part.find('=');
+    if (eq == std::string::npos) return bad("'" + part + "' is not LAYOUT=MODE");
+    const std::string name = part.substr(0, eq), mode_name = part.substr(eq + 1);
+    if (name != "easy" && name != "medium" && name != "hard")
+      return bad("layout '" + name + "' unknown (easy, medium, hard)");
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) return bad("layout '" + name + "' given twice");
+    seen.push_back(name);
+    sim::AuvTaskParams::Progress mode{};
+    if (!sim::ParseAuvProgress(mode_name, &mode))
+      return bad("'" + mode_name + "' for " + name + " is not euclidean or geodesic");
+    if (name == layout) result = mode;
+    start = end + 1;
+  }
+  return result;
+}
+
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
                                              const std::string& progress) {
-  sim::AuvTaskParams::Progress mode{};
-  if (!progress.empty() && !sim::ParseAuvProgress(progress, &mode))
-    return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress '" + progress + "' unknown (euclidean, geodesic)");
+  if (auto check = ProgressFor(progress, "easy"); !check)
+    return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress " + check.error().message);
   std::vector<std::string> names;
   if (layout_name == "mixed") {
     // Hard twice: it needs the most experience (a serpentine of three corridors).
@@ -25,7 +55,7 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
   for (const auto& n : names) {
     auto cfg = sim::LoadAuvTaskConfig(dir + "auv.yaml", dir + "layouts/" + n + ".yaml", dir + "io_layout.yaml");
     if (!cfg) return std::move(cfg).error();
-    if (!progress.empty()) cfg->task.progress = mode;
+    if (const auto mode = ProgressFor(progress, n).value()) cfg->task.progress = *mode;
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
   return Make(std::move(configs), "auv-nav:" + layout_name);

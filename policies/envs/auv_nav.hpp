@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,12 +20,18 @@ namespace pbppo::envs {
 class AuvNav final : public Env {
  public:
   // `layout_name`: easy, medium or hard (models/<dir>/auv/layouts/<name>.yaml), or mixed.
-  // progress: "euclidean" or "geodesic" replaces auv.yaml's task.progress; empty keeps it.
+  // progress: a progress spec (ProgressFor) that replaces auv.yaml's task.progress; empty keeps it.
   static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name,
                                               const std::string& progress = "");
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);
+
+  // The progress term a spec gives `layout`: "" keeps auv.yaml's (nullopt); "euclidean" or
+  // "geodesic" holds for every layout; "LAYOUT=MODE,..." (e.g. "hard=geodesic") for the layouts
+  // it names, the others keep auv.yaml's. Errors name the part of the spec that is wrong.
+  static Result<std::optional<sim::AuvTaskParams::Progress>> ProgressFor(const std::string& spec,
+                                                                         const std::string& layout);
 
   const std::string& name() const noexcept override { return name_; }
   std::uint32_t observation_size() const noexcept override;

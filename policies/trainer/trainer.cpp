@@ -13,6 +13,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/adam.hpp"
 #include "policies/trainer/gae.hpp"
@@ -144,8 +145,7 @@ Status TrainConfig::Validate() const {
     return Invalid("--exploring-starts", std::to_string(exploring_starts) + " is not in [0, 1]");
   if (exploring_starts > 0 && env != "auv-nav")
     return Invalid("--exploring-starts", "only auv-nav has exploring starts, not '" + env + "'");
-  if (sim::AuvTaskParams::Progress mode{}; !progress.empty() && !sim::ParseAuvProgress(progress, &mode))
-    return Invalid("--progress", "'" + progress + "' is not euclidean or geodesic");
+  if (auto p = envs::AuvNav::ProgressFor(progress, "easy"); !p) return Invalid("--progress", p.error().message);
   if (!progress.empty() && env != "auv-nav")
     return Invalid("--progress", "only auv-nav has a progress term to choose, not '" + env + "'");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");

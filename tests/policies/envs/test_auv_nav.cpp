@@ -21,6 +21,14 @@ std::unique_ptr<Env> Make(const std::string& layout) {
   return std::move(env).value();
 }
 
+// Index of the observation element `name` of the env's IO layout (models/auv/io_layout.yaml).
+std::size_t Input(const Env& env, const std::string& name) {
+  const auto names = env.layout().ObservationNames();
+  const auto it = std::find(names.begin(), names.end(), name);
+  REQUIRE_MESSAGE(it != names.end(), "no observation element '" << name << "'");
+  return static_cast<std::size_t>(it - names.begin());
+}
+
 TEST_CASE("auv-nav has the IO layout's sizes, names and policy-unit action bounds") {
   auto env = Make("hard");
   CHECK(env->name() == "auv-nav:hard");
@@ -53,7 +61,7 @@ TEST_CASE("actions in policy units are mapped through the layout to speed comman
   CHECK(auv->task().commanded_speed_mps() == doctest::Approx(0.0));
   // Accelerating forward for 2 s shows up in the surge-speed observation.
   for (int i = 0; i < 20; ++i) env->Step(full, obs);
-  CHECK(obs[20] > 0.3f);
+  CHECK(obs[Input(*env, "surge_speed")] > 0.3f);
 }
 
 TEST_CASE("same rng gives the same episode - clones are independent instances") {
@@ -96,7 +104,7 @@ TEST_CASE("driving into an obstacle ends the episode as a collision - the info s
   REQUIRE(r.terminated);
   CHECK(env->episode_info().failure);
   CHECK(r.reward < -400);
-  CHECK(obs[19] == 1.f);  // chi, the episode-end flag
+  CHECK(obs[Input(*env, "episode_end")] == 1.f);  // chi
 }
 
 TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by name") {
@@ -141,7 +149,40 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   o.progress = "manhattan";
   auto bad = MakeEnv("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message == "auv-nav: progress 'manhattan' unknown (euclidean, geodesic)");
+  CHECK(bad.error().message == "auv-nav: progress 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
+  // Per layout: the named layouts take the mode, the others keep auv.yaml's.
+  o.progress = "hard=geodesic";
+  auto per_layout = MakeEnv("auv-nav", o);
+  REQUIRE_MESSAGE(per_layout.ok(), per_layout.error().message);
+  auto* mixed = dynamic_cast<AuvNav*>(per_layout->get());
+  seen.clear();
+  for (int i = 0; i < 40; ++i) {
+    (*per_layout)->Reset(rng, obs);
+    const auto& cfg = mixed->config();
+    CAPTURE(cfg.layout.name);
+    CHECK(cfg.task.progress == (cfg.layout.name == "hard" ? sim::AuvTaskParams::Progress::kGeodesic
+                                                          : sim::AuvTaskParams::Progress::kEuclidean));
+    seen.insert(cfg.layout.name);
+  }
+  CHECK(seen.size() == 3);
+  for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
+           {"hard=geodesic,deep=geodesic", "'hard=geodesic,deep=geodesic': layout 'deep' unknown (easy, medium, hard)"},
+           {"hard=geodesic,hard=euclidean", "'hard=geodesic,hard=euclidean': layout 'hard' given twice"},
+           {"hard=bee-line", "'hard=bee-line': 'bee-line' for hard is not euclidean or geodesic"},
+           {"hard=geodesic,", "'hard=geodesic,': '' is not LAYOUT=MODE"},
+           {"medium=euclidean,geodesic", "'medium=euclidean,geodesic': 'geodesic' is not LAYOUT=MODE"}}) {
+    CAPTURE(spec);
+    o.progress = spec;
+    bad = MakeEnv("auv-nav", o);
+    REQUIRE_FALSE(bad.ok());
+    CHECK(bad.error().message == "auv-nav: progress " + message);
+    CHECK(AuvNav::ProgressFor(spec, "hard").error().message == message);
+  }
+  CHECK(*AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "easy").value() ==
+        sim::AuvTaskParams::Progress::kGeodesic);
+  CHECK(*AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "medium").value() ==
+        sim::AuvTaskParams::Progress::kEuclidean);
+  CHECK_FALSE(AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "hard").value().has_value());
   o.progress = "geodesic";
   bad = MakeEnv("pendulum", o);
   REQUIRE_FALSE(bad.ok());

@@ -152,7 +152,11 @@ TEST_CASE("trainer errors name the field and value") {
         std::string::npos);
   c.env = "auv-nav";
   c.progress = "crow-flies";
-  CHECK(Train(c).error().message.find("--progress: 'crow-flies' is not euclidean or geodesic") != std::string::npos);
+  CHECK(Train(c).error().message.find("--progress: 'crow-flies': unknown (euclidean, geodesic, or LAYOUT=MODE,...)") !=
+        std::string::npos);
+  c.progress = "hard=crow-flies";
+  CHECK(Train(c).error().message.find("--progress: 'hard=crow-flies': 'crow-flies' for hard is not euclidean or "
+                                      "geodesic") != std::string::npos);
   c = Small();
   const std::string dir = test::ScratchDir("trainer_unwritable");
   std::ofstream(dir + "/file") << "x";
