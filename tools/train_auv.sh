@@ -1,31 +1,90 @@
 #!/usr/bin/env bash
-# Trains the shipped AUV navigation policy and writes its report: Pb-PPO (our `pbppo` schedule,
-# arms 0.05:0.4:6, rollout feedback) on the hard layout (LAYOUT=mixed trains on all three), then
-# 200 deterministic evaluation episodes per layout from seeds that training never uses, with the
-# trajectory plots. Copies the blob, its golden vectors and the report to policies/frozen/auv_nav/.
-# Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]   (PBPPO=path/to/pbppo, STEPS, SEED, THREADS)
+# Trains the shipped AUV navigation policy and writes its report. Pb-PPO (our `pbppo` schedule,
+# arms 0.05:0.4:6, rollout feedback) in stages, each starting from the best policy of the one
+# before (--init):
+#   stage 1: the hard layout from scratch (observation normaliser on), geodesic progress;
+#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR in MIXED_STAGES.
+# Then 200 deterministic evaluation episodes per layout from seeds that training never uses, with
+# the trajectory plots. Copies the blob, its golden vectors and the report to
+# policies/frozen/auv_nav/. Same build, same settings: the same blob (runs are bit-reproducible).
+# A stage whose folder already holds a finished run (summary.json, not interrupted) is kept, so a
+# stopped script resumes at the first unfinished stage; delete OUT_DIR to train afresh.
+# Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]
+#   PBPPO=path/to/pbppo  THREADS=2  PROGRESS=geodesic (--progress of every stage)
+#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4"
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/runs/train_auv}"
 pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
-steps="${STEPS:-2.5e6}"
-layout="${LAYOUT:-hard}"
-seed="${SEED:-1}"
 threads="${THREADS:-2}"
+progress="${PROGRESS:-geodesic}"
+hard_steps="${HARD_STEPS:-6e6}"
+hard_seed="${HARD_SEED:-1}"
+mixed_steps="${MIXED_STEPS:-6e6}"
+mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4}"
 frozen="$root/policies/frozen/auv_nav"
 if [ ! -x "$pbppo" ]; then
   echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
   exit 2
 fi
+common=(--env auv-nav --schedule pbppo --arms 0.05:0.4:6 --feedback rollout --threads "$threads" --envs 16
+  --rollout 256 --minibatch 512 --epochs 10 --gamma 0.99 --scale-rewards --hidden 64-64 --keep-best
+  --progress "$progress")
+finished() {  # finished DIR ENV SEED LR: a completed run with these settings is there (another: stop)
+  [ -f "$1/best.blob" ] && [ -f "$1/summary.json" ] || return 1
+  local rc=0
+  python3 - "$1/summary.json" "$2" "$3" "$4" "$progress" <<'PY' || rc=$?
+import json, sys
+s = json.load(open(sys.argv[1]))
+want = {"env": sys.argv[2], "seed": int(sys.argv[3]), "learning_rate": float(sys.argv[4]), "progress": sys.argv[5]}
+got = {k: s.get(k) for k in want}
+if got != want:
+    print("train_auv: %s holds another run (%s, this script wants %s); delete it or choose another OUT_DIR"
+          % (sys.argv[1], got, want), file=sys.stderr)
+    sys.exit(3)
+sys.exit(0 if s.get("interrupted") is False else 1)
+PY
+  [ "$rc" -ne 3 ] || exit 1
+  return "$rc"
+}
+for pair in $mixed_stages; do
+  case "$pair" in
+    [0-9]*:[0-9.]*) ;;
+    *) echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR (e.g. 1:3e-4)" >&2; exit 2 ;;
+  esac
+done
 mkdir -p "$out"
-"$pbppo" train --env auv-nav --layout "$layout" --schedule pbppo --arms 0.05:0.4:6 --feedback rollout \
-  --steps "$steps" --seed "$seed" --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10 \
-  --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --hidden 64-64 --keep-best --out "$out"
-# PPO on this task is not monotonic: ship the policy of the best last-100-episode return.
-"$root/tools/eval_auv.sh" "$out/best.blob" "$out" || echo "train_auv: the policy misses the evaluation targets (shipped anyway, see the report)"
+if finished "$out/stage1" auv-nav:hard "$hard_seed" 3e-4; then
+  echo "train_auv: stage 1: kept the finished run in $out/stage1"
+else
+  echo "train_auv: stage 1: hard, $hard_steps steps, seed $hard_seed -> $out/stage1"
+  "$pbppo" train "${common[@]}" --layout hard --normalize-obs --lr 3e-4 --steps "$hard_steps" \
+    --seed "$hard_seed" --out "$out/stage1"
+fi
+stage=1
+for pair in $mixed_stages; do
+  seed=${pair%%:*} lr=${pair#*:}
+  prev=$stage
+  stage=$((stage + 1))
+  if finished "$out/stage$stage" auv-nav:mixed "$seed" "$lr"; then
+    echo "train_auv: stage $stage: kept the finished run in $out/stage$stage"
+    continue
+  fi
+  echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr, from stage $prev -> $out/stage$stage"
+  # The normaliser comes with the --init blob (and keeps adapting).
+  "$pbppo" train "${common[@]}" --layout mixed --init "$out/stage$prev/best.blob" --lr "$lr" \
+    --steps "$mixed_steps" --seed "$seed" --out "$out/stage$stage"
+done
+last="$out/stage$stage"
+# PPO on this task is not monotonic: each stage hands on, and ships, its best checkpoint.
+"$root/tools/eval_auv.sh" "$last/best.blob" "$out" || echo "train_auv: the policy misses the evaluation targets (shipped anyway, see the report)"
+rm -rf "$frozen/report"
 mkdir -p "$frozen/report"
-cp "$out/best.blob" "$frozen/auv_nav.blob"
-cp "$out/best.golden" "$frozen/auv_nav.golden"
-cp "$out"/{summary.json,log.csv,return.png,success.png,epsilon.png,arms.png} "$frozen/report/"
+cp "$last/best.blob" "$frozen/auv_nav.blob"
+cp "$last/best.golden" "$frozen/auv_nav.golden"
+for s in $(seq 1 "$stage"); do
+  mkdir -p "$frozen/report/stage$s"
+  cp "$out/stage$s"/{summary.json,log.csv,return.png,success.png,epsilon.png,arms.png} "$frozen/report/stage$s/"
+done
 cp "$out"/eval_{easy,medium,hard}.{json,png} "$frozen/report/"
 echo "shipped: $frozen"

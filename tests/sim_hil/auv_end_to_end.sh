@@ -73,8 +73,8 @@ run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to com
 }
 
 echo "== 2: lock-step determinism, no allocation in the tick"
-run_pair det1 hard 11 --max-time 40
-run_pair det2 hard 11 --max-time 40
+run_pair det1 hard 4 --max-time 40
+run_pair det2 hard 4 --max-time 40
 cmp "$work/det1.csv" "$work/det2.csv" || fail "two lock-step runs with the same seed differ"
 [ "$(wc -l <"$work/det1.csv")" -gt 300 ] || fail "det1: short trajectory"
 expect "$work/det1.ctl.log" "control thread heap allocations during the loop: 0$"

@@ -33,7 +33,8 @@ AuvNavTask MakeTask(const AuvTaskConfig& c) {
 }
 
 // Observation indices of models/auv/io_layout.yaml.
-constexpr int kSonar0 = 0, kBeams = 16, kDist = 16, kYaw = 17, kBearing = 18, kEnd = 19;
+constexpr int kSonar0 = 0, kBeams = 16, kDist = 16, kBearing = 17, kEnd = 18, kSurge = 19, kYawRate = 20,
+              kCosBearing = 21, kSinBearing = 22, kNearestEcho = 23, kX = 24, kY = 25, kInputs = 26;
 
 // A scripted pilot reading only the observation: attraction towards the target plus repulsion
 // from sonar echoes closer than 6 m, pure pursuit on the resulting direction, slower when the
@@ -106,10 +107,20 @@ TEST_CASE("auv task: all layouts and the IO layout load - sizes and hash come fr
     CHECK(c.layout.name == name);
     CHECK(c.layout.targets.size() == 3);
     AuvNavTask t = MakeTask(c);
-    CHECK(t.observation_size() == 27);
+    CHECK(t.observation_size() == kInputs);
     CHECK(t.action_size() == 2);
     CHECK(t.io_layout_hash() == c.io.Hash());
-    CHECK(t.io_layout().ObservationNames()[kBearing] == "target_bearing");
+    const auto names = t.io_layout().ObservationNames();
+    CHECK(names[kDist] == "target_distance");
+    CHECK(names[kBearing] == "target_bearing");
+    CHECK(names[kEnd] == "episode_end");
+    CHECK(names[kSurge] == "surge_speed");
+    CHECK(names[kYawRate] == "yaw_rate");
+    CHECK(names[kCosBearing] == "cos_target_bearing");
+    CHECK(names[kSinBearing] == "sin_target_bearing");
+    CHECK(names[kNearestEcho] == "nearest_echo");
+    CHECK(names[kX] == "x");
+    CHECK(names[kY] == "y");
     CHECK(t.max_episode_steps() == 2000);
   }
 }
@@ -172,7 +183,7 @@ TEST_CASE("auv task: the progress term follows l_AT and |phi_AT| exactly, and tu
   AuvTaskConfig c = Config("easy");
   c.layout = Layout(kOpenLayout);  // start at (20, 20) facing +x, target at (5, 35): phi = 135 deg
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(7, obs.data());
   auto measure = [&] {
     const AuvState& s = task.vehicle();
@@ -182,7 +193,10 @@ TEST_CASE("auv task: the progress term follows l_AT and |phi_AT| exactly, and tu
   };
   CHECK(obs[kBearing] == doctest::Approx(0.75).epsilon(1e-6));
   CHECK(obs[kDist] == doctest::Approx(std::hypot(15.0, 15.0) / 40.0).epsilon(1e-6));
-  CHECK(obs[kYaw] == doctest::Approx(0.0));
+  CHECK(obs[kCosBearing] == doctest::Approx(std::cos(0.75 * kPi)).epsilon(1e-6));
+  CHECK(obs[kSinBearing] == doctest::Approx(std::sin(0.75 * kPi)).epsilon(1e-6));
+  CHECK(obs[kX] == doctest::Approx(0.0));  // (20, 20): the arena's centre
+  CHECK(obs[kY] == doctest::Approx(0.0));
   const float turn_left[2] = {-1.0f, 1.0f};  // v = 0, omega = +0.5 rad/s: towards the target
   double bearing_gain_sum = 0.0;
   for (int k = 0; k < 30; ++k) {
@@ -206,7 +220,7 @@ TEST_CASE("auv task: a collision terminates with -500 and later steps change not
   AuvTaskConfig c = Config("easy");
   c.layout = Layout(kOpenLayout);  // the circle at (30, 20) r 2 lies 8 m dead ahead
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(3, obs.data());
   CHECK(obs[0] == doctest::Approx(8.0 / 15.0).epsilon(1e-5));  // bow beam sees the circle
   const float ahead[2] = {1.0f, 0.0f};
@@ -243,7 +257,7 @@ TEST_CASE("auv task: the time limit truncates without terminating") {
   c.task.episode_time_s = 5.0;
   AuvNavTask task = MakeTask(c);
   CHECK(task.max_episode_steps() == 50);
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(11, obs.data());
   const float stop[2] = {-1.0f, 0.0f};  // v = 0
   for (int k = 1; k <= 50; ++k) {
@@ -274,7 +288,7 @@ TEST_CASE("auv task: same seed, same episode bit for bit - other seeds move star
   // The same instance reset with the same seed repeats itself too.
   const Episode ea2 = RunPilot(a, 42, 300);
   CHECK(ea2.obs.back() == ea.obs.back());
-  std::vector<float> o1(27), o2(27);
+  std::vector<float> o1(kInputs), o2(kInputs);
   a.Reset(1, o1.data());
   const double x1 = a.vehicle().x_m;
   b.Reset(2, o2.data());
@@ -288,7 +302,7 @@ TEST_CASE("auv task: random starts and random obstacles respect the layout's rul
     const AuvTaskConfig c = Config(name);
     AuvNavTask task = MakeTask(c);
     const auto& r = c.layout.random_obstacles;
-    std::vector<float> obs(27);
+    std::vector<float> obs(kInputs);
     int total = 0;
     for (std::uint64_t seed = 0; seed < 60; ++seed) {
       task.Reset(seed, obs.data());
@@ -320,7 +334,7 @@ TEST_CASE("auv task: random starts and random obstacles respect the layout's rul
 
 TEST_CASE("auv task: non-finite actions are replaced by zero and counted") {
   AuvNavTask task = MakeTask(Config("easy"));
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(5, obs.data());
   const float bad[2] = {std::nanf(""), INFINITY};
   const AuvStepResult r = task.Step(bad, obs.data());
@@ -438,6 +452,19 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   auto s = LoadSonarParams(scratch);
   REQUIRE_FALSE(s.ok());
   CHECK(s.error().message.find("sonar.beams: '2.5' is not an integer") != std::string::npos);
+  write("max_range_m: 15.0", "max_range_m: 15.0\n  beam_width_deg: 120");
+  s = LoadSonarParams(scratch);
+  REQUIRE_FALSE(s.ok());
+  CHECK(s.error().message.find("sonar.beam_width_deg: '120' is outside") != std::string::npos);
+  write("max_range_m: 15.0", "max_range_m: 15.0\n  rays_per_beam: 0");
+  s = LoadSonarParams(scratch);
+  REQUIRE_FALSE(s.ok());
+  CHECK(s.error().message.find("sonar.rays_per_beam: '0' is outside") != std::string::npos);
+  write("max_range_m: 15.0", "max_range_m: 15.0\n  beam_width_deg: 22.5\n  rays_per_beam: 5");
+  s = LoadSonarParams(scratch);
+  REQUIRE_MESSAGE(s.ok(), s.error().message);
+  CHECK(s->beam_width_rad == doctest::Approx(kPi / 8));
+  CHECK(s->rays_per_beam == 5);
   write("safe_distance_m: 1.2", "safe_distnce_m: 1.2");
   auto t = LoadAuvTaskParams(scratch);
   REQUIRE_FALSE(t.ok());
@@ -538,7 +565,7 @@ TEST_CASE("auv task: every layout stays solvable with its random obstacles (grid
     CAPTURE(name);
     const AuvTaskConfig c = Config(name);
     AuvNavTask task = MakeTask(c);
-    std::vector<float> obs(27);
+    std::vector<float> obs(kInputs);
     const double need = c.task.safe_distance_m + 0.1;
     for (const auto& t : c.layout.targets) CHECK(Clearance(c.layout.world, t[0], t[1]) >= need);
     for (std::uint64_t seed = 0; seed < 30; ++seed) {
@@ -579,7 +606,7 @@ TEST_CASE("auv task: two task instances on two threads give the single-threaded 
 TEST_CASE("auv task: observations are the signals through the IO layout, history included") {
   AuvTaskConfig c = Config("medium");
   AuvNavTask task = MakeTask(c);
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(17, obs.data());
   const float fwd[2] = {0.5f, 0.3f};
   for (int k = 0; k < 20; ++k) (void)task.Step(fwd, obs.data());
@@ -589,17 +616,28 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
     CHECK(range == doctest::Approx(CastRay(task.world(), s.x_m, s.y_m, s.yaw_rad + 2 * kPi * i / 16, 15.0)));
     CHECK(obs[static_cast<std::size_t>(i)] == doctest::Approx(std::min(range / 15.0, 1.0)).epsilon(1e-6));
   }
-  CHECK(obs[20] == doctest::Approx(s.u_mps / 1.5).epsilon(1e-5));
-  CHECK(obs[21] == doctest::Approx(std::clamp(s.r_radps / 0.6, -1.5, 1.5)).epsilon(1e-5));
-  CHECK(obs[kYaw] == doctest::Approx(WrapAngle(s.yaw_rad) / kPi).epsilon(1e-6));
+  CHECK(obs[kSurge] == doctest::Approx(s.u_mps / 1.5).epsilon(1e-5));
+  CHECK(obs[kYawRate] == doctest::Approx(std::clamp(s.r_radps / 0.6, -1.5, 1.5)).epsilon(1e-5));
+  const double nearest = *std::min_element(task.sonar_ranges().begin(), task.sonar_ranges().end());
+  CHECK(nearest < 15.0);  // something in range, so the element is not just its clip
+  pbppo::robot::AuvSensorSample sample;
+  task.FillSensorSample(sample);
+  CHECK(nearest >= sample.clearance_m);  // a range never undercuts the exact clearance
+  CHECK(obs[kNearestEcho] == doctest::Approx(std::min(nearest / 5.0, 1.0)).epsilon(1e-6));
+  CHECK(obs[kX] == doctest::Approx((s.x_m - 20.0) / 20.0).epsilon(1e-6));
+  CHECK(obs[kY] == doctest::Approx((s.y_m - 20.0) / 20.0).epsilon(1e-6));
+  const auto& target = c.layout.targets[static_cast<std::size_t>(task.target_index())];
+  const double phi = WrapAngle(std::atan2(target[1] - s.y_m, target[0] - s.x_m) - s.yaw_rad);
+  CHECK(obs[kCosBearing] == doctest::Approx(std::cos(phi)).epsilon(1e-5));
+  CHECK(obs[kSinBearing] == doctest::Approx(std::sin(phi)).epsilon(1e-5));
 
-  // History 3 on target_distance, and an offset: 29 inputs, the element shifts by one per step.
+  // History 3 on target_distance, and an offset: 28 inputs, the element shifts by one per step.
   c.io.observations[16].history = 3;
   c.io.observations[16].offset = 10.0;
   AuvNavTask h = MakeTask(c);
-  CHECK(h.observation_size() == 29);
+  CHECK(h.observation_size() == kInputs + 2);
   CHECK(h.io_layout_hash() != task.io_layout_hash());
-  std::vector<float> o(29);
+  std::vector<float> o(kInputs + 2);
   h.Reset(17, o.data());
   CHECK(o[16] == o[17]);  // filled with the reset value
   CHECK(o[17] == o[18]);
@@ -611,7 +649,8 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
     CHECK(o[16] == doctest::Approx((std::hypot(t[0] - v.x_m, t[1] - v.y_m) - 10.0) * 0.025).epsilon(1e-6));
     CHECK(o[17] == prev[16]);
     CHECK(o[18] == prev[17]);
-    CHECK(o[19] == doctest::Approx(WrapAngle(v.yaw_rad) / kPi).epsilon(1e-6));  // yaw follows at 19
+    const double phi = WrapAngle(std::atan2(t[1] - v.y_m, t[0] - v.x_m) - v.yaw_rad);
+    CHECK(o[19] == doctest::Approx(phi / kPi).epsilon(1e-5));  // the bearing follows at 19
     prev = o;
   }
 }
@@ -619,7 +658,7 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
 TEST_CASE("auv task: StepCommand with the mapped physical command is Step bit for bit") {
   const AuvTaskConfig c = Config("medium");
   AuvNavTask a = MakeTask(c), b = MakeTask(c);
-  std::vector<float> oa(27), ob(27);
+  std::vector<float> oa(kInputs), ob(kInputs);
   a.Reset(11, oa.data());
   b.Reset(11, ob.data());
   for (int k = 0; k < 150; ++k) {
@@ -643,7 +682,7 @@ TEST_CASE("auv task: StepCommand with the mapped physical command is Step bit fo
 
 TEST_CASE("auv task: FillSensorSample reports the vehicle, sonar and target the task measures") {
   AuvNavTask task = MakeTask(Config("easy"));
-  std::vector<float> obs(27);
+  std::vector<float> obs(kInputs);
   task.Reset(3, obs.data());
   for (int k = 0; k < 20; ++k) task.StepCommand(1.0, 0.2, obs.data());
   pbppo::robot::AuvSensorSample s;
