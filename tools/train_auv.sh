@@ -11,7 +11,7 @@
 # stopped script resumes at the first unfinished stage; delete OUT_DIR to train afresh.
 # Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]
 #   PBPPO=path/to/pbppo  THREADS=2  PROGRESS=geodesic (--progress of every stage)
-#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4"
+#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4 5:5e-5"
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/runs/train_auv}"
@@ -21,7 +21,7 @@ progress="${PROGRESS:-geodesic}"
 hard_steps="${HARD_STEPS:-6e6}"
 hard_seed="${HARD_SEED:-1}"
 mixed_steps="${MIXED_STEPS:-6e6}"
-mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4}"
+mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4 5:5e-5}"
 frozen="$root/policies/frozen/auv_nav"
 if [ ! -x "$pbppo" ]; then
   echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
