@@ -4,6 +4,14 @@
 #include <cmath>
 
 namespace pbppo::envs {
+namespace {
+
+// The layouts under models/<dir>/auv/layouts/ (mixed draws from them).
+bool IsLayoutName(const std::string& name) {
+  return name == "easy" || name == "medium" || name == "hard";
+}
+
+}  // namespace
 
 Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const std::string& spec,
                                                                         const std::string& layout) {
@@ -23,8 +31,7 @@ Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const st
     const std::size_t eq = part.find('=');
     if (eq == std::string::npos) return bad("'" + part + "' is not LAYOUT=MODE");
     const std::string name = part.substr(0, eq), mode_name = part.substr(eq + 1);
-    if (name != "easy" && name != "medium" && name != "hard")
-      return bad("layout '" + name + "' unknown (easy, medium, hard)");
+    if (!IsLayoutName(name)) return bad("layout '" + name + "' unknown (easy, medium, hard)");
     if (std::find(seen.begin(), seen.end(), name) != seen.end()) return bad("layout '" + name + "' given twice");
     seen.push_back(name);
     sim::AuvTaskParams::Progress mode{};
@@ -38,13 +45,13 @@ Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const st
 
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
                                              const std::string& progress) {
-  if (auto check = ProgressFor(progress, "easy"); !check)
+  if (auto check = ProgressFor(progress, ""); !check)
     return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress " + check.error().message);
   std::vector<std::string> names;
   if (layout_name == "mixed") {
     // Hard twice: it needs the most experience (a serpentine of three corridors).
     names = {"easy", "medium", "hard", "hard"};
-  } else if (layout_name == "easy" || layout_name == "medium" || layout_name == "hard") {
+  } else if (IsLayoutName(layout_name)) {
     names = {layout_name};
   } else {
     return MakeError(ErrorCode::kInvalidValue,

@@ -29,7 +29,8 @@ class AuvNav final : public Env {
 
   // The progress term a spec gives `layout`: "" keeps auv.yaml's (nullopt); "euclidean" or
   // "geodesic" holds for every layout; "LAYOUT=MODE,..." (e.g. "hard=geodesic") for the layouts
-  // it names, the others keep auv.yaml's. Errors name the part of the spec that is wrong.
+  // it names, the others keep auv.yaml's. The whole spec is checked whatever `layout` is ("" only
+  // checks it); errors name the part of the spec that is wrong.
   static Result<std::optional<sim::AuvTaskParams::Progress>> ProgressFor(const std::string& spec,
                                                                          const std::string& layout);
 

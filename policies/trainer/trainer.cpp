@@ -24,7 +24,6 @@
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
 #include "runtime/robot/io_layout.hpp"
-#include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -145,7 +144,7 @@ Status TrainConfig::Validate() const {
     return Invalid("--exploring-starts", std::to_string(exploring_starts) + " is not in [0, 1]");
   if (exploring_starts > 0 && env != "auv-nav")
     return Invalid("--exploring-starts", "only auv-nav has exploring starts, not '" + env + "'");
-  if (auto p = envs::AuvNav::ProgressFor(progress, "easy"); !p) return Invalid("--progress", p.error().message);
+  if (auto p = envs::AuvNav::ProgressFor(progress, ""); !p) return Invalid("--progress", p.error().message);
   if (!progress.empty() && env != "auv-nav")
     return Invalid("--progress", "only auv-nav has a progress term to choose, not '" + env + "'");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");

@@ -71,7 +71,7 @@ void SonarScan(const World2d& w, const SonarParams& p, double x, double y, doubl
     const double axis = yaw + BeamAngle(p, i);
     double r = p.max_range_m;
     for (int k = 0; k < rays; ++k) {
-      const double offset = rays == 1 ? 0.0 : -0.5 * p.beam_width_rad + (k + 0.5) * slice;
+      const double offset = (k + 0.5) * slice - 0.5 * p.beam_width_rad;  // 0 for a single ray
       r = std::min(r, CastRay(w, x, y, axis + offset, p.max_range_m));
     }
     ranges[i] = r;

@@ -448,20 +448,19 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   p = LoadAuvParams(scratch);
   REQUIRE_FALSE(p.ok());
   CHECK(p.error().message.find("damping.linear: expected a list of 6 numbers") != std::string::npos);
-  write("beams: 16", "beams: 2.5");
-  auto s = LoadSonarParams(scratch);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.error().message.find("sonar.beams: '2.5' is not an integer") != std::string::npos);
-  write("max_range_m: 15.0", "max_range_m: 15.0\n  beam_width_deg: 120");
-  s = LoadSonarParams(scratch);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.error().message.find("sonar.beam_width_deg: '120' is outside") != std::string::npos);
-  write("max_range_m: 15.0", "max_range_m: 15.0\n  rays_per_beam: 0");
-  s = LoadSonarParams(scratch);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.error().message.find("sonar.rays_per_beam: '0' is outside") != std::string::npos);
+  auto sonar_refused = [&](const std::string& from, const std::string& to, const std::string& message) {
+    CAPTURE(to);
+    write(from, to);
+    const auto s = LoadSonarParams(scratch);
+    REQUIRE_FALSE(s.ok());
+    CHECK(s.error().message.find(message) != std::string::npos);
+  };
+  sonar_refused("beams: 16", "beams: 2.5", "sonar.beams: '2.5' is not an integer");
+  sonar_refused("max_range_m: 15.0", "max_range_m: 15.0\n  beam_width_deg: 120",
+                "sonar.beam_width_deg: '120' is outside");
+  sonar_refused("max_range_m: 15.0", "max_range_m: 15.0\n  rays_per_beam: 0", "sonar.rays_per_beam: '0' is outside");
   write("max_range_m: 15.0", "max_range_m: 15.0\n  beam_width_deg: 22.5\n  rays_per_beam: 5");
-  s = LoadSonarParams(scratch);
+  auto s = LoadSonarParams(scratch);
   REQUIRE_MESSAGE(s.ok(), s.error().message);
   CHECK(s->beam_width_rad == doctest::Approx(kPi / 8));
   CHECK(s->rays_per_beam == 5);
@@ -649,8 +648,8 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
     CHECK(o[16] == doctest::Approx((std::hypot(t[0] - v.x_m, t[1] - v.y_m) - 10.0) * 0.025).epsilon(1e-6));
     CHECK(o[17] == prev[16]);
     CHECK(o[18] == prev[17]);
-    const double phi = WrapAngle(std::atan2(t[1] - v.y_m, t[0] - v.x_m) - v.yaw_rad);
-    CHECK(o[19] == doctest::Approx(phi / kPi).epsilon(1e-5));  // the bearing follows at 19
+    const double phi_now = WrapAngle(std::atan2(t[1] - v.y_m, t[0] - v.x_m) - v.yaw_rad);
+    CHECK(o[19] == doctest::Approx(phi_now / kPi).epsilon(1e-5));  // the bearing follows at 19
     prev = o;
   }
 }
