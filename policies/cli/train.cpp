@@ -254,6 +254,9 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
   s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");
+  s.add_option("--outcomes", o.outcomes,
+               "auv-nav: write one row per episode to this CSV (outcome, targets, time, return, end pose, clearance, "
+               "the nearest obstacle and the random obstacles)");
   s.add_flag("--json", o.json, "Print JSON");
 }
 
@@ -327,6 +330,51 @@ std::string PlotTrajectories(const std::string& png, const sim::AuvTaskConfig& c
   return "";
 }
 
+// Opens an eval CSV output and writes its header; an empty path writes nothing (true).
+bool OpenCsv(std::ofstream& out, const std::string& path, const char* option, const char* header) {
+  if (path.empty()) return true;
+  out.open(path);
+  if (!out) {
+    std::fprintf(stderr, "pbppo eval: %s: cannot write '%s'\n", option, path.c_str());
+    return false;
+  }
+  out << header << '\n';
+  return true;
+}
+
+// One --outcomes row: how the episode ended, where, and what was nearest there ("wall", "layout" obstacle
+// or "random" obstacle); the random obstacles as x:y:radius separated by spaces.
+void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, double ret) {
+  const auto& task = auv.task();
+  const auto& st = task.stats();
+  const auto& v = task.vehicle();
+  const auto& world = task.world();
+  const char* outcome = st.success ? "success" : st.collided ? "collision" : "timeout";
+  const std::size_t first_random = world.circles.size() - static_cast<std::size_t>(st.random_obstacles);
+  double nearest = std::min({v.x_m - world.arena.x_min_m, world.arena.x_max_m - v.x_m, v.y_m - world.arena.y_min_m,
+                             world.arena.y_max_m - v.y_m});
+  const char* what = "wall";
+  for (const auto& b : world.boxes) {
+    const double dx = std::max({b.x_min_m - v.x_m, 0.0, v.x_m - b.x_max_m});
+    const double dy = std::max({b.y_min_m - v.y_m, 0.0, v.y_m - b.y_max_m});
+    if (const double d = std::hypot(dx, dy); d < nearest) nearest = d, what = "layout";
+  }
+  for (std::size_t i = 0; i < world.circles.size(); ++i) {
+    const auto& c = world.circles[i];
+    if (const double d = std::hypot(v.x_m - c.x_m, v.y_m - c.y_m) - c.radius_m; d < nearest) {
+      nearest = d;
+      what = i >= first_random ? "random" : "layout";
+    }
+  }
+  out << episode << ',' << auv.config().layout.name << ',' << outcome << ',' << st.targets_reached << ',' << st.time_s
+      << ',' << ret << ',' << v.x_m << ',' << v.y_m << ',' << v.yaw_rad << ',' << nearest << ',' << what << ',';
+  for (std::size_t i = first_random; i < world.circles.size(); ++i) {
+    const auto& c = world.circles[i];
+    out << (i > first_random ? " " : "") << c.x_m << ':' << c.y_m << ':' << c.radius_m;
+  }
+  out << '\n';
+}
+
 }  // namespace
 
 int Eval(const EvalOptions& o) {
@@ -348,8 +396,9 @@ int Eval(const EvalOptions& o) {
     return 1;
   }
   auto* auv = dynamic_cast<envs::AuvNav*>(env->get());
-  if ((!o.plot.empty() || !o.trajectories.empty()) && auv == nullptr) {
-    std::fprintf(stderr, "pbppo eval: --plot and --trajectories need --env auv-nav (not '%s')\n", o.env.c_str());
+  if ((!o.plot.empty() || !o.trajectories.empty() || !o.outcomes.empty()) && auv == nullptr) {
+    std::fprintf(stderr, "pbppo eval: --plot, --trajectories and --outcomes need --env auv-nav (not '%s')\n",
+                 o.env.c_str());
     return 2;
   }
   if (!o.plot.empty() && o.layout == "mixed") {
@@ -368,14 +417,12 @@ int Eval(const EvalOptions& o) {
   std::vector<float> obs(e.observation_size()), act(e.action_size());
   std::vector<double> returns;
   std::vector<EpisodeTrace> traces;
-  std::ofstream traj;
-  if (!o.trajectories.empty()) {
-    traj.open(o.trajectories);
-    if (!traj) {
-      std::fprintf(stderr, "pbppo eval: --trajectories: cannot write '%s'\n", o.trajectories.c_str());
-      return 2;
-    }
-    traj << "episode,step,t_s,x_m,y_m,yaw_rad,v_cmd_mps,w_cmd_radps,target\n";
+  std::ofstream traj, outcomes;
+  if (!OpenCsv(traj, o.trajectories, "--trajectories",
+               "episode,step,t_s,x_m,y_m,yaw_rad,v_cmd_mps,w_cmd_radps,target") ||
+      !OpenCsv(outcomes, o.outcomes, "--outcomes",
+               "episode,layout,outcome,targets,time_s,return,x_m,y_m,yaw_rad,clearance_m,nearest,random_obstacles")) {
+    return 2;
   }
   std::uint64_t steps = 0, bad = 0;
   int successes = 0, failures = 0, timeouts = 0, goals = 0;
@@ -422,6 +469,7 @@ int Eval(const EvalOptions& o) {
       tr.success = info.success;
       tr.collided = info.failure;
     }
+    if (outcomes.is_open()) WriteOutcome(outcomes, ep, *auv, ret);
     if (auv != nullptr && !o.plot.empty()) traces.push_back(std::move(tr));
   }
   const double n = static_cast<double>(returns.size());

@@ -60,6 +60,7 @@ struct EvalOptions {
   std::string layout = "hard";
   std::string plot;          // PNG of the trajectories over the map (auv-nav)
   std::string trajectories;  // CSV of every episode's trajectory (auv-nav)
+  std::string outcomes;      // CSV, one row per episode: outcome, end pose, random obstacles (auv-nav)
   int episodes = 100;
   std::uint64_t seed = 7;
   std::string models;
