@@ -20,16 +20,22 @@ GeodesicField::GeodesicField(const Arena& arena, double cell_m) : arena_(arena),
   const auto n = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
   dist_.assign(n, kInf);
   free_.assign(n, 0);
+  weight_.assign(n, 1.0f);
   heap_.reserve(2 * n);
 }
 
-void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, double goal_y) {
+void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, double goal_y, double margin_m,
+                            double margin_cost) {
   goal_x_ = goal_x;
   goal_y_ = goal_y;
+  const bool weighted = margin_m > 0.0 && margin_cost > 0.0;
   for (int j = 0; j < ny_; ++j) {
     for (int i = 0; i < nx_; ++i) {
       const double x = arena_.x_min_m + i * cell_, y = arena_.y_min_m + j * cell_;
-      free_[Index(i, j)] = Clearance(world, x, y) >= keep_m ? 1 : 0;
+      const double c = Clearance(world, x, y);
+      free_[Index(i, j)] = c >= keep_m ? 1 : 0;
+      weight_[Index(i, j)] =
+          weighted ? static_cast<float>(1.0 + margin_cost * std::clamp(1.0 - (c - keep_m) / margin_m, 0.0, 1.0)) : 1.0f;
     }
   }
   std::fill(dist_.begin(), dist_.end(), kInf);
@@ -66,7 +72,8 @@ void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, 
       if (!free_[static_cast<std::size_t>(n)]) continue;
       // A diagonal step may not cut the corner of a blocked node.
       if (k >= 4 && (!free_[Index(a, j)] || !free_[Index(i, b)])) continue;
-      const float nd = d + (k < 4 ? straight : diagonal);
+      const float nd = d + (k < 4 ? straight : diagonal) * 0.5f *
+                               (weight_[static_cast<std::size_t>(index)] + weight_[static_cast<std::size_t>(n)]);
       if (nd < dist_[static_cast<std::size_t>(n)]) {
         dist_[static_cast<std::size_t>(n)] = nd;
         push(nd, n);

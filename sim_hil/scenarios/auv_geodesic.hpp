@@ -6,8 +6,9 @@
 //
 // A grid of nodes spaced `cell_m` over the arena; a node is free when its clearance is at least
 // `keep_m` (l_safe: where the vehicle may be without colliding). Dijkstra over the 8-neighbour
-// graph (edge lengths cell and cell * sqrt 2) from the free nodes within reach of the goal gives
-// each free node its distance. Storage is allocated once; Compute reuses it.
+// graph (edge lengths cell and cell * sqrt 2, optionally weighted near obstacles) from the free
+// nodes within reach of the goal gives each free node its distance. Storage is allocated once;
+// Compute reuses it.
 #pragma once
 
 #include <cstddef>
@@ -26,7 +27,12 @@ class GeodesicField {
 
   // Distances to (goal_x, goal_y) through the free nodes of `world`. The goal's nearest free
   // nodes (within two cells) are the sources, at their straight-line distance from the goal.
-  void Compute(const World2d& world, double keep_m, double goal_x, double goal_y);
+  // With margin_m > 0 and margin_cost > 0 a path pays for running close to obstacles: a node
+  // whose clearance exceeds keep_m by c < margin_m weighs 1 + margin_cost (1 - c / margin_m), and
+  // an edge costs its length times the mean weight of its two nodes. The shortest path then keeps
+  // off obstacles where there is room and still takes passages narrower than 2 (keep + margin).
+  void Compute(const World2d& world, double keep_m, double goal_x, double goal_y, double margin_m = 0.0,
+               double margin_cost = 0.0);
 
   // The distance from (x, y): the least over the four surrounding nodes of (node's distance +
   // straight-line distance to it); without a reachable node among them, the best reachable
@@ -52,6 +58,7 @@ class GeodesicField {
   double goal_x_ = 0.0, goal_y_ = 0.0;
   std::vector<float> dist_;
   std::vector<std::uint8_t> free_;
+  std::vector<float> weight_;  // the node's cost per metre (1 without a margin)
   std::vector<std::pair<float, std::int32_t>> heap_;
 };
 

@@ -69,7 +69,7 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   if (auto st =
           f.Keys(n, "task",
                  {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights", "collision_penalty",
-                  "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress"});
+                  "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress", "geodesic_margin"});
       !st)
     return st.error();
   AuvTaskParams t;
@@ -89,6 +89,15 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
     if (auto st = f.Text(n, "progress", "task", &progress); !st) return st.error();
     if (!ParseAuvProgress(progress, &t.progress))
       return f.Fail("task.progress", "'" + progress + "' is not euclidean or geodesic");
+  }
+  if (n["geodesic_margin"]) {  // optional: no margin by default
+    YAML::Node g;
+    if (auto st = f.Map(n, "geodesic_margin", "task", &g); !st) return st.error();
+    if (auto st = f.Keys(g, "task.geodesic_margin", {"distance_m", "cost"}); !st) return st.error();
+    if (auto st = f.Number(g, "distance_m", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_m); !st)
+      return st.error();
+    if (auto st = f.Number(g, "cost", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_cost); !st)
+      return st.error();
   }
   YAML::Node w;
   if (auto st = f.Map(n, "weights", "task", &w); !st) return st.error();
@@ -236,7 +245,8 @@ void AuvNavTask::Measure() {
   if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
     if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
     if (geodesic_target_ != target_) {
-      geodesic_->Compute(world_, config_.task.safe_distance_m, t[0], t[1]);
+      geodesic_->Compute(world_, config_.task.safe_distance_m, t[0], t[1], config_.task.geodesic_margin_m,
+                         config_.task.geodesic_margin_cost);
       geodesic_target_ = target_;
     }
     // Outside the free space (only at a collision) or walled off: the straight line stands.

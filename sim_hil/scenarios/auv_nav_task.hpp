@@ -50,6 +50,12 @@ struct AuvTaskParams {
   // observation's target distance and bearing stay straight-line (what a vehicle measures).
   enum class Progress { kEuclidean, kGeodesic };
   Progress progress = Progress::kEuclidean;
+  // Geodesic only (task.geodesic_margin: {distance_m, cost}): the path pays up to `cost` extra
+  // per metre within `distance_m` beyond l_safe of an obstacle (GeodesicField::Compute), so the
+  // progress term leads round obstacles with room to spare instead of along the l_safe boundary.
+  // 0: the shortest path (it grazes l_safe).
+  double geodesic_margin_m = 0.0;
+  double geodesic_margin_cost = 0.0;
 };
 
 // "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).

@@ -2,11 +2,14 @@
 // empty arena, the detour around a wall, the dead end of the hard layout, walled-off points.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "sim_hil/scenarios/auv_geodesic.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
+#include "sim_hil/scenarios/auv_sonar.hpp"
 
 using namespace pbppo::sim;
 
@@ -75,4 +78,53 @@ TEST_CASE("geodesic field: on the hard layout the way from T1 to T2 passes below
   const double a = f.PathAngle(22.0, 22.5, 2.0);
   CHECK(std::sin(a) < 0.0);
   CHECK(std::cos(a) < 0.0);
+}
+
+namespace {
+
+// Follows the field's path (0.5 m lookahead) from (x, y) in 0.25 m steps until within 1 m of the goal; the least
+// clearance on the way (infinity when the goal is not reached in 400 steps).
+double PathClearance(const GeodesicField& f, const World2d& w, double x, double y, double gx, double gy) {
+  double least = Clearance(w, x, y);
+  for (int k = 0; k < 400; ++k) {
+    if (std::hypot(gx - x, gy - y) < 1.0) return least;
+    const double a = f.PathAngle(x, y, 0.5);
+    if (!std::isfinite(a)) break;
+    x += 0.25 * std::cos(a);
+    y += 0.25 * std::sin(a);
+    least = std::min(least, Clearance(w, x, y));
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+TEST_CASE("geodesic field: a margin keeps the path off obstacles where there is room, and narrow passages open") {
+  World2d w;
+  w.circles.push_back(Circle{20.0, 20.0, 1.0});  // a column on the straight line
+  GeodesicField f(w.arena, 0.25);
+  f.Compute(w, 1.2, 35.0, 20.0);
+  const double shortest = f.Distance(5.0, 20.3);
+  // The shortest path grazes l_safe ...
+  const double grazing = PathClearance(f, w, 5.0, 20.3, 35.0, 20.0);
+  CAPTURE(grazing);
+  CHECK(grazing >= 1.2 - 0.2);
+  CHECK(grazing < 1.6);
+  // ... the weighted one passes the column with room to spare, and its cost exceeds the length.
+  f.Compute(w, 1.2, 35.0, 20.0, 1.5, 2.0);
+  const double kept = PathClearance(f, w, 5.0, 20.3, 35.0, 20.0);
+  CAPTURE(kept);
+  CHECK(kept > 2.2);
+  CHECK(f.Distance(5.0, 20.3) > shortest);
+  // Far from everything a metre still costs a metre: the weighted distance between two points
+  // on the far side of the column grows by their separation.
+  CHECK(f.Distance(30.0, 35.0) - f.Distance(30.0, 30.0) == doctest::Approx(5.0).epsilon(0.1));
+  // A corridor 4 m wide (1.6 m free between the l_safe bands, narrower than 2 (1.2 + 1.5)) stays
+  // open, and the path runs along its middle.
+  World2d corridor;
+  corridor.boxes = {Box{0.0, 40.0, 0.0, 18.0}, Box{0.0, 40.0, 22.0, 40.0}};
+  f.Compute(corridor, 1.2, 35.0, 20.0, 1.5, 2.0);
+  CHECK(std::isfinite(f.Distance(5.0, 19.5)));
+  CHECK(PathClearance(f, corridor, 5.0, 19.5, 35.0, 20.0) >= 1.2 - 0.2);
+  CHECK(std::cos(f.PathAngle(10.0, 20.0, 2.0)) > 0.9);
 }

@@ -477,6 +477,24 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   REQUIRE(t.ok());
   CHECK(t->progress == AuvTaskParams::Progress::kGeodesic);
   CHECK(Config("hard").task.progress == AuvTaskParams::Progress::kEuclidean);  // the shipped file: the paper's
+  CHECK(t->geodesic_margin_cost == 0.0);                                       // no margin unless asked
+  auto task_refused = [&](const std::string& to, const std::string& message) {
+    CAPTURE(to);
+    write("bearing_gain: 2.0", to);
+    const auto r = LoadAuvTaskParams(scratch);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message.find(message) != std::string::npos);
+  };
+  task_refused("bearing_gain: 2.0\n  geodesic_margin: 1.5", "task.geodesic_margin");
+  task_refused("bearing_gain: 2.0\n  geodesic_margin: {distance_m: -1, cost: 2}",
+               "task.geodesic_margin.distance_m: '-1' is outside");
+  task_refused("bearing_gain: 2.0\n  geodesic_margin: {distance_m: 1.5, cost: 2, slope: 1}",
+               "task.geodesic_margin.slope: unknown field");
+  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  geodesic_margin: {distance_m: 1.5, cost: 2.0}");
+  t = LoadAuvTaskParams(scratch);
+  REQUIRE(t.ok());
+  CHECK(t->geodesic_margin_m == 1.5);
+  CHECK(t->geodesic_margin_cost == 2.0);
 }
 
 TEST_CASE("auv task: geodesic progress pays for the way round a wall, not for running at it") {
