@@ -99,6 +99,10 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
       "auv-nav: the reward's progress term: euclidean (the paper: straight-line distance and bearing to "
       "the target) or geodesic (shortest path around obstacles), for every layout or per layout as "
       "LAYOUT=MODE,... (e.g. hard=geodesic; the others keep it); default: models/auv/auv.yaml's task.progress");
+  s.add_option("--geodesic-margin", o.geodesic_margin,
+               "auv-nav: DISTANCE_M:COST, the geodesic path pays up to COST extra per metre within DISTANCE_M beyond "
+               "l_safe of obstacles (keeps the progress term off the collision boundary); default: auv.yaml's "
+               "task.geodesic_margin (none)");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
@@ -146,6 +150,7 @@ int Train(const TrainOptions& o) {
   c.layout = o.layout;
   c.exploring_starts = o.exploring_starts;
   c.progress = o.progress;
+  c.geodesic_margin = o.geodesic_margin;
   if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
   c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
   c.seed = o.seed;
@@ -205,6 +210,7 @@ int Train(const TrainOptions& o) {
     eo.layout = c.layout;
     eo.exploring_starts = c.exploring_starts;
     eo.progress = c.progress;
+    eo.geodesic_margin = c.geodesic_margin;
     if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
   }
 

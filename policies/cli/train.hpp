@@ -15,6 +15,7 @@ struct TrainOptions {
   std::string layout = "hard";
   double exploring_starts = 0.0;
   std::string progress;
+  std::string geodesic_margin;
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <tuple>
 
 namespace pbppo::envs {
 namespace {
@@ -43,10 +45,32 @@ Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const st
   return result;
 }
 
+Result<std::optional<std::pair<double, double>>> AuvNav::ParseGeodesicMargin(const std::string& spec) {
+  std::optional<std::pair<double, double>> result;
+  if (spec.empty()) return result;
+  const std::size_t colon = spec.find(':');
+  if (colon == std::string::npos)
+    return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not DISTANCE_M:COST (e.g. 2:4)");
+  double v[2] = {0, 0};
+  const std::string parts[2] = {spec.substr(0, colon), spec.substr(colon + 1)};
+  const char* what[2] = {"distance", "cost"};
+  for (int k = 0; k < 2; ++k) {
+    char* end = nullptr;
+    v[k] = std::strtod(parts[k].c_str(), &end);
+    if (parts[k].empty() || end != parts[k].c_str() + parts[k].size() || !(v[k] >= 0 && v[k] <= 100))
+      return MakeError(ErrorCode::kInvalidValue,
+                       "'" + spec + "': " + what[k] + " '" + parts[k] + "' is not a number in [0, 100]");
+  }
+  result = std::pair{v[0], v[1]};
+  return result;
+}
+
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
-                                             const std::string& progress) {
+                                             const std::string& progress, const std::string& geodesic_margin) {
   if (auto check = ProgressFor(progress, ""); !check)
     return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress " + check.error().message);
+  auto margin = ParseGeodesicMargin(geodesic_margin);
+  if (!margin) return MakeError(ErrorCode::kInvalidValue, "auv-nav: geodesic margin " + margin.error().message);
   std::vector<std::string> names;
   if (layout_name == "mixed") {
     // Hard twice: it needs the most experience (a serpentine of three corridors).
@@ -63,6 +87,7 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
     auto cfg = sim::LoadAuvTaskConfig(dir + "auv.yaml", dir + "layouts/" + n + ".yaml", dir + "io_layout.yaml");
     if (!cfg) return std::move(cfg).error();
     if (const auto mode = ProgressFor(progress, n).value()) cfg->task.progress = *mode;
+    if (*margin) std::tie(cfg->task.geodesic_margin_m, cfg->task.geodesic_margin_cost) = **margin;
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
   return Make(std::move(configs), "auv-nav:" + layout_name);

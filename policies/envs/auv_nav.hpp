@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "policies/envs/env.hpp"
@@ -21,8 +22,11 @@ class AuvNav final : public Env {
  public:
   // `layout_name`: easy, medium or hard (models/<dir>/auv/layouts/<name>.yaml), or mixed.
   // progress: a progress spec (ProgressFor) that replaces auv.yaml's task.progress; empty keeps it.
+  // geodesic_margin: "D:C" sets auv.yaml's task.geodesic_margin (distance_m D, cost C) in every
+  // layout (it acts where the progress term is geodesic); empty keeps auv.yaml's.
   static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name,
-                                              const std::string& progress = "");
+                                              const std::string& progress = "",
+                                              const std::string& geodesic_margin = "");
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);
@@ -33,6 +37,9 @@ class AuvNav final : public Env {
   // checks it); errors name the part of the spec that is wrong.
   static Result<std::optional<sim::AuvTaskParams::Progress>> ProgressFor(const std::string& spec,
                                                                          const std::string& layout);
+
+  // "D:C" -> (distance_m, cost), each a number in [0, 100]; "" -> nullopt. Errors name the part.
+  static Result<std::optional<std::pair<double, double>>> ParseGeodesicMargin(const std::string& spec);
 
   const std::string& name() const noexcept override { return name_; }
   std::uint32_t observation_size() const noexcept override;

@@ -22,6 +22,8 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     if (!options.progress.empty())
       return MakeError(ErrorCode::kInvalidValue,
                        "progress: only auv-nav has a progress term to choose, not 'pendulum'");
+    if (!options.geodesic_margin.empty())
+      return MakeError(ErrorCode::kInvalidValue, "geodesic margin: only auv-nav has one, not 'pendulum'");
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
@@ -29,7 +31,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     return std::unique_ptr<Env>(std::move(env).value());
   }
   if (name == "auv-nav") {
-    auto env = AuvNav::Make(dir, options.layout, options.progress);
+    auto env = AuvNav::Make(dir, options.layout, options.progress, options.geodesic_margin);
     if (!env) return std::move(env).error();
     (*env)->set_exploring_starts(options.exploring_starts);
     return std::unique_ptr<Env>(std::move(env).value());

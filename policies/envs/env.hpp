@@ -70,6 +70,8 @@ struct EnvOptions {
   // auv-nav: the reward's progress term, "euclidean" or "geodesic" (sim::AuvTaskParams::progress);
   // empty: as models/auv/auv.yaml says.
   std::string progress;
+  // auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin (AuvNav::Make); empty keeps it.
+  std::string geodesic_margin;
 };
 
 // The names MakeEnv() knows.

@@ -147,6 +147,10 @@ Status TrainConfig::Validate() const {
   if (auto p = envs::AuvNav::ProgressFor(progress, ""); !p) return Invalid("--progress", p.error().message);
   if (!progress.empty() && env != "auv-nav")
     return Invalid("--progress", "only auv-nav has a progress term to choose, not '" + env + "'");
+  if (auto m = envs::AuvNav::ParseGeodesicMargin(geodesic_margin); !m)
+    return Invalid("--geodesic-margin", m.error().message);
+  if (!geodesic_margin.empty() && env != "auv-nav")
+    return Invalid("--geodesic-margin", "only auv-nav has one, not '" + env + "'");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");
   if (!(gamma > 0 && gamma <= 1)) return Invalid("--gamma", std::to_string(gamma) + " is not in (0, 1]");
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
@@ -844,6 +848,7 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     j["env"] = proto_->name();
     if (c_.exploring_starts > 0) j["exploring_starts"] = c_.exploring_starts;
     if (!c_.progress.empty()) j["progress"] = c_.progress;
+    if (!c_.geodesic_margin.empty()) j["geodesic_margin"] = c_.geodesic_margin;
     j["seed"] = c_.seed;
     if (!c_.init_blob.empty()) j["init"] = c_.init_blob;
     j["schedule"] = c_.schedule.Describe();
@@ -885,6 +890,7 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   eo.layout = config.layout;
   eo.exploring_starts = config.exploring_starts;
   eo.progress = config.progress;
+  eo.geodesic_margin = config.geodesic_margin;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

@@ -23,6 +23,7 @@ struct TrainConfig {
   std::string layout = "hard";    // obstacle layout of environments that have several (auv-nav)
   double exploring_starts = 0.0;  // auv-nav: probability of an episode starting anywhere (training only)
   std::string progress;           // auv-nav: "euclidean" or "geodesic" reward progress; empty: auv.yaml's
+  std::string geodesic_margin;    // auv-nav: "D:C", the geodesic path's margin; empty: auv.yaml's
   std::uint64_t seed = 1;
   std::uint64_t total_steps = 200000;  // training environment steps (evaluation steps are extra)
   int num_envs = 1;

@@ -125,6 +125,64 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
   CHECK(bad.error().message.find("layout 'labyrinth' unknown") != std::string::npos);
 }
 
+TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad values are refused naming the part") {
+  EnvOptions o;
+  o.layout = "mixed";
+  o.progress = "geodesic";
+  o.geodesic_margin = "2:4";
+  auto made = MakeEnv("auv-nav", o);
+  REQUIRE_MESSAGE(made.ok(), made.error().message);
+  auto* auv = dynamic_cast<AuvNav*>(made->get());
+  REQUIRE(auv != nullptr);
+  Rng rng(5);
+  std::vector<float> obs((*made)->observation_size());
+  std::set<std::string> seen;
+  for (int i = 0; i < 40; ++i) {
+    (*made)->Reset(rng, obs);
+    CHECK(auv->config().task.geodesic_margin_m == 2.0);
+    CHECK(auv->config().task.geodesic_margin_cost == 4.0);
+    seen.insert(auv->config().layout.name);
+  }
+  CHECK(seen.size() == 3);
+  // The same episode earns a different progress reward with the margin (the path and its length
+  // change) and the same observations (the reward only).
+  o.layout = "hard";
+  auto with = MakeEnv("auv-nav", o);
+  o.geodesic_margin = "";
+  auto without = MakeEnv("auv-nav", o);
+  REQUIRE(with.ok());
+  REQUIRE(without.ok());
+  CHECK(dynamic_cast<AuvNav*>(without->get())->config().task.geodesic_margin_cost == 0.0);
+  Rng r1(9), r2(9);
+  std::vector<float> o1(obs.size()), o2(obs.size());
+  (*with)->Reset(r1, o1);
+  (*without)->Reset(r2, o2);
+  const std::vector<float> ahead{1.0f, 0.0f};
+  double sum_with = 0, sum_without = 0;
+  for (int k = 0; k < 30; ++k) {
+    sum_with += (*with)->Step(ahead, o1).reward;
+    sum_without += (*without)->Step(ahead, o2).reward;
+    CHECK(o1 == o2);
+  }
+  CHECK(sum_with != sum_without);
+  for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
+           {"2", "'2' is not DISTANCE_M:COST (e.g. 2:4)"},
+           {"2:", "'2:': cost '' is not a number in [0, 100]"},
+           {"x:4", "'x:4': distance 'x' is not a number in [0, 100]"},
+           {"2:-1", "'2:-1': cost '-1' is not a number in [0, 100]"},
+           {"2:4:1", "'2:4:1': cost '4:1' is not a number in [0, 100]"},
+           {"nan:4", "'nan:4': distance 'nan' is not a number in [0, 100]"}}) {
+    CAPTURE(spec);
+    o.geodesic_margin = spec;
+    auto bad = MakeEnv("auv-nav", o);
+    REQUIRE_FALSE(bad.ok());
+    CHECK(bad.error().message == "auv-nav: geodesic margin " + message);
+  }
+  o.geodesic_margin = "2:4";
+  auto pendulum = MakeEnv("pendulum", o);
+  REQUIRE_FALSE(pendulum.ok());
+}
+
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
   EnvOptions o;
   o.layout = "mixed";

@@ -157,6 +157,13 @@ TEST_CASE("trainer errors name the field and value") {
   c.progress = "hard=crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'hard=crow-flies': 'crow-flies' for hard is not euclidean or "
                                       "geodesic") != std::string::npos);
+  c.progress = "";
+  c.geodesic_margin = "2:four";
+  CHECK(Train(c).error().message.find("--geodesic-margin: '2:four': cost 'four' is not a number in [0, 100]") !=
+        std::string::npos);
+  c = Small();
+  c.geodesic_margin = "2:4";  // pendulum
+  CHECK(Train(c).error().message.find("--geodesic-margin: only auv-nav has one, not 'pendulum'") != std::string::npos);
   c = Small();
   const std::string dir = test::ScratchDir("trainer_unwritable");
   std::ofstream(dir + "/file") << "x";
