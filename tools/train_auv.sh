@@ -3,7 +3,8 @@
 # arms 0.05:0.4:6, rollout feedback) in stages, each starting from the best policy of the one
 # before (--init):
 #   stage 1: the hard layout from scratch (observation normaliser on), geodesic progress;
-#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR in MIXED_STAGES.
+#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR[@D:C] in
+#   MIXED_STAGES (@D:C: --geodesic-margin D:C, the progress path keeps off obstacles).
 # Then 200 deterministic evaluation episodes per layout from seeds that training never uses, with
 # the trajectory plots. Copies the blob, its golden vectors and the report to
 # policies/frozen/auv_nav/. Same build, same settings: the same blob (runs are bit-reproducible).
@@ -11,7 +12,7 @@
 # stopped script resumes at the first unfinished stage; delete OUT_DIR to train afresh.
 # Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]
 #   PBPPO=path/to/pbppo  THREADS=2  PROGRESS=geodesic (--progress of every stage)
-#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4 5:5e-5"
+#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4 5:5e-5 7:5e-5@2:4"
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/runs/train_auv}"
@@ -21,7 +22,7 @@ progress="${PROGRESS:-geodesic}"
 hard_steps="${HARD_STEPS:-6e6}"
 hard_seed="${HARD_SEED:-1}"
 mixed_steps="${MIXED_STEPS:-6e6}"
-mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4 5:5e-5}"
+mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4 5:5e-5 7:5e-5@2:4}"
 frozen="$root/policies/frozen/auv_nav"
 if [ ! -x "$pbppo" ]; then
   echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
@@ -30,13 +31,14 @@ fi
 common=(--env auv-nav --schedule pbppo --arms 0.05:0.4:6 --feedback rollout --threads "$threads" --envs 16
   --rollout 256 --minibatch 512 --epochs 10 --gamma 0.99 --scale-rewards --hidden 64-64 --keep-best
   --progress "$progress")
-finished() {  # finished DIR ENV SEED LR: a completed run with these settings is there (another: stop)
+finished() {  # finished DIR ENV SEED LR [MARGIN]: a completed run with these settings is there (another: stop)
   [ -f "$1/best.blob" ] && [ -f "$1/summary.json" ] || return 1
   local rc=0
-  python3 - "$1/summary.json" "$2" "$3" "$4" "$progress" <<'PY' || rc=$?
+  python3 - "$1/summary.json" "$2" "$3" "$4" "$progress" "${5:-}" <<'PY' || rc=$?
 import json, sys
 s = json.load(open(sys.argv[1]))
-want = {"env": sys.argv[2], "seed": int(sys.argv[3]), "learning_rate": float(sys.argv[4]), "progress": sys.argv[5]}
+want = {"env": sys.argv[2], "seed": int(sys.argv[3]), "learning_rate": float(sys.argv[4]), "progress": sys.argv[5],
+        "geodesic_margin": sys.argv[6] or None}
 got = {k: s.get(k) for k in want}
 if got != want:
     print("train_auv: %s holds another run (%s, this script wants %s); delete it or choose another OUT_DIR"
@@ -49,6 +51,8 @@ PY
 }
 for pair in $mixed_stages; do
   case "$pair" in
+    [0-9]*:[0-9.]*@[0-9.]*:[0-9.]*) ;;
+    *@*) echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR@DISTANCE:COST (e.g. 7:5e-5@2:4)" >&2; exit 2 ;;
     [0-9]*:[0-9.]*) ;;
     *) echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR (e.g. 1:3e-4)" >&2; exit 2 ;;
   esac
@@ -63,17 +67,19 @@ else
 fi
 stage=1
 for pair in $mixed_stages; do
+  margin=""
+  case "$pair" in *@*) margin=${pair#*@} pair=${pair%@*} ;; esac
   seed=${pair%%:*} lr=${pair#*:}
   prev=$stage
   stage=$((stage + 1))
-  if finished "$out/stage$stage" auv-nav:mixed "$seed" "$lr"; then
+  if finished "$out/stage$stage" auv-nav:mixed "$seed" "$lr" "$margin"; then
     echo "train_auv: stage $stage: kept the finished run in $out/stage$stage"
     continue
   fi
-  echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr, from stage $prev -> $out/stage$stage"
+  echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr${margin:+, geodesic margin $margin}, from stage $prev -> $out/stage$stage"
   # The normaliser comes with the --init blob (and keeps adapting).
   "$pbppo" train "${common[@]}" --layout mixed --init "$out/stage$prev/best.blob" --lr "$lr" \
-    --steps "$mixed_steps" --seed "$seed" --out "$out/stage$stage"
+    --steps "$mixed_steps" --seed "$seed" ${margin:+--geodesic-margin "$margin"} --out "$out/stage$stage"
 done
 last="$out/stage$stage"
 # PPO on this task is not monotonic: each stage hands on, and ships, its best checkpoint.
@@ -86,5 +92,5 @@ for s in $(seq 1 "$stage"); do
   mkdir -p "$frozen/report/stage$s"
   cp "$out/stage$s"/{summary.json,log.csv,return.png,success.png,epsilon.png,arms.png} "$frozen/report/stage$s/"
 done
-cp "$out"/eval_{easy,medium,hard}.{json,png} "$frozen/report/"
+cp "$out"/eval_{easy,medium,hard}.{json,png} "$out"/outcomes_{easy,medium,hard}.csv "$frozen/report/"
 echo "shipped: $frozen"
