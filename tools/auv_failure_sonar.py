@@ -60,17 +60,18 @@ def main():
             x, y = float(o["x_m"]), float(o["y_m"])
             circles = [tuple(map(float, c.split(":"))) for c in o["random_obstacles"].split()]
             c = min(circles, key=lambda c: math.hypot(x - c[0], y - c[1]) - c[2])
-            seen = [math.hypot(px - c[0], py - c[1]) - c[2] for px, py, yaw in steps[e]
-                    if beam_hits(px, py, yaw, c, beams, max_range)]
-            first_seen.append(seen[0] if seen else None)
+            # Per control period: the obstacle's surface distance and whether a beam hit it.
+            track = [(math.hypot(px - c[0], py - c[1]) - c[2], beam_hits(px, py, yaw, c, beams, max_range))
+                     for px, py, yaw in steps[e]]
+            first_seen.append(next((d for d, hit in track if hit), None))
             run_start = None
-            for px, py, yaw in reversed(steps[e]):
-                if not beam_hits(px, py, yaw, c, beams, max_range):
+            for d, hit in reversed(track):
+                if not hit:
                     break
-                run_start = math.hypot(px - c[0], py - c[1]) - c[2]
+                run_start = d
             tracked.append(run_start)
-            last = steps[e][-30:]
-            visible.append(sum(beam_hits(px, py, yaw, c, beams, max_range) for px, py, yaw in last) / len(last))
+            last = track[-30:]
+            visible.append(sum(hit for _, hit in last) / len(last))
             px, py, yaw = steps[e][-1]
             b = math.degrees(math.atan2(c[1] - py, c[0] - px) - yaw)
             bearings.append(abs((b + 180) % 360 - 180))

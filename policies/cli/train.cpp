@@ -20,6 +20,7 @@
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "sim_hil/scenarios/auv_sonar.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -349,29 +350,19 @@ bool OpenCsv(std::ofstream& out, const std::string& path, const char* option, co
 }
 
 // One --outcomes row: how the episode ended, where, and what was nearest there ("wall", "layout" obstacle
-// or "random" obstacle); the random obstacles as x:y:radius separated by spaces.
+// or "random" obstacle); the random obstacles (those beyond the layout's) as x:y:radius separated by spaces.
 void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, double ret) {
   const auto& task = auv.task();
   const auto& st = task.stats();
   const auto& v = task.vehicle();
   const auto& world = task.world();
+  const auto& fixed = auv.config().layout.world;  // arena and layout obstacles, without the random ones
   const char* outcome = st.success ? "success" : st.collided ? "collision" : "timeout";
-  const std::size_t first_random = world.circles.size() - static_cast<std::size_t>(st.random_obstacles);
-  double nearest = std::min({v.x_m - world.arena.x_min_m, world.arena.x_max_m - v.x_m, v.y_m - world.arena.y_min_m,
-                             world.arena.y_max_m - v.y_m});
-  const char* what = "wall";
-  for (const auto& b : world.boxes) {
-    const double dx = std::max({b.x_min_m - v.x_m, 0.0, v.x_m - b.x_max_m});
-    const double dy = std::max({b.y_min_m - v.y_m, 0.0, v.y_m - b.y_max_m});
-    if (const double d = std::hypot(dx, dy); d < nearest) nearest = d, what = "layout";
-  }
-  for (std::size_t i = 0; i < world.circles.size(); ++i) {
-    const auto& c = world.circles[i];
-    if (const double d = std::hypot(v.x_m - c.x_m, v.y_m - c.y_m) - c.radius_m; d < nearest) {
-      nearest = d;
-      what = i >= first_random ? "random" : "layout";
-    }
-  }
+  const double nearest = sim::Clearance(world, v.x_m, v.y_m);
+  const double fixed_nearest = sim::Clearance(fixed, v.x_m, v.y_m);
+  const double wall = sim::Clearance(sim::World2d{world.arena, {}, {}}, v.x_m, v.y_m);
+  const char* what = nearest < fixed_nearest ? "random" : wall <= fixed_nearest ? "wall" : "layout";
+  const std::size_t first_random = fixed.circles.size();
   out << episode << ',' << auv.config().layout.name << ',' << outcome << ',' << st.targets_reached << ',' << st.time_s
       << ',' << ret << ',' << v.x_m << ',' << v.y_m << ',' << v.yaw_rad << ',' << nearest << ',' << what << ',';
   for (std::size_t i = first_random; i < world.circles.size(); ++i) {

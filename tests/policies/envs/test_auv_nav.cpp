@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -27,6 +29,26 @@ std::size_t Input(const Env& env, const std::string& name) {
   const auto it = std::find(names.begin(), names.end(), name);
   REQUIRE_MESSAGE(it != names.end(), "no observation element '" << name << "'");
   return static_cast<std::size_t>(it - names.begin());
+}
+
+// Makes auv-nav with `o` and resets it 40 times from `seed`, handing each episode's task
+// configuration to `check`; the layouts the episodes drew.
+std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t seed,
+                                          const std::function<void(const sim::AuvTaskConfig&)>& check) {
+  auto made = MakeEnv("auv-nav", o);
+  REQUIRE_MESSAGE(made.ok(), made.error().message);
+  auto* auv = dynamic_cast<AuvNav*>(made->get());
+  REQUIRE(auv != nullptr);
+  Rng rng(seed);
+  std::vector<float> obs((*made)->observation_size());
+  std::set<std::string> seen;
+  for (int i = 0; i < 40; ++i) {
+    (*made)->Reset(rng, obs);
+    CAPTURE(auv->config().layout.name);
+    check(auv->config());
+    seen.insert(auv->config().layout.name);
+  }
+  return seen;
 }
 
 TEST_CASE("auv-nav has the IO layout's sizes, names and policy-unit action bounds") {
@@ -130,20 +152,10 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
   o.layout = "mixed";
   o.progress = "geodesic";
   o.geodesic_margin = "2:4";
-  auto made = MakeEnv("auv-nav", o);
-  REQUIRE_MESSAGE(made.ok(), made.error().message);
-  auto* auv = dynamic_cast<AuvNav*>(made->get());
-  REQUIRE(auv != nullptr);
-  Rng rng(5);
-  std::vector<float> obs((*made)->observation_size());
-  std::set<std::string> seen;
-  for (int i = 0; i < 40; ++i) {
-    (*made)->Reset(rng, obs);
-    CHECK(auv->config().task.geodesic_margin_m == 2.0);
-    CHECK(auv->config().task.geodesic_margin_cost == 4.0);
-    seen.insert(auv->config().layout.name);
-  }
-  CHECK(seen.size() == 3);
+  CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
+          CHECK(cfg.task.geodesic_margin_m == 2.0);
+          CHECK(cfg.task.geodesic_margin_cost == 4.0);
+        }).size() == 3);
   // The same episode earns a different progress reward with the margin (the path and its length
   // change) and the same observations (the reward only).
   o.layout = "hard";
@@ -154,7 +166,7 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
   REQUIRE(without.ok());
   CHECK(dynamic_cast<AuvNav*>(without->get())->config().task.geodesic_margin_cost == 0.0);
   Rng r1(9), r2(9);
-  std::vector<float> o1(obs.size()), o2(obs.size());
+  std::vector<float> o1((*with)->observation_size()), o2(o1.size());
   (*with)->Reset(r1, o1);
   (*without)->Reset(r2, o2);
   const std::vector<float> ahead{1.0f, 0.0f};
@@ -187,19 +199,9 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   EnvOptions o;
   o.layout = "mixed";
   o.progress = "geodesic";
-  auto made = MakeEnv("auv-nav", o);
-  REQUIRE(made.ok());
-  auto* auv = dynamic_cast<AuvNav*>(made->get());
-  REQUIRE(auv != nullptr);
-  Rng rng(3);
-  std::vector<float> obs((*made)->observation_size());
-  std::set<std::string> seen;
-  for (int i = 0; i < 40; ++i) {
-    (*made)->Reset(rng, obs);
-    CHECK(auv->config().task.progress == sim::AuvTaskParams::Progress::kGeodesic);
-    seen.insert(auv->config().layout.name);
-  }
-  CHECK(seen.size() == 3);
+  CHECK(CheckEpisodeConfigs(o, 3, [](const sim::AuvTaskConfig& cfg) {
+          CHECK(cfg.task.progress == sim::AuvTaskParams::Progress::kGeodesic);
+        }).size() == 3);
   o.progress = "";
   auto plain = MakeEnv("auv-nav", o);
   REQUIRE(plain.ok());
@@ -210,19 +212,10 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   CHECK(bad.error().message == "auv-nav: progress 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
   // Per layout: the named layouts take the mode, the others keep auv.yaml's.
   o.progress = "hard=geodesic";
-  auto per_layout = MakeEnv("auv-nav", o);
-  REQUIRE_MESSAGE(per_layout.ok(), per_layout.error().message);
-  auto* mixed = dynamic_cast<AuvNav*>(per_layout->get());
-  seen.clear();
-  for (int i = 0; i < 40; ++i) {
-    (*per_layout)->Reset(rng, obs);
-    const auto& cfg = mixed->config();
-    CAPTURE(cfg.layout.name);
-    CHECK(cfg.task.progress == (cfg.layout.name == "hard" ? sim::AuvTaskParams::Progress::kGeodesic
-                                                          : sim::AuvTaskParams::Progress::kEuclidean));
-    seen.insert(cfg.layout.name);
-  }
-  CHECK(seen.size() == 3);
+  CHECK(CheckEpisodeConfigs(o, 4, [](const sim::AuvTaskConfig& cfg) {
+          CHECK(cfg.task.progress == (cfg.layout.name == "hard" ? sim::AuvTaskParams::Progress::kGeodesic
+                                                                : sim::AuvTaskParams::Progress::kEuclidean));
+        }).size() == 3);
   for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
            {"hard=geodesic,deep=geodesic", "'hard=geodesic,deep=geodesic': layout 'deep' unknown (easy, medium, hard)"},
            {"hard=geodesic,hard=euclidean", "'hard=geodesic,hard=euclidean': layout 'hard' given twice"},
