@@ -66,10 +66,10 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   YamlFields f(auv_yaml);
   YAML::Node n;
   if (auto st = f.Map(*doc, "task", "", &n); !st) return st.error();
-  if (auto st =
-          f.Keys(n, "task",
-                 {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights", "collision_penalty",
-                  "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress", "geodesic_margin"});
+  if (auto st = f.Keys(n, "task",
+                       {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights",
+                        "collision_penalty", "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress",
+                        "geodesic_margin", "clearance_penalty"});
       !st)
     return st.error();
   AuvTaskParams t;
@@ -97,6 +97,15 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
     if (auto st = f.Number(g, "distance_m", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_m); !st)
       return st.error();
     if (auto st = f.Number(g, "cost", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_cost); !st)
+      return st.error();
+  }
+  if (n["clearance_penalty"]) {  // optional: off by default
+    YAML::Node c;
+    if (auto st = f.Map(n, "clearance_penalty", "task", &c); !st) return st.error();
+    if (auto st = f.Keys(c, "task.clearance_penalty", {"distance_m", "per_step"}); !st) return st.error();
+    if (auto st = f.Number(c, "distance_m", "task.clearance_penalty", 0.0, 100.0, &t.clearance_penalty_m); !st)
+      return st.error();
+    if (auto st = f.Number(c, "per_step", "task.clearance_penalty", 0.0, 1e6, &t.clearance_penalty_per_step); !st)
       return st.error();
   }
   YAML::Node w;
@@ -350,6 +359,9 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
   r.r_progress = -p.step_penalty + p.distance_gain * (l_prev - progress_l_) +
                  p.bearing_gain * (std::abs(phi_prev) - std::abs(progress_phi_));
   stats_.min_clearance_m = std::min(stats_.min_clearance_m, clearance_);
+  if (p.clearance_penalty_m > 0.0 && p.clearance_penalty_per_step > 0.0)
+    r.r_clearance = -p.clearance_penalty_per_step *
+                    std::clamp(1.0 - (clearance_ - p.safe_distance_m) / p.clearance_penalty_m, 0.0, 1.0);
   if (clearance_ < p.safe_distance_m) {
     r.r_collision = -p.collision_penalty;
     r.events.collision = true;
@@ -373,7 +385,8 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
     r.truncated = true;
     stats_.truncated = true;
   }
-  r.reward = p.weight_collision * r.r_collision + p.weight_goal * r.r_goal + p.weight_progress * r.r_progress;
+  r.reward =
+      p.weight_collision * r.r_collision + p.weight_goal * r.r_goal + p.weight_progress * r.r_progress + r.r_clearance;
   stats_.episode_return += r.reward;
   stats_.time_s = plant_.State().time_s;
   done_ = r.terminated || r.truncated;

@@ -56,6 +56,12 @@ struct AuvTaskParams {
   // 0: the shortest path (it grazes l_safe).
   double geodesic_margin_m = 0.0;
   double geodesic_margin_cost = 0.0;
+  // Clearance term (task.clearance_penalty: {distance_m, per_step}, not in the paper): each step
+  // with the clearance c within `distance_m` beyond l_safe costs per_step (1 - (c - l_safe) /
+  // distance_m), rising linearly from 0 at l_safe + distance_m to per_step at l_safe. The
+  // paper's reward charges only the collision itself. 0: off.
+  double clearance_penalty_m = 0.0;
+  double clearance_penalty_per_step = 0.0;
 };
 
 // "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).
@@ -89,7 +95,7 @@ struct AuvStepResult {
   bool truncated = false;   // time limit (bootstrap from the value of the last observation)
   AuvStepEvents events;
   // The three terms before weighting.
-  double r_collision = 0.0, r_goal = 0.0, r_progress = 0.0;
+  double r_collision = 0.0, r_goal = 0.0, r_progress = 0.0, r_clearance = 0.0;
 };
 
 struct AuvEpisodeStats {

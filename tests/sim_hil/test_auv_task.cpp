@@ -216,6 +216,42 @@ TEST_CASE("auv task: the progress term follows l_AT and |phi_AT| exactly, and tu
   CHECK(late < 0.0);
 }
 
+TEST_CASE("auv task: the clearance term charges each step inside the band, linearly towards l_safe") {
+  AuvTaskConfig c = Config("easy");
+  c.layout = Layout(kOpenLayout);  // the circle at (30, 20) r 2 lies 8 m dead ahead
+  c.task.clearance_penalty_m = 1.5;
+  c.task.clearance_penalty_per_step = 2.0;
+  AuvNavTask with = MakeTask(c);
+  c.task.clearance_penalty_per_step = 0.0;
+  AuvNavTask without = MakeTask(c);
+  std::vector<float> o1(kInputs), o2(kInputs);
+  with.Reset(3, o1.data());
+  without.Reset(3, o2.data());
+  const float ahead[2] = {1.0f, 0.0f};
+  int inside = 0, outside = 0;
+  for (int k = 0; k < 400; ++k) {
+    const AuvStepResult a = with.Step(ahead, o1.data());
+    const AuvStepResult b = without.Step(ahead, o2.data());
+    CHECK(o1 == o2);  // the reward only
+    CHECK(b.r_clearance == 0.0);
+    pbppo::robot::AuvSensorSample sample;
+    with.FillSensorSample(sample);
+    const double c_m = sample.clearance_m;
+    const double expected = c_m >= 1.2 + 1.5 ? 0.0 : -2.0 * std::min(1.0, 1.0 - (c_m - 1.2) / 1.5);
+    CHECK(a.r_clearance == doctest::Approx(expected).epsilon(1e-12));
+    CHECK(a.reward == doctest::Approx(b.reward + expected).epsilon(1e-12));
+    CHECK(a.reward == doctest::Approx(a.r_collision + a.r_goal + a.r_progress + a.r_clearance));
+    (a.r_clearance < 0.0 ? inside : outside) += 1;
+    if (a.terminated) {
+      CHECK(a.events.collision);
+      CHECK(a.r_clearance < -2.0 * (1.0 - 0.16 / 1.5));  // at l_safe: (nearly) the full cost
+      break;
+    }
+  }
+  CHECK(inside >= 8);  // 1.5 m at <= 0.15 m per period
+  CHECK(outside > inside);
+}
+
 TEST_CASE("auv task: a collision terminates with -500 and later steps change nothing") {
   AuvTaskConfig c = Config("easy");
   c.layout = Layout(kOpenLayout);  // the circle at (30, 20) r 2 lies 8 m dead ahead
@@ -495,6 +531,17 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   REQUIRE(t.ok());
   CHECK(t->geodesic_margin_m == 1.5);
   CHECK(t->geodesic_margin_cost == 2.0);
+  CHECK(t->clearance_penalty_per_step == 0.0);  // no clearance term unless asked
+  task_refused("bearing_gain: 2.0\n  clearance_penalty: 1.5", "task.clearance_penalty");
+  task_refused("bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5, per_step: -1}",
+               "task.clearance_penalty.per_step: '-1' is outside");
+  task_refused("bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5}",
+               "task.clearance_penalty: missing field 'per_step'");
+  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5, per_step: 0.5}");
+  t = LoadAuvTaskParams(scratch);
+  REQUIRE(t.ok());
+  CHECK(t->clearance_penalty_m == 1.5);
+  CHECK(t->clearance_penalty_per_step == 0.5);
 }
 
 TEST_CASE("auv task: geodesic progress pays for the way round a wall, not for running at it") {
