@@ -3,8 +3,9 @@
 # arms 0.05:0.4:6, rollout feedback) in stages, each starting from the best policy of the one
 # before (--init):
 #   stage 1: the hard layout from scratch (observation normaliser on), geodesic progress;
-#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR[@D:C] in
-#   MIXED_STAGES (@D:C: --geodesic-margin D:C, the progress path keeps off obstacles).
+#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR[@D:C][+D:W] in
+#   MIXED_STAGES (@D:C: --geodesic-margin D:C, the progress path keeps off obstacles;
+#   +D:W: --clearance-penalty D:W, a cost for every step within D of l_safe).
 # Then 200 deterministic evaluation episodes per layout from seeds that training never uses, with
 # the trajectory plots. Copies the blob, its golden vectors and the report to
 # policies/frozen/auv_nav/. Same build, same settings: the same blob (runs are bit-reproducible).
@@ -31,14 +32,14 @@ fi
 common=(--env auv-nav --schedule pbppo --arms 0.05:0.4:6 --feedback rollout --threads "$threads" --envs 16
   --rollout 256 --minibatch 512 --epochs 10 --gamma 0.99 --scale-rewards --hidden 64-64 --keep-best
   --progress "$progress")
-finished() {  # finished DIR ENV SEED LR [MARGIN]: a completed run with these settings is there (another: stop)
+finished() {  # finished DIR ENV SEED LR [MARGIN [CLEARANCE]]: a completed run with these settings is there (another: stop)
   [ -f "$1/best.blob" ] && [ -f "$1/summary.json" ] || return 1
   local rc=0
-  python3 - "$1/summary.json" "$2" "$3" "$4" "$progress" "${5:-}" <<'PY' || rc=$?
+  python3 - "$1/summary.json" "$2" "$3" "$4" "$progress" "${5:-}" "${6:-}" <<'PY' || rc=$?
 import json, sys
 s = json.load(open(sys.argv[1]))
 want = {"env": sys.argv[2], "seed": int(sys.argv[3]), "learning_rate": float(sys.argv[4]), "progress": sys.argv[5],
-        "geodesic_margin": sys.argv[6] or None}
+        "geodesic_margin": sys.argv[6] or None, "clearance_penalty": sys.argv[7] or None}
 got = {k: s.get(k) for k in want}
 if got != want:
     print("train_auv: %s holds another run (%s, this script wants %s); delete it or choose another OUT_DIR"
@@ -49,13 +50,23 @@ PY
   [ "$rc" -ne 3 ] || exit 1
   return "$rc"
 }
+# SEED:LR[@D:C][+D:W] -> stage_seed, stage_lr, stage_margin, stage_clearance (empty when absent).
+parse_stage() {
+  local spec="$1" rest
+  stage_clearance="" stage_margin=""
+  case "$spec" in *+*) stage_clearance=${spec#*+} spec=${spec%%+*} ;; esac
+  case "$spec" in *@*) stage_margin=${spec#*@} spec=${spec%%@*} ;; esac
+  stage_seed=${spec%%:*} stage_lr=${spec#*:}
+  rest="$stage_seed:$stage_lr"
+  [[ "$rest" =~ ^[0-9]+:[0-9.]+(e-?[0-9]+)?$ ]] || return 1
+  [ -z "$stage_margin" ] || [[ "$stage_margin" =~ ^[0-9.]+:[0-9.]+$ ]] || return 1
+  [ -z "$stage_clearance" ] || [[ "$stage_clearance" =~ ^[0-9.]+:[0-9.]+$ ]] || return 1
+}
 for pair in $mixed_stages; do
-  case "$pair" in
-    [0-9]*:[0-9.]*@[0-9.]*:[0-9.]*) ;;
-    *@*) echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR@DISTANCE:COST (e.g. 7:5e-5@2:4)" >&2; exit 2 ;;
-    [0-9]*:[0-9.]*) ;;
-    *) echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR (e.g. 1:3e-4)" >&2; exit 2 ;;
-  esac
+  if ! parse_stage "$pair"; then
+    echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR[@DISTANCE:COST][+DISTANCE:PER_STEP] (e.g. 1:3e-4, 7:5e-5@2:4, 11:5e-5@2:4+1.5:1)" >&2
+    exit 2
+  fi
 done
 mkdir -p "$out"
 if finished "$out/stage1" auv-nav:hard "$hard_seed" 3e-4; then
@@ -67,19 +78,19 @@ else
 fi
 stage=1
 for pair in $mixed_stages; do
-  margin=""
-  case "$pair" in *@*) margin=${pair#*@} pair=${pair%@*} ;; esac
-  seed=${pair%%:*} lr=${pair#*:}
+  parse_stage "$pair"
+  seed=$stage_seed lr=$stage_lr margin=$stage_margin clearance=$stage_clearance
   prev=$stage
   stage=$((stage + 1))
-  if finished "$out/stage$stage" auv-nav:mixed "$seed" "$lr" "$margin"; then
+  if finished "$out/stage$stage" auv-nav:mixed "$seed" "$lr" "$margin" "$clearance"; then
     echo "train_auv: stage $stage: kept the finished run in $out/stage$stage"
     continue
   fi
-  echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr${margin:+, geodesic margin $margin}, from stage $prev -> $out/stage$stage"
+  echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr${margin:+, geodesic margin $margin}${clearance:+, clearance penalty $clearance}, from stage $prev -> $out/stage$stage"
   # The normaliser comes with the --init blob (and keeps adapting).
   "$pbppo" train "${common[@]}" --layout mixed --init "$out/stage$prev/best.blob" --lr "$lr" \
-    --steps "$mixed_steps" --seed "$seed" ${margin:+--geodesic-margin "$margin"} --out "$out/stage$stage"
+    --steps "$mixed_steps" --seed "$seed" ${margin:+--geodesic-margin "$margin"} \
+    ${clearance:+--clearance-penalty "$clearance"} --out "$out/stage$stage"
 done
 last="$out/stage$stage"
 # PPO on this task is not monotonic: each stage hands on, and ships, its best checkpoint.

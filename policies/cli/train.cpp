@@ -104,6 +104,12 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
                "auv-nav: DISTANCE_M:COST, the geodesic path pays up to COST extra per metre within DISTANCE_M beyond "
                "l_safe of obstacles (keeps the progress term off the collision boundary); default: auv.yaml's "
                "task.geodesic_margin (none)");
+  s.add_option("--clearance-penalty", o.clearance_penalty,
+               "auv-nav: DISTANCE_M:PER_STEP, each step within DISTANCE_M beyond l_safe of an obstacle costs up to "
+               "PER_STEP (linear, the full cost at l_safe); default: auv.yaml's task.clearance_penalty (none)");
+  s.add_option("--extra-obstacles", o.extra_obstacles,
+               "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
+               "so that the policy has to steer by its sonar rather than learn a route");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
@@ -122,6 +128,9 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--lr", o.lr, "Adam learning rate");
   s.add_flag("--anneal-lr", o.anneal_lr, "Decay the learning rate linearly to 0 over the budget");
   s.add_flag("--keep-best", o.keep_best, "Also write best.blob: the policy of the best last-100-episode return");
+  s.add_option("--snapshots", o.snapshots,
+               "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by environment steps), "
+               "to choose among on held-out episodes (tools/select_auv.sh)");
   s.add_option("--gamma", o.gamma, "Discount");
   s.add_option("--gae-lambda", o.gae_lambda, "GAE lambda");
   s.add_option("--ent-coef", o.ent_coef, "Entropy coefficient");
@@ -138,6 +147,8 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_flag("--no-plots", o.no_plots, "Do not run gnuplot");
   s.add_option("--checkpoint-seconds", o.checkpoint_seconds, "Seconds between checkpoint blobs");
   s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
+  s.add_option("--critic-warmup", o.critic_warmup,
+               "With --init: the first N iterations train only the (fresh) value network, the policy is held");
   s.add_option("--init", o.init,
                "Start from this blob's policy and observation normaliser (same IO layout, --hidden and "
                "--activation; value network and log-std start fresh), e.g. to continue on a harder layout");
@@ -152,6 +163,8 @@ int Train(const TrainOptions& o) {
   c.exploring_starts = o.exploring_starts;
   c.progress = o.progress;
   c.geodesic_margin = o.geodesic_margin;
+  c.clearance_penalty = o.clearance_penalty;
+  c.extra_obstacles = o.extra_obstacles;
   if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
   c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
   c.seed = o.seed;
@@ -163,6 +176,8 @@ int Train(const TrainOptions& o) {
   c.learning_rate = o.lr;
   c.anneal_lr = o.anneal_lr;
   c.keep_best = o.keep_best;
+  c.snapshots = o.snapshots;
+  c.critic_warmup = o.critic_warmup;
   c.gamma = o.gamma;
   c.gae_lambda = o.gae_lambda;
   c.ent_coef = o.ent_coef;
@@ -212,6 +227,8 @@ int Train(const TrainOptions& o) {
     eo.exploring_starts = c.exploring_starts;
     eo.progress = c.progress;
     eo.geodesic_margin = c.geodesic_margin;
+    eo.clearance_penalty = c.clearance_penalty;
+    eo.extra_obstacles = c.extra_obstacles;
     if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
   }
 

@@ -16,6 +16,8 @@ struct TrainOptions {
   double exploring_starts = 0.0;
   std::string progress;
   std::string geodesic_margin;
+  std::string clearance_penalty;
+  int extra_obstacles = 0;
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";
@@ -33,6 +35,8 @@ struct TrainOptions {
   double lr = 3e-4;
   bool anneal_lr = false;
   bool keep_best = false;
+  int snapshots = 0;
+  int critic_warmup = 0;
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;

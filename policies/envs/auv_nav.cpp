@@ -1,6 +1,7 @@
 #include "policies/envs/auv_nav.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <tuple>
@@ -46,15 +47,23 @@ Result<std::optional<sim::AuvTaskParams::Progress>> AuvNav::ProgressFor(const st
 }
 
 Result<std::optional<std::pair<double, double>>> AuvNav::ParseGeodesicMargin(const std::string& spec) {
+  return ParseNumberPair(spec, "DISTANCE_M:COST (e.g. 2:4)", {"distance", "cost"});
+}
+
+Result<std::optional<std::pair<double, double>>> AuvNav::ParseClearancePenalty(const std::string& spec) {
+  return ParseNumberPair(spec, "DISTANCE_M:PER_STEP (e.g. 1.5:1)", {"distance", "per-step cost"});
+}
+
+Result<std::optional<std::pair<double, double>>> AuvNav::ParseNumberPair(const std::string& spec,
+                                                                         const std::string& form,
+                                                                         const std::array<const char*, 2>& what) {
   std::optional<std::pair<double, double>> result;
   if (spec.empty()) return result;
   const std::size_t colon = spec.find(':');
-  if (colon == std::string::npos)
-    return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not DISTANCE_M:COST (e.g. 2:4)");
+  if (colon == std::string::npos) return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not " + form);
   double v[2] = {0, 0};
   const std::string parts[2] = {spec.substr(0, colon), spec.substr(colon + 1)};
-  const char* what[2] = {"distance", "cost"};
-  for (int k = 0; k < 2; ++k) {
+  for (std::size_t k = 0; k < 2; ++k) {
     char* end = nullptr;
     v[k] = std::strtod(parts[k].c_str(), &end);
     if (parts[k].empty() || end != parts[k].c_str() + parts[k].size() || !(v[k] >= 0 && v[k] <= 100))
@@ -66,11 +75,17 @@ Result<std::optional<std::pair<double, double>>> AuvNav::ParseGeodesicMargin(con
 }
 
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
-                                             const std::string& progress, const std::string& geodesic_margin) {
+                                             const std::string& progress, const std::string& geodesic_margin,
+                                             const std::string& clearance_penalty, int extra_obstacles) {
   if (auto check = ProgressFor(progress, ""); !check)
     return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress " + check.error().message);
   auto margin = ParseGeodesicMargin(geodesic_margin);
   if (!margin) return MakeError(ErrorCode::kInvalidValue, "auv-nav: geodesic margin " + margin.error().message);
+  auto clearance = ParseClearancePenalty(clearance_penalty);
+  if (!clearance) return MakeError(ErrorCode::kInvalidValue, "auv-nav: clearance penalty " + clearance.error().message);
+  if (extra_obstacles < 0 || extra_obstacles > 16)
+    return MakeError(ErrorCode::kInvalidValue,
+                     "auv-nav: extra obstacles " + std::to_string(extra_obstacles) + " is not in [0, 16]");
   std::vector<std::string> names;
   if (layout_name == "mixed") {
     // Hard twice: it needs the most experience (a serpentine of three corridors).
@@ -88,6 +103,8 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
     if (!cfg) return std::move(cfg).error();
     if (const auto mode = ProgressFor(progress, n).value()) cfg->task.progress = *mode;
     if (*margin) std::tie(cfg->task.geodesic_margin_m, cfg->task.geodesic_margin_cost) = **margin;
+    if (*clearance) std::tie(cfg->task.clearance_penalty_m, cfg->task.clearance_penalty_per_step) = **clearance;
+    for (int& count : cfg->layout.random_obstacles.count) count += extra_obstacles;
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
   return Make(std::move(configs), "auv-nav:" + layout_name);

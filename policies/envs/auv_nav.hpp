@@ -7,6 +7,7 @@
 // all three.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -24,9 +25,13 @@ class AuvNav final : public Env {
   // progress: a progress spec (ProgressFor) that replaces auv.yaml's task.progress; empty keeps it.
   // geodesic_margin: "D:C" sets auv.yaml's task.geodesic_margin (distance_m D, cost C) in every
   // layout (it acts where the progress term is geodesic); empty keeps auv.yaml's.
+  // clearance_penalty: "D:W" sets auv.yaml's task.clearance_penalty (distance_m D, per_step W) in
+  // every layout; empty keeps auv.yaml's.
+  // extra_obstacles (training only, 0-16): every layout draws this many more random obstacles
+  // per episode than its file says (placed by the same rules, as many as fit).
   static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name,
-                                              const std::string& progress = "",
-                                              const std::string& geodesic_margin = "");
+                                              const std::string& progress = "", const std::string& geodesic_margin = "",
+                                              const std::string& clearance_penalty = "", int extra_obstacles = 0);
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);
@@ -40,6 +45,8 @@ class AuvNav final : public Env {
 
   // "D:C" -> (distance_m, cost), each a number in [0, 100]; "" -> nullopt. Errors name the part.
   static Result<std::optional<std::pair<double, double>>> ParseGeodesicMargin(const std::string& spec);
+  // "D:W" -> (distance_m, per_step), each a number in [0, 100]; "" -> nullopt. Errors name the part.
+  static Result<std::optional<std::pair<double, double>>> ParseClearancePenalty(const std::string& spec);
 
   const std::string& name() const noexcept override { return name_; }
   std::uint32_t observation_size() const noexcept override;
@@ -63,6 +70,11 @@ class AuvNav final : public Env {
   const sim::AuvTaskConfig& config() const noexcept { return *configs_[current_]; }
 
  private:
+  // "A:B" -> (A, B), each a number in [0, 100]; `form` and `what` name the spec and its two parts in errors.
+  static Result<std::optional<std::pair<double, double>>> ParseNumberPair(const std::string& spec,
+                                                                          const std::string& form,
+                                                                          const std::array<const char*, 2>& what);
+
   AuvNav(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs, std::vector<sim::AuvNavTask> tasks,
          std::string name);
 

@@ -24,6 +24,10 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
                        "progress: only auv-nav has a progress term to choose, not 'pendulum'");
     if (!options.geodesic_margin.empty())
       return MakeError(ErrorCode::kInvalidValue, "geodesic margin: only auv-nav has one, not 'pendulum'");
+    if (!options.clearance_penalty.empty())
+      return MakeError(ErrorCode::kInvalidValue, "clearance penalty: only auv-nav has one, not 'pendulum'");
+    if (options.extra_obstacles != 0)
+      return MakeError(ErrorCode::kInvalidValue, "extra obstacles: only auv-nav has obstacles, not 'pendulum'");
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
@@ -31,7 +35,8 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     return std::unique_ptr<Env>(std::move(env).value());
   }
   if (name == "auv-nav") {
-    auto env = AuvNav::Make(dir, options.layout, options.progress, options.geodesic_margin);
+    auto env = AuvNav::Make(dir, options.layout, options.progress, options.geodesic_margin, options.clearance_penalty,
+                            options.extra_obstacles);
     if (!env) return std::move(env).error();
     (*env)->set_exploring_starts(options.exploring_starts);
     return std::unique_ptr<Env>(std::move(env).value());

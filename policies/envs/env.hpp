@@ -72,6 +72,10 @@ struct EnvOptions {
   std::string progress;
   // auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin (AuvNav::Make); empty keeps it.
   std::string geodesic_margin;
+  // auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty (AuvNav::Make); empty keeps it.
+  std::string clearance_penalty;
+  // auv-nav, training only: random obstacles per episode beyond each layout's count (AuvNav::Make).
+  int extra_obstacles = 0;
 };
 
 // The names MakeEnv() knows.

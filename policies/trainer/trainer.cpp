@@ -151,6 +151,19 @@ Status TrainConfig::Validate() const {
     return Invalid("--geodesic-margin", m.error().message);
   if (!geodesic_margin.empty() && env != "auv-nav")
     return Invalid("--geodesic-margin", "only auv-nav has one, not '" + env + "'");
+  if (auto m = envs::AuvNav::ParseClearancePenalty(clearance_penalty); !m)
+    return Invalid("--clearance-penalty", m.error().message);
+  if (extra_obstacles < 0 || extra_obstacles > 16)
+    return Invalid("--extra-obstacles", std::to_string(extra_obstacles) + " is not in [0, 16]");
+  if (extra_obstacles > 0 && env != "auv-nav")
+    return Invalid("--extra-obstacles", "only auv-nav has obstacles, not '" + env + "'");
+  if (!clearance_penalty.empty() && env != "auv-nav")
+    return Invalid("--clearance-penalty", "only auv-nav has one, not '" + env + "'");
+  if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
+  if (critic_warmup > 0 && init_blob.empty())
+    return Invalid("--critic-warmup", "needs --init (it holds a trained policy while the fresh value network learns)");
+  if (snapshots < 0 || snapshots > 1000)
+    return Invalid("--snapshots", std::to_string(snapshots) + " is not in [0, 1000]");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");
   if (!(gamma > 0 && gamma <= 1)) return Invalid("--gamma", std::to_string(gamma) + " is not in (0, 1]");
   if (!(gae_lambda >= 0 && gae_lambda <= 1))
@@ -418,6 +431,9 @@ void Trainer::Update(double eps, IterationStats& st) {
   double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0;
   const bool split = pool_.size() >= 2;
   SpinBarrier sync(split ? 2 : 1);
+  // --critic-warmup: the value network learns, the policy stays as it is (its loss is still
+  // computed for the log and the gradient norm).
+  const bool critic_only = st.iteration < c_.critic_warmup;
 
   auto clip_scale = [&](long k) {
     const double n = std::sqrt(sq[k & 1][0] + sq[k & 1][1]);
@@ -457,7 +473,7 @@ void Trainer::Update(double eps, IterationStats& st) {
       }
       const auto [norm, scale] = clip_scale(k);
       gnorm += norm;
-      adam_p_.Step(pp_.data(), gp_.data(), lr_now_, scale);
+      if (!critic_only) adam_p_.Step(pp_.data(), gp_.data(), lr_now_, scale);
       if (sequential_value) adam_v_.Step(pv_.data(), gv_.data(), lr_now_, scale);
     }
   };
@@ -686,6 +702,11 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     }
     csv.open(c_.out_dir + "/log.csv", std::ios::app);
     if (!csv) return MakeError(ErrorCode::kIo, "--out: cannot append to '" + c_.out_dir + "/log.csv'");
+    if (c_.snapshots > 0) {
+      std::filesystem::create_directories(c_.out_dir + "/snapshots", ec);
+      if (ec)
+        return MakeError(ErrorCode::kIo, "--snapshots: cannot create '" + c_.out_dir + "/snapshots': " + ec.message());
+    }
   }
   auto schedule = MakeClipSchedule(c_.schedule);
   const bool bandit = schedule->uses_feedback();
@@ -777,7 +798,8 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     } else if (bandit && more) {
       st.feedback = rollout_return;
     }
-    if (bandit && std::isfinite(st.feedback) && std::isfinite(feedback_prev)) {
+    // No bandit update while the policy is held (--critic-warmup): the return did not change because of ε.
+    if (bandit && std::isfinite(st.feedback) && std::isfinite(feedback_prev) && it >= c_.critic_warmup) {
       schedule->Update(st.arm, st.feedback, feedback_prev);
       ++feedback_count;
       st.improved = st.feedback > feedback_prev;
@@ -818,6 +840,16 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
       p.epsilon = st.epsilon;
       progress(p);
     }
+    // --snapshots N: after iterations ceil(k * iterations / N), k = 1..N (the last is the final policy).
+    if (c_.snapshots > 0 && (static_cast<std::int64_t>(it + 1) * c_.snapshots) / iterations >
+                                (static_cast<std::int64_t>(it) * c_.snapshots) / iterations) {
+      // Named by the training steps that produced these parameters (the rollout just collected
+      // with them is not one).
+      const std::uint64_t trained = static_cast<std::uint64_t>(it + 1) * per_iter;
+      char name[64];
+      std::snprintf(name, sizeof name, "snapshots/%012llu.blob", static_cast<unsigned long long>(trained));
+      if (auto s = WriteCheckpoint(mean100(), trained, name); !s) return s.error();
+    }
     if (!c_.out_dir.empty() &&
         std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= c_.checkpoint_seconds) {
       if (auto s = WriteCheckpoint(mean100(), env_steps); !s) return s.error();
@@ -849,6 +881,10 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     if (c_.exploring_starts > 0) j["exploring_starts"] = c_.exploring_starts;
     if (!c_.progress.empty()) j["progress"] = c_.progress;
     if (!c_.geodesic_margin.empty()) j["geodesic_margin"] = c_.geodesic_margin;
+    if (!c_.clearance_penalty.empty()) j["clearance_penalty"] = c_.clearance_penalty;
+    if (c_.snapshots > 0) j["snapshots"] = c_.snapshots;
+    if (c_.extra_obstacles > 0) j["extra_obstacles"] = c_.extra_obstacles;
+    if (c_.critic_warmup > 0) j["critic_warmup"] = c_.critic_warmup;
     j["seed"] = c_.seed;
     if (!c_.init_blob.empty()) j["init"] = c_.init_blob;
     j["schedule"] = c_.schedule.Describe();
@@ -891,6 +927,8 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   eo.exploring_starts = config.exploring_starts;
   eo.progress = config.progress;
   eo.geodesic_margin = config.geodesic_margin;
+  eo.clearance_penalty = config.clearance_penalty;
+  eo.extra_obstacles = config.extra_obstacles;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

@@ -24,6 +24,8 @@ struct TrainConfig {
   double exploring_starts = 0.0;  // auv-nav: probability of an episode starting anywhere (training only)
   std::string progress;           // auv-nav: "euclidean" or "geodesic" reward progress; empty: auv.yaml's
   std::string geodesic_margin;    // auv-nav: "D:C", the geodesic path's margin; empty: auv.yaml's
+  std::string clearance_penalty;  // auv-nav: "D:W", the reward's clearance term; empty: auv.yaml's
+  int extra_obstacles = 0;        // auv-nav, training: random obstacles beyond each layout's count
   std::uint64_t seed = 1;
   std::uint64_t total_steps = 200000;  // training environment steps (evaluation steps are extra)
   int num_envs = 1;
@@ -36,6 +38,9 @@ struct TrainConfig {
   // Also write best.blob: the policy of the best last-100-episode task success where the
   // environment reports one (ties: the better return), otherwise of the best return.
   bool keep_best = false;
+  // Also write this many blobs evenly spaced over the run into snapshots/ (named by their
+  // environment steps), to choose among afterwards on held-out episodes. 0: none.
+  int snapshots = 0;
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;
@@ -52,6 +57,9 @@ struct TrainConfig {
   // Warm start: the policy network and observation normaliser of this blob (same IO layout,
   // widths and activation; the value network and log-std start fresh). Empty: orthogonal init.
   std::string init_blob;
+  // With init_blob: the first this many iterations update only the value network (which starts
+  // fresh), so the policy is not moved by the untrained critic's advantages. 0: none.
+  int critic_warmup = 0;
   ScheduleConfig schedule = [] {
     ScheduleConfig c;
     c.mode = ScheduleMode::kFixed;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -49,6 +50,33 @@ std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t see
     seen.insert(auv->config().layout.name);
   }
   return seen;
+}
+
+// The same episode (seed 9) driven straight ahead for up to `steps` steps in auv-nav made with
+// `with` and with `without`: the observations agree at every step (the options differ in the
+// reward only); returns the two returns, each step's reward pair handed to `step_check`.
+std::pair<double, double> SameEpisodeReturns(const EnvOptions& with, const EnvOptions& without, int steps,
+                                             const std::function<void(double, double)>& step_check = {}) {
+  auto a = MakeEnv("auv-nav", with);
+  auto b = MakeEnv("auv-nav", without);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  Rng r1(9), r2(9);
+  std::vector<float> o1((*a)->observation_size()), o2(o1.size());
+  (*a)->Reset(r1, o1);
+  (*b)->Reset(r2, o2);
+  const std::vector<float> ahead{1.0f, 0.0f};
+  std::pair<double, double> sums{0.0, 0.0};
+  for (int k = 0; k < steps; ++k) {
+    const auto ra = (*a)->Step(ahead, o1);
+    const auto rb = (*b)->Step(ahead, o2);
+    sums.first += ra.reward;
+    sums.second += rb.reward;
+    CHECK(o1 == o2);
+    if (step_check) step_check(ra.reward, rb.reward);
+    if (ra.terminated || ra.truncated) break;
+  }
+  return sums;
 }
 
 TEST_CASE("auv-nav has the IO layout's sizes, names and policy-unit action bounds") {
@@ -159,23 +187,9 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
   // The same episode earns a different progress reward with the margin (the path and its length
   // change) and the same observations (the reward only).
   o.layout = "hard";
-  auto with = MakeEnv("auv-nav", o);
-  o.geodesic_margin = "";
-  auto without = MakeEnv("auv-nav", o);
-  REQUIRE(with.ok());
-  REQUIRE(without.ok());
-  CHECK(dynamic_cast<AuvNav*>(without->get())->config().task.geodesic_margin_cost == 0.0);
-  Rng r1(9), r2(9);
-  std::vector<float> o1((*with)->observation_size()), o2(o1.size());
-  (*with)->Reset(r1, o1);
-  (*without)->Reset(r2, o2);
-  const std::vector<float> ahead{1.0f, 0.0f};
-  double sum_with = 0, sum_without = 0;
-  for (int k = 0; k < 30; ++k) {
-    sum_with += (*with)->Step(ahead, o1).reward;
-    sum_without += (*without)->Step(ahead, o2).reward;
-    CHECK(o1 == o2);
-  }
+  EnvOptions without = o;
+  without.geodesic_margin = "";
+  const auto [sum_with, sum_without] = SameEpisodeReturns(o, without, 30);
   CHECK(sum_with != sum_without);
   for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
            {"2", "'2' is not DISTANCE_M:COST (e.g. 2:4)"},
@@ -193,6 +207,83 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
   o.geodesic_margin = "2:4";
   auto pendulum = MakeEnv("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
+}
+
+TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout, bad values are refused") {
+  EnvOptions o;
+  o.layout = "mixed";
+  o.clearance_penalty = "1.5:0.75";
+  CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
+          CHECK(cfg.task.clearance_penalty_m == 1.5);
+          CHECK(cfg.task.clearance_penalty_per_step == 0.75);
+        }).size() == 3);
+  // Straight ahead from the hard start runs along the bottom wall or into the first circle: the
+  // same observations, less reward once inside the band.
+  o.layout = "hard";
+  EnvOptions without = o;
+  without.clearance_penalty = "";
+  const auto [sum_with, sum_without] =
+      SameEpisodeReturns(o, without, 200, [](double with, double plain) { CHECK(with <= plain); });
+  CHECK(sum_with < sum_without);
+  o.clearance_penalty = "1.5:1";
+  auto pendulum = MakeEnv("pendulum", o);
+  REQUIRE_FALSE(pendulum.ok());
+  CHECK(pendulum.error().message == "clearance penalty: only auv-nav has one, not 'pendulum'");
+  for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
+           {"1.5", "'1.5' is not DISTANCE_M:PER_STEP (e.g. 1.5:1)"},
+           {"1.5:", "'1.5:': per-step cost '' is not a number in [0, 100]"},
+           {"-1:1", "'-1:1': distance '-1' is not a number in [0, 100]"},
+           {"1.5:inf", "'1.5:inf': per-step cost 'inf' is not a number in [0, 100]"}}) {
+    CAPTURE(spec);
+    o.clearance_penalty = spec;
+    auto bad = MakeEnv("auv-nav", o);
+    REQUIRE_FALSE(bad.ok());
+    CHECK(bad.error().message == "auv-nav: clearance penalty " + message);
+  }
+}
+
+TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in every layout") {
+  // Mean random obstacles placed over 40 episodes per layout, without and with 3 extra.
+  auto placed = [](int extra) {
+    EnvOptions o;
+    o.layout = "mixed";
+    o.extra_obstacles = extra;
+    auto made = MakeEnv("auv-nav", o);
+    REQUIRE_MESSAGE(made.ok(), made.error().message);
+    auto* auv = dynamic_cast<AuvNav*>(made->get());
+    REQUIRE(auv != nullptr);
+    Rng rng(21);
+    std::vector<float> obs((*made)->observation_size());
+    std::map<std::string, double> mean;
+    std::map<std::string, int> episodes;
+    for (int i = 0; i < 120; ++i) {
+      (*made)->Reset(rng, obs);
+      const auto& cfg = auv->config();
+      const auto& count = cfg.layout.random_obstacles.count;
+      const int n = auv->task().stats().random_obstacles;
+      CHECK(n <= count[1]);
+      CHECK(static_cast<int>(auv->task().world().circles.size()) ==
+            static_cast<int>(cfg.layout.world.circles.size()) + n);
+      mean[cfg.layout.name] += n;
+      episodes[cfg.layout.name] += 1;
+    }
+    for (auto& [name, m] : mean) m /= episodes[name];
+    return mean;
+  };
+  const auto plain = placed(0), more = placed(3);
+  for (const char* layout : {"easy", "medium", "hard"}) {
+    CAPTURE(layout);
+    CHECK(more.at(layout) > plain.at(layout) + 2.0);  // 3 more asked; a crowded layout may fit fewer
+  }
+  EnvOptions o;
+  o.extra_obstacles = 17;
+  auto bad = MakeEnv("auv-nav", o);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message == "auv-nav: extra obstacles 17 is not in [0, 16]");
+  o.extra_obstacles = 1;
+  auto pendulum = MakeEnv("pendulum", o);
+  REQUIRE_FALSE(pendulum.ok());
+  CHECK(pendulum.error().message == "extra obstacles: only auv-nav has obstacles, not 'pendulum'");
 }
 
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {

@@ -136,6 +136,37 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the r
   CHECK(std::fabs(data->action()[0] - ref.action[0]) <= ref.error_bound[0] + 1e-6);
 }
 
+TEST_CASE("--snapshots N writes N blobs spread over the run, the last one the final policy") {
+  const std::string out = test::ScratchDir("trainer_snapshots") + "/run";
+  TrainConfig c = Small();  // 4 iterations of 1024 steps
+  c.snapshots = 2;
+  c.out_dir = out;
+  c.plots = false;
+  auto r = Train(c);
+  REQUIRE_MESSAGE(r.ok(), (r.ok() ? "" : r.error().message));
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(out + "/snapshots")) names.push_back(e.path().filename());
+  std::sort(names.begin(), names.end());
+  CHECK(names == std::vector<std::string>{"000000002048.blob", "000000002048.golden", "000000004096.blob",
+                                          "000000004096.golden"});
+  auto mid = policy::ReadBlobFile(out + "/snapshots/000000002048.blob");
+  auto last = policy::ReadBlobFile(out + "/snapshots/000000004096.blob");
+  auto final_blob = policy::ReadBlobFile(out + "/policy.blob");
+  REQUIRE(mid.ok());
+  REQUIRE(last.ok());
+  REQUIRE(final_blob.ok());
+  CHECK(mid->provenance.env_steps == 2048u);
+  const float obs[3] = {0.3f, -0.95f, 1.5f};
+  CHECK(policy::ReferenceForward(last.value(), obs).action == policy::ReferenceForward(final_blob.value(), obs).action);
+  CHECK(policy::ReferenceForward(mid.value(), obs).action != policy::ReferenceForward(last.value(), obs).action);
+  std::ifstream js(out + "/summary.json");
+  CHECK(nlohmann::json::parse(js)["snapshots"] == 2);
+  c.snapshots = 1001;
+  auto bad = Train(c);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("--snapshots: 1001 is not in [0, 1000]") != std::string::npos);
+}
+
 TEST_CASE("trainer errors name the field and value") {
   TrainConfig c = Small();
   c.env = "cartpole";
@@ -164,6 +195,19 @@ TEST_CASE("trainer errors name the field and value") {
   c = Small();
   c.geodesic_margin = "2:4";  // pendulum
   CHECK(Train(c).error().message.find("--geodesic-margin: only auv-nav has one, not 'pendulum'") != std::string::npos);
+  c.geodesic_margin = "";
+  c.clearance_penalty = "1.5:1";  // pendulum
+  CHECK(Train(c).error().message.find("--clearance-penalty: only auv-nav has one, not 'pendulum'") !=
+        std::string::npos);
+  c.clearance_penalty = "";
+  c.extra_obstacles = 2;  // pendulum
+  CHECK(Train(c).error().message.find("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'") !=
+        std::string::npos);
+  c.extra_obstacles = 0;
+  c.env = "auv-nav";
+  c.clearance_penalty = "1.5:1:2";
+  CHECK(Train(c).error().message.find("--clearance-penalty: '1.5:1:2': per-step cost '1:2' is not a number in "
+                                      "[0, 100]") != std::string::npos);
   c = Small();
   const std::string dir = test::ScratchDir("trainer_unwritable");
   std::ofstream(dir + "/file") << "x";
@@ -222,6 +266,32 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
   CHECK(worst < 1e-6f);
   CHECK(rb->spec.obs_mean == ra->spec.obs_mean);
   CHECK(rb->spec.obs_inv_std == ra->spec.obs_inv_std);
+
+  // --critic-warmup: at a real learning rate the policy stays the blob's while only the value
+  // network learns, and moves from the first iteration after the warm-up.
+  auto largest_change = [&](const policy::PolicySpec& spec) {
+    float d = 0;
+    for (std::size_t l = 0; l < ra->spec.layers.size(); ++l)
+      for (std::size_t i = 0; i < ra->spec.layers[l].weight.size(); ++i)
+        d = std::max(d, std::abs(spec.layers[l].weight[i] - ra->spec.layers[l].weight[i]));
+    return d;
+  };
+  TrainConfig w = Small();  // 1024 steps per iteration
+  w.total_steps = 2048;
+  w.init_blob = blob;
+  w.critic_warmup = 2;
+  auto held = Train(w);
+  REQUIRE(held.ok());
+  CHECK(largest_change(held->spec) == 0.0f);
+  CHECK(held->iterations.back().value_loss < held->iterations.front().value_loss);
+  w.critic_warmup = 1;
+  auto moved = Train(w);
+  REQUIRE(moved.ok());
+  CHECK(largest_change(moved->spec) > 1e-4f);
+  w.init_blob = "";
+  auto no_init = Train(w);
+  REQUIRE_FALSE(no_init.ok());
+  CHECK(no_init.error().message.find("--critic-warmup: needs --init") != std::string::npos);
 
   auto error_of = [&](TrainConfig c) {
     auto r = Train(c);

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# Chooses an AUV policy among a training run's candidates on development episodes: best.blob and
+# every blob in snapshots/ (pbppo train --snapshots N) are evaluated deterministically on each
+# layout (EPISODES from seed DEV_SEED: a stream that neither training nor tools/eval_auv.sh uses),
+# and the candidate closest to the targets (95 / 95 / 90 % on easy / medium / hard: the least total
+# shortfall, ties by the higher total success) is copied to RUN_DIR/selected.blob with its golden
+# vectors. Writes RUN_DIR/select.csv (one row per candidate) and prints the table.
+# Usage: tools/select_auv.sh RUN_DIR   (PBPPO=path/to/pbppo, EPISODES=100, DEV_SEED=777, JOBS=2)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+if [ $# -ne 1 ] || [ ! -d "$1" ]; then
+  echo "select_auv: usage: tools/select_auv.sh RUN_DIR (a pbppo train --out folder)" >&2
+  exit 2
+fi
+run="$1"
+pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+episodes="${EPISODES:-100}"
+seed="${DEV_SEED:-777}"
+jobs="${JOBS:-2}"
+case "$episodes" in '' | *[!0-9]* | 0) echo "select_auv: EPISODES: '$episodes' is not a positive integer" >&2; exit 2 ;; esac
+case "$seed" in '' | *[!0-9]*) echo "select_auv: DEV_SEED: '$seed' is not a non-negative integer" >&2; exit 2 ;; esac
+case "$jobs" in '' | *[!0-9]* | 0) echo "select_auv: JOBS: '$jobs' is not a positive integer" >&2; exit 2 ;; esac
+if [ ! -x "$pbppo" ]; then
+  echo "select_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
+  exit 2
+fi
+candidates=()
+[ -f "$run/best.blob" ] && candidates+=("$run/best.blob")
+for b in "$run"/snapshots/*.blob; do [ -f "$b" ] && candidates+=("$b"); done
+if [ ${#candidates[@]} -eq 0 ]; then
+  echo "select_auv: $run holds no best.blob and no snapshots/*.blob" >&2
+  exit 2
+fi
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+# One job per (candidate, layout); each writes one line "index layout success collisions timeouts".
+i=0
+for b in "${candidates[@]}"; do
+  for layout in easy medium hard; do echo "$i $layout $b"; done
+  i=$((i + 1))
+done > "$work/jobs"
+export pbppo episodes seed work
+xargs -P "$jobs" -L 1 bash -c '
+  "$pbppo" eval "$2" --env auv-nav --layout "$1" --episodes "$episodes" --seed "$seed" --json > "$work/$0.$1.json"
+' < "$work/jobs"
+python3 - "$work" "$run" "${candidates[@]}" <<'PY'
+import csv, json, os, shutil, sys
+work, run, cands = sys.argv[1], sys.argv[2], sys.argv[3:]
+targets = {"easy": 95.0, "medium": 95.0, "hard": 90.0}
+rows = []
+for i, blob in enumerate(cands):
+    row = {"candidate": os.path.relpath(blob, run)}
+    shortfall = total = 0.0
+    for layout, t in targets.items():
+        e = json.load(open(os.path.join(work, "%d.%s.json" % (i, layout))))
+        s = 100.0 * e["success_rate"]
+        row[layout] = round(s, 2)
+        row[layout + "_collisions"] = e["collisions"]
+        row[layout + "_timeouts"] = e["timeouts"]
+        shortfall += max(0.0, t - s)
+        total += s
+    row["shortfall"] = shortfall
+    row["total"] = total
+    rows.append(row)
+best = min(range(len(rows)), key=lambda i: (rows[i]["shortfall"], -rows[i]["total"], i))
+with open(os.path.join(run, "select.csv.tmp"), "w", newline="") as f:
+    w = csv.DictWriter(f, fieldnames=list(rows[0].keys()) + ["selected"])
+    w.writeheader()
+    for i, r in enumerate(rows):
+        w.writerow(dict(r, selected=int(i == best)))
+os.replace(os.path.join(run, "select.csv.tmp"), os.path.join(run, "select.csv"))
+print("%-28s %7s %7s %7s  %s" % ("candidate", "easy", "medium", "hard", "shortfall"))
+for i, r in enumerate(rows):
+    print("%-28s %6.1f%% %6.1f%% %6.1f%%  %5.1f%s" % (r["candidate"], r["easy"], r["medium"], r["hard"], r["shortfall"],
+                                                    "  <- selected" if i == best else ""))
+src = cands[best]
+for ext in (".blob", ".golden"):
+    a = src[: -len(".blob")] + ext
+    tmp = os.path.join(run, "selected" + ext + ".tmp")
+    shutil.copyfile(a, tmp)
+    os.replace(tmp, os.path.join(run, "selected" + ext))
+print("select_auv: %s -> %s/selected.blob" % (rows[best]["candidate"], run))
+PY
