@@ -135,7 +135,7 @@ endif()
 run(0 ${PBPPO} eval ${WORK}/int/policy.blob --env auv-nav --episodes 2)
 # auv-nav: a tiny run, evaluation with the task's figures, the trajectory plot and CSV, bad inputs.
 run(0 ${PBPPO} train --env auv-nav --layout medium --schedule pbppo --arms 0.1,0.3 --feedback rollout --steps 4096
-    --envs 4 --rollout 512 --minibatch 256 --epochs 1 --no-plots --quiet --out ${WORK}/auv)
+    --envs 4 --rollout 512 --minibatch 256 --epochs 1 --snapshots 2 --no-plots --quiet --out ${WORK}/auv)
 run(0 ${PBPPO} inspect ${WORK}/auv/policy.blob)
 expect_in("${OUT}" "auv-nav:medium")
 expect_in("${OUT}" "surge_speed")
@@ -196,5 +196,28 @@ run(2 ${PBPPO} eval ${WORK}/run1/policy.blob --env pendulum --episodes 1 --plot 
 expect_in("${ERR}" "need --env auv-nav")
 run(2 ${PBPPO} eval ${WORK}/auv/policy.blob --env auv-nav --layout mixed --episodes 1 --plot ${WORK}/x.png)
 expect_in("${ERR}" "not 'mixed'")
+
+# tools/select_auv.sh: the run's two snapshots evaluated per layout, the choice copied with its
+# golden vectors, one row per candidate; bad arguments refused.
+set(select ${SOURCE_DIR}/tools/select_auv.sh)
+run(0 env PBPPO=${PBPPO} EPISODES=2 bash ${select} ${WORK}/auv)
+expect_in("${OUT}" "snapshots/000000002048.blob")
+expect_in("${OUT}" "<- selected")
+file(STRINGS ${WORK}/auv/select.csv rows)
+list(LENGTH rows n)
+if(NOT n EQUAL 3)
+  message(FATAL_ERROR "select.csv: ${n} lines for 2 candidates:\n${rows}")
+endif()
+expect_in("${rows}" "candidate,easy,easy_collisions,easy_timeouts,medium")
+if(NOT EXISTS ${WORK}/auv/selected.blob OR NOT EXISTS ${WORK}/auv/selected.golden)
+  message(FATAL_ERROR "select_auv wrote no selected.blob and .golden")
+endif()
+run(0 ${PBPPO} inspect ${WORK}/auv/selected.blob)
+run(2 env PBPPO=${PBPPO} bash ${select} ${WORK}/no-such-run)
+expect_in("${ERR}" "usage: tools/select_auv.sh RUN_DIR")
+run(2 env PBPPO=${PBPPO} EPISODES=ten bash ${select} ${WORK}/auv)
+expect_in("${ERR}" "EPISODES: 'ten' is not a positive integer")
+run(2 env PBPPO=${PBPPO} bash ${select} ${WORK}/run1)
+expect_in("${ERR}" "holds no best.blob and no snapshots/*.blob")
 
 message(STATUS "pbppo cli: all checks passed")
