@@ -4,8 +4,12 @@
 # layout (EPISODES from seed DEV_SEED: a stream that neither training nor tools/eval_auv.sh uses),
 # and the candidate closest to the targets (95 / 95 / 90 % on easy / medium / hard: the least total
 # shortfall, ties by the higher total success) is copied to RUN_DIR/selected.blob with its golden
-# vectors. Writes RUN_DIR/select.csv (one row per candidate) and prints the table.
-# Usage: tools/select_auv.sh RUN_DIR   (PBPPO=path/to/pbppo, EPISODES=100, DEV_SEED=777, JOBS=2)
+# vectors. Writes RUN_DIR/select.csv (one row per candidate) and prints the table. The best of many
+# candidates on the same episodes is flattered by chance (at 100 episodes and 65 % one standard
+# error is 5 points), so the choice is evaluated again on as many episodes from CONFIRM_SEED (a
+# second development stream; empty: skip) and both results are printed.
+# Usage: tools/select_auv.sh RUN_DIR
+#   (PBPPO=path/to/pbppo, EPISODES=100, DEV_SEED=777, CONFIRM_SEED=888, JOBS=2)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 if [ $# -ne 1 ] || [ ! -d "$1" ]; then
@@ -16,10 +20,16 @@ run="$1"
 pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
 episodes="${EPISODES:-100}"
 seed="${DEV_SEED:-777}"
+confirm="${CONFIRM_SEED-888}"
 jobs="${JOBS:-2}"
 case "$episodes" in '' | *[!0-9]* | 0) echo "select_auv: EPISODES: '$episodes' is not a positive integer" >&2; exit 2 ;; esac
 case "$seed" in '' | *[!0-9]*) echo "select_auv: DEV_SEED: '$seed' is not a non-negative integer" >&2; exit 2 ;; esac
 case "$jobs" in '' | *[!0-9]* | 0) echo "select_auv: JOBS: '$jobs' is not a positive integer" >&2; exit 2 ;; esac
+case "$confirm" in *[!0-9]*) echo "select_auv: CONFIRM_SEED: '$confirm' is not a non-negative integer (or empty: skip)" >&2; exit 2 ;; esac
+if [ -n "$confirm" ] && [ "$confirm" = "$seed" ]; then
+  echo "select_auv: CONFIRM_SEED must differ from DEV_SEED ($seed)" >&2
+  exit 2
+fi
 if [ ! -x "$pbppo" ]; then
   echo "select_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
   exit 2
@@ -81,3 +91,12 @@ for ext in (".blob", ".golden"):
     os.replace(tmp, os.path.join(run, "selected" + ext))
 print("select_auv: %s -> %s/selected.blob" % (rows[best]["candidate"], run))
 PY
+if [ -n "$confirm" ]; then
+  line=""
+  for layout in easy medium hard; do
+    r=$("$pbppo" eval "$run/selected.blob" --env auv-nav --layout "$layout" --episodes "$episodes" --seed "$confirm" --json |
+      python3 -c 'import json,sys; e=json.load(sys.stdin); print("%.1f%%" % (100 * e["success_rate"]))')
+    line="$line $layout $r"
+  done
+  echo "select_auv: the choice on $episodes other episodes per layout (seed $confirm):$line"
+fi
