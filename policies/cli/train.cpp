@@ -129,7 +129,7 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_flag("--anneal-lr", o.anneal_lr, "Decay the learning rate linearly to 0 over the budget");
   s.add_flag("--keep-best", o.keep_best, "Also write best.blob: the policy of the best last-100-episode return");
   s.add_option("--snapshots", o.snapshots,
-               "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by environment steps), "
+               "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by training steps), "
                "to choose among on held-out episodes (tools/select_auv.sh)");
   s.add_option("--gamma", o.gamma, "Discount");
   s.add_option("--gae-lambda", o.gae_lambda, "GAE lambda");

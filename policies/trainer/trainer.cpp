@@ -432,7 +432,7 @@ void Trainer::Update(double eps, IterationStats& st) {
   const bool split = pool_.size() >= 2;
   SpinBarrier sync(split ? 2 : 1);
   // --critic-warmup: the value network learns, the policy stays as it is (its loss is still
-  // computed for the log and the gradient norm).
+  // computed for the log).
   const bool critic_only = st.iteration < c_.critic_warmup;
 
   auto clip_scale = [&](long k) {
@@ -464,7 +464,7 @@ void Trainer::Update(double eps, IterationStats& st) {
       ent += ps.entropy;
       kl += ps.approx_kl;
       clipfrac += ps.clip_fraction;
-      sq[k & 1][0] = SquaredNorm(gp_);
+      sq[k & 1][0] = critic_only ? 0.0 : SquaredNorm(gp_);  // a held policy takes no part in the clip
       if (sequential_value) {
         vloss += ValueLossAndGrad(value_, pv_.data(), o, rt.data(), ov.data(), c_.clip_vf, c_.vf_coef, wsv, gv_.data());
         sq[k & 1][1] = SquaredNorm(gv_);

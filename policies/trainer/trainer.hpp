@@ -38,8 +38,8 @@ struct TrainConfig {
   // Also write best.blob: the policy of the best last-100-episode task success where the
   // environment reports one (ties: the better return), otherwise of the best return.
   bool keep_best = false;
-  // Also write this many blobs evenly spaced over the run into snapshots/ (named by their
-  // environment steps), to choose among afterwards on held-out episodes. 0: none.
+  // Also write this many blobs evenly spaced over the run into snapshots/ (named by the training
+  // steps that produced them), to choose among afterwards on held-out episodes. 0: none.
   int snapshots = 0;
   double gamma = 0.99;
   double gae_lambda = 0.95;
