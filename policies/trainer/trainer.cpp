@@ -153,12 +153,12 @@ Status TrainConfig::Validate() const {
     return Invalid("--geodesic-margin", "only auv-nav has one, not '" + env + "'");
   if (auto m = envs::AuvNav::ParseClearancePenalty(clearance_penalty); !m)
     return Invalid("--clearance-penalty", m.error().message);
+  if (!clearance_penalty.empty() && env != "auv-nav")
+    return Invalid("--clearance-penalty", "only auv-nav has one, not '" + env + "'");
   if (extra_obstacles < 0 || extra_obstacles > 16)
     return Invalid("--extra-obstacles", std::to_string(extra_obstacles) + " is not in [0, 16]");
   if (extra_obstacles > 0 && env != "auv-nav")
     return Invalid("--extra-obstacles", "only auv-nav has obstacles, not '" + env + "'");
-  if (!clearance_penalty.empty() && env != "auv-nav")
-    return Invalid("--clearance-penalty", "only auv-nav has one, not '" + env + "'");
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
   if (critic_warmup > 0 && init_blob.empty())
     return Invalid("--critic-warmup", "needs --init (it holds a trained policy while the fresh value network learns)");

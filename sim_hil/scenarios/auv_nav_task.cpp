@@ -90,24 +90,21 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
     if (!ParseAuvProgress(progress, &t.progress))
       return f.Fail("task.progress", "'" + progress + "' is not euclidean or geodesic");
   }
-  if (n["geodesic_margin"]) {  // optional: no margin by default
-    YAML::Node g;
-    if (auto st = f.Map(n, "geodesic_margin", "task", &g); !st) return st.error();
-    if (auto st = f.Keys(g, "task.geodesic_margin", {"distance_m", "cost"}); !st) return st.error();
-    if (auto st = f.Number(g, "distance_m", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_m); !st)
-      return st.error();
-    if (auto st = f.Number(g, "cost", "task.geodesic_margin", 0.0, 100.0, &t.geodesic_margin_cost); !st)
-      return st.error();
-  }
-  if (n["clearance_penalty"]) {  // optional: off by default
-    YAML::Node c;
-    if (auto st = f.Map(n, "clearance_penalty", "task", &c); !st) return st.error();
-    if (auto st = f.Keys(c, "task.clearance_penalty", {"distance_m", "per_step"}); !st) return st.error();
-    if (auto st = f.Number(c, "distance_m", "task.clearance_penalty", 0.0, 100.0, &t.clearance_penalty_m); !st)
-      return st.error();
-    if (auto st = f.Number(c, "per_step", "task.clearance_penalty", 0.0, 1e6, &t.clearance_penalty_per_step); !st)
-      return st.error();
-  }
+  // Optional {distance_m, <second>} maps, each number in [0, 100]; absent: off (both stay 0).
+  auto optional_pair = [&](const char* key, const char* second, double* distance_m, double* value) -> Status {
+    if (!n[key]) return {};
+    YAML::Node m;
+    const std::string where = std::string("task.") + key;
+    if (auto st = f.Map(n, key, "task", &m); !st) return st;
+    if (auto st = f.Keys(m, where, {"distance_m", second}); !st) return st;
+    if (auto st = f.Number(m, "distance_m", where, 0.0, 100.0, distance_m); !st) return st;
+    return f.Number(m, second, where, 0.0, 100.0, value);
+  };
+  if (auto st = optional_pair("geodesic_margin", "cost", &t.geodesic_margin_m, &t.geodesic_margin_cost); !st)
+    return st.error();
+  if (auto st = optional_pair("clearance_penalty", "per_step", &t.clearance_penalty_m, &t.clearance_penalty_per_step);
+      !st)
+    return st.error();
   YAML::Node w;
   if (auto st = f.Map(n, "weights", "task", &w); !st) return st.error();
   if (auto st = f.Keys(w, "task.weights", {"collision", "goal", "progress"}); !st) return st.error();

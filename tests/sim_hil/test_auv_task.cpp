@@ -526,9 +526,14 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
                "task.geodesic_margin.distance_m: '-1' is outside");
   task_refused("bearing_gain: 2.0\n  geodesic_margin: {distance_m: 1.5, cost: 2, slope: 1}",
                "task.geodesic_margin.slope: unknown field");
-  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  geodesic_margin: {distance_m: 1.5, cost: 2.0}");
-  t = LoadAuvTaskParams(scratch);
-  REQUIRE(t.ok());
+  auto task_accepted = [&](const std::string& to) {
+    CAPTURE(to);
+    write("bearing_gain: 2.0", to);
+    auto r = LoadAuvTaskParams(scratch);
+    REQUIRE_MESSAGE(r.ok(), r.error().message);
+    return r;
+  };
+  t = task_accepted("bearing_gain: 2.0\n  geodesic_margin: {distance_m: 1.5, cost: 2.0}");
   CHECK(t->geodesic_margin_m == 1.5);
   CHECK(t->geodesic_margin_cost == 2.0);
   CHECK(t->clearance_penalty_per_step == 0.0);  // no clearance term unless asked
@@ -537,9 +542,7 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
                "task.clearance_penalty.per_step: '-1' is outside");
   task_refused("bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5}",
                "task.clearance_penalty: missing field 'per_step'");
-  write("bearing_gain: 2.0", "bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5, per_step: 0.5}");
-  t = LoadAuvTaskParams(scratch);
-  REQUIRE(t.ok());
+  t = task_accepted("bearing_gain: 2.0\n  clearance_penalty: {distance_m: 1.5, per_step: 0.5}");
   CHECK(t->clearance_penalty_m == 1.5);
   CHECK(t->clearance_penalty_per_step == 0.5);
 }
