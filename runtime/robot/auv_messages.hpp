@@ -31,6 +31,9 @@ struct AuvSensorSample {
   double target_x_m = 0, target_y_m = 0;
   double target_distance_m = 0;   // l_AT
   double target_bearing_rad = 0;  // phi_AT relative to the heading, (-pi, pi]
+  // The bearing of the mission computer's planned route (over the charted obstacles) relative to
+  // the heading, (-pi, pi]; the target bearing where it has no route.
+  double route_bearing_rad = 0;
   double clearance_m = 0;         // distance to the nearest obstacle surface (HIL ground truth)
   bool mission_complete = false;  // every target reached
   bool episode_end = false;       // chi: the vehicle's episode ended (collision, done, time)

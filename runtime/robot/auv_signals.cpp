@@ -28,7 +28,10 @@ constexpr const char* kNames[kAuvSonarSignal0] = {"target_distance",
                                                   "target_index",
                                                   "target_x",
                                                   "target_y",
-                                                  "nearest_echo"};
+                                                  "nearest_echo",
+                                                  "route_bearing",
+                                                  "cos_route_bearing",
+                                                  "sin_route_bearing"};
 
 }  // namespace
 
@@ -64,6 +67,9 @@ void AuvSignals(const AuvSignalInputs& in, double depth_setpoint_m, const double
   g[kAuvTargetIndex] = in.target_index;
   g[kAuvTargetX] = in.target_x_m;
   g[kAuvTargetY] = in.target_y_m;
+  g[kAuvRouteBearing] = in.route_bearing_rad;
+  g[kAuvCosRouteBearing] = std::cos(in.route_bearing_rad);
+  g[kAuvSinRouteBearing] = std::sin(in.route_bearing_rad);
   const std::uint32_t n = std::min(sonar_beams, kAuvMaxSonarBeams);
   double nearest = std::numeric_limits<double>::infinity();
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -84,6 +90,7 @@ void AuvSignalsFromSample(const AuvSensorSample& s, double depth_setpoint_m, dou
   in.yaw_rate_radps = s.yaw_rate_radps;
   in.target_distance_m = s.target_distance_m;
   in.target_bearing_rad = s.target_bearing_rad;
+  in.route_bearing_rad = s.route_bearing_rad;
   in.clearance_m = s.clearance_m;
   in.target_index = s.target_index;
   in.target_x_m = s.target_x_m;

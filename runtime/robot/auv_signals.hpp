@@ -33,6 +33,11 @@ enum AuvSignal : std::uint32_t {
   kAuvTargetX,      // current target in the world frame, m
   kAuvTargetY,
   kAuvNearestEcho,  // shortest sonar range over all beams, m (+inf without beams)
+  // The mission computer's route: the bearing of its planned path over the charted obstacles
+  // relative to the heading, rad in (-pi, pi] (the target bearing where it has no route).
+  kAuvRouteBearing,
+  kAuvCosRouteBearing,
+  kAuvSinRouteBearing,
   kAuvSonarSignal0
 };
 
@@ -47,7 +52,7 @@ std::vector<std::string> AuvSignalNames(std::uint32_t sonar_beams);
 struct AuvSignalInputs {
   double x_m = 0, y_m = 0, depth_m = 0, yaw_rad = 0;
   double surge_mps = 0, sway_mps = 0, yaw_rate_radps = 0;
-  double target_distance_m = 0, target_bearing_rad = 0, clearance_m = 0;
+  double target_distance_m = 0, target_bearing_rad = 0, clearance_m = 0, route_bearing_rad = 0;
   std::int32_t target_index = 0;
   double target_x_m = 0, target_y_m = 0;
   bool episode_end = false;

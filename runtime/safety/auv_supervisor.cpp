@@ -161,6 +161,7 @@ std::uint32_t CheckAuvSample(const AuvSupervisorConfig& c, const robot::AuvSenso
                 {"target_y_m", s.target_y_m, -pos, pos},
                 {"target_distance_m", s.target_distance_m, 0.0, 4.0 * pos},
                 {"target_bearing_rad", s.target_bearing_rad, -7.0, 7.0},
+                {"route_bearing_rad", s.route_bearing_rad, -7.0, 7.0},
                 {"clearance_m", s.clearance_m, -4.0 * pos, 4.0 * pos},
                 {"target_index", static_cast<double>(s.target_index), 0.0, 1e6}};
   for (const auto& f : fields) {

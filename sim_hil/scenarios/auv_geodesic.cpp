@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 
 namespace pbppo::sim {
@@ -21,7 +20,41 @@ GeodesicField::GeodesicField(const Arena& arena, double cell_m) : arena_(arena),
   dist_.assign(n, kInf);
   free_.assign(n, 0);
   weight_.assign(n, 1.0f);
-  heap_.reserve(2 * n);
+  heap_.reserve(n);
+  place_.assign(n, -1);
+}
+
+void GeodesicField::SiftUp(std::size_t k) noexcept {
+  const std::int32_t node = heap_[k];
+  const float d = dist_[static_cast<std::size_t>(node)];
+  while (k > 0) {
+    const std::size_t parent = (k - 1) / 2;
+    if (!(d < dist_[static_cast<std::size_t>(heap_[parent])])) break;
+    heap_[k] = heap_[parent];
+    place_[static_cast<std::size_t>(heap_[k])] = static_cast<std::int32_t>(k);
+    k = parent;
+  }
+  heap_[k] = node;
+  place_[static_cast<std::size_t>(node)] = static_cast<std::int32_t>(k);
+}
+
+void GeodesicField::SiftDown(std::size_t k) noexcept {
+  const std::int32_t node = heap_[k];
+  const float d = dist_[static_cast<std::size_t>(node)];
+  const std::size_t size = heap_.size();
+  for (;;) {
+    std::size_t child = 2 * k + 1;
+    if (child >= size) break;
+    if (child + 1 < size &&
+        dist_[static_cast<std::size_t>(heap_[child + 1])] < dist_[static_cast<std::size_t>(heap_[child])])
+      ++child;
+    if (!(dist_[static_cast<std::size_t>(heap_[child])] < d)) break;
+    heap_[k] = heap_[child];
+    place_[static_cast<std::size_t>(heap_[k])] = static_cast<std::int32_t>(k);
+    k = child;
+  }
+  heap_[k] = node;
+  place_[static_cast<std::size_t>(node)] = static_cast<std::int32_t>(k);
 }
 
 void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, double goal_y, double margin_m,
@@ -40,10 +73,16 @@ void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, 
   }
   std::fill(dist_.begin(), dist_.end(), kInf);
   heap_.clear();
-  // Min-heap on distance (std::greater on the pair puts the smallest first).
-  const auto push = [&](float d, int index) {
-    heap_.emplace_back(d, index);
-    std::push_heap(heap_.begin(), heap_.end(), std::greater<>{});
+  std::fill(place_.begin(), place_.end(), -1);
+  // Queues the node whose distance was just lowered, or moves it up if it is queued already.
+  const auto push = [&](int index) {
+    const auto at = place_[static_cast<std::size_t>(index)];
+    if (at >= 0) {
+      SiftUp(static_cast<std::size_t>(at));
+    } else {
+      heap_.push_back(index);
+      SiftUp(heap_.size() - 1);
+    }
   };
   const int gi = static_cast<int>(std::lround((goal_x - arena_.x_min_m) / cell_));
   const int gj = static_cast<int>(std::lround((goal_y - arena_.y_min_m) / cell_));
@@ -54,16 +93,18 @@ void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, 
           static_cast<float>(std::hypot(arena_.x_min_m + i * cell_ - goal_x, arena_.y_min_m + j * cell_ - goal_y));
       if (d < dist_[Index(i, j)]) {
         dist_[Index(i, j)] = d;
-        push(d, Index(i, j));
+        push(Index(i, j));
       }
     }
   }
   const float straight = static_cast<float>(cell_), diagonal = static_cast<float>(cell_ * std::sqrt(2.0));
   while (!heap_.empty()) {
-    std::pop_heap(heap_.begin(), heap_.end(), std::greater<>{});
-    const auto [d, index] = heap_.back();
+    const std::int32_t index = heap_.front();
+    const float d = dist_[static_cast<std::size_t>(index)];
+    place_[static_cast<std::size_t>(index)] = -1;
+    heap_.front() = heap_.back();
     heap_.pop_back();
-    if (d > dist_[static_cast<std::size_t>(index)]) continue;  // a stale entry
+    if (!heap_.empty()) SiftDown(0);
     const int i = index % nx_, j = index / nx_;
     for (int k = 0; k < 8; ++k) {
       const int a = i + kDi[k], b = j + kDj[k];
@@ -76,7 +117,7 @@ void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, 
                                (weight_[static_cast<std::size_t>(index)] + weight_[static_cast<std::size_t>(n)]);
       if (nd < dist_[static_cast<std::size_t>(n)]) {
         dist_[static_cast<std::size_t>(n)] = nd;
-        push(nd, n);
+        push(n);
       }
     }
   }

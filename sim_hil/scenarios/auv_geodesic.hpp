@@ -13,7 +13,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 #include "sim_hil/scenarios/auv_sonar.hpp"
@@ -59,7 +58,13 @@ class GeodesicField {
   std::vector<float> dist_;
   std::vector<std::uint8_t> free_;
   std::vector<float> weight_;  // the node's cost per metre (1 without a margin)
-  std::vector<std::pair<float, std::int32_t>> heap_;
+  // Dijkstra's queue: a binary min-heap of node indices keyed by dist_, with each node's place in
+  // it (-1: not queued), so a shorter distance moves the node up instead of queuing it again and
+  // the heap never holds more than the nodes (no growth after the constructor).
+  std::vector<std::int32_t> heap_;
+  std::vector<std::int32_t> place_;
+  void SiftUp(std::size_t k) noexcept;
+  void SiftDown(std::size_t k) noexcept;
 };
 
 }  // namespace pbppo::sim

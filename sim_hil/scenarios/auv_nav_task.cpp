@@ -16,6 +16,11 @@ constexpr double kPi = 3.14159265358979323846;
 // space: six nodes across) and how far ahead along the path its bearing looks.
 constexpr double kGeodesicCellM = 0.25;
 constexpr double kGeodesicLookaheadM = 2.0;
+// The route signal: the path keeps off obstacles (2 m beyond l_safe at up to 4 extra per metre,
+// as task.geodesic_margin 2:4) and points 3 m ahead along it.
+constexpr double kRouteMarginM = 2.0;
+constexpr double kRouteMarginCost = 4.0;
+constexpr double kRouteLookaheadM = 3.0;
 
 }  // namespace
 
@@ -69,7 +74,7 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   if (auto st = f.Keys(n, "task",
                        {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights",
                         "collision_penalty", "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress",
-                        "geodesic_margin", "clearance_penalty"});
+                        "geodesic_margin", "clearance_penalty", "route_map"});
       !st)
     return st.error();
   AuvTaskParams t;
@@ -89,6 +94,16 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
     if (auto st = f.Text(n, "progress", "task", &progress); !st) return st.error();
     if (!ParseAuvProgress(progress, &t.progress))
       return f.Fail("task.progress", "'" + progress + "' is not euclidean or geodesic");
+  }
+  if (n["route_map"]) {  // optional: the chart by default
+    std::string map;
+    if (auto st = f.Text(n, "route_map", "task", &map); !st) return st.error();
+    if (map == "chart")
+      t.route_map = AuvTaskParams::RouteMap::kChart;
+    else if (map == "chart_and_sonar")
+      t.route_map = AuvTaskParams::RouteMap::kChartAndSonar;
+    else
+      return f.Fail("task.route_map", "'" + map + "' is not chart or chart_and_sonar");
   }
   // Optional {distance_m, <second>} maps, each number in [0, 100]; absent: off (both stay 0).
   auto optional_pair = [&](const char* key, const char* second, double* distance_m, double* value) -> Status {
@@ -178,6 +193,14 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   t.last_obs_.assign(t.obs_size_, 0.0f);
   t.signals_.assign(names.size(), 0.0);
   t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
+  t.route_.reserve(config.layout.targets.size());  // built in place: a copy would not keep its queue's capacity
+  for (std::size_t k = 0; k < config.layout.targets.size(); ++k)
+    t.route_.emplace_back(config.layout.world.arena, kGeodesicCellM);
+  t.route_ready_.assign(config.layout.targets.size(), 0);
+  t.route_world_ = config.layout.world;
+  const auto random_max = static_cast<std::size_t>(config.layout.random_obstacles.count[1]);
+  t.route_world_.circles.reserve(config.layout.world.circles.size() + random_max);
+  t.detected_.reserve(random_max);
   t.max_steps_ = std::lround(std::ceil(config.task.episode_time_s / config.plant.control_period_s - 1e-9));
   t.world_ = config.layout.world;
   t.world_.circles.reserve(config.layout.world.circles.size() +
@@ -238,9 +261,25 @@ void AuvNavTask::ExploringStart(Rng& rng, AuvPose& pose) {
   // No free spot found (a crowded layout): the ordinary start drawn above stands.
 }
 
+void AuvNavTask::DetectObstacles() {
+  const AuvState& s = plant_.State();
+  const std::size_t charted = config_.layout.world.circles.size();
+  bool grew = false;
+  for (std::size_t i = 0; i < detected_.size(); ++i) {
+    if (detected_[i]) continue;
+    const Circle& c = world_.circles[charted + i];
+    if (!SonarEchoesFrom(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, c)) continue;
+    detected_[i] = 1;
+    route_world_.circles.push_back(c);
+    grew = true;
+  }
+  if (grew) std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
+}
+
 void AuvNavTask::Measure() {
   const AuvState& s = plant_.State();
   SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data());
+  if (config_.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar) DetectObstacles();
   const auto& t = config_.layout.targets[static_cast<std::size_t>(
       std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
   l_at_ = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
@@ -248,6 +287,16 @@ void AuvNavTask::Measure() {
   clearance_ = Clearance(world_, s.x_m, s.y_m);
   progress_l_ = l_at_;
   progress_phi_ = phi_at_;
+  route_phi_ = phi_at_;
+  {
+    const auto k = static_cast<std::size_t>(std::min<int>(target_, static_cast<int>(route_.size()) - 1));
+    if (!route_ready_[k]) {
+      route_[k].Compute(route_world_, config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
+      route_ready_[k] = 1;
+    }
+    const double a = route_[k].PathAngle(s.x_m, s.y_m, kRouteLookaheadM);
+    if (std::isfinite(a)) route_phi_ = WrapAngle(a - s.yaw_rad);
+  }
   if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
     if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
     if (geodesic_target_ != target_) {
@@ -279,6 +328,7 @@ void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
   in.yaw_rate_radps = s.r_radps;
   in.target_distance_m = l_at_;
   in.target_bearing_rad = phi_at_;
+  in.route_bearing_rad = route_phi_;
   in.clearance_m = clearance_;
   in.target_index = target_;
   const auto& tgt = config_.layout.targets[static_cast<std::size_t>(
@@ -298,6 +348,11 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   world_.circles.resize(config_.layout.world.circles.size());
   PlaceRandomObstacles(rng);
   geodesic_target_ = -1;  // the world changed
+  detected_.assign(world_.circles.size() - config_.layout.world.circles.size(), 0);
+  if (route_world_.circles.size() != config_.layout.world.circles.size()) {  // detections of the last episode
+    route_world_.circles.resize(config_.layout.world.circles.size());
+    std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
+  }
   // Start pose: uniform in the start region, redrawn while closer than l_safe + 0.5 m to anything.
   const AuvStartRegion& s = config_.layout.start;
   AuvPose pose;
@@ -420,6 +475,7 @@ void AuvNavTask::FillSensorSample(robot::AuvSensorSample& out) const {
   out.target_y_m = t[1];
   out.target_distance_m = l_at_;
   out.target_bearing_rad = phi_at_;
+  out.route_bearing_rad = route_phi_;
   out.clearance_m = clearance_;
   out.mission_complete = stats_.success;
   out.episode_end = done_;

@@ -62,6 +62,11 @@ struct AuvTaskParams {
   // paper's reward charges only the collision itself. 0: off.
   double clearance_penalty_m = 0.0;
   double clearance_penalty_per_step = 0.0;
+  // What the mission computer plans the route signal over (task.route_map): "chart" (the
+  // layout's fixed obstacles) or "chart_and_sonar" (those plus every random obstacle a sonar ray
+  // has echoed from in this episode; the route is replanned when one is first seen).
+  enum class RouteMap { kChart, kChartAndSonar };
+  RouteMap route_map = RouteMap::kChart;
 };
 
 // "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).
@@ -164,7 +169,8 @@ class AuvNavTask {
   AuvNavTask(const AuvTaskConfig& config, AuvPlant plant);
   void PlaceRandomObstacles(Rng& rng);
   void ExploringStart(Rng& rng, AuvPose& pose);
-  void Measure();  // sonar, l_AT, phi, clearance from the plant's state
+  void Measure();          // sonar, l_AT, phi, clearance, route from the plant's state
+  void DetectObstacles();  // RouteMap::kChartAndSonar: add newly echoed random obstacles to the route map
   void WriteObservation(bool episode_end, bool first, float* obs);
 
   AuvTaskConfig config_;
@@ -187,6 +193,14 @@ class AuvNavTask {
   std::optional<GeodesicField> geodesic_;
   int geodesic_target_ = -1;
   double progress_l_ = 0.0, progress_phi_ = 0.0;
+  // The route signal: per target, the path over route_world_ (the charted obstacles, plus the
+  // detected random ones with RouteMap::kChartAndSonar), computed at the first use after it
+  // changed; route_phi_ is its bearing relative to the heading (phi_at_ where there is no path).
+  World2d route_world_;
+  std::vector<std::uint8_t> detected_;  // per random obstacle: a sonar ray has echoed from it
+  std::vector<GeodesicField> route_;
+  std::vector<std::uint8_t> route_ready_;
+  double route_phi_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;
   double exploring_starts_ = 0.0;

@@ -78,6 +78,21 @@ void SonarScan(const World2d& w, const SonarParams& p, double x, double y, doubl
   }
 }
 
+bool SonarEchoesFrom(const World2d& w, const SonarParams& p, double x, double y, double yaw, const Circle& c) noexcept {
+  if (std::hypot(c.x_m - x, c.y_m - y) - c.radius_m >= p.max_range_m) return false;
+  const int rays = p.beam_width_rad > 0.0 ? std::max(p.rays_per_beam, 1) : 1;
+  const double slice = p.beam_width_rad / rays;
+  for (int i = 0; i < p.beams; ++i) {
+    const double axis = yaw + BeamAngle(p, i);
+    for (int k = 0; k < rays; ++k) {
+      const double a = axis + (k + 0.5) * slice - 0.5 * p.beam_width_rad;
+      const double t = RayCircle(x, y, std::cos(a), std::sin(a), c);
+      if (t < p.max_range_m && t <= CastRay(w, x, y, a, p.max_range_m)) return true;
+    }
+  }
+  return false;
+}
+
 double Clearance(const World2d& w, double x, double y) noexcept {
   const Arena& a = w.arena;
   double d = std::min(std::min(x - a.x_min_m, a.x_max_m - x), std::min(y - a.y_min_m, a.y_max_m - y));

@@ -56,6 +56,10 @@ double BeamAngle(const SonarParams& p, int i) noexcept;
 // ranges[i] for every beam from pose (x, y, yaw): the shortest of the beam's rays.
 void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges) noexcept;
 
+// Whether a ray of the scan from (x, y, yaw) (SonarScan's beams and rays) reaches `c` first, within
+// the maximum range: the sonar receives an echo from it.
+bool SonarEchoesFrom(const World2d& w, const SonarParams& p, double x, double y, double yaw, const Circle& c) noexcept;
+
 // Signed distance from the point to the nearest obstacle surface or wall (negative inside an
 // obstacle or outside the arena).
 double Clearance(const World2d& w, double x, double y) noexcept;

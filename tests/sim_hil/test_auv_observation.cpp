@@ -45,9 +45,9 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   auto c = sim::LoadAuvTaskConfig(kModel + "auv.yaml", kModel + "layouts/medium.yaml", kModel + "io_layout.yaml");
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   // Every signal of the table, some with history, on top of the shipped layout.
-  for (const char* sig :
-       {"yaw", "cos_yaw", "sin_yaw", "x", "y", "depth_error", "clearance", "target_index", "sway_speed",
-        "cos_target_bearing", "sin_target_bearing", "nearest_echo", "target_x", "target_y"}) {
+  for (const char* sig : {"yaw", "cos_yaw", "sin_yaw", "x", "y", "depth_error", "clearance", "target_index",
+                          "sway_speed", "cos_target_bearing", "sin_target_bearing", "nearest_echo", "target_x",
+                          "target_y", "route_bearing", "cos_route_bearing", "sin_route_bearing"}) {
     robot::ObservationElement e;
     e.name = sig;
     e.signal = sig;
@@ -80,6 +80,9 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
     s.target_distance_m = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
     s.target_bearing_rad = robot::WrapAngleRad(std::atan2(t[1] - s.y_m, t[0] - s.x_m) - task->vehicle().yaw_rad);
     s.clearance_m = sim::Clearance(task->world(), s.x_m, s.y_m);
+    robot::AuvSensorSample planned;  // the route comes from the mission computer (here: the task)
+    task->FillSensorSample(planned);
+    s.route_bearing_rad = planned.route_bearing_rad;
     robot::AuvSignalsFromSample(s, c->task.depth_m, g.data());
     builder->Build(g.data(), k == 0, ctrl_obs.data());
     for (std::size_t i = 0; i < n; ++i) {

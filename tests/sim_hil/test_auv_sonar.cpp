@@ -96,6 +96,28 @@ TEST_CASE("sonar: a beam with a width reports the nearest echo within it - thin 
   CHECK(one == r);
 }
 
+TEST_CASE(
+    "sonar: an obstacle echoes when a ray reaches it first - not between thin beams, behind another or out of range") {
+  World2d w;
+  // The column between beams 0 and 1 again, and a second one hidden behind a bigger column.
+  const double bearing = kPi / 16, d = 5.0;
+  const Circle between{20.0 + d * std::cos(bearing), 20.0 + d * std::sin(bearing), 0.4};
+  const Circle screen{20.0, 26.0, 1.5}, hidden{20.0, 30.0, 0.5}, far{20.0, 4.0, 0.5};
+  w.circles = {between, screen, hidden, far};
+  SonarParams thin{16, 2 * kPi, 15.0};
+  SonarParams wide = thin;
+  wide.beam_width_rad = 2 * kPi / 16;
+  wide.rays_per_beam = 5;
+  CHECK_FALSE(SonarEchoesFrom(w, thin, 20.0, 20.0, 0.0, between));
+  CHECK(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, between));
+  CHECK(SonarEchoesFrom(w, thin, 20.0, 20.0, 0.0, screen));        // beam 4 (90 deg) hits it at 4.5 m
+  CHECK_FALSE(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, hidden));  // behind the screen
+  CHECK_FALSE(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, far));     // 15.5 m: beyond 15 m
+  CHECK(SonarEchoesFrom(w, wide, 20.0, 19.0, 0.0, far));           // 14.5 m
+  // Turning the vehicle moves the thin beams onto the column between them.
+  CHECK(SonarEchoesFrom(w, thin, 20.0, 20.0, bearing, between));
+}
+
 TEST_CASE("sonar: a forward fan spreads its beams evenly across the field of view") {
   SonarParams fan{5, kPi / 2, 20.0};
   CHECK(BeamAngle(fan, 0) == doctest::Approx(-kPi / 4));

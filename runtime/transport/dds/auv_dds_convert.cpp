@@ -26,6 +26,7 @@ void ToDds(const robot::AuvSensorSample& in, pbppo_idl::auv::SensorState* out) n
   out->target_y_m(in.target_y_m);
   out->target_distance_m(in.target_distance_m);
   out->target_bearing_rad(in.target_bearing_rad);
+  out->route_bearing_rad(in.route_bearing_rad);
   out->clearance_m(in.clearance_m);
   out->mission_complete(in.mission_complete);
   out->episode_end(in.episode_end);
@@ -53,6 +54,7 @@ void FromDds(const pbppo_idl::auv::SensorState& in, robot::AuvSensorSample* out)
   out->target_y_m = in.target_y_m();
   out->target_distance_m = in.target_distance_m();
   out->target_bearing_rad = in.target_bearing_rad();
+  out->route_bearing_rad = in.route_bearing_rad();
   out->clearance_m = in.clearance_m();
   out->mission_complete = in.mission_complete();
   out->episode_end = in.episode_end();

@@ -37,7 +37,7 @@ std::uint32_t CheckAuvSensorSample(const robot::AuvSensorSample& s) noexcept {
   if (s.sonar_beams > robot::kAuvMaxSonarBeams) f |= kSampleTooManyBeams;
   if (!AllFinite({s.x_m, s.y_m, s.depth_m, s.roll_rad, s.pitch_rad, s.yaw_rad, s.surge_mps, s.sway_mps, s.heave_mps,
                   s.roll_rate_radps, s.pitch_rate_radps, s.yaw_rate_radps, s.target_x_m, s.target_y_m,
-                  s.target_distance_m, s.target_bearing_rad, s.clearance_m}))
+                  s.target_distance_m, s.target_bearing_rad, s.route_bearing_rad, s.clearance_m}))
     f |= kSampleNonFinite;
   const std::uint32_t beams = s.sonar_beams < robot::kAuvMaxSonarBeams ? s.sonar_beams : robot::kAuvMaxSonarBeams;
   for (std::uint32_t i = 0; i < beams; ++i) {
@@ -48,7 +48,7 @@ std::uint32_t CheckAuvSensorSample(const robot::AuvSensorSample& s) noexcept {
       f |= kSampleSonarOutOfRange;
   }
   // NaN compares false, so only finite values reach the range checks below as failures.
-  for (double a : {s.roll_rad, s.pitch_rad, s.yaw_rad, s.target_bearing_rad})
+  for (double a : {s.roll_rad, s.pitch_rad, s.yaw_rad, s.target_bearing_rad, s.route_bearing_rad})
     if (std::isfinite(a) && !AngleOk(a)) f |= kSampleAngleOutOfRange;
   for (double v : {s.surge_mps, s.sway_mps, s.heave_mps})
     if (std::abs(v) > kAuvMaxPlausibleSpeedMps) f |= kSampleSpeedOutOfRange;

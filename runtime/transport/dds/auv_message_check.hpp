@@ -15,7 +15,7 @@ namespace pbppo::dds {
 enum AuvSampleFlag : std::uint32_t {
   kSampleNonFinite = 1u << 0,         // a NaN or infinite number in any field
   kSampleSonarOutOfRange = 1u << 1,   // a valid beam's range is negative
-  kSampleAngleOutOfRange = 1u << 2,   // roll, pitch, yaw or target bearing outside [-pi, pi]
+  kSampleAngleOutOfRange = 1u << 2,   // roll, pitch, yaw, target or route bearing outside [-pi, pi]
   kSampleSpeedOutOfRange = 1u << 3,   // a body velocity above kAuvMaxPlausibleSpeed*
   kSampleTargetOutOfRange = 1u << 4,  // negative target index or distance, negative stamp
   kSampleTooManyBeams = 1u << 5,      // sonar_beams > kAuvMaxSonarBeams (rejected, not delivered)

@@ -189,6 +189,10 @@ TEST_CASE("auv supervisor: non-finite action, invalid samples and deadline overr
   CHECK(CheckAuvSample(c, sample, &field, &value) == kAuvCauseInvalidSample);
   CHECK(std::string(field) == "sonar_beams");
   CHECK(value == 8.0);
+  sample = GoodSample();
+  sample.route_bearing_rad = std::numeric_limits<double>::quiet_NaN();
+  CHECK(CheckAuvSample(c, sample, &field, &value) == kAuvCauseInvalidSample);
+  CHECK(std::string(field) == "route_bearing_rad");
 
   s = AuvSupervisorState{};
   sample = GoodSample();

@@ -63,6 +63,7 @@ robot::AuvSensorSample Distinct(std::uint64_t tick) {
   s.target_y_m = 20.0;
   s.target_distance_m = 12.5;
   s.target_bearing_rad = -1.0;
+  s.route_bearing_rad = 0.75;
   s.clearance_m = 3.75;
   s.mission_complete = true;
   s.episode_end = true;
@@ -91,6 +92,7 @@ void CheckSame(const robot::AuvSensorSample& a, const robot::AuvSensorSample& b)
   CHECK(a.target_y_m == b.target_y_m);
   CHECK(a.target_distance_m == b.target_distance_m);
   CHECK(a.target_bearing_rad == b.target_bearing_rad);
+  CHECK(a.route_bearing_rad == b.route_bearing_rad);
   CHECK(a.clearance_m == b.clearance_m);
   CHECK(a.mission_complete == b.mission_complete);
   CHECK(a.episode_end == b.episode_end);
@@ -165,6 +167,15 @@ TEST_CASE("dds link: samples, commands and status arrive intact") {
   CHECK(p.controller->Peer().matched_writers == 1);
   CHECK(p.controller->Peer().matched_readers == 1);
   CHECK(p.controller->Peer().last_receive_age_ns >= 0);
+}
+
+TEST_CASE("dds link: the sample check covers the route bearing like the target bearing") {
+  robot::AuvSensorSample s = Distinct(1);
+  CHECK(dds::CheckAuvSensorSample(s) == 0);
+  s.route_bearing_rad = 3.5;
+  CHECK(dds::CheckAuvSensorSample(s) == dds::kSampleAngleOutOfRange);
+  s.route_bearing_rad = std::numeric_limits<double>::infinity();
+  CHECK(dds::CheckAuvSensorSample(s) == dds::kSampleNonFinite);
 }
 
 TEST_CASE("dds link: implausible samples are delivered flagged and counted, too many beams rejected") {
