@@ -6,8 +6,9 @@ blob, layout, episodes and seed) and, for every collision whose nearest obstacle
 traces the thin sonar beams (BEAMS evenly over 360 degrees from the bow, MAX_RANGE m) against that
 obstacle along the trajectory: the surface distance at which a beam first hit it and at which the
 last unbroken run of hits up to the collision began, in how many of the last 30 control periods
-a beam hit it, and its bearing from the bow at the collision. Thin beams only (the shipped auv.yaml); other obstacles that would shadow the
-obstacle are ignored, so "seen" is an upper bound.
+a beam hit it, and its bearing from the bow at the collision. Thin beams only (written for the
+earlier thin-beam auv.yaml; the shipped beams are 22.5 deg wide and see at least what a thin beam on
+their axis sees); other obstacles that would shadow the obstacle are ignored.
 Usage: tools/auv_failure_sonar.py OUTCOMES.csv TRAJECTORIES.csv [BEAMS=16] [MAX_RANGE=15]
 """
 import collections

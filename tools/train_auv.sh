@@ -2,10 +2,11 @@
 # Trains the shipped AUV navigation policy and writes its report. Pb-PPO (our `pbppo` schedule,
 # arms 0.05:0.4:6, rollout feedback) in stages, each starting from the best policy of the one
 # before (--init):
-#   stage 1: the hard layout from scratch (observation normaliser on), geodesic progress;
-#   stage 2, 3, ...: all three layouts (--layout mixed), one stage per SEED:LR[@D:C][+D:W] in
-#   MIXED_STAGES (@D:C: --geodesic-margin D:C, the progress path keeps off obstacles;
-#   +D:W: --clearance-penalty D:W, a cost for every step within D of l_safe).
+#   stage 1: FIRST_LAYOUT (all three layouts by default) from scratch (observation normaliser on),
+#   geodesic progress with the margin FIRST_MARGIN;
+#   stage 2, 3, ... (none by default): all three layouts (--layout mixed), one stage per
+#   SEED:LR[@D:C][+D:W] in MIXED_STAGES (@D:C: --geodesic-margin D:C, the progress path keeps off
+#   obstacles; +D:W: --clearance-penalty D:W, a cost for every step within D of l_safe).
 # Then 200 deterministic evaluation episodes per layout from seeds that training never uses, with
 # the trajectory plots. Copies the blob, its golden vectors and the report to
 # policies/frozen/auv_nav/. Same build, same settings: the same blob (runs are bit-reproducible).
@@ -13,17 +14,20 @@
 # stopped script resumes at the first unfinished stage; delete OUT_DIR to train afresh.
 # Usage: tools/train_auv.sh [OUT_DIR=runs/train_auv]
 #   PBPPO=path/to/pbppo  THREADS=2  PROGRESS=geodesic (--progress of every stage)
-#   HARD_STEPS=6e6  HARD_SEED=1  MIXED_STEPS=6e6  MIXED_STAGES="1:3e-4 3:1e-4 5:5e-5 7:5e-5@2:4"
+#   FIRST_LAYOUT=mixed  FIRST_STEPS=4e6  FIRST_SEED=1  FIRST_MARGIN=2:4 (empty: none)
+#   MIXED_STEPS=6e6  MIXED_STAGES="" (e.g. "3:1e-4 5:5e-5@2:4")
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/runs/train_auv}"
 pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
 threads="${THREADS:-2}"
 progress="${PROGRESS:-geodesic}"
-hard_steps="${HARD_STEPS:-6e6}"
-hard_seed="${HARD_SEED:-1}"
+first_layout="${FIRST_LAYOUT:-mixed}"
+first_steps="${FIRST_STEPS:-4e6}"
+first_seed="${FIRST_SEED:-1}"
+first_margin="${FIRST_MARGIN-2:4}"
 mixed_steps="${MIXED_STEPS:-6e6}"
-mixed_stages="${MIXED_STAGES:-1:3e-4 3:1e-4 5:5e-5 7:5e-5@2:4}"
+mixed_stages="${MIXED_STAGES:-}"
 frozen="$root/policies/frozen/auv_nav"
 if [ ! -x "$pbppo" ]; then
   echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
@@ -69,12 +73,16 @@ for pair in $mixed_stages; do
   fi
 done
 mkdir -p "$out"
-if finished "$out/stage1" auv-nav:hard "$hard_seed" 3e-4; then
+if [ -n "$first_margin" ] && ! [[ "$first_margin" =~ ^[0-9.]+:[0-9.]+$ ]]; then
+  echo "train_auv: FIRST_MARGIN: '$first_margin' is not DISTANCE:COST (e.g. 2:4)" >&2
+  exit 2
+fi
+if finished "$out/stage1" "auv-nav:$first_layout" "$first_seed" 3e-4 "$first_margin"; then
   echo "train_auv: stage 1: kept the finished run in $out/stage1"
 else
-  echo "train_auv: stage 1: hard, $hard_steps steps, seed $hard_seed -> $out/stage1"
-  "$pbppo" train "${common[@]}" --layout hard --normalize-obs --lr 3e-4 --steps "$hard_steps" \
-    --seed "$hard_seed" --out "$out/stage1"
+  echo "train_auv: stage 1: $first_layout, $first_steps steps, seed $first_seed${first_margin:+, geodesic margin $first_margin} -> $out/stage1"
+  "$pbppo" train "${common[@]}" --layout "$first_layout" --normalize-obs --lr 3e-4 --steps "$first_steps" \
+    --seed "$first_seed" ${first_margin:+--geodesic-margin "$first_margin"} --out "$out/stage1"
 fi
 stage=1
 for pair in $mixed_stages; do

@@ -64,6 +64,7 @@ robot::AuvSensorSample Sample(std::uint64_t tick) {
   s.yaw_rad = 0.3;
   s.target_distance_m = 20.0;
   s.target_bearing_rad = 0.2;
+  s.route_bearing_rad = -0.4;
   s.clearance_m = 5.0;
   return s;
 }
@@ -120,7 +121,7 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
   other.observations[16].history = 2;
   c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "history.blob"));
   REQUIRE_FALSE(c.ok());
-  CHECK(c.error().message.find("the policy takes 27 observations, the layout gives 26") != std::string::npos);
+  CHECK(c.error().message.find("the policy takes 25 observations, the layout gives 24") != std::string::npos);
   other = Layout();
   std::swap(other.observations[0], other.observations[1]);
   c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "order.blob"));
@@ -155,16 +156,14 @@ TEST_CASE("auv controller: the tick observes the sample through the layout, infe
   c->Arm();
   c->Tick(&s, 1, cmd);
   CHECK(c->policy_runs() == 1);
-  // The observation is the layout's: sonar_0 / 15, target distance / 40, bearing / pi and its
-  // cos/sin, the nearest echo / 5 (5 m here: clipped at 1), x and y over the 40 m arena.
+  // The observation is the layout's: sonar_0 / 15, target distance / 40, the nearest echo / 5
+  // (5 m here: clipped at 1), the route bearing / pi and its cos/sin.
   CHECK(c->observation()[0] == doctest::Approx(s.sonar_m[0] / 15.0));
   CHECK(c->observation()[16] == doctest::Approx(0.5));
-  CHECK(c->observation()[17] == doctest::Approx(0.2 / 3.14159265358979));
-  CHECK(c->observation()[21] == doctest::Approx(std::cos(0.2)));
-  CHECK(c->observation()[22] == doctest::Approx(std::sin(0.2)));
-  CHECK(c->observation()[23] == 1.0f);
-  CHECK(c->observation()[24] == doctest::Approx((0.01 - 20.0) / 20.0));
-  CHECK(c->observation()[25] == doctest::Approx(-1.0));
+  CHECK(c->observation()[20] == 1.0f);
+  CHECK(c->observation()[21] == doctest::Approx(-0.4 / 3.14159265358979));
+  CHECK(c->observation()[22] == doctest::Approx(std::cos(-0.4)));
+  CHECK(c->observation()[23] == doctest::Approx(std::sin(-0.4)));
   CHECK(cmd.answers == 1);
   CHECK(cmd.tick == 1);
   CHECK(cmd.mode == 0);

@@ -83,7 +83,7 @@ TEST_CASE("auv-nav has the IO layout's sizes, names and policy-unit action bound
   auto env = Make("hard");
   CHECK(env->name() == "auv-nav:hard");
   CHECK(env->observation_size() == env->layout().observation_size());
-  CHECK(env->observation_size() == 26);
+  CHECK(env->observation_size() == 24);
   CHECK(env->action_size() == 2);
   CHECK(env->action_low()[0] == -1.f);
   CHECK(env->action_high()[1] == 1.f);
