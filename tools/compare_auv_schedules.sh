@@ -4,14 +4,18 @@
 # bandits take `rollout` feedback (mean return of the episodes finished in the next rollout), which
 # costs no extra steps, so every run uses exactly STEPS environment steps. After training, each
 # policy is evaluated deterministically on 100 hard episodes from seed 900001 (not a training seed).
+# The reward is the shipped policy's training reward (PROGRESS=geodesic, MARGIN=2:4: the geodesic
+# progress term with its margin; PROGRESS=euclidean MARGIN= for the paper's).
 # Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot.
 # Usage: tools/compare_auv_schedules.sh [OUT_DIR=runs/compare_auv]
-#   (PBPPO=path/to/pbppo, STEPS=1.5e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100 may be set)
+#   (PBPPO=path/to/pbppo, STEPS=1e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100, PROGRESS, MARGIN may be set)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="${1:-$root/runs/compare_auv}"
 pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
-steps="${STEPS:-1.5e6}"
+steps="${STEPS:-1e6}"
+progress="${PROGRESS:-geodesic}"
+margin="${MARGIN-2:4}"
 seeds="${SEEDS:-1 2 3 4 5}"
 threads="${THREADS:-2}"
 episodes="${EPISODES:-100}"
@@ -21,7 +25,8 @@ if [ ! -x "$pbppo" ]; then
 fi
 schedules=("fixed:0.2" "pbppo-paper:wi-ad" "pbppo-reference" "pbppo")
 common=(--env auv-nav --layout hard --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10
-  --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --arms 0.05:0.4:6 --feedback rollout --steps "$steps")
+  --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --arms 0.05:0.4:6 --feedback rollout --steps "$steps"
+  --progress "$progress" ${margin:+--geodesic-margin "$margin"})
 mkdir -p "$out"
 for seed in $seeds; do
   for s in "${schedules[@]}"; do

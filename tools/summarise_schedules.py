@@ -26,6 +26,7 @@ def mean_ci(xs):
 def main():
     runs, out_md, schedules = sys.argv[1], sys.argv[2], sys.argv[3:]
     rows, curves = [], {}
+    reward = "the paper's reward"  # from the runs' summaries
     for s in schedules:
         tag = s.replace(":", "_")
         dirs = sorted(d for d in os.listdir(runs) if d.startswith(tag + "_seed") and
@@ -35,6 +36,9 @@ def main():
         fin, succ, evret, steps, tsucc, seeds = [], [], [], [], [], []
         for d in dirs:
             summ = json.load(open(os.path.join(runs, d, "summary.json")))
+            if summ.get("progress") == "geodesic":
+                reward = "geodesic progress" + (", margin %s" % summ["geodesic_margin"]
+                                                if summ.get("geodesic_margin") else "")
             ev = json.load(open(os.path.join(runs, d, "eval.json")))
             fin.append(summ["final_return_last100"])
             tsucc.append(100 * summ.get("task_success_100", float("nan")))
@@ -75,10 +79,10 @@ def main():
         f.write("# Clip schedules on auv-nav, hard layout\n\n")
         f.write("Produced by `tools/compare_auv_schedules.sh` (do not edit by hand). Same PPO settings for every run "
                 "(16 envs x 256 steps, minibatch 512, 10 epochs, lr 3e-4, gamma 0.99, GAE 0.95, 64-64 tanh, "
-                "observation normalisation and reward scaling); bandit arms `0.05:0.4:6` with `rollout` feedback, "
-                "so every run uses the same total environment steps (no evaluation steps). Evaluation after "
+                "observation normalisation and reward scaling, %s, the observation of `models/auv/io_layout.yaml`); "
+                "bandit arms `0.05:0.4:6` with `rollout` feedback, so every run uses the same total environment steps (no evaluation steps). Evaluation after "
                 "training: 100 deterministic hard episodes from seed 900001 (no training seed). Values are means "
-                "over seeds ± the half-width of the 95% Student-t interval.\n\n")
+                "over seeds ± the half-width of the 95%% Student-t interval.\n\n" % reward)
         f.write("| schedule | seeds | total env steps | final training return (last 100 ep.) | training success "
                 "(last 100 ep.) % | eval success % | eval return | eval success per seed % |\n")
         f.write("| --- | --- | --- | --- | --- | --- | --- | --- |\n")
