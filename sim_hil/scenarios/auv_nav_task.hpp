@@ -148,7 +148,8 @@ class AuvNavTask {
   // stats().nonfinite_actions. Step(action) maps the action through the IO layout, then calls this.
   AuvStepResult StepCommand(double surge_speed_mps, double yaw_rate_radps, float* obs);
   // The vehicle's current state as the sensor sample the HIL publishes: pose, body velocities,
-  // sonar (at most robot::kAuvMaxSonarBeams beams), the current target, clearance, flags.
+  // sonar (at most robot::kAuvMaxSonarBeams beams), the current target, the route's bearing,
+  // clearance, flags.
   // tick = control periods since Reset and stamp_ns = simulated time; callers may restamp.
   void FillSensorSample(robot::AuvSensorSample& out) const;
 
