@@ -54,6 +54,7 @@ PY
   [ "$rc" -ne 3 ] || exit 1
   return "$rc"
 }
+pair_re='^[0-9.]+:[0-9.]+$'  # DISTANCE:VALUE (a margin or a clearance term)
 # SEED:LR[@D:C][+D:W] -> stage_seed, stage_lr, stage_margin, stage_clearance (empty when absent).
 parse_stage() {
   local spec="$1" rest
@@ -63,8 +64,8 @@ parse_stage() {
   stage_seed=${spec%%:*} stage_lr=${spec#*:}
   rest="$stage_seed:$stage_lr"
   [[ "$rest" =~ ^[0-9]+:[0-9.]+(e-?[0-9]+)?$ ]] || return 1
-  [ -z "$stage_margin" ] || [[ "$stage_margin" =~ ^[0-9.]+:[0-9.]+$ ]] || return 1
-  [ -z "$stage_clearance" ] || [[ "$stage_clearance" =~ ^[0-9.]+:[0-9.]+$ ]] || return 1
+  [ -z "$stage_margin" ] || [[ "$stage_margin" =~ $pair_re ]] || return 1
+  [ -z "$stage_clearance" ] || [[ "$stage_clearance" =~ $pair_re ]] || return 1
 }
 for pair in $mixed_stages; do
   if ! parse_stage "$pair"; then
@@ -73,7 +74,7 @@ for pair in $mixed_stages; do
   fi
 done
 mkdir -p "$out"
-if [ -n "$first_margin" ] && ! [[ "$first_margin" =~ ^[0-9.]+:[0-9.]+$ ]]; then
+if [ -n "$first_margin" ] && ! [[ "$first_margin" =~ $pair_re ]]; then
   echo "train_auv: FIRST_MARGIN: '$first_margin' is not DISTANCE:COST (e.g. 2:4)" >&2
   exit 2
 fi

@@ -280,23 +280,20 @@ void AuvNavTask::Measure() {
   const AuvState& s = plant_.State();
   SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data());
   if (config_.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar) DetectObstacles();
-  const auto& t = config_.layout.targets[static_cast<std::size_t>(
-      std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
+  const auto current =
+      static_cast<std::size_t>(std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1));
+  const auto& t = config_.layout.targets[current];
   l_at_ = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
   phi_at_ = WrapAngle(std::atan2(t[1] - s.y_m, t[0] - s.x_m) - s.yaw_rad);
   clearance_ = Clearance(world_, s.x_m, s.y_m);
   progress_l_ = l_at_;
   progress_phi_ = phi_at_;
-  route_phi_ = phi_at_;
-  {
-    const auto k = static_cast<std::size_t>(std::min<int>(target_, static_cast<int>(route_.size()) - 1));
-    if (!route_ready_[k]) {
-      route_[k].Compute(route_world_, config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
-      route_ready_[k] = 1;
-    }
-    const double a = route_[k].PathAngle(s.x_m, s.y_m, kRouteLookaheadM);
-    if (std::isfinite(a)) route_phi_ = WrapAngle(a - s.yaw_rad);
+  if (!route_ready_[current]) {
+    route_[current].Compute(route_world_, config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
+    route_ready_[current] = 1;
   }
+  const double route_angle = route_[current].PathAngle(s.x_m, s.y_m, kRouteLookaheadM);
+  route_phi_ = std::isfinite(route_angle) ? WrapAngle(route_angle - s.yaw_rad) : phi_at_;
   if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
     if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
     if (geodesic_target_ != target_) {

@@ -89,6 +89,19 @@ AuvLayout Layout(const std::string& text) {
   return *l;
 }
 
+// One episode flown by a proportional pilot at 1 m/s that turns towards the sensor sample's route
+// bearing (or its straight-line target bearing): what a controller could do with that input alone.
+void FlyBearing(AuvNavTask& task, std::uint64_t seed, bool by_route) {
+  std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
+  task.Reset(seed, obs.data());
+  pbppo::robot::AuvSensorSample s;
+  for (long k = 0; k < task.max_episode_steps(); ++k) {
+    task.FillSensorSample(s);
+    const double a = by_route ? s.route_bearing_rad : s.target_bearing_rad;
+    if (task.StepCommand(1.0, std::clamp(1.5 * a, -0.5, 0.5), obs.data()).terminated) break;
+  }
+}
+
 const char* kOpenLayout = R"(
 name: open
 arena: {x_min_m: 0, x_max_m: 40, y_min_m: 0, y_max_m: 40}
@@ -788,14 +801,7 @@ TEST_CASE("auv task: steering by the route bearing alone reaches every target of
       AuvTaskConfig c = Config(layout);
       c.layout.random_obstacles.count = {0, 0};
       AuvNavTask task = MakeTask(c);
-      std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
-      task.Reset(5, obs.data());
-      pbppo::robot::AuvSensorSample s;
-      for (long k = 0; k < task.max_episode_steps(); ++k) {
-        task.FillSensorSample(s);
-        const double a = by_route ? s.route_bearing_rad : s.target_bearing_rad;
-        if (task.StepCommand(1.0, std::clamp(1.5 * a, -0.5, 0.5), obs.data()).terminated) break;
-      }
+      FlyBearing(task, 5, by_route);
       CAPTURE(layout);
       CAPTURE(by_route);
       if (by_route) {
@@ -817,14 +823,8 @@ TEST_CASE("auv task: with route_map chart_and_sonar the route bends round the ra
       AuvTaskConfig c = Config(layout);
       c.task.route_map = map;
       AuvNavTask task = MakeTask(c);
-      std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
-      pbppo::robot::AuvSensorSample s;
       for (std::uint64_t seed = 0; seed < 12; ++seed) {
-        task.Reset(seed, obs.data());
-        for (long k = 0; k < task.max_episode_steps(); ++k) {
-          task.FillSensorSample(s);
-          if (task.StepCommand(1.0, std::clamp(1.5 * s.route_bearing_rad, -0.5, 0.5), obs.data()).terminated) break;
-        }
+        FlyBearing(task, seed, true);
         successes[map == AuvTaskParams::RouteMap::kChartAndSonar] += task.stats().success;
       }
     }
