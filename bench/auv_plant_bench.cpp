@@ -1,10 +1,12 @@
 // Throughput of the AUV plant and navigation task: physics steps/s, control steps/s of the bare
 // plant, and task steps/s (Step with random actions, resets included) per layout and integrator.
-// Per-thread CPU time, so other load on the machine does not count.
+// Per-thread CPU time, so other load on the machine does not count. Last, the route planner's
+// pieces (chart clearances, adding a sonar return to the map, a replan) on the hard layout.
 //
 //   auv_plant_bench [control_steps]   (default 20000)
 #include <time.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -23,6 +25,41 @@ double CpuSeconds() {
 
 const char* Name(pbppo::sim::AuvIntegrator i) {
   return i == pbppo::sim::AuvIntegrator::kRk2 ? "rk2" : "semi_explicit_euler";
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// The route planner's pieces on the hard layout (0.25 m grid): the chart's clearances (once per
+// task), one sonar return added to the map, and one replan (Solve), each the median of 31 runs.
+int RouteBench(const std::string& model) {
+  auto layout = pbppo::sim::LoadAuvLayout(model + "layouts/hard.yaml");
+  if (!layout) {
+    std::fprintf(stderr, "%s\n", layout.error().message.c_str());
+    return 1;
+  }
+  const auto& w = layout->world;
+  const auto& goal = layout->targets.back();
+  pbppo::sim::GeodesicField chart(w.arena, 0.25), route(w.arena, 0.25);
+  std::vector<double> set, add, solve;
+  pbppo::Rng rng(3);
+  for (int k = 0; k < 31; ++k) {
+    double t0 = CpuSeconds();
+    chart.SetObstacles(w);
+    set.push_back(CpuSeconds() - t0);
+    route.CopyObstacles(chart);
+    t0 = CpuSeconds();
+    for (int p = 0; p < 100; ++p) route.AddPoint(rng.Uniform(5.0, 35.0), rng.Uniform(5.0, 35.0), 1.2 + 2.0 + 0.25);
+    add.push_back((CpuSeconds() - t0) / 100);
+    t0 = CpuSeconds();
+    route.Solve(1.2, goal[0], goal[1], 2.0, 4.0);
+    solve.push_back(CpuSeconds() - t0);
+  }
+  std::printf("route hard (%dx%d nodes): chart clearances %.2f ms, add a return %.1f us, replan %.2f ms (medians)\n",
+              chart.nx(), chart.ny(), 1e3 * Median(set), 1e6 * Median(add), 1e3 * Median(solve));
+  return 0;
 }
 
 }  // namespace
@@ -89,5 +126,5 @@ int main(int argc, char** argv) {
                   static_cast<double>(steps) / dt, episodes, 1e6 * dt / static_cast<double>(steps));
     }
   }
-  return 0;
+  return RouteBench(model);
 }

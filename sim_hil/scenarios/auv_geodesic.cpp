@@ -18,6 +18,7 @@ GeodesicField::GeodesicField(const Arena& arena, double cell_m) : arena_(arena),
   ny_ = static_cast<int>(std::floor((arena.y_max_m - arena.y_min_m) / cell_m)) + 1;
   const auto n = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
   dist_.assign(n, kInf);
+  clear_.assign(n, std::numeric_limits<double>::infinity());
   free_.assign(n, 0);
   weight_.assign(n, 1.0f);
   heap_.reserve(n);
@@ -59,17 +60,49 @@ void GeodesicField::SiftDown(std::size_t k) noexcept {
 
 void GeodesicField::Compute(const World2d& world, double keep_m, double goal_x, double goal_y, double margin_m,
                             double margin_cost) {
+  SetObstacles(world);
+  Solve(keep_m, goal_x, goal_y, margin_m, margin_cost);
+}
+
+void GeodesicField::SetObstacles(const World2d& world) {
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i)
+      clear_[Index(i, j)] = Clearance(world, arena_.x_min_m + i * cell_, arena_.y_min_m + j * cell_);
+}
+
+void GeodesicField::CopyObstacles(const GeodesicField& other) noexcept {
+  std::copy(other.clear_.begin(), other.clear_.end(), clear_.begin());
+}
+
+bool GeodesicField::AddPoint(double x, double y, double reach_m) noexcept {
+  const int i0 = std::max(0, static_cast<int>(std::floor((x - reach_m - arena_.x_min_m) / cell_)));
+  const int i1 = std::min(nx_ - 1, static_cast<int>(std::ceil((x + reach_m - arena_.x_min_m) / cell_)));
+  const int j0 = std::max(0, static_cast<int>(std::floor((y - reach_m - arena_.y_min_m) / cell_)));
+  const int j1 = std::min(ny_ - 1, static_cast<int>(std::ceil((y + reach_m - arena_.y_min_m) / cell_)));
+  bool changed = false;
+  for (int j = j0; j <= j1; ++j) {
+    for (int i = i0; i <= i1; ++i) {
+      const double d = std::hypot(arena_.x_min_m + i * cell_ - x, arena_.y_min_m + j * cell_ - y);
+      if (d > reach_m) continue;
+      double& c = clear_[Index(i, j)];
+      if (d < c) {
+        c = d;
+        changed = true;
+      }
+    }
+  }
+  return changed;
+}
+
+void GeodesicField::Solve(double keep_m, double goal_x, double goal_y, double margin_m, double margin_cost) {
   goal_x_ = goal_x;
   goal_y_ = goal_y;
   const bool weighted = margin_m > 0.0 && margin_cost > 0.0;
-  for (int j = 0; j < ny_; ++j) {
-    for (int i = 0; i < nx_; ++i) {
-      const double x = arena_.x_min_m + i * cell_, y = arena_.y_min_m + j * cell_;
-      const double c = Clearance(world, x, y);
-      free_[Index(i, j)] = c >= keep_m ? 1 : 0;
-      weight_[Index(i, j)] =
-          weighted ? static_cast<float>(1.0 + margin_cost * std::clamp(1.0 - (c - keep_m) / margin_m, 0.0, 1.0)) : 1.0f;
-    }
+  for (std::size_t n = 0; n < clear_.size(); ++n) {
+    const double c = clear_[n];
+    free_[n] = c >= keep_m ? 1 : 0;
+    weight_[n] =
+        weighted ? static_cast<float>(1.0 + margin_cost * std::clamp(1.0 - (c - keep_m) / margin_m, 0.0, 1.0)) : 1.0f;
   }
   std::fill(dist_.begin(), dist_.end(), kInf);
   heap_.clear();
@@ -151,13 +184,34 @@ double GeodesicField::Distance(double x, double y) const noexcept {
   return total;
 }
 
-double GeodesicField::PathAngle(double x, double y, double lookahead_m) const noexcept {
+double GeodesicField::SegmentClearance(double x, double y, int node) const noexcept {
+  const double px = arena_.x_min_m + (node % nx_) * cell_, py = arena_.y_min_m + (node / nx_) * cell_;
+  const int samples = std::max(1, static_cast<int>(std::ceil(std::hypot(px - x, py - y) / (0.5 * cell_))));
+  double least = std::numeric_limits<double>::infinity();
+  for (int s = 0; s <= samples; ++s) {
+    const double f = static_cast<double>(s) / samples;
+    const int i = static_cast<int>(std::lround((x + f * (px - x) - arena_.x_min_m) / cell_));
+    const int j = static_cast<int>(std::lround((y + f * (py - y) - arena_.y_min_m) / cell_));
+    if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return -std::numeric_limits<double>::infinity();
+    least = std::min(least, clear_[Index(i, j)]);
+  }
+  return least;
+}
+
+bool GeodesicField::PathAim(double x, double y, double lookahead_m, double min_clearance_m, double* aim_x,
+                            double* aim_y) const noexcept {
   double total = 0;
   int node = BestNode(x, y, 1, &total);
   if (node < 0) node = BestNode(x, y, 3, &total);
-  if (node < 0) return std::numeric_limits<double>::quiet_NaN();
-  if (total <= lookahead_m) return std::atan2(goal_y_ - y, goal_x_ - x);
+  if (node < 0) return false;
+  if (total <= lookahead_m) {
+    *aim_x = goal_x_;
+    *aim_y = goal_y_;
+    return true;
+  }
   const int steps = std::max(1, static_cast<int>(std::lround(lookahead_m / cell_)));
+  int aim = -1, first = -1;
+  double path_clearance = clear_[static_cast<std::size_t>(node)];
   for (int s = 0; s < steps; ++s) {
     const int i = node % nx_, j = node / nx_;
     int next = node;
@@ -168,8 +222,24 @@ double GeodesicField::PathAngle(double x, double y, double lookahead_m) const no
     }
     if (next == node) break;
     node = next;
+    if (first < 0) first = node;
+    if (min_clearance_m > 0.0) {
+      path_clearance = std::min(path_clearance, clear_[static_cast<std::size_t>(node)]);
+      const double need = std::min(min_clearance_m, path_clearance) - 0.5 * cell_;
+      if (SegmentClearance(x, y, node) >= need) aim = node;
+    } else {
+      aim = node;
+    }
   }
-  const double px = arena_.x_min_m + (node % nx_) * cell_, py = arena_.y_min_m + (node / nx_) * cell_;
+  if (aim < 0) aim = first >= 0 ? first : node;  // no stretch in the clear: the path's next node
+  *aim_x = arena_.x_min_m + (aim % nx_) * cell_;
+  *aim_y = arena_.y_min_m + (aim / nx_) * cell_;
+  return true;
+}
+
+double GeodesicField::PathAngle(double x, double y, double lookahead_m, double min_clearance_m) const noexcept {
+  double px = 0, py = 0;
+  if (!PathAim(x, y, lookahead_m, min_clearance_m, &px, &py)) return std::numeric_limits<double>::quiet_NaN();
   if (std::hypot(px - x, py - y) < 1e-6) return std::atan2(goal_y_ - y, goal_x_ - x);
   return std::atan2(py - y, px - x);
 }

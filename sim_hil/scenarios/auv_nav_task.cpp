@@ -17,10 +17,16 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kGeodesicCellM = 0.25;
 constexpr double kGeodesicLookaheadM = 2.0;
 // The route signal: the path keeps off obstacles (2 m beyond l_safe at up to 4 extra per metre,
-// as task.geodesic_margin 2:4) and points 3 m ahead along it.
+// as task.geodesic_margin 2:4) and points up to 3 m ahead along it, no further than a straight
+// line keeps 1 m beyond l_safe (or the path's own clearance where that is less) so that it does
+// not cut corners.
 constexpr double kRouteMarginM = 2.0;
 constexpr double kRouteMarginCost = 4.0;
 constexpr double kRouteLookaheadM = 3.0;
+constexpr double kRouteAimBeyondSafeM = 1.0;
+// The sonar map (route_map: chart_and_sonar): a return within this distance of a charted
+// surface is that surface; any other marks its point as an obstacle, one per grid cell.
+constexpr double kChartedEchoM = 0.1;
 
 }  // namespace
 
@@ -193,14 +199,18 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   t.last_obs_.assign(t.obs_size_, 0.0f);
   t.signals_.assign(names.size(), 0.0);
   t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
+  t.chart_.emplace(config.layout.world.arena, kGeodesicCellM);
+  t.chart_->SetObstacles(config.layout.world);
   t.route_.reserve(config.layout.targets.size());  // built in place: a copy would not keep its queue's capacity
-  for (std::size_t k = 0; k < config.layout.targets.size(); ++k)
+  for (std::size_t k = 0; k < config.layout.targets.size(); ++k) {
     t.route_.emplace_back(config.layout.world.arena, kGeodesicCellM);
+    t.route_.back().CopyObstacles(*t.chart_);
+  }
   t.route_ready_.assign(config.layout.targets.size(), 0);
-  t.route_world_ = config.layout.world;
-  const auto random_max = static_cast<std::size_t>(config.layout.random_obstacles.count[1]);
-  t.route_world_.circles.reserve(config.layout.world.circles.size() + random_max);
-  t.detected_.reserve(random_max);
+  if (config.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar) {
+    t.rays_.assign(static_cast<std::size_t>(config.sonar.beams * SonarRaysPerBeam(config.sonar)), 0.0);
+    t.mapped_.assign(static_cast<std::size_t>(t.chart_->nx()) * static_cast<std::size_t>(t.chart_->ny()), 0);
+  }
   t.max_steps_ = std::lround(std::ceil(config.task.episode_time_s / config.plant.control_period_s - 1e-9));
   t.world_ = config.layout.world;
   t.world_.circles.reserve(config.layout.world.circles.size() +
@@ -261,25 +271,40 @@ void AuvNavTask::ExploringStart(Rng& rng, AuvPose& pose) {
   // No free spot found (a crowded layout): the ordinary start drawn above stands.
 }
 
-void AuvNavTask::DetectObstacles() {
+void AuvNavTask::MapReturns() {
   const AuvState& s = plant_.State();
-  const std::size_t charted = config_.layout.world.circles.size();
-  bool grew = false;
-  for (std::size_t i = 0; i < detected_.size(); ++i) {
-    if (detected_[i]) continue;
-    const Circle& c = world_.circles[charted + i];
-    if (!SonarEchoesFrom(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, c)) continue;
-    detected_[i] = 1;
-    route_world_.circles.push_back(c);
-    grew = true;
+  const SonarParams& p = config_.sonar;
+  const Arena& a = config_.layout.world.arena;
+  const int rays = SonarRaysPerBeam(p), nx = chart_->nx(), ny = chart_->ny();
+  // Beyond l_safe + margin a point changes neither a node's weight nor whether it is free.
+  const double reach = config_.task.safe_distance_m + kRouteMarginM + kGeodesicCellM;
+  bool changed = false;
+  for (int i = 0; i < p.beams; ++i) {
+    for (int k = 0; k < rays; ++k) {
+      const double r = rays_[static_cast<std::size_t>(i * rays + k)];
+      if (!(r < p.max_range_m)) continue;  // no echo
+      const double angle = s.yaw_rad + SonarRayAngle(p, i, k);
+      const double hx = s.x_m + r * std::cos(angle), hy = s.y_m + r * std::sin(angle);
+      if (Clearance(config_.layout.world, hx, hy) < kChartedEchoM) continue;  // the chart has it
+      const int ci = std::clamp(static_cast<int>(std::lround((hx - a.x_min_m) / kGeodesicCellM)), 0, nx - 1);
+      const int cj = std::clamp(static_cast<int>(std::lround((hy - a.y_min_m) / kGeodesicCellM)), 0, ny - 1);
+      std::uint8_t& seen =
+          mapped_[static_cast<std::size_t>(cj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ci)];
+      if (seen) continue;
+      seen = 1;
+      map_dirty_ = true;
+      ++stats_.mapped_returns;
+      for (GeodesicField& f : route_) changed = f.AddPoint(hx, hy, reach) || changed;
+    }
   }
-  if (grew) std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
+  if (changed) std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
 }
 
 void AuvNavTask::Measure() {
   const AuvState& s = plant_.State();
-  SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data());
-  if (config_.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar) DetectObstacles();
+  const bool map_sonar = config_.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar;
+  SonarScan(world_, config_.sonar, s.x_m, s.y_m, s.yaw_rad, sonar_.data(), map_sonar ? rays_.data() : nullptr);
+  if (map_sonar) MapReturns();
   const auto current =
       static_cast<std::size_t>(std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1));
   const auto& t = config_.layout.targets[current];
@@ -289,10 +314,11 @@ void AuvNavTask::Measure() {
   progress_l_ = l_at_;
   progress_phi_ = phi_at_;
   if (!route_ready_[current]) {
-    route_[current].Compute(route_world_, config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
+    route_[current].Solve(config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
     route_ready_[current] = 1;
   }
-  const double route_angle = route_[current].PathAngle(s.x_m, s.y_m, kRouteLookaheadM);
+  const double route_angle =
+      route_[current].PathAngle(s.x_m, s.y_m, kRouteLookaheadM, config_.task.safe_distance_m + kRouteAimBeyondSafeM);
   route_phi_ = std::isfinite(route_angle) ? WrapAngle(route_angle - s.yaw_rad) : phi_at_;
   if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
     if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
@@ -345,9 +371,10 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   world_.circles.resize(config_.layout.world.circles.size());
   PlaceRandomObstacles(rng);
   geodesic_target_ = -1;  // the world changed
-  detected_.assign(world_.circles.size() - config_.layout.world.circles.size(), 0);
-  if (route_world_.circles.size() != config_.layout.world.circles.size()) {  // detections of the last episode
-    route_world_.circles.resize(config_.layout.world.circles.size());
+  if (map_dirty_) {       // the sonar map of the last episode
+    map_dirty_ = false;
+    std::fill(mapped_.begin(), mapped_.end(), std::uint8_t{0});
+    for (GeodesicField& f : route_) f.CopyObstacles(*chart_);
     std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
   }
   // Start pose: uniform in the start region, redrawn while closer than l_safe + 0.5 m to anything.

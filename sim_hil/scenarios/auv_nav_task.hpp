@@ -63,8 +63,9 @@ struct AuvTaskParams {
   double clearance_penalty_m = 0.0;
   double clearance_penalty_per_step = 0.0;
   // What the mission computer plans the route signal over (task.route_map): "chart" (the
-  // layout's fixed obstacles) or "chart_and_sonar" (those plus every random obstacle a sonar ray
-  // has echoed from in this episode; the route is replanned when one is first seen).
+  // layout's fixed obstacles) or "chart_and_sonar" (those plus a map of the sonar's returns in
+  // this episode: every point where a receive ray found a surface that is not on the chart; the
+  // route is replanned when the map gains a point).
   enum class RouteMap { kChart, kChartAndSonar };
   RouteMap route_map = RouteMap::kChart;
 };
@@ -114,6 +115,7 @@ struct AuvEpisodeStats {
   double min_clearance_m = 0.0;
   long nonfinite_actions = 0;  // action elements replaced by 0 because they were NaN or inf
   int random_obstacles = 0;
+  long mapped_returns = 0;       // RouteMap::kChartAndSonar: points the sonar map gained (one per grid cell)
   int first_target = 0;          // index of the target the episode started with
   bool exploring_start = false;  // started anywhere in the arena (training only, set_exploring_starts)
 };
@@ -170,8 +172,8 @@ class AuvNavTask {
   AuvNavTask(const AuvTaskConfig& config, AuvPlant plant);
   void PlaceRandomObstacles(Rng& rng);
   void ExploringStart(Rng& rng, AuvPose& pose);
-  void Measure();          // sonar, l_AT, phi, clearance, route from the plant's state
-  void DetectObstacles();  // RouteMap::kChartAndSonar: add newly echoed random obstacles to the route map
+  void Measure();     // sonar, l_AT, phi, clearance, route from the plant's state
+  void MapReturns();  // RouteMap::kChartAndSonar: add the sonar's new uncharted returns to the route map
   void WriteObservation(bool episode_end, bool first, float* obs);
 
   AuvTaskConfig config_;
@@ -194,13 +196,17 @@ class AuvNavTask {
   std::optional<GeodesicField> geodesic_;
   int geodesic_target_ = -1;
   double progress_l_ = 0.0, progress_phi_ = 0.0;
-  // The route signal: per target, the path over route_world_ (the charted obstacles, plus the
-  // detected random ones with RouteMap::kChartAndSonar), computed at the first use after it
-  // changed; route_phi_ is its bearing relative to the heading (phi_at_ where there is no path).
-  World2d route_world_;
-  std::vector<std::uint8_t> detected_;  // per random obstacle: a sonar ray has echoed from it
+  // The route signal: per target, the path over the chart (chart_: its clearances, computed once)
+  // plus, with RouteMap::kChartAndSonar, the points of the sonar map (mapped_: per grid cell,
+  // whether a return there is in the map; rays_: the last scan's per-ray ranges). A target's path
+  // is computed at its first use after the map changed; route_phi_ is its bearing relative to the
+  // heading (phi_at_ where there is no path).
+  std::optional<GeodesicField> chart_;
   std::vector<GeodesicField> route_;
   std::vector<std::uint8_t> route_ready_;
+  std::vector<double> rays_;
+  std::vector<std::uint8_t> mapped_;
+  bool map_dirty_ = false;
   double route_phi_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;

@@ -64,41 +64,36 @@ double BeamAngle(const SonarParams& p, int i) noexcept {
   return -0.5 * p.fov_rad + p.fov_rad * i / (p.beams - 1);
 }
 
-namespace {
-
-// A beam's rays: one along the axis for a thin beam; with a width, rays_per_beam at the centres of
-// equal slices of it. RayOffset is ray k's angle from the axis (0 for a single ray).
-int RaysPerBeam(const SonarParams& p) noexcept {
+int SonarRaysPerBeam(const SonarParams& p) noexcept {
   return p.beam_width_rad > 0.0 ? std::max(p.rays_per_beam, 1) : 1;
 }
+
+namespace {
+
+// Ray k's angle from its beam's axis (0 for a single ray).
 double RayOffset(const SonarParams& p, int rays, int k) noexcept {
   return (k + 0.5) * p.beam_width_rad / rays - 0.5 * p.beam_width_rad;
 }
 
 }  // namespace
 
-void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges) noexcept {
-  const int rays = RaysPerBeam(p);
+double SonarRayAngle(const SonarParams& p, int beam, int ray) noexcept {
+  return BeamAngle(p, beam) + RayOffset(p, SonarRaysPerBeam(p), ray);
+}
+
+void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges,
+               double* ray_ranges) noexcept {
+  const int rays = SonarRaysPerBeam(p);
   for (int i = 0; i < p.beams; ++i) {
     const double axis = yaw + BeamAngle(p, i);
     double r = p.max_range_m;
-    for (int k = 0; k < rays; ++k) r = std::min(r, CastRay(w, x, y, axis + RayOffset(p, rays, k), p.max_range_m));
+    for (int k = 0; k < rays; ++k) {
+      const double ray = CastRay(w, x, y, axis + RayOffset(p, rays, k), p.max_range_m);
+      if (ray_ranges != nullptr) ray_ranges[i * rays + k] = ray;
+      r = std::min(r, ray);
+    }
     ranges[i] = r;
   }
-}
-
-bool SonarEchoesFrom(const World2d& w, const SonarParams& p, double x, double y, double yaw, const Circle& c) noexcept {
-  if (std::hypot(c.x_m - x, c.y_m - y) - c.radius_m >= p.max_range_m) return false;
-  const int rays = RaysPerBeam(p);
-  for (int i = 0; i < p.beams; ++i) {
-    const double axis = yaw + BeamAngle(p, i);
-    for (int k = 0; k < rays; ++k) {
-      const double a = axis + RayOffset(p, rays, k);
-      const double t = RayCircle(x, y, std::cos(a), std::sin(a), c);
-      if (t < p.max_range_m && t <= CastRay(w, x, y, a, p.max_range_m)) return true;
-    }
-  }
-  return false;
 }
 
 double Clearance(const World2d& w, double x, double y) noexcept {

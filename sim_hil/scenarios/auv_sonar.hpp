@@ -53,12 +53,17 @@ double CastRay(const World2d& w, double ox, double oy, double angle_rad, double 
 // Beam i's angle relative to the heading: full circle i * 2 pi / n (beam 0 ahead, counter-
 // clockwise); a fan -fov/2 + i * fov / (n - 1) (a single beam looks straight ahead).
 double BeamAngle(const SonarParams& p, int i) noexcept;
-// ranges[i] for every beam from pose (x, y, yaw): the shortest of the beam's rays.
-void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges) noexcept;
-
-// Whether a ray of the scan from (x, y, yaw) (SonarScan's beams and rays) reaches `c` first, within
-// the maximum range: the sonar receives an echo from it.
-bool SonarEchoesFrom(const World2d& w, const SonarParams& p, double x, double y, double yaw, const Circle& c) noexcept;
+// A beam's rays: one along the axis for a thin beam (width 0), otherwise rays_per_beam (at least
+// one). SonarRayAngle is ray k of beam i's angle relative to the heading: the beam's axis plus
+// the centre of the k-th of equal slices of its width.
+int SonarRaysPerBeam(const SonarParams& p) noexcept;
+double SonarRayAngle(const SonarParams& p, int beam, int ray) noexcept;
+// ranges[i] for every beam from pose (x, y, yaw): the shortest of the beam's rays. With ray_ranges,
+// also every ray's own range there (beams * SonarRaysPerBeam values, beam by beam): the returns
+// of the sonar's narrow receive beams, which the mission computer maps (a range below
+// max_range_m is an echo from the surface at that distance along the ray).
+void SonarScan(const World2d& w, const SonarParams& p, double x, double y, double yaw, double* ranges,
+               double* ray_ranges = nullptr) noexcept;
 
 // Signed distance from the point to the nearest obstacle surface or wall (negative inside an
 // obstacle or outside the arena).

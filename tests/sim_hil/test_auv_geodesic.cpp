@@ -3,13 +3,19 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "sim_hil/scenarios/auv_geodesic.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}  // namespace
 
 using namespace pbppo::sim;
 
@@ -127,4 +133,86 @@ TEST_CASE("geodesic field: a margin keeps the path off obstacles where there is 
   CHECK(std::isfinite(f.Distance(5.0, 19.5)));
   CHECK(PathClearance(f, corridor, 5.0, 19.5, 35.0, 20.0) >= 1.2 - 0.2);
   CHECK(std::cos(f.PathAngle(10.0, 20.0, 2.0)) > 0.9);
+}
+
+TEST_CASE("geodesic field: points added to the chart's clearances block the path like the obstacle they lie on") {
+  World2d chart;  // empty arena: the straight line from (5, 20) to (35, 20)
+  World2d real = chart;
+  const Circle column{20.0, 20.0, 1.0};
+  real.circles.push_back(column);
+  GeodesicField truth(chart.arena, 0.25), mapped(chart.arena, 0.25), base(chart.arena, 0.25);
+  truth.Compute(real, 1.2, 35.0, 20.0, 2.0, 4.0);
+  base.SetObstacles(chart);
+  mapped.CopyObstacles(base);
+  // SetObstacles + Solve is Compute.
+  mapped.Solve(1.2, 35.0, 20.0, 2.0, 4.0);
+  GeodesicField computed(chart.arena, 0.25);
+  computed.Compute(chart, 1.2, 35.0, 20.0, 2.0, 4.0);
+  CHECK(mapped.Distance(5.0, 20.0) == computed.Distance(5.0, 20.0));
+  CHECK(mapped.Distance(5.0, 20.0) == doctest::Approx(30.0).epsilon(0.01));
+  // The column's near side, as the sonar sees it from the west: points 0.1 rad apart on the
+  // half of its surface that faces (5, 20).
+  const double reach = 1.2 + 2.0 + 0.25;
+  bool changed = false;
+  for (int k = -15; k <= 15; ++k) {
+    const double a = kPi + 0.1 * k;
+    changed = mapped.AddPoint(column.x_m + std::cos(a), column.y_m + std::sin(a), reach) || changed;
+  }
+  CHECK(changed);
+  CHECK_FALSE(mapped.AddPoint(column.x_m - 1.0, column.y_m, reach));  // the same point again changes nothing
+  mapped.Solve(1.2, 35.0, 20.0, 2.0, 4.0);
+  // The path now goes round: far longer than the straight line, within 10 % of the path round the
+  // whole column, and it leaves the line to pass it.
+  const double round = mapped.Distance(5.0, 20.0);
+  CAPTURE(round);
+  CHECK(round > 31.0);
+  CHECK(round == doctest::Approx(truth.Distance(5.0, 20.0)).epsilon(0.1));
+  CHECK(std::abs(std::sin(mapped.PathAngle(15.0, 20.0, 3.0))) > 0.3);
+  // Copying the chart back forgets the points.
+  mapped.CopyObstacles(base);
+  mapped.Solve(1.2, 35.0, 20.0, 2.0, 4.0);
+  CHECK(mapped.Distance(5.0, 20.0) == computed.Distance(5.0, 20.0));
+}
+
+TEST_CASE("geodesic field: with a minimum clearance the aim does not cut the corner of an obstacle") {
+  // A block rising from the south wall to y = 20; the goal lies beyond it to the south-east, so the
+  // shortest path (no margin) from the west runs along its top at l_safe, round its north-east
+  // corner and down its east side.
+  World2d w;
+  w.boxes = {Box{10.0, 20.0, 0.0, 20.0}};
+  GeodesicField f(w.arena, 0.25);
+  f.Compute(w, 1.2, 30.0, 5.0);
+  // The least clearance of the straight line from (x, y) to (ax, ay), sampled every 5 cm.
+  const auto line = [&](double x, double y, double ax, double ay) {
+    double least = Clearance(w, x, y);
+    const int n = static_cast<int>(std::ceil(std::hypot(ax - x, ay - y) / 0.05));
+    for (int s = 1; s <= n; ++s) {
+      const double t = static_cast<double>(s) / n;
+      least = std::min(least, Clearance(w, x + t * (ax - x), y + t * (ay - y)));
+    }
+    return least;
+  };
+  // Points just outside l_safe where the path runs: above the block's top, then round its corner.
+  std::vector<std::array<double, 2>> points;
+  for (double x = 14.0; x < 20.0; x += 0.5) points.push_back({x, 21.3});
+  for (int deg = 90; deg >= 0; deg -= 10)
+    points.push_back({20.0 + 1.3 * std::cos(deg * kPi / 180), 20.0 + 1.3 * std::sin(deg * kPi / 180)});
+  // The path's own clearance is l_safe, so that is what the aim's line keeps, to within half a
+  // cell and the distance from a point to its nearest node.
+  const double keep = 1.2 - (0.5 * 0.25 + 0.25 * std::sqrt(0.5)) - 0.01;
+  int cut = 0;
+  for (const auto& [x, y] : points) {
+    double ax = 0, ay = 0, bx = 0, by = 0;
+    REQUIRE(f.PathAim(x, y, 3.0, 1.2 + 1.0, &ax, &ay));
+    REQUIRE(f.PathAim(x, y, 3.0, 0.0, &bx, &by));
+    CAPTURE(x);
+    CAPTURE(y);
+    CHECK(f.Distance(ax, ay) < f.Distance(x, y));  // ahead on the path
+    CHECK(line(x, y, ax, ay) >= keep);
+    cut += line(x, y, bx, by) < keep ? 1 : 0;
+    CHECK(std::hypot(ax - x, ay - y) <= std::hypot(bx - x, by - y) + 1e-9);
+  }
+  // Without it, the full 3 m look-ahead cuts the corner from the points at the turn (4 of them).
+  CAPTURE(cut);
+  CHECK(cut >= 3);
 }

@@ -1,6 +1,8 @@
 // Sonar ray casting and clearance against hand-computed geometry.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -96,8 +98,41 @@ TEST_CASE("sonar: a beam with a width reports the nearest echo within it - thin 
   CHECK(one == r);
 }
 
+namespace {
+
+// The points where the scan's receive rays from (x, y, yaw) found a surface.
+std::vector<std::array<double, 2>> ReturnPoints(const World2d& w, const SonarParams& p, double x, double y,
+                                                double yaw) {
+  const int rays = SonarRaysPerBeam(p);
+  std::vector<double> beams(static_cast<std::size_t>(p.beams)), each(static_cast<std::size_t>(p.beams * rays));
+  SonarScan(w, p, x, y, yaw, beams.data(), each.data());
+  std::vector<std::array<double, 2>> points;
+  for (int i = 0; i < p.beams; ++i) {
+    double least = p.max_range_m;
+    for (int k = 0; k < rays; ++k) {
+      const double r = each[static_cast<std::size_t>(i * rays + k)];
+      least = std::min(least, r);
+      if (r >= p.max_range_m) continue;
+      const double a = yaw + SonarRayAngle(p, i, k);
+      points.push_back({x + r * std::cos(a), y + r * std::sin(a)});
+    }
+    CHECK(beams[static_cast<std::size_t>(i)] == least);  // a beam reports its shortest ray
+  }
+  return points;
+}
+
+// How many of the points lie on the circle's surface.
+int On(const std::vector<std::array<double, 2>>& points, const Circle& c) {
+  int n = 0;
+  for (const auto& q : points) n += std::abs(std::hypot(q[0] - c.x_m, q[1] - c.y_m) - c.radius_m) < 1e-9 ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
 TEST_CASE(
-    "sonar: an obstacle echoes when a ray reaches it first - not between thin beams, behind another or out of range") {
+    "sonar: per-ray returns lie on the first surface each ray meets - not between thin beams, behind "
+    "another obstacle or out of range") {
   World2d w;
   // The column between beams 0 and 1 again, and a second one hidden behind a bigger column.
   const double bearing = kPi / 16, d = 5.0;
@@ -108,14 +143,24 @@ TEST_CASE(
   SonarParams wide = thin;
   wide.beam_width_rad = 2 * kPi / 16;
   wide.rays_per_beam = 5;
-  CHECK_FALSE(SonarEchoesFrom(w, thin, 20.0, 20.0, 0.0, between));
-  CHECK(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, between));
-  CHECK(SonarEchoesFrom(w, thin, 20.0, 20.0, 0.0, screen));        // beam 4 (90 deg) hits it at 4.5 m
-  CHECK_FALSE(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, hidden));  // behind the screen
-  CHECK_FALSE(SonarEchoesFrom(w, wide, 20.0, 20.0, 0.0, far));     // 15.5 m: beyond 15 m
-  CHECK(SonarEchoesFrom(w, wide, 20.0, 19.0, 0.0, far));           // 14.5 m
+  CHECK(SonarRaysPerBeam(thin) == 1);
+  CHECK(SonarRaysPerBeam(wide) == 5);
+  CHECK(SonarRayAngle(thin, 3, 0) == BeamAngle(thin, 3));
+  CHECK(SonarRayAngle(wide, 0, 2) == doctest::Approx(0.0));  // the middle ray is the axis
+  CHECK(SonarRayAngle(wide, 0, 0) == doctest::Approx(-2 * kPi / 16 * 0.4));
+  const auto thin_points = ReturnPoints(w, thin, 20.0, 20.0, 0.0);
+  const auto wide_points = ReturnPoints(w, wide, 20.0, 20.0, 0.0);
+  CHECK(On(thin_points, between) == 0);
+  CHECK(On(wide_points, between) >= 1);
+  CHECK(On(thin_points, screen) == 1);  // beam 4 (90 deg) hits it at 4.5 m
+  CHECK(On(wide_points, screen) >= 5);
+  CHECK(On(wide_points, hidden) == 0);                          // behind the screen
+  CHECK(On(wide_points, far) == 0);                             // 15.5 m: beyond 15 m
+  CHECK(On(ReturnPoints(w, wide, 20.0, 19.0, 0.0), far) >= 1);  // 14.5 m
   // Turning the vehicle moves the thin beams onto the column between them.
-  CHECK(SonarEchoesFrom(w, thin, 20.0, 20.0, bearing, between));
+  CHECK(On(ReturnPoints(w, thin, 20.0, 20.0, bearing), between) == 1);
+  // The walls are 20 m away: every return is from one of the two columns in reach.
+  CHECK(On(wide_points, between) + On(wide_points, screen) == static_cast<int>(wide_points.size()));
 }
 
 TEST_CASE("sonar: a forward fan spreads its beams evenly across the field of view") {

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "sim_hil/scenarios/auv_nav_task.hpp"
@@ -834,4 +835,40 @@ TEST_CASE("auv task: with route_map chart_and_sonar the route bends round the ra
     CHECK(successes[1] >= 8);  // a proportional pilot cuts corners; it is the difference that counts
     CHECK(successes[1] > successes[0]);
   }
+}
+
+TEST_CASE("auv task: the sonar map takes only returns off the chart, and every episode starts with an empty one") {
+  // Without random obstacles every return is from a charted surface: nothing is mapped, and the
+  // route is the chart's, bearing for bearing.
+  AuvTaskConfig bare = Config("hard");
+  bare.layout.random_obstacles.count = {0, 0};
+  AuvTaskConfig chart = bare;
+  chart.task.route_map = AuvTaskParams::RouteMap::kChart;
+  bare.task.route_map = AuvTaskParams::RouteMap::kChartAndSonar;
+  AuvNavTask by_sonar = MakeTask(bare), by_chart = MakeTask(chart);
+  pbppo::robot::AuvSensorSample a, b;
+  for (std::uint64_t seed : {3u, 4u}) {
+    FlyBearing(by_sonar, seed, true);
+    FlyBearing(by_chart, seed, true);
+    CHECK(by_sonar.stats().mapped_returns == 0);
+    CHECK(by_sonar.stats().steps == by_chart.stats().steps);
+    CHECK(by_sonar.stats().success == by_chart.stats().success);
+    by_sonar.FillSensorSample(a);
+    by_chart.FillSensorSample(b);
+    CHECK(a.route_bearing_rad == b.route_bearing_rad);
+    CHECK(a.x_m == b.x_m);
+  }
+  // With them, the map gains points; an episode run again after another one flies exactly as the
+  // first time (the other episode's map is gone).
+  AuvNavTask task = MakeTask(Config("hard"));
+  const auto fly = [&](std::uint64_t seed) {
+    FlyBearing(task, seed, true);
+    task.FillSensorSample(a);
+    return std::make_tuple(task.stats().steps, task.stats().mapped_returns, a.x_m, a.y_m, a.route_bearing_rad);
+  };
+  const auto first = fly(7);
+  CHECK(std::get<1>(first) > 0);
+  const auto other = fly(8);
+  CHECK(std::get<1>(other) > 0);
+  CHECK(fly(7) == first);
 }
