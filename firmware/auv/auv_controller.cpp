@@ -130,8 +130,15 @@ AuvControllerConfig ForTickPeriod(const AuvControllerConfig& c, double tick_peri
   auto periods = [&](std::uint32_t n) {
     return static_cast<std::uint32_t>(std::min(1e6, std::ceil(static_cast<double>(n) / k)));
   };
-  r.supervisor.stale_degraded_ticks = periods(c.supervisor.stale_degraded_ticks);
-  r.supervisor.stale_safe_stop_ticks = periods(c.supervisor.stale_safe_stop_ticks);
+  // Ticking at the control period a sample's age is a whole number of periods, so "older than n
+  // periods" means n samples missed. Ticking faster, a sample that is due every period arrives a
+  // few ticks early or late; the limit is n and a half periods, so that a sample a little late
+  // still counts as on time and a missed one does not (the same at the control period itself).
+  auto missed = [&](std::uint32_t n) {
+    return static_cast<std::uint32_t>(std::min(1e6, std::floor((static_cast<double>(n) + 0.5) / k + 1e-9)));
+  };
+  r.supervisor.stale_degraded_ticks = missed(c.supervisor.stale_degraded_ticks);
+  r.supervisor.stale_safe_stop_ticks = missed(c.supervisor.stale_safe_stop_ticks);
   r.supervisor.lost_peer_ticks = periods(c.supervisor.lost_peer_ticks);
   r.supervisor.dv_max_mps = c.supervisor.dv_max_mps * k;
   r.supervisor.dw_max_radps = c.supervisor.dw_max_radps * k;

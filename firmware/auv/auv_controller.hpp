@@ -41,8 +41,9 @@ struct AuvControllerConfig {
 // Errors name the file and the field and quote the value.
 Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& auv_yaml);
 // The same limits for a controller ticking every tick_period_s instead of every control period:
-// sample ages counted in ticks scale up (stale after the same time), rate limits per tick scale
-// down (the same accelerations).
+// sample ages counted in ticks scale up (stale after the same time: n periods and a half for the
+// stale limits, so that a sample a tick or two late is not taken for a missed one), rate limits
+// per tick scale down (the same accelerations). At the control period itself nothing changes.
 AuvControllerConfig ForTickPeriod(const AuvControllerConfig& config, double tick_period_s);
 
 class AuvController {

@@ -108,6 +108,41 @@ TEST_CASE("auv controller: configuration from auv.yaml - bad fields named with t
         dir + "/auv.yaml: supervisor.lost_peer_ticks: missing");
 }
 
+TEST_CASE(
+    "auv controller: ticking at 1 kHz the limits keep their time - a sample a tick late is on time, a missed "
+    "one is stale") {
+  auto c = firmware::LoadAuvControllerConfig(kAuvYaml);
+  REQUIRE_MESSAGE(c.ok(), c.error().message);
+  // At the control period nothing changes.
+  const auto same = firmware::ForTickPeriod(*c, c->control_period_s);
+  CHECK(same.supervisor.stale_degraded_ticks == c->supervisor.stale_degraded_ticks);
+  CHECK(same.supervisor.stale_safe_stop_ticks == c->supervisor.stale_safe_stop_ticks);
+  CHECK(same.supervisor.lost_peer_ticks == c->supervisor.lost_peer_ticks);
+  CHECK(same.supervisor.dv_max_mps == c->supervisor.dv_max_mps);
+  // 100 ticks per period: stale after 1.5 and 2.5 periods, lost after 20, rates per tick / 100.
+  const auto fast = firmware::ForTickPeriod(*c, 0.001);
+  CHECK(fast.supervisor.stale_degraded_ticks == 150);
+  CHECK(fast.supervisor.stale_safe_stop_ticks == 250);
+  CHECK(fast.supervisor.lost_peer_ticks == 2000);
+  CHECK(fast.supervisor.dv_max_mps == doctest::Approx(c->supervisor.dv_max_mps / 100));
+  char why[256];
+  CHECK(safety::ValidateAuvSupervisorConfig(fast.supervisor, why, sizeof why));
+  // The 10 Hz sample due at tick 100 arrives at tick 101 (age 101): on time. One missed (age 151):
+  // degraded. Two missed (age 251): safe-stop.
+  const robot::AuvSensorSample sample = Sample(1);
+  safety::AuvSupervisorInput in;
+  in.sample = &sample;
+  in.v_mps = 0.05;
+  const auto mode_at = [&](std::uint32_t age) {
+    in.sample_age_ticks = age;
+    return safety::SuperviseAuv(fast.supervisor, in, safety::AuvSupervisorState{}).state.mode;
+  };
+  CHECK(mode_at(101) == safety::AuvMode::kNominal);
+  CHECK(mode_at(150) == safety::AuvMode::kNominal);
+  CHECK(mode_at(151) == safety::AuvMode::kDegraded);
+  CHECK(mode_at(251) == safety::AuvMode::kSafeStop);
+}
+
 TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refused, naming why") {
   const std::string dir = test::ScratchDir("auv_controller_blobs");
   robot::IoLayout other = Layout();
