@@ -31,8 +31,9 @@ struct AuvSensorSample {
   double target_x_m = 0, target_y_m = 0;
   double target_distance_m = 0;   // l_AT
   double target_bearing_rad = 0;  // phi_AT relative to the heading, (-pi, pi]
-  // The bearing of the mission computer's planned route (over the charted obstacles) relative to
-  // the heading, (-pi, pi]; the target bearing where it has no route.
+  // The bearing of the mission computer's planned route (over the chart, and the sonar map with
+  // task.route_map: chart_and_sonar) relative to the heading, (-pi, pi]; the target bearing where
+  // it has no route.
   double route_bearing_rad = 0;
   double clearance_m = 0;         // distance to the nearest obstacle surface (HIL ground truth)
   bool mission_complete = false;  // every target reached

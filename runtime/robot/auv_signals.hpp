@@ -33,8 +33,9 @@ enum AuvSignal : std::uint32_t {
   kAuvTargetX,      // current target in the world frame, m
   kAuvTargetY,
   kAuvNearestEcho,  // shortest sonar range over all beams, m (+inf without beams)
-  // The mission computer's route: the bearing of its planned path over the charted obstacles
-  // relative to the heading, rad in (-pi, pi] (the target bearing where it has no route).
+  // The mission computer's route: the bearing of its planned path (over the chart, and the sonar
+  // map with task.route_map: chart_and_sonar) relative to the heading, rad in (-pi, pi] (the
+  // target bearing where it has no route).
   kAuvRouteBearing,
   kAuvCosRouteBearing,
   kAuvSinRouteBearing,

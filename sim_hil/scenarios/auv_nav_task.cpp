@@ -201,12 +201,8 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
   t.chart_.emplace(config.layout.world.arena, kGeodesicCellM);
   t.chart_->SetObstacles(config.layout.world);
-  t.route_.reserve(config.layout.targets.size());  // built in place: a copy would not keep its queue's capacity
-  for (std::size_t k = 0; k < config.layout.targets.size(); ++k) {
-    t.route_.emplace_back(config.layout.world.arena, kGeodesicCellM);
-    t.route_.back().CopyObstacles(*t.chart_);
-  }
-  t.route_ready_.assign(config.layout.targets.size(), 0);
+  t.route_.emplace(config.layout.world.arena, kGeodesicCellM);
+  t.route_->CopyObstacles(*t.chart_);
   if (config.task.route_map == AuvTaskParams::RouteMap::kChartAndSonar) {
     t.rays_.assign(static_cast<std::size_t>(config.sonar.beams * SonarRaysPerBeam(config.sonar)), 0.0);
     t.mapped_.assign(static_cast<std::size_t>(t.chart_->nx()) * static_cast<std::size_t>(t.chart_->ny()), 0);
@@ -292,12 +288,11 @@ void AuvNavTask::MapReturns() {
           mapped_[static_cast<std::size_t>(cj) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(ci)];
       if (seen) continue;
       seen = 1;
-      map_dirty_ = true;
       ++stats_.mapped_returns;
-      for (GeodesicField& f : route_) changed = f.AddPoint(hx, hy, reach) || changed;
+      changed = route_->AddPoint(hx, hy, reach) || changed;
     }
   }
-  if (changed) std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
+  if (changed) route_target_ = -1;
 }
 
 void AuvNavTask::Measure() {
@@ -313,12 +308,12 @@ void AuvNavTask::Measure() {
   clearance_ = Clearance(world_, s.x_m, s.y_m);
   progress_l_ = l_at_;
   progress_phi_ = phi_at_;
-  if (!route_ready_[current]) {
-    route_[current].Solve(config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
-    route_ready_[current] = 1;
+  if (route_target_ != static_cast<int>(current)) {
+    route_->Solve(config_.task.safe_distance_m, t[0], t[1], kRouteMarginM, kRouteMarginCost);
+    route_target_ = static_cast<int>(current);
   }
   const double route_angle =
-      route_[current].PathAngle(s.x_m, s.y_m, kRouteLookaheadM, config_.task.safe_distance_m + kRouteAimBeyondSafeM);
+      route_->PathAngle(s.x_m, s.y_m, kRouteLookaheadM, config_.task.safe_distance_m + kRouteAimBeyondSafeM);
   route_phi_ = std::isfinite(route_angle) ? WrapAngle(route_angle - s.yaw_rad) : phi_at_;
   if (config_.task.progress == AuvTaskParams::Progress::kGeodesic) {
     if (!geodesic_) geodesic_.emplace(world_.arena, kGeodesicCellM);
@@ -367,16 +362,15 @@ void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
 
 void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   Rng rng(seed);
+  if (stats_.mapped_returns > 0) {  // the last episode's sonar map: back to the chart
+    std::fill(mapped_.begin(), mapped_.end(), std::uint8_t{0});
+    route_->CopyObstacles(*chart_);
+    route_target_ = -1;
+  }
   stats_ = AuvEpisodeStats{};
   world_.circles.resize(config_.layout.world.circles.size());
   PlaceRandomObstacles(rng);
   geodesic_target_ = -1;  // the world changed
-  if (map_dirty_) {       // the sonar map of the last episode
-    map_dirty_ = false;
-    std::fill(mapped_.begin(), mapped_.end(), std::uint8_t{0});
-    for (GeodesicField& f : route_) f.CopyObstacles(*chart_);
-    std::fill(route_ready_.begin(), route_ready_.end(), std::uint8_t{0});
-  }
   // Start pose: uniform in the start region, redrawn while closer than l_safe + 0.5 m to anything.
   const AuvStartRegion& s = config_.layout.start;
   AuvPose pose;

@@ -196,17 +196,16 @@ class AuvNavTask {
   std::optional<GeodesicField> geodesic_;
   int geodesic_target_ = -1;
   double progress_l_ = 0.0, progress_phi_ = 0.0;
-  // The route signal: per target, the path over the chart (chart_: its clearances, computed once)
-  // plus, with RouteMap::kChartAndSonar, the points of the sonar map (mapped_: per grid cell,
-  // whether a return there is in the map; rays_: the last scan's per-ray ranges). A target's path
-  // is computed at its first use after the map changed; route_phi_ is its bearing relative to the
-  // heading (phi_at_ where there is no path).
+  // The route signal: the path to the current target (route_target_; -1: replan) over the chart
+  // (chart_: its clearances, computed once) plus, with RouteMap::kChartAndSonar, the points of the
+  // sonar map (mapped_: per grid cell, whether a return there is in the map; rays_: the last
+  // scan's per-ray ranges), replanned when the target or the map changes; route_phi_ is its
+  // bearing relative to the heading (phi_at_ where there is no path).
   std::optional<GeodesicField> chart_;
-  std::vector<GeodesicField> route_;
-  std::vector<std::uint8_t> route_ready_;
+  std::optional<GeodesicField> route_;
+  int route_target_ = -1;
   std::vector<double> rays_;
   std::vector<std::uint8_t> mapped_;
-  bool map_dirty_ = false;
   double route_phi_ = 0.0;
   double v_cmd_ = 0.0, w_cmd_ = 0.0;
   bool done_ = false, terminated_ = false, truncated_ = false;
