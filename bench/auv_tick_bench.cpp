@@ -74,9 +74,9 @@ int main(int argc, char** argv) {
     s.tick = static_cast<std::uint64_t>(k + 1000);
     for (std::uint32_t b = 0; b < 16; ++b) s.sonar_m[b] = static_cast<float>((k + b) % 15);
     s.yaw_rad = 0.001 * static_cast<double>(k % 3000) - 1.5;
-    const std::int64_t t0 = rt::MonotonicNs();
+    const std::int64_t t0 = MonotonicNs();
     ctl.Tick(&s, s.tick, cmd);
-    ctl.profiler().Record(rt::Stage::kTick, rt::MonotonicNs() - t0);
+    ctl.profiler().Record(rt::Stage::kTick, MonotonicNs() - t0);
   }
   const std::uint64_t allocs = scope.count();
   const rt::ProfileReport r = rt::TakeReport(ctl.profiler());

@@ -209,7 +209,7 @@ bool AuvController::ResetSupervisor() noexcept {
 }
 
 void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tick, robot::AuvCommand& out) noexcept {
-  const std::int64_t t0 = rt::MonotonicNs();
+  const std::int64_t t0 = MonotonicNs();
   ++ticks_;
   // Observe: a new sample resets the age; the signal table through the IO layout.
   if (latest != nullptr && (!have_sample_ || latest->tick != sample_.tick || latest->stamp_ns != sample_.stamp_ns)) {
@@ -227,7 +227,7 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
     builder_.Build(signals_.data(), first_armed_tick_, obs_.data());
     first_armed_tick_ = false;
   }
-  const std::int64_t t1 = rt::MonotonicNs();
+  const std::int64_t t1 = MonotonicNs();
   // Infer (only armed, and only once an observation exists).
   double v = 0.0, w = 0.0;
   if (armed_ && !first_armed_tick_) {
@@ -240,7 +240,7 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
     if (fs != policy::ForwardStatus::kOk && std::isfinite(v) && std::isfinite(w)) v = std::nan("");
     ++policy_runs_;
   }
-  const std::int64_t t2 = rt::MonotonicNs();
+  const std::int64_t t2 = MonotonicNs();
   // Supervise.
   safety::AuvSupervisorInput in;
   in.v_mps = v;
@@ -270,7 +270,7 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
   out.surge_speed_mps = decision_.v_mps;
   out.yaw_rate_radps = decision_.w_radps;
   out.mode = static_cast<std::uint8_t>(sup_.mode);
-  const std::int64_t t3 = rt::MonotonicNs();
+  const std::int64_t t3 = MonotonicNs();
   out.stamp_ns = t3;
   profiler_.Record(rt::Stage::kObserve, t1 - t0);
   profiler_.Record(rt::Stage::kInfer, t2 - t1);
@@ -287,7 +287,7 @@ void AuvController::Tick(const robot::AuvSensorSample* latest, std::uint64_t tic
 
 void AuvController::ShutdownCommand(std::uint64_t tick, robot::AuvCommand& out) const noexcept {
   out.tick = tick;
-  out.stamp_ns = rt::MonotonicNs();
+  out.stamp_ns = MonotonicNs();
   out.answers = have_sample_ ? sample_.tick : 0;
   out.surge_speed_mps = 0.0;
   out.yaw_rate_radps = 0.0;

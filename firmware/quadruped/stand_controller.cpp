@@ -5,12 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <set>
 #include <sstream>
+
+#include "runtime/core/clock.hpp"
 
 namespace pbppo::firmware {
 namespace {
@@ -19,12 +20,6 @@ constexpr std::size_t kCmdFields = 5;  // q, dq, kp, kd, tau
 constexpr std::size_t kFbFields = 2;   // q, dq
 // Feedback beyond a joint limit by more than this is a fault (the stand has no hard stops).
 constexpr double kFeedbackMarginRad = 0.3;
-
-std::uint64_t RealtimeNs() noexcept {
-  timespec t{};
-  clock_gettime(CLOCK_REALTIME, &t);
-  return static_cast<std::uint64_t>(t.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(t.tv_nsec);
-}
 
 }  // namespace
 
@@ -368,7 +363,7 @@ void StandController::SendCommands() noexcept {
     mode = safety::Step(sup_model_, in, tick_, sup_).mode;
   }
   clamped_fields_ += safety::LimitCommand(sup_model_, command_);
-  const std::uint64_t now = RealtimeNs();
+  const auto now = static_cast<std::uint64_t>(RealtimeNs());
   for (std::size_t m = 0; m < n; ++m) {
     const std::uint32_t id = table_.motor_id[m];
     can::CanFrame f;

@@ -6,12 +6,6 @@
 
 namespace pbppo::rt {
 
-std::int64_t MonotonicNs() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-
 void FreeRunningClock::Start(std::int64_t start_ns) noexcept {
   next_ns_ = start_ns >= 0 ? start_ns : MonotonicNs();
   tick_ = 0;

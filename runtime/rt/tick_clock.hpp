@@ -14,10 +14,9 @@
 #include <atomic>
 #include <cstdint>
 
-namespace pbppo::rt {
+#include "runtime/core/clock.hpp"
 
-// CLOCK_MONOTONIC in nanoseconds (vDSO: no system call).
-std::int64_t MonotonicNs() noexcept;
+namespace pbppo::rt {
 
 struct TickTiming {
   std::uint64_t tick = 0;        // 0, 1, 2, ...

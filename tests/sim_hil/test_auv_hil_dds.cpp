@@ -55,9 +55,9 @@ struct Hil {
   }
   // Exit code, or 128 + signal; -1 if it did not end within the timeout.
   int Wait(std::int64_t timeout_ns = 20 * kSecond) {
-    const std::int64_t end = dds::MonotonicNs() + timeout_ns;
+    const std::int64_t end = MonotonicNs() + timeout_ns;
     int status = 0;
-    while (dds::MonotonicNs() < end) {
+    while (MonotonicNs() < end) {
       if (waitpid(pid, &status, WNOHANG) == pid) {
         pid = -1;
         return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -160,8 +160,8 @@ TEST_CASE("auv hil: a killed simulator is seen by the controller as a lost peer 
   kill(hil.pid, SIGKILL);
   CHECK(hil.Wait() == 128 + SIGKILL);
   // No goodbye from a killed process: the participant's lease (2 s in the profile) runs out.
-  const std::int64_t end = dds::MonotonicNs() + 8 * kSecond;
-  while (link->Peer().matched_writers > 0 && dds::MonotonicNs() < end)
+  const std::int64_t end = MonotonicNs() + 8 * kSecond;
+  while (link->Peer().matched_writers > 0 && MonotonicNs() < end)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   const dds::AuvPeerView p = link->Peer();
   CHECK(p.matched_writers == 0);
@@ -217,7 +217,7 @@ TEST_CASE("auv hil: real-time mode runs at the control period, applies commands 
   REQUIRE(link->WaitForPeer(20 * kSecond));
   std::uint64_t version = 0, samples = 0;
   dds::AuvSensorInput in;
-  const std::int64_t t0 = dds::MonotonicNs();
+  const std::int64_t t0 = MonotonicNs();
   std::int64_t t_end = t0;
   while (link->WaitForSample(version, 5 * kSecond)) {
     version = link->ReadSample(&in);
@@ -227,7 +227,7 @@ TEST_CASE("auv hil: real-time mode runs at the control period, applies commands 
     c.surge_speed_mps = 0.5;
     REQUIRE(link->PushCommand(c));
     if (in.sample.episode_end) {
-      t_end = dds::MonotonicNs();
+      t_end = MonotonicNs();
       break;
     }
   }

@@ -14,6 +14,8 @@
 #include <cstring>
 #include <ctime>
 
+#include "runtime/core/clock.hpp"
+
 namespace pbppo::can {
 namespace {
 
@@ -174,12 +176,9 @@ SocketCanBus::~SocketCanBus() {
 std::size_t SocketCanBus::ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept {
   std::size_t got = Receive(out);
   if (got >= want || got >= out.size()) return got;
-  timespec t0{};
-  clock_gettime(CLOCK_MONOTONIC, &t0);
+  const std::int64_t t0 = MonotonicNs();
   while (got < want && got < out.size()) {
-    timespec t{};
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    const std::int64_t elapsed = (t.tv_sec - t0.tv_sec) * 1000000000LL + (t.tv_nsec - t0.tv_nsec);
+    const std::int64_t elapsed = MonotonicNs() - t0;
     if (elapsed >= timeout_ns) break;
     pollfd p{fd_, POLLIN, 0};
     const std::int64_t left_ms = (timeout_ns - elapsed + 999999) / 1000000;

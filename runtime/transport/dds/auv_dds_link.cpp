@@ -1,7 +1,5 @@
 #include "runtime/transport/dds/auv_dds_link.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -24,6 +22,7 @@
 #include <semaphore>
 #include <thread>
 
+#include "runtime/core/clock.hpp"
 #include "runtime/core/latest_mailbox.hpp"
 #include "runtime/core/spsc_queue.hpp"
 #include "runtime/transport/dds/auv_dds_convert.hpp"
@@ -34,12 +33,6 @@ namespace pbppo::dds {
 namespace fdds = eprosima::fastdds::dds;
 using eprosima::fastrtps::Duration_t;
 using eprosima::fastrtps::types::ReturnCode_t;
-
-std::int64_t MonotonicNs() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 namespace {
 

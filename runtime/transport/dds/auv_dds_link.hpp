@@ -24,6 +24,7 @@
 #include <memory>
 #include <string>
 
+#include "runtime/core/clock.hpp"  // MonotonicNs: the clock of received_ns and the ages
 #include "runtime/core/result.hpp"
 #include "runtime/robot/auv_messages.hpp"
 
@@ -121,8 +122,5 @@ class AuvDdsLink {
   explicit AuvDdsLink(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
-
-// CLOCK_MONOTONIC in nanoseconds (the clock of received_ns and the ages).
-std::int64_t MonotonicNs() noexcept;
 
 }  // namespace pbppo::dds

@@ -112,7 +112,7 @@ TEST_CASE("free-running clock: absolute deadlines without drift, jitter measured
   // (a parallel build, sanitizers) does not turn scheduling delay into a false miss.
   constexpr std::int64_t kPeriod = 20000000;
   FreeRunningClock c(kPeriod);
-  const std::int64_t start = MonotonicNs() + 1000000;
+  const std::int64_t start = pbppo::MonotonicNs() + 1000000;
   c.Start(start);
   TickTiming t;
   for (int k = 0; k < 10; ++k) {

@@ -101,9 +101,9 @@ void CheckSame(const robot::AuvSensorSample& a, const robot::AuvSensorSample& b)
 // Polls `pred` until it holds or `timeout_ns` passes.
 template <typename F>
 bool Eventually(F pred, std::int64_t timeout_ns = 5 * kSecond) {
-  const std::int64_t end = dds::MonotonicNs() + timeout_ns;
+  const std::int64_t end = MonotonicNs() + timeout_ns;
   while (!pred()) {
-    if (dds::MonotonicNs() > end) return false;
+    if (MonotonicNs() > end) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return true;

@@ -1,0 +1,14 @@
+// The clocks of the runtime, read without a system call (vDSO). Everything that measures time
+// (tick clocks, latencies, transport ages, logs) uses these two.
+#pragma once
+
+#include <cstdint>
+
+namespace pbppo {
+
+// CLOCK_MONOTONIC in nanoseconds: durations, deadlines, ages.
+std::int64_t MonotonicNs() noexcept;
+// CLOCK_REALTIME in nanoseconds: time stamps meant for people and other machines (candump logs).
+std::int64_t RealtimeNs() noexcept;
+
+}  // namespace pbppo
