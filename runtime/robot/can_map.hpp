@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "runtime/core/result.hpp"
-#include "runtime/transport/can/mit_codec.hpp"
+#include "runtime/robot/mit_range.hpp"
 
 namespace pbppo::robot {
 
@@ -19,9 +19,6 @@ struct CanBus {
   std::string interface;  // "can0" on the robot
   bool fd = false;        // the interface runs CAN FD (classic frames still pass)
 };
-
-// Linear ranges of the MIT (mini-cheetah) protocol, as flashed into the driver.
-using MitRange = can::MitRange;
 
 struct CanActuator {
   std::string name;

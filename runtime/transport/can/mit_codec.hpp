@@ -10,6 +10,7 @@
 
 #include <cstdint>
 
+#include "runtime/robot/mit_range.hpp"
 #include "runtime/transport/can/can_frame.hpp"
 
 namespace pbppo::can {
@@ -21,14 +22,8 @@ inline constexpr unsigned kMitTorqueBits = 12;
 inline constexpr std::uint8_t kMitCommandLen = 8;
 inline constexpr std::uint8_t kMitReplyLen = 6;
 
-// Linear ranges flashed into a driver (configuration: models/<robot>/can_map.yaml).
-struct MitRange {
-  double p_min = 0, p_max = 0;    // position, rad
-  double v_min = 0, v_max = 0;    // velocity, rad/s
-  double kp_min = 0, kp_max = 0;  // stiffness, Nm/rad
-  double kd_min = 0, kd_max = 0;  // damping, Nm*s/rad
-  double t_min = 0, t_max = 0;    // torque (feed-forward and measured), Nm
-};
+// Linear ranges flashed into a driver: robot data (models/<robot>/can_map.yaml).
+using MitRange = robot::MitRange;
 
 struct MitCommand {
   double q_rad = 0;
