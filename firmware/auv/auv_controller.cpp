@@ -1,111 +1,57 @@
 #include "firmware/auv/auv_controller.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 
 #include "runtime/policy/blob.hpp"
 #include "runtime/robot/auv_signals.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 #include "runtime/rt/tick_clock.hpp"
 
 namespace pbppo::firmware {
-namespace {
-
-// Field reader for auv.yaml: errors name the file and the field and quote the value.
-class Fields {
- public:
-  Fields(std::string path, YAML::Node root) : path_(std::move(path)), root_(std::move(root)) {}
-
-  Status Number(const char* section, const char* key, double lo, double hi, double* out) const {
-    const YAML::Node v = root_[section] ? root_[section][key] : YAML::Node();
-    const std::string where = path_ + ": " + section + "." + key;
-    if (!v) return MakeError(ErrorCode::kInvalidValue, where + ": missing");
-    if (!v.IsScalar()) return MakeError(ErrorCode::kInvalidValue, where + ": expected a number");
-    return Check(where, v.as<std::string>(), lo, hi, out);
-  }
-  Status Count(const char* section, const char* key, double lo, double hi, std::uint32_t* out) const {
-    double d = 0;
-    if (auto st = Number(section, key, lo, hi, &d); !st) return st;
-    if (d != std::floor(d))
-      return MakeError(ErrorCode::kInvalidValue,
-                       path_ + ": " + section + "." + key + ": " + Fmt(d) + " is not an integer");
-    *out = static_cast<std::uint32_t>(d);
-    return {};
-  }
-  Status Pair(const char* section, const char* key, double lo, double hi, double* a, double* b) const {
-    const YAML::Node v = root_[section] ? root_[section][key] : YAML::Node();
-    const std::string where = path_ + ": " + section + "." + key;
-    if (!v) return MakeError(ErrorCode::kInvalidValue, where + ": missing");
-    if (!v.IsSequence() || v.size() != 2) return MakeError(ErrorCode::kInvalidValue, where + ": expected [low, high]");
-    if (auto st = Check(where + "[0]", v[0].as<std::string>(), lo, hi, a); !st) return st;
-    if (auto st = Check(where + "[1]", v[1].as<std::string>(), lo, hi, b); !st) return st;
-    if (*a >= *b) return MakeError(ErrorCode::kInvalidValue, where + ": low " + Fmt(*a) + " >= high " + Fmt(*b));
-    return {};
-  }
-
- private:
-  static std::string Fmt(double d) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", d);
-    return buf;
-  }
-  static Status Check(const std::string& where, const std::string& text, double lo, double hi, double* out) {
-    char* end = nullptr;
-    const double d = std::strtod(text.c_str(), &end);
-    if (end == text.c_str() || *end != '\0' || !std::isfinite(d))
-      return MakeError(ErrorCode::kInvalidValue, where + ": '" + text + "' is not a finite number");
-    if (d < lo || d > hi)
-      return MakeError(ErrorCode::kInvalidValue, where + ": " + text + " outside [" + Fmt(lo) + ", " + Fmt(hi) + "]");
-    *out = d;
-    return {};
-  }
-  std::string path_;
-  YAML::Node root_;
-};
-
-}  // namespace
 
 Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    return MakeError(ErrorCode::kIo, path + ": cannot open");
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat,
-                     path + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  auto doc = robot::LoadYamlFile(path);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const robot::YamlFields f(path);
+  YAML::Node sim, task, sonar, sup;
+  for (const Status& st : {f.Map(root, "simulation", "", &sim), f.Map(root, "task", "", &task),
+                           f.Map(root, "sonar", "", &sonar), f.Map(root, "supervisor", "", &sup)}) {
+    if (!st) return st.error();
   }
-  if (!root["supervisor"] || !root["supervisor"].IsMap())
-    return MakeError(ErrorCode::kInvalidValue, path + ": missing section 'supervisor'");
-  const Fields f(path, root);
   AuvControllerConfig c;
   safety::AuvSupervisorConfig& s = c.supervisor;
   double accel = 0, yaw_accel = 0, stop = 0, stop_yaw = 0, beams = 0;
-  const char* S = "supervisor";
+  std::array<double, 2> surge{}, depth{};
+  const std::string S = "supervisor";
   for (const Status& st : {
-           f.Number("simulation", "control_period_s", 1e-4, 10.0, &c.control_period_s),
-           f.Number("task", "depth_m", 0.0, 1e4, &c.depth_setpoint_m),
-           f.Number("sonar", "beams", 1, robot::kAuvMaxSonarBeams, &beams),
-           f.Number("sonar", "max_range_m", 0.1, 1000.0, &s.sonar_max_m),
-           f.Pair(S, "surge_speed_mps", -10.0, 10.0, &s.v_min_mps, &s.v_max_mps),
-           f.Number(S, "yaw_rate_max_radps", 0.0, 10.0, &s.w_max_radps),
-           f.Number(S, "degraded_surge_max_mps", 0.0, 10.0, &s.degraded_v_max_mps),
-           f.Number(S, "surge_accel_max_mps2", 1e-6, 100.0, &accel),
-           f.Number(S, "yaw_accel_max_radps2", 1e-6, 100.0, &yaw_accel),
-           f.Number(S, "stop_decel_mps2", 1e-6, 1000.0, &stop),
-           f.Number(S, "stop_yaw_decel_radps2", 1e-6, 1000.0, &stop_yaw),
-           f.Count(S, "stale_degraded_ticks", 0, 1e6, &s.stale_degraded_ticks),
-           f.Count(S, "stale_safe_stop_ticks", 1, 1e6, &s.stale_safe_stop_ticks),
-           f.Count(S, "lost_peer_ticks", 1, 1e6, &s.lost_peer_ticks),
-           f.Count(S, "invalid_safe_stop", 1, 1e6, &s.invalid_safe_stop),
-           f.Count(S, "overrun_degraded", 1, 1e6, &s.overrun_degraded),
-           f.Count(S, "overrun_safe_stop", 1, 1e6, &s.overrun_safe_stop),
-           f.Number(S, "speed_max_mps", 0.0, 1e3, &s.speed_max_mps),
-           f.Number(S, "rate_max_radps", 0.0, 1e3, &s.rate_max_radps),
-           f.Pair(S, "depth_range_m", -1e4, 1e5, &s.depth_min_m, &s.depth_max_m),
+           f.Number(sim, "control_period_s", "simulation", 1e-4, 10.0, &c.control_period_s),
+           f.Number(task, "depth_m", "task", 0.0, 1e4, &c.depth_setpoint_m),
+           f.Number(sonar, "beams", "sonar", 1, robot::kAuvMaxSonarBeams, &beams),
+           f.Number(sonar, "max_range_m", "sonar", 0.1, 1000.0, &s.sonar_max_m),
+           f.Range(sup, "surge_speed_mps", S, -10.0, 10.0, &surge),
+           f.Number(sup, "yaw_rate_max_radps", S, 0.0, 10.0, &s.w_max_radps),
+           f.Number(sup, "degraded_surge_max_mps", S, 0.0, 10.0, &s.degraded_v_max_mps),
+           f.Number(sup, "surge_accel_max_mps2", S, 1e-6, 100.0, &accel),
+           f.Number(sup, "yaw_accel_max_radps2", S, 1e-6, 100.0, &yaw_accel),
+           f.Number(sup, "stop_decel_mps2", S, 1e-6, 1000.0, &stop),
+           f.Number(sup, "stop_yaw_decel_radps2", S, 1e-6, 1000.0, &stop_yaw),
+           f.Count(sup, "stale_degraded_ticks", S, 0, 1000000, &s.stale_degraded_ticks),
+           f.Count(sup, "stale_safe_stop_ticks", S, 1, 1000000, &s.stale_safe_stop_ticks),
+           f.Count(sup, "lost_peer_ticks", S, 1, 1000000, &s.lost_peer_ticks),
+           f.Count(sup, "invalid_safe_stop", S, 1, 1000000, &s.invalid_safe_stop),
+           f.Count(sup, "overrun_degraded", S, 1, 1000000, &s.overrun_degraded),
+           f.Count(sup, "overrun_safe_stop", S, 1, 1000000, &s.overrun_safe_stop),
+           f.Number(sup, "speed_max_mps", S, 0.0, 1e3, &s.speed_max_mps),
+           f.Number(sup, "rate_max_radps", S, 0.0, 1e3, &s.rate_max_radps),
+           f.Range(sup, "depth_range_m", S, -1e4, 1e5, &depth),
        }) {
     if (!st) return st.error();
   }
+  s.v_min_mps = surge[0];
+  s.v_max_mps = surge[1];
+  s.depth_min_m = depth[0];
+  s.depth_max_m = depth[1];
   s.sonar_beams = static_cast<std::uint32_t>(beams);
   s.sonar_max_m *= 1.0001;  // a range reading at exactly the maximum is valid
   s.dv_max_mps = accel * c.control_period_s;

@@ -1,17 +1,16 @@
 #include "firmware/quadruped/stand_controller.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <set>
 #include <sstream>
 
 #include "runtime/core/clock.hpp"
+#include "runtime/robot/text_file.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::firmware {
 namespace {
@@ -39,60 +38,37 @@ const char* ToString(Phase phase) noexcept {
 
 Result<Trajectory> ParseTrajectory(const std::string& yaml_text, const std::string& origin,
                                    const robot::RobotDescription& robot) {
-  auto fail = [&](const std::string& where, const std::string& what) {
-    return MakeError(ErrorCode::kInvalidValue, origin + ": " + where + ": " + what);
-  };
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat, origin + ": YAML: " + e.what());
-  }
-  if (!root.IsMap()) return fail("document", "is not a mapping");
-  for (const auto& kv : root) {
-    const std::string k = kv.first.as<std::string>();
-    if (k != "duration_s" && k != "joints") return fail(k, "unknown field");
-  }
-  auto number = [&](const YAML::Node& n, const std::string& where, const char* key, double* out) -> Status {
-    const YAML::Node v = n[key];
-    if (!v) return fail(where, std::string("missing field '") + key + "'");
-    const std::string s = v.IsScalar() ? v.as<std::string>() : std::string();
-    char* end = nullptr;
-    const double d = std::strtod(s.c_str(), &end);
-    if (s.empty() || *end != '\0' || !std::isfinite(d))
-      return fail(where + "." + key, "'" + s + "' is not a finite number");
-    *out = d;
-    return {};
-  };
+  auto doc = robot::ParseYaml(yaml_text, origin);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const robot::YamlFields f(origin);
+  constexpr double kInf = HUGE_VAL;
+  if (auto st = f.Keys(root, "", {"duration_s", "joints"}); !st) return st.error();
   Trajectory t;
-  if (auto s = number(root, "trajectory", "duration_s", &t.duration_s); !s) return s.error();
-  if (!(t.duration_s > 0)) return fail("duration_s", "is not positive");
-  const YAML::Node joints = root["joints"];
-  if (!joints || !joints.IsSequence() || joints.size() == 0) return fail("joints", "missing or not a non-empty list");
+  if (auto st = f.Number(root, "duration_s", "", -kInf, kInf, &t.duration_s); !st) return st.error();
+  if (!(t.duration_s > 0)) return f.Fail("duration_s", "is not positive");
+  YAML::Node joints;
+  if (auto st = f.List(root, "joints", "", true, &joints); !st) return st.error();
+  if (joints.size() == 0) return f.Fail("joints", "is empty");
   std::set<std::string> seen;
   for (std::size_t i = 0; i < joints.size(); ++i) {
     const YAML::Node j = joints[i];
     std::string where = "joints[" + std::to_string(i) + "]";
-    if (!j.IsMap() || !j["joint"]) return fail(where, "missing field 'joint'");
-    for (const auto& kv : j) {
-      const std::string k = kv.first.as<std::string>();
-      if (k != "joint" && k != "amplitude_rad" && k != "frequency_hz" && k != "phase_rad")
-        return fail(where + "." + k, "unknown field");
-    }
-    const std::string name = j["joint"].as<std::string>();
+    if (auto st = f.Keys(j, where, {"joint", "amplitude_rad", "frequency_hz", "phase_rad"}); !st) return st.error();
+    std::string name;
+    if (auto st = f.Text(j, "joint", where, &name); !st) return st.error();
     where += " '" + name + "'";
     const auto it = std::find(robot.joint_names.begin(), robot.joint_names.end(), name);
-    if (it == robot.joint_names.end()) return fail(where + ".joint", "is not an actuated joint of the robot");
-    if (!seen.insert(name).second) return fail(where + ".joint", "listed twice");
+    if (it == robot.joint_names.end()) return f.Fail(where + ".joint", "is not an actuated joint of the robot");
+    if (!seen.insert(name).second) return f.Fail(where + ".joint", "listed twice");
     JointSinusoid s;
     s.joint = static_cast<std::uint32_t>(it - robot.joint_names.begin());
-    if (auto st = number(j, where, "amplitude_rad", &s.amplitude_rad); !st) return st.error();
-    if (auto st = number(j, where, "frequency_hz", &s.frequency_hz); !st) return st.error();
-    if (j["phase_rad"]) {
-      if (auto st = number(j, where, "phase_rad", &s.phase_rad); !st) return st.error();
+    for (const Status& st : {f.Number(j, "amplitude_rad", where, 0.0, kInf, &s.amplitude_rad),
+                             f.Number(j, "frequency_hz", where, -kInf, kInf, &s.frequency_hz),
+                             f.OptionalNumber(j, "phase_rad", where, -kInf, kInf, &s.phase_rad)}) {
+      if (!st) return st.error();
     }
-    if (s.amplitude_rad < 0) return fail(where + ".amplitude_rad", "is negative");
-    if (!(s.frequency_hz > 0) || s.frequency_hz > 10) return fail(where + ".frequency_hz", "is outside (0, 10] Hz");
+    if (!(s.frequency_hz > 0) || s.frequency_hz > 10) return f.Fail(where + ".frequency_hz", "is outside (0, 10] Hz");
     // The whole sinusoid must stay inside the joint's limits.
     const robot::UrdfJoint& uj = robot.joint_at(s.joint);
     const double centre = robot.default_q_rad[s.joint] - s.amplitude_rad * std::sin(s.phase_rad);
@@ -100,7 +76,7 @@ Result<Trajectory> ParseTrajectory(const std::string& yaml_text, const std::stri
       std::ostringstream ss;
       ss << "sweeps [" << centre - s.amplitude_rad << ", " << centre + s.amplitude_rad
          << "] rad, outside the joint's limits [" << uj.lower_rad << ", " << uj.upper_rad << "]";
-      return fail(where + ".amplitude_rad", ss.str());
+      return f.Fail(where + ".amplitude_rad", ss.str());
     }
     t.joints.push_back(s);
   }
@@ -108,11 +84,9 @@ Result<Trajectory> ParseTrajectory(const std::string& yaml_text, const std::stri
 }
 
 Result<Trajectory> LoadTrajectory(const std::string& path, const robot::RobotDescription& robot) {
-  std::ifstream in(path);
-  if (!in) return MakeError(ErrorCode::kIo, path + ": cannot open");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ParseTrajectory(ss.str(), std::filesystem::path(path).filename().string(), robot);
+  auto text = robot::ReadTextFile(path);
+  if (!text) return std::move(text).error();
+  return ParseTrajectory(*text, std::filesystem::path(path).filename().string(), robot);
 }
 
 StandController::~StandController() = default;

@@ -1,114 +1,16 @@
 #include "runtime/robot/can_map.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
-#include <initializer_list>
 #include <map>
-#include <sstream>
+
+#include "runtime/robot/text_file.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::robot {
 namespace {
 
-std::string Hex(std::uint32_t v) {
-  char b[16];
-  std::snprintf(b, sizeof b, "0x%03X", v);
-  return b;
-}
-
-class Parser {
- public:
-  explicit Parser(std::string origin) : origin_(std::move(origin)) {}
-
-  Error Fail(const std::string& where, const std::string& what) const {
-    return MakeError(ErrorCode::kInvalidValue, origin_ + ": " + where + ": " + what);
-  }
-
-  Status Text(const YAML::Node& n, const char* key, const std::string& where, std::string* out) const {
-    const YAML::Node v = n[key];
-    if (!v) return Fail(where, std::string("missing field '") + key + "'");
-    if (!v.IsScalar()) return Fail(where + "." + key, "is not a string");
-    *out = v.as<std::string>();
-    if (out->empty()) return Fail(where + "." + key, "is empty");
-    for (char ch : *out) {
-      const auto c = static_cast<unsigned char>(ch);
-      if (c < 0x21 || c > 0x7E)
-        return Fail(where + "." + key, "'" + *out + "' has a character outside printable ASCII or a space");
-    }
-    return {};
-  }
-
-  Status Number(const YAML::Node& n, const char* key, const std::string& where, double* out) const {
-    const YAML::Node v = n[key];
-    if (!v) return Fail(where, std::string("missing field '") + key + "'");
-    if (!v.IsScalar()) return Fail(where + "." + key, "is not a number");
-    const std::string s = v.as<std::string>();
-    char* end = nullptr;
-    const double d = std::strtod(s.c_str(), &end);
-    if (s.empty() || *end != '\0') return Fail(where + "." + key, "'" + s + "' is not a number");
-    if (!std::isfinite(d)) return Fail(where + "." + key, "'" + s + "' is not finite");
-    *out = d;
-    return {};
-  }
-
-  // Decimal or 0x-hexadecimal CAN identifier in [lo, hi].
-  Status Id(const YAML::Node& n, const char* key, const std::string& where, std::uint32_t lo, std::uint32_t hi,
-            std::uint32_t* out) const {
-    const YAML::Node v = n[key];
-    if (!v) return Fail(where, std::string("missing field '") + key + "'");
-    if (!v.IsScalar()) return Fail(where + "." + key, "is not an integer");
-    const std::string s = v.as<std::string>();
-    char* end = nullptr;
-    const unsigned long long d = std::strtoull(s.c_str(), &end, 0);
-    if (s.empty() || s[0] == '-' || *end != '\0') return Fail(where + "." + key, "'" + s + "' is not an integer");
-    if (d < lo || d > hi) return Fail(where + "." + key, "'" + s + "' is outside [" + Hex(lo) + ", " + Hex(hi) + "]");
-    *out = static_cast<std::uint32_t>(d);
-    return {};
-  }
-
-  Status Bool(const YAML::Node& n, const char* key, const std::string& where, bool* out) const {
-    const YAML::Node v = n[key];
-    if (!v) return {};
-    const std::string s = v.IsScalar() ? v.as<std::string>() : std::string("<not a scalar>");
-    if (s == "true") {
-      *out = true;
-    } else if (s == "false") {
-      *out = false;
-    } else {
-      return Fail(where + "." + key, "'" + s + "' is not true or false");
-    }
-    return {};
-  }
-
-  Status CheckKeys(const YAML::Node& n, const std::string& where, std::initializer_list<const char*> allowed) const {
-    if (!n.IsMap()) return Fail(where, "is not a mapping");
-    for (const auto& kv : n) {
-      const std::string k = kv.first.as<std::string>();
-      bool ok = false;
-      for (const char* a : allowed) ok |= k == a;
-      if (!ok) return Fail(where, "unknown field '" + k + "'");
-    }
-    return {};
-  }
-
-  Status Sequence(const YAML::Node& root, const char* key, bool required, YAML::Node* out) const {
-    const YAML::Node v = root[key];
-    if (!v) {
-      if (required) return Fail("top level", std::string("missing field '") + key + "'");
-      *out = YAML::Node(YAML::NodeType::Sequence);
-      return {};
-    }
-    if (!v.IsSequence()) return Fail(key, "is not a list");
-    *out = v;
-    return {};
-  }
-
- private:
-  std::string origin_;
-};
+using Rule = YamlFields::TextRule;
 
 #define PBPPO_TRY(expr)            \
   do {                             \
@@ -117,7 +19,7 @@ class Parser {
     }                              \
   } while (false)
 
-Status ParseRange(const Parser& p, const YAML::Node& n, const std::string& where, MitRange* r) {
+Status ParseRange(const YamlFields& p, const YAML::Node& n, const std::string& where, MitRange* r) {
   struct Pair {
     const char* lo;
     const char* hi;
@@ -130,8 +32,8 @@ Status ParseRange(const Parser& p, const YAML::Node& n, const std::string& where
                         {"kd_min", "kd_max", &r->kd_min, &r->kd_max},
                         {"t_min", "t_max", &r->t_min, &r->t_max}};
   for (const Pair& pr : pairs) {
-    PBPPO_TRY(p.Number(n, pr.lo, where, pr.lo_v));
-    PBPPO_TRY(p.Number(n, pr.hi, where, pr.hi_v));
+    PBPPO_TRY(p.Number(n, pr.lo, where, -HUGE_VAL, HUGE_VAL, pr.lo_v));
+    PBPPO_TRY(p.Number(n, pr.hi, where, -HUGE_VAL, HUGE_VAL, pr.hi_v));
     if (!(*pr.lo_v < *pr.hi_v)) {
       char b[160];
       std::snprintf(b, sizeof b, "%s %.9g is not below %s %.9g", pr.lo, *pr.lo_v, pr.hi, *pr.hi_v);
@@ -154,33 +56,29 @@ const char* ToString(ImuFormat format) noexcept {
 }
 
 Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& origin) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat,
-                     origin + ": YAML error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  const Parser p(origin);
-  if (!root.IsMap()) return p.Fail("top level", "expected a mapping with robot, buses, actuators, motors, imus");
-  PBPPO_TRY(p.CheckKeys(root, "top level", {"robot", "buses", "actuators", "motors", "imus"}));
+  auto doc = ParseYaml(yaml_text, origin);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const YamlFields p(origin);
+  if (!root.IsMap()) return p.Fail("", "expected a mapping with robot, buses, actuators, motors, imus");
+  PBPPO_TRY(p.Keys(root, "", {"robot", "buses", "actuators", "motors", "imus"}));
   CanMap m;
-  PBPPO_TRY(p.Text(root, "robot", "top level", &m.robot));
+  PBPPO_TRY(p.Text(root, "robot", "", &m.robot, Rule::kToken));
 
   YAML::Node buses, actuators, motors, imus;
-  PBPPO_TRY(p.Sequence(root, "buses", true, &buses));
-  PBPPO_TRY(p.Sequence(root, "actuators", true, &actuators));
-  PBPPO_TRY(p.Sequence(root, "motors", true, &motors));
-  PBPPO_TRY(p.Sequence(root, "imus", false, &imus));
+  PBPPO_TRY(p.List(root, "buses", "", true, &buses));
+  PBPPO_TRY(p.List(root, "actuators", "", true, &actuators));
+  PBPPO_TRY(p.List(root, "motors", "", true, &motors));
+  PBPPO_TRY(p.List(root, "imus", "", false, &imus));
   if (buses.size() == 0) return p.Fail("buses", "is empty");
 
   std::map<std::string, std::uint32_t> bus_index, actuator_index;
   for (std::size_t i = 0; i < buses.size(); ++i) {
     const std::string where = "buses[" + std::to_string(i) + "]";
-    PBPPO_TRY(p.CheckKeys(buses[i], where, {"name", "interface", "fd"}));
+    PBPPO_TRY(p.Keys(buses[i], where, {"name", "interface", "fd"}));
     CanBus b;
-    PBPPO_TRY(p.Text(buses[i], "name", where, &b.name));
-    PBPPO_TRY(p.Text(buses[i], "interface", where, &b.interface));
+    PBPPO_TRY(p.Text(buses[i], "name", where, &b.name, Rule::kToken));
+    PBPPO_TRY(p.Text(buses[i], "interface", where, &b.interface, Rule::kToken));
     PBPPO_TRY(p.Bool(buses[i], "fd", where, &b.fd));
     if (b.interface.size() > 15)
       return p.Fail(where + ".interface", "'" + b.interface + "' is longer than 15 characters");
@@ -195,11 +93,11 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
 
   for (std::size_t i = 0; i < actuators.size(); ++i) {
     const std::string where = "actuators[" + std::to_string(i) + "]";
-    PBPPO_TRY(p.CheckKeys(
-        actuators[i], where,
-        {"name", "p_min", "p_max", "v_min", "v_max", "kp_min", "kp_max", "kd_min", "kd_max", "t_min", "t_max"}));
+    PBPPO_TRY(
+        p.Keys(actuators[i], where,
+               {"name", "p_min", "p_max", "v_min", "v_max", "kp_min", "kp_max", "kd_min", "kd_max", "t_min", "t_max"}));
     CanActuator a;
-    PBPPO_TRY(p.Text(actuators[i], "name", where, &a.name));
+    PBPPO_TRY(p.Text(actuators[i], "name", where, &a.name, Rule::kToken));
     const std::string named = where + " '" + a.name + "'";
     PBPPO_TRY(ParseRange(p, actuators[i], named, &a.range));
     if (actuator_index.count(a.name)) return p.Fail(where + ".name", "duplicate actuator '" + a.name + "'");
@@ -212,13 +110,13 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
   auto claim = [&](std::uint32_t bus, std::uint32_t id, const std::string& who, const std::string& field) -> Status {
     auto [it, fresh] = used[bus].emplace(id, who);
     if (!fresh)
-      return p.Fail(field,
-                    "identifier " + Hex(id) + " on bus '" + m.buses[bus].name + "' is already used by " + it->second);
+      return p.Fail(field, "identifier " + YamlFields::Hex(id) + " on bus '" + m.buses[bus].name +
+                               "' is already used by " + it->second);
     return {};
   };
   auto lookup_bus = [&](const YAML::Node& n, const std::string& where, std::uint32_t* out) -> Status {
     std::string name;
-    PBPPO_TRY(p.Text(n, "bus", where, &name));
+    PBPPO_TRY(p.Text(n, "bus", where, &name, Rule::kToken));
     auto it = bus_index.find(name);
     if (it == bus_index.end()) return p.Fail(where + ".bus", "unknown bus '" + name + "'");
     *out = it->second;
@@ -228,9 +126,9 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
   std::map<std::string, int> joints;
   for (std::size_t i = 0; i < motors.size(); ++i) {
     const std::string where = "motors[" + std::to_string(i) + "]";
-    PBPPO_TRY(p.CheckKeys(motors[i], where, {"joint", "bus", "id", "reply_id", "actuator"}));
+    PBPPO_TRY(p.Keys(motors[i], where, {"joint", "bus", "id", "reply_id", "actuator"}));
     CanMotor mo;
-    PBPPO_TRY(p.Text(motors[i], "joint", where, &mo.joint));
+    PBPPO_TRY(p.Text(motors[i], "joint", where, &mo.joint, Rule::kToken));
     const std::string named = where + " '" + mo.joint + "'";
     if (joints.count(mo.joint)) return p.Fail(named + ".joint", "duplicate joint '" + mo.joint + "'");
     joints[mo.joint] = 1;
@@ -239,7 +137,7 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
     PBPPO_TRY(p.Id(motors[i], "id", named, 1, 0xFF, &mo.id));
     PBPPO_TRY(p.Id(motors[i], "reply_id", named, 0, kCanMaxStandardId, &mo.reply_id));
     std::string act;
-    PBPPO_TRY(p.Text(motors[i], "actuator", named, &act));
+    PBPPO_TRY(p.Text(motors[i], "actuator", named, &act, Rule::kToken));
     auto ai = actuator_index.find(act);
     if (ai == actuator_index.end()) return p.Fail(named + ".actuator", "unknown actuator '" + act + "'");
     mo.actuator = ai->second;
@@ -252,15 +150,15 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
   std::map<std::string, int> imu_names;
   for (std::size_t i = 0; i < imus.size(); ++i) {
     const std::string where = "imus[" + std::to_string(i) + "]";
-    PBPPO_TRY(p.CheckKeys(imus[i], where, {"name", "bus", "format", "id"}));
+    PBPPO_TRY(p.Keys(imus[i], where, {"name", "bus", "format", "id"}));
     CanImu u;
-    PBPPO_TRY(p.Text(imus[i], "name", where, &u.name));
+    PBPPO_TRY(p.Text(imus[i], "name", where, &u.name, Rule::kToken));
     const std::string named = where + " '" + u.name + "'";
     if (imu_names.count(u.name)) return p.Fail(named + ".name", "duplicate IMU '" + u.name + "'");
     imu_names[u.name] = 1;
     PBPPO_TRY(lookup_bus(imus[i], named, &u.bus));
     std::string fmt;
-    PBPPO_TRY(p.Text(imus[i], "format", named, &fmt));
+    PBPPO_TRY(p.Text(imus[i], "format", named, &fmt, Rule::kToken));
     if (fmt == "classic") {
       u.format = ImuFormat::kClassic;
     } else if (fmt == "fd") {
@@ -283,11 +181,9 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
 #undef PBPPO_TRY
 
 Result<CanMap> LoadCanMap(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ParseCanMap(ss.str(), path);
+  auto text = ReadTextFile(path);
+  if (!text) return std::move(text).error();
+  return ParseCanMap(*text, path);
 }
 
 }  // namespace pbppo::robot

@@ -1,20 +1,17 @@
 #include "runtime/robot/io_layout.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <set>
-#include <sstream>
+
+#include "runtime/robot/text_file.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::robot {
 namespace {
 
 std::string Num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
+  return YamlFields::Num(v);
 }
 
 std::string Hex(std::uint64_t v) {
@@ -22,58 +19,6 @@ std::string Hex(std::uint64_t v) {
   std::snprintf(b, sizeof b, "0x%016llx", static_cast<unsigned long long>(v));
   return b;
 }
-
-class Parser {
- public:
-  explicit Parser(std::string origin) : origin_(std::move(origin)) {}
-
-  Error Fail(const std::string& where, const std::string& what) const {
-    return MakeError(ErrorCode::kInvalidValue, origin_ + ": " + where + ": " + what);
-  }
-
-  Status Text(const YAML::Node& n, const char* key, const std::string& where, bool required, std::string* out) {
-    const YAML::Node v = n[key];
-    if (!v) {
-      if (required) return Fail(where, std::string("missing field '") + key + "'");
-      return {};
-    }
-    if (!v.IsScalar()) return Fail(where + "." + key, "is not a string");
-    *out = v.as<std::string>();
-    if (required && out->empty()) return Fail(where + "." + key, "is empty");
-    for (char ch : *out) {
-      const auto c = static_cast<unsigned char>(ch);
-      if (c < 0x21 || c > 0x7E)
-        return Fail(where + "." + key, "'" + *out + "' has a character outside printable ASCII or a space");
-    }
-    return {};
-  }
-
-  Status Number(const YAML::Node& n, const char* key, const std::string& where, double* out) {
-    const YAML::Node v = n[key];
-    if (!v) return {};  // default stays
-    if (!v.IsScalar()) return Fail(where + "." + key, "is not a number");
-    const std::string s = v.as<std::string>();
-    char* end = nullptr;
-    const double d = std::strtod(s.c_str(), &end);
-    if (s.empty() || *end != '\0') return Fail(where + "." + key, "'" + s + "' is not a number");
-    if (!std::isfinite(d)) return Fail(where + "." + key, "'" + s + "' is not finite");
-    *out = d;
-    return {};
-  }
-
-  Status CheckKeys(const YAML::Node& n, const std::string& where, std::initializer_list<const char*> allowed) {
-    for (const auto& kv : n) {
-      const std::string k = kv.first.as<std::string>();
-      bool ok = false;
-      for (const char* a : allowed) ok |= k == a;
-      if (!ok) return Fail(where, "unknown field '" + k + "'");
-    }
-    return {};
-  }
-
- private:
-  std::string origin_;
-};
 
 }  // namespace
 
@@ -125,79 +70,74 @@ std::uint64_t IoLayout::Hash() const {
 }
 
 Result<IoLayout> ParseIoLayout(const std::string& yaml_text, const std::string& origin) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat,
-                     origin + ": YAML error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  Parser p(origin);
-  if (!root.IsMap()) return p.Fail("top level", "expected a mapping with robot, observations, actions");
-  if (auto st = p.CheckKeys(root, "top level", {"robot", "observations", "actions", "description"}); !st)
-    return st.error();
+  auto doc = ParseYaml(yaml_text, origin);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const YamlFields f(origin);
+  using Rule = YamlFields::TextRule;
+  if (!root.IsMap()) return f.Fail("", "expected a mapping with robot, observations, actions");
+  if (auto st = f.Keys(root, "", {"robot", "observations", "actions", "description"}); !st) return st.error();
   IoLayout l;
-  if (auto st = p.Text(root, "robot", "top level", true, &l.robot); !st) return st.error();
+  if (auto st = f.Text(root, "robot", "", &l.robot, Rule::kToken); !st) return st.error();
   const YAML::Node obs = root["observations"], act = root["actions"];
-  if (!obs || !obs.IsSequence() || obs.size() == 0) return p.Fail("observations", "expected a non-empty list");
-  if (!act || !act.IsSequence() || act.size() == 0) return p.Fail("actions", "expected a non-empty list");
+  if (!obs || !obs.IsSequence() || obs.size() == 0) return f.Fail("observations", "expected a non-empty list");
+  if (!act || !act.IsSequence() || act.size() == 0) return f.Fail("actions", "expected a non-empty list");
+  constexpr double kInf = HUGE_VAL;
   std::set<std::string> names;
   for (std::size_t i = 0; i < obs.size(); ++i) {
     const std::string w = "observations[" + std::to_string(i) + "]";
     const YAML::Node n = obs[i];
-    if (!n.IsMap()) return p.Fail(w, "expected a mapping");
-    if (auto st = p.CheckKeys(n, w, {"name", "signal", "unit", "scale", "offset", "clip", "history"}); !st)
+    if (auto st = f.Keys(n, w, {"name", "signal", "unit", "scale", "offset", "clip", "history"}); !st)
       return st.error();
     ObservationElement e;
-    if (auto st = p.Text(n, "name", w, true, &e.name); !st) return st.error();
+    if (auto st = f.Text(n, "name", w, &e.name, Rule::kToken); !st) return st.error();
     e.signal = e.name;
-    if (auto st = p.Text(n, "signal", w, false, &e.signal); !st) return st.error();
     e.unit = "1";
-    if (auto st = p.Text(n, "unit", w, false, &e.unit); !st) return st.error();
-    if (auto st = p.Number(n, "scale", w, &e.scale); !st) return st.error();
-    if (auto st = p.Number(n, "offset", w, &e.offset); !st) return st.error();
-    if (auto st = p.Number(n, "clip", w, &e.clip); !st) return st.error();
     double history = 1;
-    if (auto st = p.Number(n, "history", w, &history); !st) return st.error();
-    if (e.scale == 0.0) return p.Fail(w + ".scale", "0 would erase the signal");
-    if (!(e.clip > 0.0)) return p.Fail(w + ".clip", Num(e.clip) + " is not positive");
+    for (const Status& st :
+         {f.OptionalText(n, "signal", w, &e.signal, Rule::kToken), f.OptionalText(n, "unit", w, &e.unit, Rule::kToken),
+          f.OptionalNumber(n, "scale", w, -kInf, kInf, &e.scale),
+          f.OptionalNumber(n, "offset", w, -kInf, kInf, &e.offset),
+          f.OptionalNumber(n, "clip", w, -kInf, kInf, &e.clip),
+          f.OptionalNumber(n, "history", w, -kInf, kInf, &history)}) {
+      if (!st) return st.error();
+    }
+    if (e.scale == 0.0) return f.Fail(w + ".scale", "0 would erase the signal");
+    if (!(e.clip > 0.0)) return f.Fail(w + ".clip", Num(e.clip) + " is not positive");
     if (history < 1 || history > 64 || history != std::floor(history)) {
-      return p.Fail(w + ".history", Num(history) + " is not an integer in 1..64");
+      return f.Fail(w + ".history", Num(history) + " is not an integer in 1..64");
     }
     e.history = static_cast<std::uint32_t>(history);
-    if (!names.insert("obs:" + e.name).second) return p.Fail(w + ".name", "'" + e.name + "' appears twice");
+    if (!names.insert("obs:" + e.name).second) return f.Fail(w + ".name", "'" + e.name + "' appears twice");
     l.observations.push_back(std::move(e));
   }
   for (std::size_t i = 0; i < act.size(); ++i) {
     const std::string w = "actions[" + std::to_string(i) + "]";
     const YAML::Node n = act[i];
-    if (!n.IsMap()) return p.Fail(w, "expected a mapping");
-    if (auto st = p.CheckKeys(n, w, {"name", "command", "unit", "scale", "offset", "low", "high"}); !st)
-      return st.error();
+    if (auto st = f.Keys(n, w, {"name", "command", "unit", "scale", "offset", "low", "high"}); !st) return st.error();
     ActionElement e;
-    if (auto st = p.Text(n, "name", w, true, &e.name); !st) return st.error();
+    if (auto st = f.Text(n, "name", w, &e.name, Rule::kToken); !st) return st.error();
     e.command = e.name;
-    if (auto st = p.Text(n, "command", w, false, &e.command); !st) return st.error();
     e.unit = "1";
-    if (auto st = p.Text(n, "unit", w, false, &e.unit); !st) return st.error();
-    if (auto st = p.Number(n, "scale", w, &e.scale); !st) return st.error();
-    if (auto st = p.Number(n, "offset", w, &e.offset); !st) return st.error();
-    if (auto st = p.Number(n, "low", w, &e.low); !st) return st.error();
-    if (auto st = p.Number(n, "high", w, &e.high); !st) return st.error();
-    if (!(e.low <= e.high)) return p.Fail(w, "low " + Num(e.low) + " is above high " + Num(e.high));
-    if (!names.insert("act:" + e.name).second) return p.Fail(w + ".name", "'" + e.name + "' appears twice");
+    for (const Status& st :
+         {f.OptionalText(n, "command", w, &e.command, Rule::kToken),
+          f.OptionalText(n, "unit", w, &e.unit, Rule::kToken), f.OptionalNumber(n, "scale", w, -kInf, kInf, &e.scale),
+          f.OptionalNumber(n, "offset", w, -kInf, kInf, &e.offset), f.OptionalNumber(n, "low", w, -kInf, kInf, &e.low),
+          f.OptionalNumber(n, "high", w, -kInf, kInf, &e.high)}) {
+      if (!st) return st.error();
+    }
+    if (!(e.low <= e.high)) return f.Fail(w, "low " + Num(e.low) + " is above high " + Num(e.high));
+    if (!names.insert("act:" + e.name).second) return f.Fail(w + ".name", "'" + e.name + "' appears twice");
     l.actions.push_back(std::move(e));
   }
-  if (l.observation_size() > 1024) return p.Fail("observations", "more than 1024 inputs");
+  if (l.observation_size() > 1024) return f.Fail("observations", "more than 1024 inputs");
   return l;
 }
 
 Result<IoLayout> LoadIoLayout(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ParseIoLayout(ss.str(), path);
+  auto text = ReadTextFile(path);
+  if (!text) return std::move(text).error();
+  return ParseIoLayout(*text, path);
 }
 
 void ApplyLayoutToSpec(const IoLayout& layout, policy::PolicySpec& spec) {

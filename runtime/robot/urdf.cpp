@@ -1,16 +1,16 @@
 #include "runtime/robot/urdf.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
 #include <sstream>
+
+#include "runtime/robot/text_file.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::robot {
 namespace {
@@ -187,14 +187,6 @@ class XmlReader {
   std::string origin_;
   std::size_t pos_ = 0;
 };
-
-Result<std::string> ReadFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return MakeError(ErrorCode::kIo, path + ": cannot open");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // ---- URDF ------------------------------------------------------------------------------------
 
@@ -441,109 +433,81 @@ Result<UrdfModel> ParseUrdf(const std::string& xml_text, const std::string& orig
 }
 
 Result<UrdfModel> LoadUrdf(const std::string& path) {
-  auto text = ReadFile(path);
+  auto text = ReadTextFile(path);
   if (!text.ok()) return std::move(text).error();
   return ParseUrdf(*text, Base(path));
 }
 
 Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, const std::string& origin, UrdfModel urdf,
                                                const std::string& urdf_path) {
-  auto fail = [&](const std::string& where, const std::string& what) {
-    return MakeError(ErrorCode::kInvalidValue, origin + ": " + where + ": " + what);
-  };
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat, origin + ": YAML: " + e.what());
-  }
-  if (!root.IsMap()) return fail("document", "is not a mapping");
-  static const std::set<std::string> kKnown = {"urdf", "joints", "default_pose", "stand", "gains"};
-  for (const auto& kv : root) {
-    const std::string key = kv.first.as<std::string>();
-    if (kKnown.count(key) == 0) return fail(key, "unknown field");
-  }
-  auto number = [&](const YAML::Node& parent, const std::string& where, const char* key, double* out) -> Status {
-    const YAML::Node v = parent[key];
-    if (!v) return fail(where, std::string("missing field '") + key + "'");
-    const std::string s = v.IsScalar() ? v.as<std::string>() : std::string();
-    char* end = nullptr;
-    const double d = std::strtod(s.c_str(), &end);
-    if (s.empty() || *end != '\0' || !std::isfinite(d))
-      return fail(where + "." + key, "'" + s + "' is not a finite number");
-    *out = d;
-    return {};
-  };
-
+  auto doc = ParseYaml(yaml_text, origin);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const YamlFields f(origin);
+  if (auto st = f.Keys(root, "", {"urdf", "joints", "default_pose", "stand", "gains"}); !st) return st.error();
+  constexpr double kInf = HUGE_VAL;
   RobotDescription d;
   d.urdf = std::move(urdf);
   d.urdf_path = urdf_path;
-  const YAML::Node joints = root["joints"];
-  if (!joints || !joints.IsSequence()) return fail("joints", "missing or not a list");
+  YAML::Node joints;
+  if (auto st = f.List(root, "joints", "", true, &joints); !st) return st.error();
   std::set<std::string> seen;
   for (std::size_t i = 0; i < joints.size(); ++i) {
-    const std::string name = joints[i].IsScalar() ? joints[i].as<std::string>() : std::string();
+    const std::string name = joints[i].IsScalar() ? joints[i].as<std::string>() : YamlFields::Quote(joints[i]);
     const std::string where = "joints[" + std::to_string(i) + "]";
     const int j = d.urdf.FindJoint(name);
-    if (j < 0) return fail(where, "'" + name + "' is not a joint of " + Base(urdf_path));
+    if (j < 0) return f.Fail(where, "'" + name + "' is not a joint of " + Base(urdf_path));
     if (d.urdf.joints[static_cast<std::size_t>(j)].type != UrdfJointType::kRevolute)
-      return fail(where, "'" + name + "' is not a revolute joint");
-    if (!seen.insert(name).second) return fail(where, "'" + name + "' listed twice");
+      return f.Fail(where, "'" + name + "' is not a revolute joint");
+    if (!seen.insert(name).second) return f.Fail(where, "'" + name + "' listed twice");
     d.joint_names.push_back(name);
     d.joint.push_back(static_cast<std::uint32_t>(j));
   }
   for (const auto& j : d.urdf.joints)
     if (j.type == UrdfJointType::kRevolute && seen.count(j.name) == 0)
-      return fail("joints", "revolute joint '" + j.name + "' of " + Base(urdf_path) + " is not listed");
+      return f.Fail("joints", "revolute joint '" + j.name + "' of " + Base(urdf_path) + " is not listed");
 
-  const YAML::Node pose = root["default_pose"];
-  if (!pose || !pose.IsMap()) return fail("default_pose", "missing or not a mapping");
+  YAML::Node pose, stand, gains;
+  if (auto st = f.Map(root, "default_pose", "", &pose); !st) return st.error();
   for (const auto& kv : pose) {
     const std::string key = kv.first.as<std::string>();
-    if (seen.count(key) == 0) return fail("default_pose." + key, "is not an actuated joint");
+    if (seen.count(key) == 0) return f.Fail("default_pose." + key, "is not an actuated joint");
   }
   d.default_q_rad.resize(d.joint.size());
   for (std::size_t i = 0; i < d.joint.size(); ++i) {
-    if (auto s = number(pose, "default_pose", d.joint_names[i].c_str(), &d.default_q_rad[i]); !s) return s.error();
     const UrdfJoint& j = d.joint_at(i);
-    if (d.default_q_rad[i] < j.lower_rad || d.default_q_rad[i] > j.upper_rad) {
-      std::ostringstream ss;
-      ss << "'" << d.default_q_rad[i] << "' is outside the joint's limits [" << j.lower_rad << ", " << j.upper_rad
-         << "]";
-      return fail("default_pose." + d.joint_names[i], ss.str());
-    }
+    if (auto st = f.Number(pose, d.joint_names[i].c_str(), "default_pose", -kInf, kInf, &d.default_q_rad[i]); !st)
+      return st.error();
+    if (d.default_q_rad[i] < j.lower_rad || d.default_q_rad[i] > j.upper_rad)
+      return f.Fail("default_pose." + d.joint_names[i],
+                    YamlFields::Quote(pose[d.joint_names[i]]) + " is outside the joint's limits [" +
+                        YamlFields::Num(j.lower_rad) + ", " + YamlFields::Num(j.upper_rad) + "]");
   }
-  const YAML::Node stand = root["stand"];
-  if (!stand || !stand.IsMap()) return fail("stand", "missing or not a mapping");
-  if (auto s = number(stand, "stand", "base_height_m", &d.stand_base_height_m); !s) return s.error();
-  if (!(d.stand_base_height_m > 0)) return fail("stand.base_height_m", "is not positive");
-  const YAML::Node gains = root["gains"];
-  if (!gains || !gains.IsMap()) return fail("gains", "missing or not a mapping");
-  if (auto s = number(gains, "gains", "kp_nm_rad", &d.kp_nm_rad); !s) return s.error();
-  if (auto s = number(gains, "gains", "kd_nm_s_rad", &d.kd_nm_s_rad); !s) return s.error();
-  if (auto s = number(gains, "gains", "damping_kd_nm_s_rad", &d.damping_kd_nm_s_rad); !s) return s.error();
-  if (d.kp_nm_rad < 0) return fail("gains.kp_nm_rad", "is negative");
-  if (d.kd_nm_s_rad < 0) return fail("gains.kd_nm_s_rad", "is negative");
-  if (!(d.damping_kd_nm_s_rad > 0)) return fail("gains.damping_kd_nm_s_rad", "is not positive");
+  if (auto st = f.Map(root, "stand", "", &stand); !st) return st.error();
+  if (auto st = f.Keys(stand, "stand", {"base_height_m"}); !st) return st.error();
+  if (auto st = f.Number(stand, "base_height_m", "stand", 1e-3, 100.0, &d.stand_base_height_m); !st) return st.error();
+  if (auto st = f.Map(root, "gains", "", &gains); !st) return st.error();
+  if (auto st = f.Keys(gains, "gains", {"kp_nm_rad", "kd_nm_s_rad", "damping_kd_nm_s_rad"}); !st) return st.error();
+  for (const Status& st : {f.Number(gains, "kp_nm_rad", "gains", 0.0, kInf, &d.kp_nm_rad),
+                           f.Number(gains, "kd_nm_s_rad", "gains", 0.0, kInf, &d.kd_nm_s_rad),
+                           f.Number(gains, "damping_kd_nm_s_rad", "gains", 1e-9, kInf, &d.damping_kd_nm_s_rad)}) {
+    if (!st) return st.error();
+  }
   return d;
 }
 
 Result<RobotDescription> LoadRobotDescription(const std::string& yaml_path) {
-  auto text = ReadFile(yaml_path);
+  auto text = ReadTextFile(yaml_path);
   if (!text.ok()) return std::move(text).error();
-  YAML::Node root;
-  try {
-    root = YAML::Load(*text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat, Base(yaml_path) + ": YAML: " + e.what());
-  }
-  if (!root.IsMap() || !root["urdf"] || !root["urdf"].IsScalar())
-    return MakeError(ErrorCode::kInvalidValue, Base(yaml_path) + ": urdf: missing field 'urdf'");
-  const std::string urdf_path =
-      (std::filesystem::path(yaml_path).parent_path() / root["urdf"].as<std::string>()).string();
+  const std::string origin = Base(yaml_path);
+  auto doc = ParseYaml(*text, origin);
+  if (!doc) return std::move(doc).error();
+  std::string urdf_name;
+  if (auto st = YamlFields(origin).Text(*doc, "urdf", "", &urdf_name); !st) return st.error();
+  const std::string urdf_path = (std::filesystem::path(yaml_path).parent_path() / urdf_name).string();
   auto urdf = LoadUrdf(urdf_path);
   if (!urdf.ok()) return std::move(urdf).error();
-  return ParseRobotDescription(*text, Base(yaml_path), std::move(*urdf), urdf_path);
+  return ParseRobotDescription(*text, origin, std::move(*urdf), urdf_path);
 }
 
 }  // namespace pbppo::robot

@@ -4,13 +4,16 @@
 
 #include <Simbody.h>
 
-#include "sim_hil/common/yaml_fields.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 namespace pbppo::sim {
 namespace {
+
+using robot::LoadYamlFile;
+using robot::YamlFields;
 
 double Clamp(double x, double lo, double hi) {
   return std::min(std::max(x, lo), hi);

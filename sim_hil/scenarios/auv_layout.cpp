@@ -2,10 +2,13 @@
 
 #include <cmath>
 
-#include "sim_hil/common/yaml_fields.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::sim {
 namespace {
+
+using robot::LoadYamlFile;
+using robot::YamlFields;
 
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 constexpr double kBig = 1e6;
@@ -102,14 +105,9 @@ Result<AuvLayout> Parse(const YAML::Node& root, const std::string& origin) {
 }  // namespace
 
 Result<AuvLayout> ParseAuvLayout(const std::string& yaml_text, const std::string& origin) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    return MakeError(ErrorCode::kFormat,
-                     origin + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  return Parse(root, origin);
+  auto root = robot::ParseYaml(yaml_text, origin);
+  if (!root) return std::move(root).error();
+  return Parse(*root, origin);
 }
 
 Result<AuvLayout> LoadAuvLayout(const std::string& path) {

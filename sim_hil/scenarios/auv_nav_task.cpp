@@ -6,10 +6,13 @@
 #include <numbers>
 
 #include "runtime/robot/auv_signals.hpp"
-#include "sim_hil/common/yaml_fields.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::sim {
 namespace {
+
+using robot::LoadYamlFile;
+using robot::YamlFields;
 
 constexpr double kPi = 3.14159265358979323846;
 // Geodesic progress: grid spacing (the narrowest passage of the layouts leaves 1.6 m of free

@@ -96,16 +96,16 @@ TEST_CASE("auv controller: configuration from auv.yaml - bad fields named with t
     return r.error().message;
   };
   CHECK(with("yaw_rate_max_radps: 0.5", "yaw_rate_max_radps: fast") ==
-        dir + "/auv.yaml: supervisor.yaw_rate_max_radps: 'fast' is not a finite number");
+        dir + "/auv.yaml: supervisor.yaw_rate_max_radps: 'fast' is not a number");
   CHECK(with("lost_peer_ticks: 20", "lost_peer_ticks: 2.5") ==
-        dir + "/auv.yaml: supervisor.lost_peer_ticks: 2.5 is not an integer");
+        dir + "/auv.yaml: supervisor.lost_peer_ticks: '2.5' is not an integer");
   CHECK(with("surge_speed_mps: [0.0, 1.5]", "surge_speed_mps: [1.5, 0.0]") ==
-        dir + "/auv.yaml: supervisor.surge_speed_mps: low 1.5 >= high 0");
+        dir + "/auv.yaml: supervisor.surge_speed_mps: low 1.5 is above high 0");
   CHECK(with("stop_decel_mps2: 3.0", "stop_decel_mps2: 0.5")
             .find("supervisor: stop_dv_mps = 0.05: must be >= "
                   "dv_max_mps") != std::string::npos);
   CHECK(with("lost_peer_ticks: 20", "lost_peer_ticks_typo: 20") ==
-        dir + "/auv.yaml: supervisor.lost_peer_ticks: missing");
+        dir + "/auv.yaml: supervisor: missing field 'lost_peer_ticks'");
 }
 
 TEST_CASE(

@@ -425,7 +425,7 @@ TEST_CASE("auv task: bad layout files are refused naming the element and field")
        "start: {x_m: [3, 7], y_m: [3, 7], yaw_deg: [0, 90]}\ntargets: [[20, 20]]\n"
        "obstacles:\n  - {type: box, x_min_m: 0, x_max_m: 10, y_min_m: 0, y_max_m: 10}\n",
        "start: the centre of the start region (5, 5) lies inside an obstacle"},
-      {"name: bad\narena: {x_min_m: 0, x_max_m: 40, y_min_m: 0, y_max_m: 40\n", "YAML syntax error"},
+      {"name: bad\narena: {x_min_m: 0, x_max_m: 40, y_min_m: 0, y_max_m: 40\n", "test.yaml: YAML error at line"},
   };
   for (const Case& c : cases) {
     CAPTURE(c.text);

@@ -90,9 +90,8 @@ TEST_CASE("errors name the file - the element and the field") {
         "t.yaml: buses[1].interface: 'vcan0' is already used by bus 'a'");
   CHECK(ErrorOf(Replace(g, "{name: b,", "{name: a,")) == "t.yaml: buses[1].name: duplicate bus 'a'");
   CHECK(ErrorOf(Replace(g, "fd: true", "fd: yes please")) == "t.yaml: buses[0].fd: 'yes please' is not true or false");
-  CHECK(ErrorOf(Replace(g, "robot: testbot", "robot: testbot\nextra: 1")) ==
-        "t.yaml: top level: unknown field 'extra'");
-  CHECK(ErrorOf(Replace(g, "id: 0x80", "id: 0x80, gain: 2")) == "t.yaml: imus[0]: unknown field 'gain'");
+  CHECK(ErrorOf(Replace(g, "robot: testbot", "robot: testbot\nextra: 1")) == "t.yaml: extra: unknown field");
+  CHECK(ErrorOf(Replace(g, "id: 0x80", "id: 0x80, gain: 2")) == "t.yaml: imus[0].gain: unknown field");
   CHECK(LoadCanMap("/nonexistent/can_map.yaml").error().message == "/nonexistent/can_map.yaml: cannot open");
 }
 

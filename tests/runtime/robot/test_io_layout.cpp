@@ -63,7 +63,7 @@ TEST_CASE("bad layouts are refused naming the file, element and field") {
   CHECK(ErrorOf("robot: x\nobservations: [{name: a}, {name: a}]\nactions: [{name: b}]") ==
         "t.yaml: observations[1].name: 'a' appears twice");
   CHECK(ErrorOf("robot: x\nobservations: [{name: a, gain: 2}]\nactions: [{name: b}]") ==
-        "t.yaml: observations[0]: unknown field 'gain'");
+        "t.yaml: observations[0].gain: unknown field");
   CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b, low: 1, high: 0}]") ==
         "t.yaml: actions[0]: low 1 is above high 0");
   CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b, high: .nan}]") ==
