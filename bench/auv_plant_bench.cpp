@@ -34,12 +34,13 @@ double Median(std::vector<double> v) {
 
 // The route planner's pieces on the hard layout (0.25 m grid): the chart's clearances (once per
 // task), one sonar return added to the map, and one replan (Solve), each the median of 31 runs.
-int RouteBench(const std::string& model) {
-  auto layout = pbppo::sim::LoadAuvLayout(model + "layouts/hard.yaml");
-  if (!layout) {
-    std::fprintf(stderr, "%s\n", layout.error().message.c_str());
+int RouteBench(const pbppo::robot::RobotModel& robot) {
+  auto hard = pbppo::sim::MakeAuvTaskConfig(robot, "hard");
+  if (!hard) {
+    std::fprintf(stderr, "%s\n", hard.error().message.c_str());
     return 1;
   }
+  const auto* layout = &hard->layout;
   const auto& w = layout->world;
   const auto& goal = layout->targets.back();
   pbppo::sim::GeodesicField chart(w.arena, 0.25), route(w.arena, 0.25);
@@ -66,17 +67,22 @@ int RouteBench(const std::string& model) {
 
 int main(int argc, char** argv) {
   const long steps = argc > 1 ? std::atol(argv[1]) : 20000;
-  const std::string model = std::string(PBPPO_SOURCE_DIR) + "/models/auv/";
+  auto robot = pbppo::robot::LoadRobotModel(std::string(PBPPO_SOURCE_DIR) + "/models/auv/robot.yaml");
+  if (!robot) {
+    std::fprintf(stderr, "%s\n", robot.error().message.c_str());
+    return 1;
+  }
   std::printf("AUV plant/task throughput, %ld control steps per row, per-thread CPU time\n", steps);
   for (auto integ : {pbppo::sim::AuvIntegrator::kRk2, pbppo::sim::AuvIntegrator::kSemiExplicitEuler}) {
     // Bare plant: a varying command, no sonar, no reward.
-    auto params = pbppo::sim::LoadAuvParams(model + "auv.yaml");
-    if (!params) {
-      std::fprintf(stderr, "%s\n", params.error().message.c_str());
+    auto hard = pbppo::sim::MakeAuvTaskConfig(*robot, "hard");
+    if (!hard) {
+      std::fprintf(stderr, "%s\n", hard.error().message.c_str());
       return 1;
     }
-    params->integrator = integ;
-    auto plant = pbppo::sim::AuvPlant::Create(*params);
+    pbppo::sim::AuvParams params = hard->plant;
+    params.integrator = integ;
+    auto plant = pbppo::sim::AuvPlant::Create(params);
     if (!plant) {
       std::fprintf(stderr, "%s\n", plant.error().message.c_str());
       return 1;
@@ -91,11 +97,10 @@ int main(int argc, char** argv) {
     double dt = CpuSeconds() - t0;
     const double physics = static_cast<double>(plant->physics_steps());
     std::printf("plant %-20s physics step %.3f s x %d: %9.0f physics steps/s, %8.0f control steps/s\n", Name(integ),
-                params->physics_step_s, params->substeps(), physics / dt, static_cast<double>(steps) / dt);
+                params.physics_step_s, params.substeps(), physics / dt, static_cast<double>(steps) / dt);
 
     for (const char* layout : {"easy", "medium", "hard"}) {
-      auto config = pbppo::sim::LoadAuvTaskConfig(model + "auv.yaml", model + "layouts/" + layout + ".yaml",
-                                                  model + "io_layout.yaml");
+      auto config = pbppo::sim::MakeAuvTaskConfig(*robot, layout);
       if (!config) {
         std::fprintf(stderr, "%s\n", config.error().message.c_str());
         return 1;
@@ -126,5 +131,5 @@ int main(int argc, char** argv) {
                   static_cast<double>(steps) / dt, episodes, 1e6 * dt / static_cast<double>(steps));
     }
   }
-  return RouteBench(model);
+  return RouteBench(*robot);
 }

@@ -38,12 +38,17 @@ int main(int argc, char** argv) {
     }
   }
   const std::string src = PBPPO_SOURCE_DIR;
-  auto config = firmware::LoadAuvControllerConfig(src + "/models/auv/auv.yaml");
-  auto layout = robot::LoadIoLayout(src + "/models/auv/io_layout.yaml");
-  if (!config || !layout) {
-    std::fprintf(stderr, "auv_tick_bench: %s\n", (!config ? config.error() : layout.error()).message.c_str());
+  auto robot = robot::LoadRobotModel(src + "/models/auv/robot.yaml");
+  if (!robot) {
+    std::fprintf(stderr, "auv_tick_bench: %s\n", robot.error().message.c_str());
     return 1;
   }
+  auto config = firmware::AuvControllerConfigOf(*robot);
+  if (!config) {
+    std::fprintf(stderr, "auv_tick_bench: %s\n", config.error().message.c_str());
+    return 1;
+  }
+  const robot::IoLayout* layout = &*robot->io;
   std::vector<std::uint32_t> widths{layout->observation_size()};
   std::stringstream ss(hidden);
   for (std::string w; std::getline(ss, w, ',');) widths.push_back(static_cast<std::uint32_t>(std::stoul(w)));

@@ -201,7 +201,7 @@ const char* ToString(AuvHilOutcome o) noexcept {
 std::string AuvHilUsage() {
   return "pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]\n"
          "              [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]\n"
-         "              [--models DIR] [--peer-timeout S] [--command-timeout S] [--fault nan|range@SECONDS]\n";
+         "              [--robot FILE] [--peer-timeout S] [--command-timeout S] [--fault nan|range@SECONDS]\n";
 }
 
 Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
@@ -246,8 +246,8 @@ Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
       o.plot_png = v;
     } else if (a == "--events") {
       o.events_json = v;
-    } else if (a == "--models") {
-      o.models_dir = v;
+    } else if (a == "--robot") {
+      o.robot = v;
     } else if (a == "--fault") {
       const auto at = v.find('@');
       const std::string kind = v.substr(0, at);
@@ -269,12 +269,15 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
     std::fprintf(stderr, "pbppo-hil auv: %s\n", why.c_str());
     return 1;
   };
-  const std::string m = o.models_dir + "/";
-  auto cfg = LoadAuvTaskConfig(m + "auv.yaml", m + "layouts/" + o.layout + ".yaml", m + "io_layout.yaml");
+  auto model = robot::LoadRobotModel(o.robot);
+  if (!model) return fail(model.error().message);
+  auto cfg = MakeAuvTaskConfig(*model, o.layout);
   if (!cfg) return fail(cfg.error().message);
   if (cfg->sonar.beams > static_cast<int>(robot::kAuvMaxSonarBeams))
-    return fail(m + "auv.yaml: sonar.beams " + std::to_string(cfg->sonar.beams) + " exceeds the DDS sample's " +
+    return fail(o.robot + ": sonar.beams " + std::to_string(cfg->sonar.beams) + " exceeds the DDS sample's " +
                 std::to_string(robot::kAuvMaxSonarBeams));
+  auto profile = model->Document("dds_profile");
+  if (!profile) return fail(profile.error().message);
   auto task_r = AuvNavTask::Create(*cfg);
   if (!task_r) return fail(task_r.error().message);
   AuvNavTask& task = *task_r;
@@ -283,7 +286,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   if (!opt.plot_png.empty() && opt.trajectory_csv.empty()) opt.trajectory_csv = opt.plot_png + ".csv";
 
   dds::AuvDdsOptions lo;
-  lo.profile_file = m + "dds_profile.xml";
+  lo.profile_file = (*profile)->path;
   lo.domain_id = o.domain_id;
   auto link_r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kVehicle, lo);
   if (!link_r) return fail(link_r.error().message);

@@ -29,7 +29,7 @@ struct AuvHilOptions {
   int domain_id = 0;
   double max_time_s = 0.0;                            // simulated seconds; 0: the task's episode limit only
   std::string trajectory_csv, plot_png, events_json;  // empty: not written
-  std::string models_dir = "models/auv";              // auv.yaml, layouts/, io_layout.yaml, dds_profile.xml
+  std::string robot = "models/auv/robot.yaml";        // the robot (plant, layouts, IO layout, DDS profile)
   double peer_timeout_s = 30.0;                       // waiting for the controller to appear
   double command_timeout_s = 10.0;                    // lock-step: longest wait for the next command
   // Fault injection for tests of the controller's supervisor: from simulated time fault_time_s on,

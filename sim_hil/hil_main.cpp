@@ -6,7 +6,7 @@
 // The AUV navigation task over DDS (sim_hil/auv_hil.hpp).
 //
 //   pbppo-hil quadruped --stand --can vcan0,vcan1 [--lockstep] [--duration S]
-//             [--robot models/quadruped/quadruped.yaml] [--can-map models/quadruped/can_map.yaml]
+//             [--robot models/quadruped/robot.yaml]
 //             [--drop-rate P --drop-burst N --seed S] [--silent-motor JOINT --silent-from S]
 //
 // Free-running (default): one tick per millisecond of wall time (absolute deadlines); ticks that
@@ -27,8 +27,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/robot/can_map.hpp"
-#include "runtime/robot/urdf.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "sim_hil/auv_hil.hpp"
 #include "sim_hil/quadruped_stand_hil.hpp"
 
@@ -51,7 +50,7 @@ int Usage(const char* why) {
   std::fprintf(stderr,
                "pbppo-hil: %s\nusage: pbppo-hil auv ... (pbppo-hil auv --help)\n       pbppo-hil quadruped --stand "
                "--can IF0,IF1 [--lockstep] [--duration S]\n"
-               "         [--robot FILE] [--can-map FILE] [--drop-rate P] [--drop-burst N] [--seed N]\n"
+               "         [--robot FILE] [--drop-rate P] [--drop-burst N] [--seed N]\n"
                "         [--silent-motor JOINT] [--silent-from S]\n",
                why);
   return 2;
@@ -78,7 +77,7 @@ int main(int argc, char** argv) {
   }
   if (argc < 2 || std::strcmp(argv[1], "quadruped") != 0)
     return Usage("the first argument must be 'auv' or 'quadruped'");
-  std::string robot_path = "models/quadruped/quadruped.yaml", map_path = "models/quadruped/can_map.yaml";
+  std::string robot_path = "models/quadruped/robot.yaml";
   std::string silent_joint;
   double duration_s = 0, silent_from_s = 0;
   bool stand = false, lockstep = false;
@@ -100,8 +99,6 @@ int main(int argc, char** argv) {
       o.interfaces = Split(next());
     else if (a == "--robot")
       robot_path = next();
-    else if (a == "--can-map")
-      map_path = next();
     else if (a == "--duration")
       duration_s = std::atof(next().c_str());
     else if (a == "--drop-rate")
@@ -118,10 +115,12 @@ int main(int argc, char** argv) {
       return Usage(("unknown option " + a).c_str());
   }
   if (!stand) return Usage("only --stand is implemented (the base welded to a stand)");
-  auto robot = robot::LoadRobotDescription(robot_path);
-  if (!robot.ok()) return std::fprintf(stderr, "pbppo-hil: %s\n", robot.error().message.c_str()), 1;
-  auto map = robot::LoadCanMap(map_path);
-  if (!map.ok()) return std::fprintf(stderr, "pbppo-hil: %s\n", map.error().message.c_str()), 1;
+  auto model = robot::LoadRobotModel(robot_path);
+  if (!model.ok()) return std::fprintf(stderr, "pbppo-hil: %s\n", model.error().message.c_str()), 1;
+  if (!model->body || !model->can)
+    return std::fprintf(stderr, "pbppo-hil: %s: no description or CAN map\n", robot_path.c_str()), 1;
+  const robot::RobotDescription* robot = &*model->body;
+  const robot::CanMap* map = &*model->can;
   if (o.interfaces.empty())
     for (const auto& b : map->buses) o.interfaces.push_back(b.interface);
   if (!silent_joint.empty()) {
@@ -135,7 +134,7 @@ int main(int argc, char** argv) {
   if (!hil.ok()) return std::fprintf(stderr, "pbppo-hil: %s\n", hil.error().message.c_str()), 1;
   signal(SIGINT, OnSignal);
   signal(SIGTERM, OnSignal);
-  std::printf("pbppo-hil: quadruped on a stand, %zu joints, %s on %s, %s\n", robot->joint_count(), map_path.c_str(),
+  std::printf("pbppo-hil: quadruped on a stand, %zu joints, %s on %s, %s\n", robot->joint_count(), robot_path.c_str(),
               o.interfaces[0].c_str(), lockstep ? "lock-step" : "free-running at 1 kHz");
   std::fflush(stdout);
 

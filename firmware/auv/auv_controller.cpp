@@ -4,65 +4,53 @@
 
 #include "runtime/policy/blob.hpp"
 #include "runtime/robot/auv_signals.hpp"
-#include "runtime/robot/yaml_fields.hpp"
 #include "runtime/rt/tick_clock.hpp"
 
 namespace pbppo::firmware {
 
-Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& path) {
-  auto doc = robot::LoadYamlFile(path);
-  if (!doc) return std::move(doc).error();
-  const YAML::Node root = *doc;
-  const robot::YamlFields f(path);
-  YAML::Node sim, task, sonar, sup;
-  for (const Status& st : {f.Map(root, "simulation", "", &sim), f.Map(root, "task", "", &task),
-                           f.Map(root, "sonar", "", &sonar), f.Map(root, "supervisor", "", &sup)}) {
-    if (!st) return st.error();
-  }
+Result<AuvControllerConfig> AuvControllerConfigOf(const robot::RobotModel& m) {
+  const int sensor = m.StreamIndex("sensor"), v = m.CommandIndex("surge_speed"), w = m.CommandIndex("yaw_rate");
+  auto field = [&](const char* name) -> const robot::FieldSpec* {
+    const int k = m.FieldIndex(name);
+    return k < 0 ? nullptr : &m.fields[static_cast<std::size_t>(k)];
+  };
+  const robot::FieldSpec *beams = field("sonar_beams"), *sonar = field("sonar_0_m"), *surge = field("surge_mps"),
+                         *rate = field("yaw_rate_radps"), *x = field("x_m"), *depth = field("depth_m");
+  auto setpoint = m.Parameter("depth_m");
+  if (sensor < 0 || v < 0 || w < 0 || !beams || !sonar || !surge || !rate || !x || !depth || !setpoint)
+    return MakeError(ErrorCode::kMismatch, m.path +
+                                               ": not the AUV (stream sensor, commands surge_speed and yaw_rate, "
+                                               "the sample's fields and parameters.depth_m)");
+  const robot::StreamSpec& st = m.streams[static_cast<std::size_t>(sensor)];
+  const robot::CommandSpec &cv = m.commands[static_cast<std::size_t>(v)], &cw = m.commands[static_cast<std::size_t>(w)];
   AuvControllerConfig c;
   safety::AuvSupervisorConfig& s = c.supervisor;
-  double accel = 0, yaw_accel = 0, stop = 0, stop_yaw = 0, beams = 0;
-  std::array<double, 2> surge{}, depth{};
-  const std::string S = "supervisor";
-  for (const Status& st : {
-           f.Number(sim, "control_period_s", "simulation", 1e-4, 10.0, &c.control_period_s),
-           f.Number(task, "depth_m", "task", 0.0, 1e4, &c.depth_setpoint_m),
-           f.Number(sonar, "beams", "sonar", 1, robot::kAuvMaxSonarBeams, &beams),
-           f.Number(sonar, "max_range_m", "sonar", 0.1, 1000.0, &s.sonar_max_m),
-           f.Range(sup, "surge_speed_mps", S, -10.0, 10.0, &surge),
-           f.Number(sup, "yaw_rate_max_radps", S, 0.0, 10.0, &s.w_max_radps),
-           f.Number(sup, "degraded_surge_max_mps", S, 0.0, 10.0, &s.degraded_v_max_mps),
-           f.Number(sup, "surge_accel_max_mps2", S, 1e-6, 100.0, &accel),
-           f.Number(sup, "yaw_accel_max_radps2", S, 1e-6, 100.0, &yaw_accel),
-           f.Number(sup, "stop_decel_mps2", S, 1e-6, 1000.0, &stop),
-           f.Number(sup, "stop_yaw_decel_radps2", S, 1e-6, 1000.0, &stop_yaw),
-           f.Count(sup, "stale_degraded_ticks", S, 0, 1000000, &s.stale_degraded_ticks),
-           f.Count(sup, "stale_safe_stop_ticks", S, 1, 1000000, &s.stale_safe_stop_ticks),
-           f.Count(sup, "lost_peer_ticks", S, 1, 1000000, &s.lost_peer_ticks),
-           f.Count(sup, "invalid_safe_stop", S, 1, 1000000, &s.invalid_safe_stop),
-           f.Count(sup, "overrun_degraded", S, 1, 1000000, &s.overrun_degraded),
-           f.Count(sup, "overrun_safe_stop", S, 1, 1000000, &s.overrun_safe_stop),
-           f.Number(sup, "speed_max_mps", S, 0.0, 1e3, &s.speed_max_mps),
-           f.Number(sup, "rate_max_radps", S, 0.0, 1e3, &s.rate_max_radps),
-           f.Range(sup, "depth_range_m", S, -1e4, 1e5, &depth),
-       }) {
-    if (!st) return st.error();
-  }
-  s.v_min_mps = surge[0];
-  s.v_max_mps = surge[1];
-  s.depth_min_m = depth[0];
-  s.depth_max_m = depth[1];
-  s.sonar_beams = static_cast<std::uint32_t>(beams);
-  s.sonar_max_m *= 1.0001;  // a range reading at exactly the maximum is valid
-  s.dv_max_mps = accel * c.control_period_s;
-  s.dw_max_radps = yaw_accel * c.control_period_s;
-  s.stop_dv_mps = stop * c.control_period_s;
-  s.stop_dw_radps = stop_yaw * c.control_period_s;
+  c.control_period_s = m.tick_period_s;
+  c.depth_setpoint_m = *setpoint;
+  s.v_min_mps = cv.min;
+  s.v_max_mps = cv.max;
+  s.w_max_radps = cw.max;
+  s.degraded_v_max_mps = cv.degraded_max;
+  s.dv_max_mps = cv.rate;
+  s.dw_max_radps = cw.rate;
+  s.stop_dv_mps = cv.stop_rate;
+  s.stop_dw_radps = cw.stop_rate;
+  s.stale_degraded_ticks = st.stale_degraded_ticks;
+  s.stale_safe_stop_ticks = st.stale_safe_stop_ticks;
+  s.lost_peer_ticks = st.lost_ticks;
+  s.invalid_safe_stop = st.invalid_safe_stop;
+  s.overrun_degraded = m.supervisor.overrun_degraded;
+  s.overrun_safe_stop = m.supervisor.overrun_safe_stop;
+  s.sonar_beams = static_cast<std::uint32_t>(beams->max);
+  s.sonar_max_m = sonar->max;
+  s.speed_max_mps = surge->max;
+  s.rate_max_radps = rate->max;
+  s.position_max_m = x->max;
+  s.depth_min_m = depth->min;
+  s.depth_max_m = depth->max;
   char why[256];
   if (!safety::ValidateAuvSupervisorConfig(s, why, sizeof why))
-    return MakeError(ErrorCode::kInvalidValue, path + ": " + why +
-                                                   " (rates are the yaml's per-second values times "
-                                                   "simulation.control_period_s)");
+    return MakeError(ErrorCode::kInvalidValue, m.path + ": " + why);
   return c;
 }
 
@@ -70,41 +58,17 @@ AuvController::AuvController(AuvControllerConfig config, robot::IoLayout layout,
                              robot::ObservationBuilder builder)
     : config_(std::move(config)), layout_(std::move(layout)), model_(std::move(model)), builder_(std::move(builder)) {}
 
-AuvControllerConfig ForTickPeriod(const AuvControllerConfig& c, double tick_period_s) {
-  AuvControllerConfig r = c;
-  const double k = tick_period_s / c.control_period_s;  // ticks per control period = 1 / k
-  auto periods = [&](std::uint32_t n) {
-    return static_cast<std::uint32_t>(std::min(1e6, std::ceil(static_cast<double>(n) / k)));
-  };
-  // Ticking at the control period a sample's age is a whole number of periods, so "older than n
-  // periods" means n samples missed. Ticking faster, a sample that is due every period arrives a
-  // few ticks early or late; the limit is n and a half periods, so that a sample a little late
-  // still counts as on time and a missed one does not (the same at the control period itself).
-  auto missed = [&](std::uint32_t n) {
-    return static_cast<std::uint32_t>(std::min(1e6, std::floor((static_cast<double>(n) + 0.5) / k + 1e-9)));
-  };
-  r.supervisor.stale_degraded_ticks = missed(c.supervisor.stale_degraded_ticks);
-  r.supervisor.stale_safe_stop_ticks = missed(c.supervisor.stale_safe_stop_ticks);
-  r.supervisor.lost_peer_ticks = periods(c.supervisor.lost_peer_ticks);
-  r.supervisor.dv_max_mps = c.supervisor.dv_max_mps * k;
-  r.supervisor.dw_max_radps = c.supervisor.dw_max_radps * k;
-  r.supervisor.stop_dv_mps = c.supervisor.stop_dv_mps * k;
-  r.supervisor.stop_dw_radps = c.supervisor.stop_dw_radps * k;
-  return r;
-}
-
-Result<std::unique_ptr<AuvController>> AuvController::Create(const std::string& auv_yaml,
-                                                             const std::string& io_layout_yaml,
+Result<std::unique_ptr<AuvController>> AuvController::Create(const robot::RobotModel& robot,
                                                              const std::string& blob_path, double tick_period_s) {
-  auto config = LoadAuvControllerConfig(auv_yaml);
+  auto ticking = robot::WithTickPeriod(robot, tick_period_s > 0 ? tick_period_s : robot.tick_period_s);
+  if (!ticking) return std::move(ticking).error();
+  auto config = AuvControllerConfigOf(*ticking);
   if (!config) return std::move(config).error();
-  if (tick_period_s > 0) *config = ForTickPeriod(*config, tick_period_s);
-  auto layout = robot::LoadIoLayout(io_layout_yaml);
-  if (!layout) return std::move(layout).error();
+  if (!robot.io) return MakeError(ErrorCode::kMismatch, robot.path + ": files: no io_layout");
   auto model = policy::PolicyModel::FromFile(blob_path);
   if (!model) return std::move(model).error();
-  auto c = Create(*config, *layout, std::move(*model));
-  if (!c) return MakeError(c.error().code, blob_path + " on " + io_layout_yaml + ": " + c.error().message);
+  auto c = Create(*config, *robot.io, std::move(*model));
+  if (!c) return MakeError(c.error().code, blob_path + " on " + robot.path + ": " + c.error().message);
   return c;
 }
 

@@ -1,6 +1,6 @@
 // The AUV's controller core, independent of the transport: made once at start-up from
-// models/auv/auv.yaml (supervisor limits, control period, sonar, depth set-point), the IO layout
-// and a policy blob; then, every control period, Tick() = observe (signal table -> observation
+// the robot model (supervisor limits, control period, depth set-point, IO layout) and a policy
+// blob; then, every control period, Tick() = observe (signal table -> observation
 // through the IO layout) -> infer (policy::Forward) -> supervise (safety::SuperviseAuv), each
 // stage timed into the profiler. Everything is allocated in Create(); Tick() allocates nothing,
 // takes no lock and never throws.
@@ -26,6 +26,7 @@
 #include "runtime/robot/auv_messages.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "runtime/rt/tick_profiler.hpp"
 #include "runtime/safety/auv_supervisor.hpp"
 
@@ -37,20 +38,15 @@ struct AuvControllerConfig {
   double depth_setpoint_m = 5.0;
 };
 
-// Reads the supervisor, simulation.control_period_s, sonar and task.depth_m sections of auv.yaml.
-// Errors name the file and the field and quote the value.
-Result<AuvControllerConfig> LoadAuvControllerConfig(const std::string& auv_yaml);
-// The same limits for a controller ticking every tick_period_s instead of every control period:
-// sample ages counted in ticks scale up (stale after the same time: n periods and a half for the
-// stale limits, so that a sample a tick or two late is not taken for a missed one), rate limits
-// per tick scale down (the same accelerations). At the control period itself nothing changes.
-AuvControllerConfig ForTickPeriod(const AuvControllerConfig& config, double tick_period_s);
+// The supervisor's limits, the tick period and the depth set-point of the robot model
+// (models/auv/robot.yaml); at another tick period, take robot::WithTickPeriod's model.
+Result<AuvControllerConfig> AuvControllerConfigOf(const robot::RobotModel& robot);
 
 class AuvController {
  public:
-  // tick_period_s > 0: the controller ticks at that period (ForTickPeriod); 0: the control period.
-  static Result<std::unique_ptr<AuvController>> Create(const std::string& auv_yaml, const std::string& io_layout_yaml,
-                                                       const std::string& blob_path, double tick_period_s = 0);
+  // tick_period_s > 0: the controller ticks at that period (robot::WithTickPeriod); 0: the robot's.
+  static Result<std::unique_ptr<AuvController>> Create(const robot::RobotModel& robot, const std::string& blob_path,
+                                                       double tick_period_s = 0);
   // From loaded pieces: refuses a policy trained for another layout (names the first
   // difference) and a layout that is not the AUV's (unknown signal, missing command).
   static Result<std::unique_ptr<AuvController>> Create(const AuvControllerConfig& config, const robot::IoLayout& layout,

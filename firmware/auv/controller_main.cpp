@@ -1,7 +1,7 @@
 // pbppo-controller: the AUV's controller program.
 //
-//   pbppo-controller --robot models/auv/auv.yaml --policy policies/frozen/auv_nav/auv_nav.blob
-//       --transport dds [--io-layout FILE] [--lockstep] [--period-ms MS] [--domain D]
+//   pbppo-controller --robot models/auv/robot.yaml --policy policies/frozen/auv_nav/auv_nav.blob
+//       --transport dds [--lockstep] [--period-ms MS] [--domain D]
 //       [--dds-profile FILE] [--ticks N] [--duration S] [--peer-timeout-s S]
 //       [--profile out.json] [--profile-plot out.png] [--rt-priority P] [--cpu C] [--no-mlock]
 //       [--status-every-s S] [--quiet]
@@ -68,25 +68,19 @@ int Fail(const std::string& msg, int rc = 2) {
   return rc;
 }
 
-std::string DefaultIoLayout(const std::string& robot_yaml) {
-  const auto dir = std::filesystem::path(robot_yaml).parent_path();
-  return (dir / "io_layout.yaml").string();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"pbppo-controller: runs a frozen policy on the AUV over DDS"};
-  std::string robot_yaml, io_yaml, blob, transport = "dds", dds_profile, profile_json, profile_png;
+  std::string robot_yaml, blob, transport = "dds", dds_profile, profile_json, profile_png;
   bool lockstep = false, no_mlock = false, quiet = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500;
   std::int64_t writer_poll_us = -1;
   std::uint64_t max_ticks = 0;
-  app.add_option("--robot", robot_yaml, "Robot description (models/auv/auv.yaml)")->required();
+  app.add_option("--robot", robot_yaml, "The robot (models/auv/robot.yaml)")->required();
   app.add_option("--policy", blob, "Frozen policy blob")->required();
   app.add_option("--transport", transport, "Transport: dds");
-  app.add_option("--io-layout", io_yaml, "IO layout (default: io_layout.yaml beside --robot)");
   app.add_flag("--lockstep", lockstep, "One tick per sensor sample (a simulator in lock-step)");
   app.add_option("--lockstep-timeout-ms", lockstep_timeout_ms,
                  "Lock-step: tick anyway after this long without a sample")
@@ -94,7 +88,7 @@ int main(int argc, char** argv) {
   app.add_option("--period-ms", period_ms, "Free-running tick period (default: the robot's control period)")
       ->check(CLI::Range(0.01, 10000.0));
   app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));
-  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: dds_profile.xml beside --robot)");
+  app.add_option("--dds-profile", dds_profile, "Fast DDS XML profile (default: the robot's)");
   app.add_option("--ticks", max_ticks, "Stop after this many ticks (0: no limit)");
   app.add_option("--duration", duration_s, "Stop after this many seconds (0: no limit)")->check(CLI::Range(0.0, 1e7));
   app.add_option("--peer-timeout-s", peer_timeout_s, "How long to wait for the vehicle at start-up")
@@ -119,12 +113,16 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   if (transport != "dds") return Fail("--transport: '" + transport + "' unknown (dds)");
-  if (io_yaml.empty()) io_yaml = DefaultIoLayout(robot_yaml);
-  if (dds_profile.empty()) dds_profile = (std::filesystem::path(robot_yaml).parent_path() / "dds_profile.xml").string();
-
-  // Everything is loaded and checked before anything moves.
+  // Everything is loaded and checked before anything moves: the robot once, then the policy.
+  auto robot = robot::LoadRobotModel(robot_yaml);
+  if (!robot) return Fail(robot.error().message);
+  if (dds_profile.empty()) {
+    auto doc = robot->Document("dds_profile");
+    if (!doc) return Fail(doc.error().message);
+    dds_profile = (*doc)->path;
+  }
   // Sample ages and rate limits are per tick: a tick period other than the control period scales them.
-  auto controller = firmware::AuvController::Create(robot_yaml, io_yaml, blob, lockstep ? 0.0 : period_ms * 1e-3);
+  auto controller = firmware::AuvController::Create(*robot, blob, lockstep ? 0.0 : period_ms * 1e-3);
   if (!controller) return Fail(controller.error().message);
   firmware::AuvController& c = **controller;
   const double period_s = period_ms > 0 ? period_ms * 1e-3 : c.config().control_period_s;

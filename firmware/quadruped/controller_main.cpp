@@ -1,7 +1,7 @@
 // pbppo-controller-quadruped: the quadruped's controller program.
 //
 //   pbppo-controller-quadruped --can can0,can1 --mode stand-test [--trajectory FILE]
-//       [--robot models/quadruped/quadruped.yaml] [--can-map models/quadruped/can_map.yaml]
+//       [--robot models/quadruped/robot.yaml]
 //       [--duration S] [--candump FILE] [--lockstep-wait-ms N] [--rt] [--receive-all]
 //
 // Arming (enter motor mode, every reply seen), ramp to the default pose, hold, the trajectory's
@@ -19,11 +19,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "firmware/quadruped/stand_controller.hpp"
+#include "runtime/robot/robot_model.hpp"
 
 namespace {
 
@@ -43,7 +45,7 @@ std::vector<std::string> Split(const std::string& s) {
 int Usage(const char* why) {
   std::fprintf(stderr,
                "pbppo-controller-quadruped: %s\nusage: pbppo-controller-quadruped --can IF0,IF1 --mode stand-test "
-               "[--trajectory FILE] [--robot FILE] [--can-map FILE]\n"
+               "[--trajectory FILE] [--robot FILE]\n"
                "         [--duration S] [--candump FILE] [--lockstep-wait-ms N] [--rt] [--receive-all]\n",
                why);
   return 2;
@@ -53,7 +55,7 @@ int Usage(const char* why) {
 
 int main(int argc, char** argv) {
   using namespace pbppo;
-  std::string robot_path = "models/quadruped/quadruped.yaml", map_path = "models/quadruped/can_map.yaml";
+  std::string robot_path = "models/quadruped/robot.yaml";
   std::string mode, trajectory_path;
   double duration_s = 0;
   int lockstep_wait_ms = 0;
@@ -76,8 +78,6 @@ int main(int argc, char** argv) {
       trajectory_path = next();
     else if (a == "--robot")
       robot_path = next();
-    else if (a == "--can-map")
-      map_path = next();
     else if (a == "--duration")
       duration_s = std::atof(next().c_str());
     else if (a == "--candump")
@@ -92,14 +92,20 @@ int main(int argc, char** argv) {
       return Usage(("unknown option " + a).c_str());
   }
   if (mode != "stand-test") return Usage("--mode must be 'stand-test'");
-  auto robot = robot::LoadRobotDescription(robot_path);
-  if (!robot.ok()) return std::fprintf(stderr, "pbppo-controller-quadruped: %s\n", robot.error().message.c_str()), 1;
-  auto map = robot::LoadCanMap(map_path);
-  if (!map.ok()) return std::fprintf(stderr, "pbppo-controller-quadruped: %s\n", map.error().message.c_str()), 1;
+  auto model = robot::LoadRobotModel(robot_path);
+  if (!model.ok()) return std::fprintf(stderr, "pbppo-controller-quadruped: %s\n", model.error().message.c_str()), 1;
+  if (!model->body || !model->can)
+    return std::fprintf(stderr, "pbppo-controller-quadruped: %s: no description or CAN map\n", robot_path.c_str()), 1;
+  const robot::RobotDescription* robot = &*model->body;
+  const robot::CanMap* map = &*model->can;
   if (o.interfaces.empty())
     for (const auto& b : map->buses) o.interfaces.push_back(b.interface);
   if (!trajectory_path.empty()) {
-    auto t = firmware::LoadTrajectory(trajectory_path, *robot);
+    // The robot's own trajectory was read with the robot; another file is read here.
+    auto doc = model->Document("stand_trajectory");
+    const bool own = doc && std::filesystem::equivalent((*doc)->path, trajectory_path);
+    auto t = own ? firmware::ParseTrajectory((*doc)->text, "stand_trajectory.yaml", *robot)
+                 : firmware::LoadTrajectory(trajectory_path, *robot);
     if (!t.ok()) return std::fprintf(stderr, "pbppo-controller-quadruped: %s\n", t.error().message.c_str()), 1;
     o.has_trajectory = true;
     o.trajectory = *t;

@@ -96,10 +96,12 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
     return MakeError(ErrorCode::kInvalidValue,
                      "auv-nav: layout '" + layout_name + "' unknown (easy, medium, hard, mixed)");
   }
-  const std::string dir = models_dir + "/auv/";
+  // The robot is read once; every layout's configuration comes from that one model.
+  auto model = robot::LoadRobotModel(models_dir + "/auv/robot.yaml");
+  if (!model) return std::move(model).error();
   std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs;
   for (const auto& n : names) {
-    auto cfg = sim::LoadAuvTaskConfig(dir + "auv.yaml", dir + "layouts/" + n + ".yaml", dir + "io_layout.yaml");
+    auto cfg = sim::MakeAuvTaskConfig(*model, n);
     if (!cfg) return std::move(cfg).error();
     if (const auto mode = ProgressFor(progress, n).value()) cfg->task.progress = *mode;
     if (*margin) std::tie(cfg->task.geodesic_margin_m, cfg->task.geodesic_margin_cost) = **margin;

@@ -21,7 +21,7 @@ namespace pbppo::envs {
 
 class AuvNav final : public Env {
  public:
-  // `layout_name`: easy, medium or hard (models/<dir>/auv/layouts/<name>.yaml), or mixed.
+  // `layout_name`: easy, medium or hard (the layouts of models/<dir>/auv/robot.yaml), or mixed.
   // progress: a progress spec (ProgressFor) that replaces auv.yaml's task.progress; empty keeps it.
   // geodesic_margin: "D:C" sets auv.yaml's task.geodesic_margin (distance_m D, cost C) in every
   // layout (it acts where the progress term is geodesic); empty keeps auv.yaml's.

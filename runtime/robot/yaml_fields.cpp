@@ -47,7 +47,7 @@ Status YamlFields::Map(const YAML::Node& parent, const char* key, const std::str
   const YAML::Node v = parent[key];
   if (!v) return Fail(where, std::string("missing field '") + key + "'");
   if (!v.IsMap()) return Fail(Join(where, key), "expected a mapping, got " + Quote(v));
-  *out = v;
+  out->reset(v);  // rebinds: assigning would write into the node *out referred to
   return {};
 }
 
@@ -56,11 +56,11 @@ Status YamlFields::List(const YAML::Node& parent, const char* key, const std::st
   const YAML::Node v = parent[key];
   if (!v) {
     if (required) return Fail(where, std::string("missing field '") + key + "'");
-    *out = YAML::Node(YAML::NodeType::Sequence);
+    out->reset(YAML::Node(YAML::NodeType::Sequence));
     return {};
   }
   if (!v.IsSequence()) return Fail(Join(where, key), "expected a list, got " + Quote(v));
-  *out = v;
+  out->reset(v);  // rebinds: assigning would write into the node *out referred to
   return {};
 }
 
@@ -165,7 +165,7 @@ Status YamlFields::Sequence(const YAML::Node& map, const char* key, const std::s
   if (!v) return Fail(where, std::string("missing field '") + key + "'");
   if (!v.IsSequence() || v.size() != n)
     return Fail(Join(where, key), "expected a list of " + std::to_string(n) + " numbers, got " + Quote(v));
-  *out = v;
+  out->reset(v);  // rebinds: assigning would write into the node *out referred to
   return {};
 }
 

@@ -12,7 +12,6 @@
 namespace pbppo::sim {
 namespace {
 
-using robot::LoadYamlFile;
 using robot::YamlFields;
 
 double Clamp(double x, double lo, double hi) {
@@ -102,7 +101,7 @@ Status ValidateAuvParams(const AuvParams& p) {
                       {"controller.surge_speed_max_mps", p.surge_speed_max_mps},
                       {"controller.yaw_rate_max_radps", p.yaw_rate_max_radps},
                       {"simulation.physics_step_s", p.physics_step_s},
-                      {"simulation.control_period_s", p.control_period_s}}) {
+                      {"control period", p.control_period_s}}) {
     if (auto st = positive(f, v); !st) return st;
   }
   if (auto st = non_negative("hull.cb_above_cg_m", p.cb_above_cg_m); !st) return st;
@@ -129,22 +128,20 @@ Status ValidateAuvParams(const AuvParams& p) {
     return bad("controller.surge_speed_min_mps", p.surge_speed_min_mps, "must be below surge_speed_max_mps");
   const double ratio = p.control_period_s / p.physics_step_s;
   if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || ratio < 0.5)
-    return bad("simulation.control_period_s", p.control_period_s,
+    return bad("control period (robot.yaml timing.policy_period_s)", p.control_period_s,
                "must be a whole multiple of simulation.physics_step_s = " + std::to_string(p.physics_step_s));
   return {};
 }
 
-Result<AuvParams> LoadAuvParams(const std::string& path) {
-  auto doc = LoadYamlFile(path);
-  if (!doc) return std::move(doc).error();
-  const YAML::Node root = *doc;
+Result<AuvParams> ParseAuvParams(const YAML::Node& root, const std::string& path, double control_period_s) {
   YamlFields f(path);
-  if (auto st = f.Keys(root, "",
-                       {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task",
-                        "description", "supervisor"});
+  if (auto st = f.Keys(
+          root, "",
+          {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task", "description"});
       !st)
     return st.error();
   AuvParams p;
+  p.control_period_s = control_period_s;
   constexpr double kBig = 1e9;
   YAML::Node n;
   if (auto st = f.Map(root, "hull", "", &n); !st) return st.error();
@@ -207,9 +204,8 @@ Result<AuvParams> LoadAuvParams(const std::string& path) {
     return st.error();
 
   if (auto st = f.Map(root, "simulation", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "simulation", {"physics_step_s", "control_period_s", "integrator"}); !st) return st.error();
+  if (auto st = f.Keys(n, "simulation", {"physics_step_s", "integrator"}); !st) return st.error();
   if (auto st = f.Number(n, "physics_step_s", "simulation", 1e-5, 1.0, &p.physics_step_s); !st) return st.error();
-  if (auto st = f.Number(n, "control_period_s", "simulation", 1e-5, 10.0, &p.control_period_s); !st) return st.error();
   std::string integ;
   if (auto st = f.Text(n, "integrator", "simulation", &integ); !st) return st.error();
   if (integ == "rk2") {

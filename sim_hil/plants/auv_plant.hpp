@@ -15,6 +15,7 @@
 #include <string>
 
 #include "runtime/core/result.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::sim {
 
@@ -65,9 +66,10 @@ struct AuvParams {
 
 // Validates every field; errors name the field and the value.
 Status ValidateAuvParams(const AuvParams& p);
-// Reads the hull, added_mass, damping, thrusters, controller and simulation sections of
-// models/auv/auv.yaml (other top-level sections are left to their own readers).
-Result<AuvParams> LoadAuvParams(const std::string& path);
+// Reads the hull, added_mass, damping, thrusters, controller and simulation sections of the
+// plant file (models/auv/auv.yaml, read with robot.yaml: sim::MakeAuvTaskConfig); `path` names it
+// in errors. The control period is the robot's (robot.yaml timing.policy_period_s).
+Result<AuvParams> ParseAuvParams(const YAML::Node& plant, const std::string& path, double control_period_s);
 
 struct AuvPose {
   double x_m = 0.0;

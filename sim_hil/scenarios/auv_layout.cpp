@@ -13,7 +13,7 @@ using robot::YamlFields;
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 constexpr double kBig = 1e6;
 
-Result<AuvLayout> Parse(const YAML::Node& root, const std::string& origin) {
+Result<AuvLayout> ParseLayout(const YAML::Node& root, const std::string& origin) {
   YamlFields f(origin);
   if (auto st = f.Keys(root, "", {"name", "description", "arena", "start", "targets", "obstacles", "random_obstacles"});
       !st)
@@ -107,13 +107,17 @@ Result<AuvLayout> Parse(const YAML::Node& root, const std::string& origin) {
 Result<AuvLayout> ParseAuvLayout(const std::string& yaml_text, const std::string& origin) {
   auto root = robot::ParseYaml(yaml_text, origin);
   if (!root) return std::move(root).error();
-  return Parse(*root, origin);
+  return ParseLayout(*root, origin);
+}
+
+Result<AuvLayout> ParseAuvLayout(const YAML::Node& root, const std::string& origin) {
+  return ParseLayout(root, origin);
 }
 
 Result<AuvLayout> LoadAuvLayout(const std::string& path) {
   auto doc = LoadYamlFile(path);
   if (!doc) return std::move(doc).error();
-  return Parse(*doc, path);
+  return ParseLayout(*doc, path);
 }
 
 }  // namespace pbppo::sim

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runtime/core/result.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
 
 namespace pbppo::sim {
@@ -37,5 +38,6 @@ struct AuvLayout {
 // Parses and validates; errors name the file, the element (obstacles[2]) and the field.
 Result<AuvLayout> LoadAuvLayout(const std::string& path);
 Result<AuvLayout> ParseAuvLayout(const std::string& yaml_text, const std::string& origin);
+Result<AuvLayout> ParseAuvLayout(const YAML::Node& root, const std::string& origin);
 
 }  // namespace pbppo::sim

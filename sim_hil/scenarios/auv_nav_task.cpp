@@ -11,7 +11,6 @@
 namespace pbppo::sim {
 namespace {
 
-using robot::LoadYamlFile;
 using robot::YamlFields;
 
 constexpr double kPi = 3.14159265358979323846;
@@ -44,12 +43,10 @@ bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noe
   return true;
 }
 
-Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
-  auto doc = LoadYamlFile(auv_yaml);
-  if (!doc) return std::move(doc).error();
-  YamlFields f(auv_yaml);
+Result<SonarParams> ParseSonarParams(const YAML::Node& plant, const std::string& path) {
+  YamlFields f(path);
   YAML::Node n;
-  if (auto st = f.Map(*doc, "sonar", "", &n); !st) return st.error();
+  if (auto st = f.Map(plant, "sonar", "", &n); !st) return st.error();
   if (auto st = f.Keys(n, "sonar", {"beams", "fov_deg", "max_range_m", "beam_width_deg", "rays_per_beam"}); !st)
     return st.error();
   SonarParams s;
@@ -74,20 +71,20 @@ Result<SonarParams> LoadSonarParams(const std::string& auv_yaml) {
   return s;
 }
 
-Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
-  auto doc = LoadYamlFile(auv_yaml);
-  if (!doc) return std::move(doc).error();
-  YamlFields f(auv_yaml);
+Result<AuvTaskParams> ParseAuvTaskParams(const YAML::Node& plant, const std::string& path, double depth_m) {
+  YamlFields f(path);
   YAML::Node n;
-  if (auto st = f.Map(*doc, "task", "", &n); !st) return st.error();
+  if (auto st = f.Map(plant, "task", "", &n); !st) return st.error();
   if (auto st = f.Keys(n, "task",
-                       {"depth_m", "safe_distance_m", "target_radius_m", "episode_time_s", "weights",
-                        "collision_penalty", "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress",
-                        "geodesic_margin", "clearance_penalty", "route_map"});
+                       {"safe_distance_m", "target_radius_m", "episode_time_s", "weights", "collision_penalty",
+                        "goal_reward", "step_penalty", "distance_gain", "bearing_gain", "progress", "geodesic_margin",
+                        "clearance_penalty", "route_map"});
       !st)
     return st.error();
   AuvTaskParams t;
-  if (auto st = f.Number(n, "depth_m", "task", 0.0, 1e4, &t.depth_m); !st) return st.error();
+  if (!(depth_m >= 0.0 && depth_m <= 1e4))
+    return f.Fail("task", "the mission depth " + YamlFields::Num(depth_m) + " m is outside [0, 10000]");
+  t.depth_m = depth_m;
   if (auto st = f.Number(n, "safe_distance_m", "task", 0.0, 100.0, &t.safe_distance_m); !st) return st.error();
   if (auto st = f.Number(n, "target_radius_m", "task", 0.01, 100.0, &t.target_radius_m); !st) return st.error();
   if (auto st = f.Number(n, "episode_time_s", "task", 1e-3, 1e6, &t.episode_time_s); !st) return st.error();
@@ -138,24 +135,33 @@ Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml) {
   return t;
 }
 
-Result<AuvTaskConfig> LoadAuvTaskConfig(const std::string& auv_yaml, const std::string& layout_yaml,
-                                        const std::string& io_layout_yaml) {
-  AuvTaskConfig c;
-  auto plant = LoadAuvParams(auv_yaml);
+Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const std::string& layout) {
+  auto plant = model.Document("plant");
   if (!plant) return std::move(plant).error();
-  c.plant = *plant;
-  auto sonar = LoadSonarParams(auv_yaml);
+  const robot::RobotDocument& doc = **plant;
+  auto depth = model.Parameter("depth_m");
+  if (!depth) return std::move(depth).error();
+  auto layout_doc = model.Document("layouts." + layout);
+  if (!layout_doc) {
+    std::string known;
+    for (const auto& n : model.DocumentGroup("layouts")) known += (known.empty() ? "" : ", ") + n;
+    return MakeError(ErrorCode::kInvalidValue, "layout '" + layout + "' unknown (" + model.path + ": " + known + ")");
+  }
+  if (!model.io) return MakeError(ErrorCode::kMismatch, model.path + ": files: no io_layout");
+  AuvTaskConfig c;
+  auto p = ParseAuvParams(doc.yaml, doc.path, model.policy_period_s);
+  if (!p) return std::move(p).error();
+  c.plant = *p;
+  auto sonar = ParseSonarParams(doc.yaml, doc.path);
   if (!sonar) return std::move(sonar).error();
   c.sonar = *sonar;
-  auto task = LoadAuvTaskParams(auv_yaml);
+  auto task = ParseAuvTaskParams(doc.yaml, doc.path, *depth);
   if (!task) return std::move(task).error();
   c.task = *task;
-  auto layout = LoadAuvLayout(layout_yaml);
-  if (!layout) return std::move(layout).error();
-  c.layout = std::move(*layout);
-  auto io = robot::LoadIoLayout(io_layout_yaml);
-  if (!io) return std::move(io).error();
-  c.io = std::move(*io);
+  auto l = ParseAuvLayout((*layout_doc)->yaml, (*layout_doc)->path);
+  if (!l) return std::move(l).error();
+  c.layout = std::move(*l);
+  c.io = *model.io;
   return c;
 }
 

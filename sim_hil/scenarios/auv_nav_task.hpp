@@ -25,6 +25,7 @@
 #include "runtime/robot/auv_messages.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "sim_hil/plants/auv_plant.hpp"
 #include "sim_hil/scenarios/auv_geodesic.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
@@ -82,12 +83,13 @@ struct AuvTaskConfig {
   robot::IoLayout io;
 };
 
-// Reads the sonar and task sections of models/auv/auv.yaml.
-Result<SonarParams> LoadSonarParams(const std::string& auv_yaml);
-Result<AuvTaskParams> LoadAuvTaskParams(const std::string& auv_yaml);
-// models/auv/auv.yaml + a layout + models/auv/io_layout.yaml.
-Result<AuvTaskConfig> LoadAuvTaskConfig(const std::string& auv_yaml, const std::string& layout_yaml,
-                                        const std::string& io_layout_yaml);
+// Read the sonar and task sections of the plant file (models/auv/auv.yaml); `path` names it in
+// errors. The mission depth is the robot's (robot.yaml parameters.depth_m).
+Result<SonarParams> ParseSonarParams(const YAML::Node& plant, const std::string& path);
+Result<AuvTaskParams> ParseAuvTaskParams(const YAML::Node& plant, const std::string& path, double depth_m);
+// Everything a task needs, from the robot (models/auv/robot.yaml, loaded once): the plant, sonar
+// and task of its plant file, the layout `layout` (one of its files.layouts), its IO layout.
+Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const std::string& layout);
 
 struct AuvStepEvents {
   int target_reached = -1;  // index of the target reached in this step, or -1

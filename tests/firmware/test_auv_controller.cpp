@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/robot/auv_signals.hpp"
+#include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo;
@@ -27,13 +29,10 @@ using firmware::AuvController;
 
 namespace {
 
-const std::string kAuvYaml = test::SourcePath("models/auv/auv.yaml");
-const std::string kIoYaml = test::SourcePath("models/auv/io_layout.yaml");
+const std::string kRobotYaml = test::SourcePath("models/auv/robot.yaml");
 
 robot::IoLayout Layout() {
-  auto l = robot::LoadIoLayout(kIoYaml);
-  REQUIRE_MESSAGE(l.ok(), l.error().message);
-  return *l;
+  return *test::AuvRobot().io;
 }
 
 // A blob with random weights whose names, hash and action map are the given layout's.
@@ -48,7 +47,7 @@ std::string WriteBlob(const std::string& dir, const robot::IoLayout& layout, con
 }
 
 std::unique_ptr<AuvController> MakeController(const std::string& dir) {
-  auto c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, Layout(), "auv.blob"));
+  auto c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, Layout(), "auv.blob"));
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   return std::move(*c);
 }
@@ -71,8 +70,8 @@ robot::AuvSensorSample Sample(std::uint64_t tick) {
 
 }  // namespace
 
-TEST_CASE("auv controller: configuration from auv.yaml - bad fields named with their value") {
-  auto c = firmware::LoadAuvControllerConfig(kAuvYaml);
+TEST_CASE("auv controller: configuration from robot.yaml - bad fields named with their value") {
+  auto c = firmware::AuvControllerConfigOf(test::AuvRobot());
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   CHECK(c->control_period_s == 0.1);
   CHECK(c->depth_setpoint_m == 5.0);
@@ -81,46 +80,53 @@ TEST_CASE("auv controller: configuration from auv.yaml - bad fields named with t
   CHECK(c->supervisor.stop_dv_mps == doctest::Approx(0.3));
   CHECK(c->supervisor.sonar_beams == 16);
 
-  const std::string dir = test::ScratchDir("auv_controller_yaml");
-  std::ifstream in(kAuvYaml);
+  // A copy of the robot's folder with one change in robot.yaml.
+  const std::string dir = test::ScratchDir("auv_controller_yaml") + "/auv";
+  std::filesystem::copy(test::SourcePath("models/auv"), dir, std::filesystem::copy_options::recursive);
+  std::ifstream in(kRobotYaml);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string p = dir + "/robot.yaml";
   auto with = [&](const std::string& from, const std::string& to) {
     std::string t = text;
     const auto at = t.find(from);
     REQUIRE(at != std::string::npos);
     t.replace(at, from.size(), to);
-    const std::string p = dir + "/auv.yaml";
     std::ofstream(p) << t;
-    auto r = firmware::LoadAuvControllerConfig(p);
+    auto m = robot::LoadRobotModel(p);
+    auto r = m ? firmware::AuvControllerConfigOf(*m) : Result<firmware::AuvControllerConfig>(m.error());
     REQUIRE_FALSE(r.ok());
     return r.error().message;
   };
-  CHECK(with("yaw_rate_max_radps: 0.5", "yaw_rate_max_radps: fast") ==
-        dir + "/auv.yaml: supervisor.yaw_rate_max_radps: 'fast' is not a number");
-  CHECK(with("lost_peer_ticks: 20", "lost_peer_ticks: 2.5") ==
-        dir + "/auv.yaml: supervisor.lost_peer_ticks: '2.5' is not an integer");
-  CHECK(with("surge_speed_mps: [0.0, 1.5]", "surge_speed_mps: [1.5, 0.0]") ==
-        dir + "/auv.yaml: supervisor.surge_speed_mps: low 1.5 is above high 0");
-  CHECK(with("stop_decel_mps2: 3.0", "stop_decel_mps2: 0.5")
+  CHECK(with("rate_per_s: 2.5", "rate_per_s: fast") == p + ": commands[1].rate_per_s: 'fast' is not a number");
+  CHECK(with("invalid_safe_stop: 3", "invalid_safe_stop: 2.5") ==
+        p + ": streams[0].invalid_safe_stop: '2.5' is not an integer");
+  CHECK(with("range: [0.0, 1.5]", "range: [1.5, 0.0]") == p + ": commands[0].range: low 1.5 is above high 0");
+  CHECK(with("stop: {ramp_per_s: 3.0}", "stop: {ramp_per_s: 0.5}")
             .find("supervisor: stop_dv_mps = 0.05: must be >= "
                   "dv_max_mps") != std::string::npos);
-  CHECK(with("lost_peer_ticks: 20", "lost_peer_ticks_typo: 20") ==
-        dir + "/auv.yaml: supervisor: missing field 'lost_peer_ticks'");
+  CHECK(with("invalid_safe_stop: 3", "invalid_safe_stop_typo: 3") ==
+        p + ": streams[0].invalid_safe_stop_typo: unknown field");
 }
 
 TEST_CASE(
     "auv controller: ticking at 1 kHz the limits keep their time - a sample a tick late is on time, a missed "
     "one is stale") {
-  auto c = firmware::LoadAuvControllerConfig(kAuvYaml);
-  REQUIRE_MESSAGE(c.ok(), c.error().message);
+  auto at = [](double tick_s) {
+    auto m = robot::WithTickPeriod(test::AuvRobot(), tick_s);
+    REQUIRE_MESSAGE(m.ok(), m.error().message);
+    auto config = firmware::AuvControllerConfigOf(*m);
+    REQUIRE_MESSAGE(config.ok(), config.error().message);
+    return *config;
+  };
+  const auto c = std::optional(at(0.1));
   // At the control period nothing changes.
-  const auto same = firmware::ForTickPeriod(*c, c->control_period_s);
+  const auto same = at(c->control_period_s);
   CHECK(same.supervisor.stale_degraded_ticks == c->supervisor.stale_degraded_ticks);
   CHECK(same.supervisor.stale_safe_stop_ticks == c->supervisor.stale_safe_stop_ticks);
   CHECK(same.supervisor.lost_peer_ticks == c->supervisor.lost_peer_ticks);
   CHECK(same.supervisor.dv_max_mps == c->supervisor.dv_max_mps);
   // 100 ticks per period: stale after 1.5 and 2.5 periods, lost after 20, rates per tick / 100.
-  const auto fast = firmware::ForTickPeriod(*c, 0.001);
+  const auto fast = at(0.001);
   CHECK(fast.supervisor.stale_degraded_ticks == 150);
   CHECK(fast.supervisor.stale_safe_stop_ticks == 250);
   CHECK(fast.supervisor.lost_peer_ticks == 2000);
@@ -147,19 +153,19 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
   const std::string dir = test::ScratchDir("auv_controller_blobs");
   robot::IoLayout other = Layout();
   other.observations[17].scale = 0.5;  // same names, other scale: only the hash differs
-  auto c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "scale.blob"));
+  auto c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "scale.blob"));
   REQUIRE_FALSE(c.ok());
-  CHECK(c.error().message.find("scale.blob on " + kIoYaml +
+  CHECK(c.error().message.find("scale.blob on " + test::AuvRobot().path +
                                ": policy does not fit robot layout 'auv': same names, "
                                "but scales, offsets, clips, units or limits differ (layout hash") != std::string::npos);
   other = Layout();
   other.observations[16].history = 2;
-  c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "history.blob"));
+  c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "history.blob"));
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("the policy takes 25 observations, the layout gives 24") != std::string::npos);
   other = Layout();
   std::swap(other.observations[0], other.observations[1]);
-  c = AuvController::Create(kAuvYaml, kIoYaml, WriteBlob(dir, other, "order.blob"));
+  c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "order.blob"));
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("observation 0 is 'sonar_1' in the policy, 'sonar_0' in the layout") !=
         std::string::npos);
@@ -173,10 +179,10 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
   bytes[bytes.size() / 2] ^= 0x5a;
   std::ofstream(dir + "/corrupt.blob", std::ios::binary)
       .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  c = AuvController::Create(kAuvYaml, kIoYaml, dir + "/corrupt.blob");
+  c = AuvController::Create(test::AuvRobot(), dir + "/corrupt.blob");
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("corrupt.blob") != std::string::npos);
-  c = AuvController::Create(kAuvYaml, kIoYaml, dir + "/missing.blob");
+  c = AuvController::Create(test::AuvRobot(), dir + "/missing.blob");
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("missing.blob") != std::string::npos);
 }

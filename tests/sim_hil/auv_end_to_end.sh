@@ -16,7 +16,7 @@ rm -rf "$work"
 mkdir -p "$work"
 cd "$src"
 blob=policies/frozen/auv_nav/auv_nav.blob
-robot=models/auv/auv.yaml
+robot=models/auv/robot.yaml
 # Missions the shipped policy must complete: "layout:seed ...".
 missions=${PBPPO_AUV_MISSIONS:-$(cat policies/frozen/auv_nav/test_missions.txt)}
 domain=$((100 + $$ % 100))

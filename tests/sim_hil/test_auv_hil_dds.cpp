@@ -40,7 +40,7 @@ struct Hil {
   pid_t pid = -1;
   std::string log;
   Hil(const std::vector<std::string>& extra, const std::string& log_path) : log(log_path) {
-    std::vector<std::string> args = {PBPPO_HIL_EXE, "auv", "--models", test::SourcePath("models/auv")};
+    std::vector<std::string> args = {PBPPO_HIL_EXE, "auv", "--robot", test::SourcePath("models/auv/robot.yaml")};
     args.insert(args.end(), extra.begin(), extra.end());
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());

@@ -13,11 +13,11 @@
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/core/random.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
+#include "tests/support/robot_models.hpp"
 
 TEST_CASE("auv task: Step and Reset allocate nothing beyond Simbody's own two per realisation") {
   REQUIRE(pbppo::AllocationCountingActive());
-  const std::string m = std::string(PBPPO_SOURCE_DIR) + "/models/auv/";
-  auto config = pbppo::sim::LoadAuvTaskConfig(m + "auv.yaml", m + "layouts/hard.yaml", m + "io_layout.yaml");
+  auto config = pbppo::sim::MakeAuvTaskConfig(pbppo::test::AuvRobot(), "hard");
   REQUIRE(config.ok());
   REQUIRE(config->plant.integrator == pbppo::sim::AuvIntegrator::kRk2);
   auto task = pbppo::sim::AuvNavTask::Create(*config);

@@ -10,11 +10,11 @@
 #include "runtime/robot/auv_signals.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
+#include "tests/support/robot_models.hpp"
 
 using namespace pbppo;
 
 namespace {
-const std::string kModel = std::string(PBPPO_SOURCE_DIR) + "/models/auv/";
 
 robot::AuvSensorSample SampleOf(const sim::AuvNavTask& t, bool episode_end) {
   const sim::AuvState& s = t.vehicle();
@@ -42,7 +42,7 @@ std::uint32_t UlpDistance(float a, float b) {
 }  // namespace
 
 TEST_CASE("auv observation: a sensor sample of the task's state gives the task's observation") {
-  auto c = sim::LoadAuvTaskConfig(kModel + "auv.yaml", kModel + "layouts/medium.yaml", kModel + "io_layout.yaml");
+  auto c = sim::MakeAuvTaskConfig(test::AuvRobot(), "medium");
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   // Every signal of the table, some with history, on top of the shipped layout.
   for (const char* sig : {"yaw", "cos_yaw", "sin_yaw", "x", "y", "depth_error", "clearance", "target_index",

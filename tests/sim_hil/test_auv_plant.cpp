@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "sim_hil/plants/auv_plant.hpp"
+#include "sim_hil/scenarios/auv_nav_task.hpp"
+#include "tests/support/robot_models.hpp"
 
 using pbppo::sim::AuvParams;
 using pbppo::sim::AuvPlant;
@@ -17,9 +19,9 @@ using pbppo::sim::AuvState;
 namespace {
 
 AuvParams Params() {
-  auto p = pbppo::sim::LoadAuvParams(std::string(PBPPO_SOURCE_DIR) + "/models/auv/auv.yaml");
-  REQUIRE_MESSAGE(p.ok(), p.error().message);
-  return *p;
+  auto c = pbppo::sim::MakeAuvTaskConfig(pbppo::test::AuvRobot(), "easy");
+  REQUIRE_MESSAGE(c.ok(), c.error().message);
+  return c->plant;
 }
 
 // A fixed command schedule: accelerate, turn both ways, slow down.
@@ -228,7 +230,7 @@ TEST_CASE("auv plant: bad parameters are refused naming the field") {
   p.physics_step_s = 0.02;
   auto r = AuvPlant::Create(p);
   REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message.find("control_period_s") != std::string::npos);
+  CHECK(r.error().message.find("control period (robot.yaml timing.policy_period_s) = 0.05") != std::string::npos);
   p = Params();
   p.mass_kg = -1.0;
   r = AuvPlant::Create(p);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim_hil/scenarios/auv_nav_task.hpp"
+#include "tests/support/robot_models.hpp"
 
 using namespace pbppo::sim;
 
@@ -22,7 +23,7 @@ constexpr double kPi = 3.14159265358979323846;
 const std::string kModel = std::string(PBPPO_SOURCE_DIR) + "/models/auv/";
 
 AuvTaskConfig Config(const std::string& layout) {
-  auto c = LoadAuvTaskConfig(kModel + "auv.yaml", kModel + "layouts/" + layout + ".yaml", kModel + "io_layout.yaml");
+  auto c = MakeAuvTaskConfig(pbppo::test::AuvRobot(), layout);
   REQUIRE_MESSAGE(c.ok(), c.error().message);
   return *c;
 }
@@ -479,6 +480,17 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
     std::fclose(f);
   };
   std::filesystem::create_directories(PBPPO_SCRATCH_DIR);
+  // The plant file's sections, read as the robot model reads them (at the robot's 0.1 s period).
+  auto doc = [&] {
+    auto d = pbppo::robot::LoadYamlFile(scratch);
+    REQUIRE_MESSAGE(d.ok(), d.error().message);
+    return *d;
+  };
+  auto LoadAuvParams = [&](const std::string& path, double period_s = 0.1) {
+    return ParseAuvParams(doc(), path, period_s);
+  };
+  auto LoadSonarParams = [&](const std::string& path) { return ParseSonarParams(doc(), path); };
+  auto LoadAuvTaskParams = [&](const std::string& path) { return ParseAuvTaskParams(doc(), path, 5.0); };
   write("mass_kg: 50.0", "mass_kg: -3");
   auto p = LoadAuvParams(scratch);
   REQUIRE_FALSE(p.ok());
@@ -487,10 +499,10 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   p = LoadAuvParams(scratch);
   REQUIRE_FALSE(p.ok());
   CHECK(p.error().message.find("simulation.integrator: 'rk45' is not one of") != std::string::npos);
-  write("control_period_s: 0.1", "control_period_s: 0.03");
-  p = LoadAuvParams(scratch);
+  write("mass_kg: 50.0", "mass_kg: 50.0");
+  p = LoadAuvParams(scratch, 0.03);  // not a whole number of 0.02 s physics steps
   REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message.find("simulation.control_period_s") != std::string::npos);
+  CHECK(p.error().message.find("control period (robot.yaml timing.policy_period_s) = 0.03") != std::string::npos);
   write("linear: [10.0, 100.0, 100.0, 2.0, 8.0, 8.0]", "linear: [10.0, 100.0]");
   p = LoadAuvParams(scratch);
   REQUIRE_FALSE(p.ok());
@@ -505,8 +517,8 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   sonar_refused("beams: 16", "beams: 2.5", "sonar.beams: '2.5' is not an integer");
   sonar_refused("beam_width_deg: 22.5", "beam_width_deg: 120", "sonar.beam_width_deg: '120' is outside");
   sonar_refused("rays_per_beam: 5", "rays_per_beam: 0", "sonar.rays_per_beam: '0' is outside");
-  auto s = LoadSonarParams(kModel + "auv.yaml");  // the shipped beams: 22.5 deg wide, 5 rays
-  REQUIRE_MESSAGE(s.ok(), s.error().message);
+  const AuvTaskConfig shipped = Config("easy");  // the shipped beams: 22.5 deg wide, 5 rays
+  const SonarParams* s = &shipped.sonar;
   CHECK(s->beam_width_rad == doctest::Approx(kPi / 8));
   CHECK(s->rays_per_beam == 5);
   write("safe_distance_m: 1.2", "safe_distnce_m: 1.2");

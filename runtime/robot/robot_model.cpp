@@ -1,0 +1,418 @@
+#include "runtime/robot/robot_model.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <set>
+
+#include "runtime/robot/robot_model_parts.hpp"
+#include "runtime/robot/text_file.hpp"
+
+namespace pbppo::robot {
+namespace {
+
+constexpr double kInf = HUGE_VAL;
+using Rule = YamlFields::TextRule;
+
+class Files {
+ public:
+  explicit Files(std::string dir) : dir_(std::move(dir)) {}
+  std::string PathOf(const std::string& rel) const { return (std::filesystem::path(dir_) / rel).string(); }
+  Result<std::string> Read(const std::string& path) {
+    auto text = ReadTextFile(path);
+    if (!text) return std::move(text).error();
+    for (char c : *text) {
+      hash_ ^= static_cast<unsigned char>(c);
+      hash_ *= 0x100000001b3ull;
+    }
+    hash_ ^= 0xff;  // file boundary
+    hash_ *= 0x100000001b3ull;
+    return text;
+  }
+  std::uint64_t hash() const noexcept { return hash_; }
+
+ private:
+  std::string dir_;
+  std::uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
+struct Loader : detail::Builder {
+  Files& files;
+
+  Status FilesSection(const YAML::Node& root) {
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "files", "", &n));
+    for (const auto& kv : n) {
+      const std::string role = kv.first.as<std::string>();
+      const std::string where = "files." + role;
+      if (kv.second.IsMap()) {
+        for (const auto& sub : kv.second) PBPPO_TRY(Document(role + "." + sub.first.as<std::string>(), sub.second));
+        continue;
+      }
+      if (!kv.second.IsScalar()) return f.Fail(where, "expected a file name or a mapping of names to files");
+      const std::string path = files.PathOf(kv.second.as<std::string>());
+      if (role == "io_layout") {
+        auto text = files.Read(path);
+        if (!text) return std::move(text).error();
+        auto io = ParseIoLayout(*text, path);
+        if (!io) return std::move(io).error();
+        m.io = std::move(*io);
+      } else if (role == "can_map") {
+        auto text = files.Read(path);
+        if (!text) return std::move(text).error();
+        auto can = ParseCanMap(*text, path);
+        if (!can) return std::move(can).error();
+        m.can = std::move(*can);
+      } else if (role == "description") {
+        PBPPO_TRY(Description(path));
+      } else {
+        PBPPO_TRY(Document(role, kv.second));
+      }
+    }
+    return {};
+  }
+
+  Status Document(const std::string& role, const YAML::Node& name) {
+    if (!name.IsScalar()) return f.Fail("files." + role, "expected a file name, got " + YamlFields::Quote(name));
+    RobotDocument d;
+    d.path = files.PathOf(name.as<std::string>());
+    auto text = files.Read(d.path);
+    if (!text) return std::move(text).error();
+    d.text = std::move(*text);
+    const std::string ext = std::filesystem::path(d.path).extension().string();
+    if (ext == ".yaml" || ext == ".yml") {
+      auto yaml = ParseYaml(d.text, d.path);
+      if (!yaml) return std::move(yaml).error();
+      d.yaml = *yaml;
+    }
+    m.documents[role] = std::move(d);
+    return {};
+  }
+
+  Status Description(const std::string& path) {
+    auto text = files.Read(path);
+    if (!text) return std::move(text).error();
+    const std::string origin = std::filesystem::path(path).filename().string();
+    auto doc = ParseYaml(*text, origin);
+    if (!doc) return std::move(doc).error();
+    std::string urdf_name;
+    PBPPO_TRY(YamlFields(origin).Text(*doc, "urdf", "", &urdf_name));
+    const std::string urdf_path = (std::filesystem::path(path).parent_path() / urdf_name).string();
+    auto urdf_text = files.Read(urdf_path);
+    if (!urdf_text) return std::move(urdf_text).error();
+    auto urdf = ParseUrdf(*urdf_text, std::filesystem::path(urdf_path).filename().string());
+    if (!urdf) return std::move(urdf).error();
+    auto body = ParseRobotDescription(*text, origin, std::move(*urdf), urdf_path);
+    if (!body) return std::move(body).error();
+    m.body = std::move(*body);
+    return {};
+  }
+
+  Status Timing(const YAML::Node& root) {
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "timing", "", &n));
+    PBPPO_TRY(f.Keys(n, "timing", {"tick_period_s", "policy_period_s", "policy_trigger"}));
+    PBPPO_TRY(f.Number(n, "tick_period_s", "timing", 1e-6, 10.0, &m.tick_period_s));
+    m.policy_period_s = m.tick_period_s;
+    PBPPO_TRY(f.OptionalNumber(n, "policy_period_s", "timing", 1e-6, 100.0, &m.policy_period_s));
+    return {};
+  }
+
+  Status Transports(const YAML::Node& root) {
+    YAML::Node list;
+    PBPPO_TRY(f.List(root, "transports", "", true, &list));
+    if (list.size() == 0) return f.Fail("transports", "is empty");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string w = "transports[" + std::to_string(i) + "]";
+      if (!list[i].IsMap()) return f.Fail(w, "expected a mapping");
+      TransportSpec t;
+      PBPPO_TRY(f.Text(list[i], "name", w, &t.name, Rule::kToken));
+      PBPPO_TRY(f.Text(list[i], "kind", w, &t.kind, Rule::kToken));
+      if (t.kind != "can" && t.kind != "dds") return f.Fail(w + ".kind", "'" + t.kind + "' is not can or dds");
+      if (m.TransportIndex(t.name) >= 0) return f.Fail(w + ".name", "transport '" + t.name + "' appears twice");
+      for (const auto& kv : list[i]) {
+        const std::string k = kv.first.as<std::string>();
+        if (k == "name" || k == "kind") continue;
+        if (!kv.second.IsScalar()) return f.Fail(w + "." + k, "expected a string, got " + YamlFields::Quote(kv.second));
+        t.options[k] = kv.second.as<std::string>();
+      }
+      m.transports.push_back(std::move(t));
+    }
+    return {};
+  }
+
+  Status DeclaredStreams(const YAML::Node& root) {
+    YAML::Node list;
+    PBPPO_TRY(f.List(root, "streams", "", false, &list));
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string w = "streams[" + std::to_string(i) + "]";
+      const YAML::Node n = list[i];
+      PBPPO_TRY(f.Keys(n, w, {"name", "transport", "period_s", "stale_after", "invalid_safe_stop", "fields"}));
+      StreamSpec s;
+      PBPPO_TRY(f.Text(n, "name", w, &s.name, Rule::kToken));
+      PBPPO_TRY(f.Text(n, "transport", w, &s.transport, Rule::kToken));
+      PBPPO_TRY(f.Number(n, "period_s", w, 1e-6, 100.0, &s.period_s));
+      PBPPO_TRY(ReadStale(n, w, &s.stale_after));
+      PBPPO_TRY(f.Count(n, "invalid_safe_stop", w, 1, 1000000, &s.invalid_safe_stop));
+      PBPPO_TRY(StartStream(std::move(s), w));
+      YAML::Node fields;
+      PBPPO_TRY(f.List(n, "fields", w, true, &fields));
+      for (std::size_t k = 0; k < fields.size(); ++k) {
+        const std::string fw = w + ".fields[" + std::to_string(k) + "]";
+        PBPPO_TRY(f.Keys(fields[k], fw, {"name", "min", "max", "count"}));
+        std::string name;
+        double lo = -kInf, hi = kInf;
+        std::uint32_t count = 0;
+        PBPPO_TRY(f.Text(fields[k], "name", fw, &name, Rule::kToken));
+        PBPPO_TRY(f.OptionalNumber(fields[k], "min", fw, -kInf, kInf, &lo));
+        PBPPO_TRY(f.OptionalNumber(fields[k], "max", fw, -kInf, kInf, &hi));
+        if (fields[k]["count"]) {
+          PBPPO_TRY(f.Count(fields[k], "count", fw, 1, 4096, &count));
+          if (name.find("{i}") == std::string::npos) return f.Fail(fw + ".name", "'" + name + "' has no {i}");
+          for (std::uint32_t j = 0; j < count; ++j) PBPPO_TRY(AddField(ExpandIndex(name, j), lo, hi, fw));
+        } else {
+          PBPPO_TRY(AddField(name, lo, hi, fw));
+        }
+      }
+    }
+    return {};
+  }
+
+  Status DeclaredCommands(const YAML::Node& root) {
+    YAML::Node list;
+    PBPPO_TRY(f.List(root, "commands", "", false, &list));
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string w = "commands[" + std::to_string(i) + "]";
+      const YAML::Node n = list[i];
+      PBPPO_TRY(f.Keys(n, w, {"name", "unit", "range", "degraded_range", "rate_per_s", "stop", "neutral"}));
+      CommandSpec c;
+      std::array<double, 2> range{}, degraded{};
+      PBPPO_TRY(f.Text(n, "name", w, &c.name, Rule::kToken));
+      c.unit = "1";
+      PBPPO_TRY(f.OptionalText(n, "unit", w, &c.unit, Rule::kToken));
+      PBPPO_TRY(f.Range(n, "range", w, -kInf, kInf, &range));
+      c.min = range[0];
+      c.max = range[1];
+      degraded = range;
+      if (n["degraded_range"]) PBPPO_TRY(f.Range(n, "degraded_range", w, c.min, c.max, &degraded));
+      c.degraded_min = degraded[0];
+      c.degraded_max = degraded[1];
+      PBPPO_TRY(f.OptionalNumber(n, "rate_per_s", w, 1e-9, kInf, &c.rate_per_s));
+      PBPPO_TRY(f.OptionalNumber(n, "neutral", w, c.min, c.max, &c.neutral));
+      YAML::Node stop;
+      PBPPO_TRY(f.Map(n, "stop", w, &stop));
+      const std::string sw = w + ".stop";
+      PBPPO_TRY(f.Keys(stop, sw, {"ramp_per_s", "value"}));
+      if (stop["ramp_per_s"]) {
+        c.stop = StopKind::kRamp;
+        PBPPO_TRY(f.Number(stop, "ramp_per_s", sw, 1e-9, kInf, &c.stop_ramp_per_s));
+      } else {
+        c.stop = StopKind::kValue;
+        PBPPO_TRY(f.Number(stop, "value", sw, c.min, c.max, &c.stop_value));
+      }
+      PBPPO_TRY(AddCommand(std::move(c), w));
+    }
+    if (m.commands.empty()) return f.Fail("commands", "the robot has no command (declare some, or a can_map)");
+    return {};
+  }
+
+  Status Phases(const YAML::Node& root) {
+    PhaseSpec& p = m.phases;
+    p.enable_motors = !m.motors.empty();
+    if (!root["phases"]) {
+      if (p.enable_motors) return f.Fail("", "missing field 'phases' (the robot has motors to switch on and off)");
+      return {};
+    }
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "phases", "", &n));
+    PBPPO_TRY(f.Keys(n, "phases", {"arming_timeout_s", "stand_up_s", "hold_s", "damping_s", "motor_off_timeout_s"}));
+    for (const Status& st : {f.Number(n, "arming_timeout_s", "phases", 1e-6, 3600.0, &p.arming_timeout_s),
+                             f.OptionalNumber(n, "stand_up_s", "phases", 0.0, 3600.0, &p.stand_up_s),
+                             f.OptionalNumber(n, "hold_s", "phases", 0.0, 3600.0, &p.hold_s),
+                             f.OptionalNumber(n, "damping_s", "phases", 0.0, 3600.0, &p.damping_s),
+                             f.Number(n, "motor_off_timeout_s", "phases", 1e-6, 3600.0, &p.motor_off_timeout_s)}) {
+      PBPPO_TRY(st);
+    }
+    return {};
+  }
+
+  Status Supervisor(const YAML::Node& root) {
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "supervisor", "", &n));
+    PBPPO_TRY(f.Keys(n, "supervisor", {"command_limit", "overrun", "signal_limits"}));
+    SupervisorSpec& s = m.supervisor;
+    std::string limit;
+    PBPPO_TRY(f.Text(n, "command_limit", "supervisor", &limit));
+    if (limit != "count" && limit != "degraded")
+      return f.Fail("supervisor.command_limit", "'" + limit + "' is not count or degraded");
+    s.command_limit_degrades = limit == "degraded";
+    YAML::Node o;
+    PBPPO_TRY(f.Map(n, "overrun", "supervisor", &o));
+    PBPPO_TRY(f.Keys(o, "supervisor.overrun", {"degraded", "safe_stop"}));
+    PBPPO_TRY(f.Count(o, "degraded", "supervisor.overrun", 1, 1000000, &s.overrun_degraded));
+    PBPPO_TRY(f.Count(o, "safe_stop", "supervisor.overrun", 1, 1000000, &s.overrun_safe_stop));
+    if (s.overrun_safe_stop <= s.overrun_degraded)
+      return f.Fail("supervisor.overrun.safe_stop", std::to_string(s.overrun_safe_stop) + " is not above degraded " +
+                                                        std::to_string(s.overrun_degraded));
+    YAML::Node limits;
+    PBPPO_TRY(f.List(n, "signal_limits", "supervisor", false, &limits));
+    for (std::size_t i = 0; i < limits.size(); ++i) {
+      const std::string w = "supervisor.signal_limits[" + std::to_string(i) + "]";
+      PBPPO_TRY(f.Keys(limits[i], w, {"signal", "range"}));
+      SignalLimitSpec l;
+      std::array<double, 2> r{};
+      PBPPO_TRY(f.Text(limits[i], "signal", w, &l.signal, Rule::kToken));
+      PBPPO_TRY(f.Range(limits[i], "range", w, -kInf, kInf, &r));
+      l.min = r[0];
+      l.max = r[1];
+      s.signal_limits.push_back(std::move(l));
+    }
+    return {};
+  }
+};
+
+std::uint32_t Ticks(double seconds, double tick_s) {
+  return static_cast<std::uint32_t>(std::min(4e9, std::round(seconds / tick_s)));
+}
+
+Status Derive(RobotModel& m, double tick_s) {
+  auto fail = [&](const std::string& what) { return MakeError(ErrorCode::kInvalidValue, m.path + ": " + what); };
+  if (!(tick_s > 0) || !std::isfinite(tick_s)) return fail("tick period " + YamlFields::Num(tick_s) + " s");
+  m.tick_period_s = tick_s;
+  const double ratio = m.policy_period_s / tick_s;
+  if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio || ratio < 0.5)
+    return fail("timing.policy_period_s " + YamlFields::Num(m.policy_period_s) + " is not a whole number of ticks of " +
+                YamlFields::Num(tick_s) + " s");
+  m.policy_period_ticks = static_cast<std::uint32_t>(std::llround(ratio));
+  for (StreamSpec& s : m.streams) {
+    // Ticks per sample period 1/k: "older than n periods" is n periods and a half, so that a
+    // sample a tick or two late is not taken for a missed one (n at k = 1); lost after n whole ones.
+    const double k = tick_s / s.period_s;
+    auto missed = [&](double n) { return static_cast<std::uint32_t>(std::min(1e6, std::floor((n + 0.5) / k + 1e-9))); };
+    auto periods = [&](double n) { return static_cast<std::uint32_t>(std::min(1e6, std::ceil(n / k - 1e-9))); };
+    s.stale_degraded_ticks = missed(s.stale_after.degraded);
+    s.stale_safe_stop_ticks = missed(s.stale_after.safe_stop);
+    s.lost_ticks = periods(s.stale_after.lost);
+  }
+  for (CommandSpec& c : m.commands) {
+    c.rate = c.rate_per_s * tick_s;
+    c.stop_rate = c.stop_ramp_per_s * tick_s;
+  }
+  PhaseSpec& p = m.phases;
+  p.arming_timeout_ticks = Ticks(p.arming_timeout_s, tick_s);
+  p.stand_up_ticks = Ticks(p.stand_up_s, tick_s);
+  p.hold_ticks = Ticks(p.hold_s, tick_s);
+  p.damping_ticks = Ticks(p.damping_s, tick_s);
+  p.motor_off_timeout_ticks = Ticks(p.motor_off_timeout_s, tick_s);
+  return {};
+}
+
+}  // namespace
+
+std::string ExpandIndex(const std::string& pattern, std::uint32_t i) {
+  const auto at = pattern.find("{i}");
+  if (at == std::string::npos) return pattern;
+  return pattern.substr(0, at) + std::to_string(i) + pattern.substr(at + 3);
+}
+
+int RobotModel::FieldIndex(std::string_view n) const noexcept {
+  for (std::size_t i = 0; i < fields.size(); ++i)
+    if (fields[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+int RobotModel::CommandIndex(std::string_view n) const noexcept {
+  for (std::size_t i = 0; i < commands.size(); ++i)
+    if (commands[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+int RobotModel::StreamIndex(std::string_view n) const noexcept {
+  for (std::size_t i = 0; i < streams.size(); ++i)
+    if (streams[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+int RobotModel::TransportIndex(std::string_view n) const noexcept {
+  for (std::size_t i = 0; i < transports.size(); ++i)
+    if (transports[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+Result<const RobotDocument*> RobotModel::Document(const std::string& role) const {
+  const auto it = documents.find(role);
+  if (it == documents.end()) return MakeError(ErrorCode::kMismatch, path + ": files: no file for '" + role + "'");
+  return &it->second;
+}
+
+std::vector<std::string> RobotModel::DocumentGroup(const std::string& group) const {
+  std::vector<std::string> names;
+  for (const auto& [role, doc] : documents)
+    if (role.rfind(group + ".", 0) == 0) names.push_back(role.substr(group.size() + 1));
+  return names;
+}
+
+Result<double> RobotModel::Parameter(const std::string& n) const {
+  const auto it = parameters.find(n);
+  if (it == parameters.end()) return MakeError(ErrorCode::kMismatch, path + ": parameters: no '" + n + "'");
+  return it->second;
+}
+
+Result<RobotModel> LoadRobotModel(const std::string& robot_yaml) {
+  RobotModel m;
+  m.path = robot_yaml;
+  m.dir = std::filesystem::path(robot_yaml).parent_path().string();
+  Files files(m.dir);
+  auto text = files.Read(robot_yaml);
+  if (!text) return std::move(text).error();
+  auto doc = ParseYaml(*text, robot_yaml);
+  if (!doc) return std::move(doc).error();
+  const YAML::Node root = *doc;
+  const YamlFields f(robot_yaml);
+  PBPPO_TRY(f.Keys(root, "",
+                   {"robot", "description", "files", "timing", "parameters", "transports", "streams", "motors", "imus",
+                    "phases", "signals", "commands", "supervisor"}));
+  PBPPO_TRY(f.Text(root, "robot", "", &m.name, Rule::kToken));
+  PBPPO_TRY(f.OptionalText(root, "description", "", &m.description));
+  Loader l{{m, f}, files};
+  PBPPO_TRY(l.Timing(root));
+  if (root["parameters"]) {
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "parameters", "", &n));
+    for (const auto& kv : n) {
+      const std::string k = kv.first.as<std::string>();
+      PBPPO_TRY(f.Number(n, k.c_str(), "parameters", -kInf, kInf, &m.parameters[k]));
+    }
+  }
+  PBPPO_TRY(l.FilesSection(root));
+  if (m.io && m.io->robot != m.name)
+    return f.Fail("files.io_layout", "the layout is for robot '" + m.io->robot + "', not '" + m.name + "'");
+  if (m.can && m.can->robot != m.name)
+    return f.Fail("files.can_map", "the CAN map is for robot '" + m.can->robot + "', not '" + m.name + "'");
+  PBPPO_TRY(l.Transports(root));
+  PBPPO_TRY(l.DeclaredStreams(root));
+  PBPPO_TRY(l.CanDevices(root));
+  PBPPO_TRY(l.DeclaredCommands(root));
+  PBPPO_TRY(l.Signals(root));
+  PBPPO_TRY(l.Phases(root));
+  PBPPO_TRY(l.Supervisor(root));
+  if (const YAML::Node t = root["timing"]["policy_trigger"]) {
+    std::string s;
+    PBPPO_TRY(f.Text(root["timing"], "policy_trigger", "timing", &s, Rule::kToken));
+    m.policy_trigger = m.StreamIndex(s);
+    if (m.policy_trigger < 0) return f.Fail("timing.policy_trigger", "'" + s + "' is not a stream of the robot");
+  }
+  if (m.streams.empty()) return f.Fail("streams", "the robot has no input (declare a stream, or a can_map)");
+  m.hash = files.hash();
+  PBPPO_TRY(Derive(m, m.tick_period_s));
+  return m;
+}
+
+Result<RobotModel> WithTickPeriod(const RobotModel& model, double tick_period_s) {
+  RobotModel m = model;
+  PBPPO_TRY(Derive(m, tick_period_s));
+  return m;
+}
+
+#undef PBPPO_TRY
+
+}  // namespace pbppo::robot

@@ -1,0 +1,178 @@
+// The robot as one immutable model: models/<robot>/robot.yaml names every piece of the robot and
+// LoadRobotModel reads every file it names, once, into a RobotModel. The controller, the HIL
+// simulator and the trainer's environments all take the same `const RobotModel&`; nothing reads a
+// robot file again (ReadTextFile counts, a test checks). What changes per tick lives in a
+// RobotData made from the model (runtime/robot/robot_data.hpp). Set-up time only.
+//
+// The model speaks of generic things only:
+//   fields     the robot's inputs, one double each, grouped in streams that arrive together (a
+//              DDS sample, one motor's reply, an IMU sample); each field has the bounds of the
+//              one sample check;
+//   commands   the robot's outputs, one double each, with the supervisor's limits and what
+//              safe-stop does with them;
+//   signals    what an IO layout may observe, computed from fields (runtime/robot/signals.hpp);
+//   motors     actuators that are switched on at arming and off at shutdown (MIT drivers);
+//   documents  the robot-specific files (the AUV's plant, task and layouts; a stand trajectory;
+//              a DDS profile), kept as read for the code that knows them (sim_hil, firmware).
+// Streams, fields and commands of MIT motors and IMUs are made from the CAN map and the URDF;
+// all others are declared in robot.yaml. Quantities per tick (stale ages, rate limits, the
+// policy period) follow from the tick period; WithTickPeriod gives the same robot at another.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+#include "runtime/robot/can_map.hpp"
+#include "runtime/robot/io_layout.hpp"
+#include "runtime/robot/urdf.hpp"
+#include "runtime/robot/yaml_fields.hpp"
+
+namespace pbppo::robot {
+
+// Ages beyond which a stream is stale (degraded, safe-stop) or lost (e-stop): "older than".
+struct StaleLimits {
+  double degraded = 0, safe_stop = 0, lost = 0;  // in the stream's periods, as robot.yaml gives them
+};
+
+struct FieldSpec {
+  std::string name;
+  double min = -HUGE_VAL, max = HUGE_VAL;  // the one sample check: finite and inside
+  std::uint32_t stream = 0;
+};
+
+enum class StreamKind : std::uint8_t { kDeclared, kMotor, kImu };
+
+struct StreamSpec {
+  std::string name;
+  std::string transport;  // the transport that delivers it (TransportSpec::name)
+  StreamKind kind = StreamKind::kDeclared;
+  std::uint32_t device = 0;  // kMotor: motor index in the CAN map; kImu: IMU index
+  std::uint32_t first_field = 0, field_count = 0;
+  double period_s = 0;  // how often a new sample is due
+  StaleLimits stale_after;
+  std::uint32_t invalid_safe_stop = 1;  // consecutive invalid checks that ask for safe-stop
+  // Per tick (derived from the tick period): ages in ticks, "older than".
+  std::uint32_t stale_degraded_ticks = 0, stale_safe_stop_ticks = 0, lost_ticks = 0;
+};
+
+// What safe-stop sends for a command.
+enum class StopKind : std::uint8_t {
+  kRamp,       // towards zero at stop_rate per tick
+  kValue,      // stop_value at once
+  kHoldField,  // the measured value of hold_field (a joint's position), inside the range
+};
+
+struct CommandSpec {
+  std::string name, unit;
+  double min = 0, max = 0;                    // limits: the supervisor clamps into them
+  double degraded_min = 0, degraded_max = 0;  // limits in degraded mode
+  double rate_per_s = HUGE_VAL;               // largest change per second (inf: none)
+  StopKind stop = StopKind::kValue;
+  double stop_ramp_per_s = 0, stop_value = 0;
+  std::int32_t hold_field = -1;
+  double neutral = 0;       // before a command source writes it: the default pose, the gains, zero
+  std::int32_t motor = -1;  // the motor it drives (MotorSpec), -1: none
+  double rate = HUGE_VAL;   // per tick (derived)
+  double stop_rate = 0;     // per tick (derived)
+};
+
+// An actuator that is switched on at arming and off at shutdown (an MIT driver), answering on
+// its stream.
+struct MotorSpec {
+  std::string joint;
+  std::uint32_t stream = 0;
+  std::uint32_t q_field = 0, dq_field = 0, tau_field = 0;  // its reply
+  std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;    // its commands
+  double default_q_rad = 0;
+};
+
+// A signal declared in robot.yaml (runtime/robot/signals.hpp resolves and computes them).
+struct SignalSpec {
+  enum class Op : std::uint8_t { kField, kWrap, kCos, kSin, kMinus, kMin, kGravityX, kGravityY, kGravityZ };
+  std::string name;
+  Op op = Op::kField;
+  std::vector<std::uint32_t> fields;  // kMin: several; kGravity*: the IMU's qw, qx, qy, qz; else one
+  double value = 0;                   // kMinus: the parameter subtracted
+};
+
+struct TransportSpec {
+  std::string name, kind;                      // kind: "can" or "dds"
+  std::map<std::string, std::string> options;  // everything else of its robot.yaml entry
+};
+
+struct PhaseSpec {
+  bool enable_motors = false;  // arming switches motors on (the robot has motors)
+  double arming_timeout_s = 0, stand_up_s = 0, hold_s = 0, damping_s = 0, motor_off_timeout_s = 0;
+  // Per tick (derived).
+  std::uint32_t arming_timeout_ticks = 0, stand_up_ticks = 0, hold_ticks = 0, damping_ticks = 0,
+                motor_off_timeout_ticks = 0;
+};
+
+struct SignalLimitSpec {
+  std::string signal;
+  double min = 0, max = 0;
+};
+
+struct SupervisorSpec {
+  bool command_limit_degrades = false;  // command_limit: degraded (else: count)
+  std::uint32_t overrun_degraded = 2, overrun_safe_stop = 5;
+  std::vector<SignalLimitSpec> signal_limits;
+};
+
+// A file robot.yaml names that runtime/robot does not interpret itself, as read.
+struct RobotDocument {
+  std::string path;
+  std::string text;
+  YAML::Node yaml;  // parsed, for .yaml files
+};
+
+struct RobotModel {
+  std::string name, description;
+  std::string path, dir;  // robot.yaml and its folder
+  double tick_period_s = 0, policy_period_s = 0;
+  std::uint32_t policy_period_ticks = 1;  // derived
+  std::int32_t policy_trigger = -1;       // a stream whose new samples run the policy; -1: every period
+  std::map<std::string, double> parameters;
+  std::optional<IoLayout> io;  // the policy's layout, when the robot has one
+  std::optional<RobotDescription> body;
+  std::optional<CanMap> can;
+  std::vector<TransportSpec> transports;
+  std::vector<FieldSpec> fields;
+  std::vector<StreamSpec> streams;
+  std::vector<CommandSpec> commands;
+  std::vector<MotorSpec> motors;
+  std::vector<SignalSpec> signals;
+  PhaseSpec phases;
+  SupervisorSpec supervisor;
+  std::map<std::string, RobotDocument> documents;  // by role: "plant", "layouts.hard", "stand_trajectory", ...
+  std::uint64_t hash = 0;                          // FNV-1a over every file read, in order
+
+  int FieldIndex(std::string_view name) const noexcept;
+  int CommandIndex(std::string_view name) const noexcept;
+  int StreamIndex(std::string_view name) const noexcept;
+  int TransportIndex(std::string_view name) const noexcept;
+  // A document by role; the error names robot.yaml and the role.
+  Result<const RobotDocument*> Document(const std::string& role) const;
+  // Names of the documents under a group ("layouts" -> easy, medium, hard).
+  std::vector<std::string> DocumentGroup(const std::string& group) const;
+  Result<double> Parameter(const std::string& name) const;
+};
+
+// Reads robot.yaml and every file it names; errors name the file, the field and the value.
+Result<RobotModel> LoadRobotModel(const std::string& robot_yaml);
+// The same robot ticking every tick_period_s: stale ages in ticks, rates per tick, phase lengths
+// and the policy period follow (a sample a little late at a faster tick still counts as on time:
+// stale limits are n and a half periods). Refuses a policy period that is not a whole number of
+// ticks.
+Result<RobotModel> WithTickPeriod(const RobotModel& model, double tick_period_s);
+
+// "sonar_{i}_m" with i = 3 -> "sonar_3_m".
+std::string ExpandIndex(const std::string& pattern, std::uint32_t i);
+
+}  // namespace pbppo::robot

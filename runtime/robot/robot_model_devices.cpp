@@ -1,0 +1,230 @@
+#include <algorithm>
+
+#include "runtime/robot/robot_model_parts.hpp"
+
+namespace pbppo::robot::detail {
+namespace {
+using Rule = YamlFields::TextRule;
+}  // namespace
+
+Status Builder::ReadStale(const YAML::Node& parent, const std::string& where, StaleLimits* out) const {
+  YAML::Node n;
+  PBPPO_TRY(f.Map(parent, "stale_after", where, &n));
+  const std::string w = YamlFields::Join(where, "stale_after");
+  PBPPO_TRY(f.Keys(n, w, {"degraded", "safe_stop", "lost"}));
+  PBPPO_TRY(f.Number(n, "degraded", w, 0.0, 1e6, &out->degraded));
+  PBPPO_TRY(f.Number(n, "safe_stop", w, 0.0, 1e6, &out->safe_stop));
+  PBPPO_TRY(f.Number(n, "lost", w, 0.0, 1e6, &out->lost));
+  if (!(out->degraded < out->safe_stop && out->safe_stop < out->lost))
+    return f.Fail(w, "degraded " + YamlFields::Num(out->degraded) + ", safe_stop " + YamlFields::Num(out->safe_stop) +
+                         ", lost " + YamlFields::Num(out->lost) + " must increase");
+  return {};
+}
+
+Status Builder::AddField(const std::string& name, double lo, double hi, const std::string& where) {
+  if (m.FieldIndex(name) >= 0) return f.Fail(where, "field '" + name + "' appears twice");
+  if (!(lo <= hi)) return f.Fail(where, "min " + YamlFields::Num(lo) + " is above max " + YamlFields::Num(hi));
+  m.fields.push_back(FieldSpec{name, lo, hi, static_cast<std::uint32_t>(m.streams.size())});
+  ++m.streams.back().field_count;
+  return {};
+}
+
+Status Builder::AddCommand(CommandSpec c, const std::string& where) {
+  if (m.CommandIndex(c.name) >= 0) return f.Fail(where, "command '" + c.name + "' appears twice");
+  m.commands.push_back(std::move(c));
+  return {};
+}
+
+Status Builder::StartStream(StreamSpec s, const std::string& where) {
+  if (m.StreamIndex(s.name) >= 0) return f.Fail(where, "stream '" + s.name + "' appears twice");
+  if (m.TransportIndex(s.transport) < 0) return f.Fail(where, "unknown transport '" + s.transport + "'");
+  s.first_field = static_cast<std::uint32_t>(m.fields.size());
+  s.field_count = 0;
+  m.streams.push_back(std::move(s));
+  return {};
+}
+
+// Streams, fields, commands and motors of the CAN map's MIT motors and IMUs.
+Status Builder::CanDevices(const YAML::Node& root) {
+  if (!m.can) return {};
+  if (!m.body) return f.Fail("files", "can_map needs a description (the URDF gives the joints' limits)");
+  const CanMap& map = *m.can;
+  const RobotDescription& body = *m.body;
+  int can_transport = -1;
+  for (std::size_t t = 0; t < m.transports.size(); ++t)
+    if (m.transports[t].kind == "can") can_transport = static_cast<int>(t);
+  if (can_transport < 0) return f.Fail("transports", "no transport of kind can for the CAN map");
+  const std::string transport = m.transports[static_cast<std::size_t>(can_transport)].name;
+  if (map.motors.size() != body.joint_count())
+    return f.Fail("files.can_map", "the CAN map has " + std::to_string(map.motors.size()) +
+                                       " motors, the description " + std::to_string(body.joint_count()) +
+                                       " actuated joints");
+  YAML::Node motors, imus;
+  PBPPO_TRY(f.Map(root, "motors", "", &motors));
+  PBPPO_TRY(f.Keys(motors, "motors", {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor"}));
+  StreamSpec proto;
+  proto.transport = transport;
+  proto.period_s = m.tick_period_s;
+  proto.kind = StreamKind::kMotor;
+  double margin = 0, factor = 0;
+  PBPPO_TRY(ReadStale(motors, "motors", &proto.stale_after));
+  PBPPO_TRY(f.Count(motors, "invalid_safe_stop", "motors", 1, 1000000, &proto.invalid_safe_stop));
+  PBPPO_TRY(f.Number(motors, "position_margin_rad", "motors", 0.0, 10.0, &margin));
+  PBPPO_TRY(f.Number(motors, "velocity_factor", "motors", 1.0, 100.0, &factor));
+  for (std::size_t k = 0; k < map.motors.size(); ++k) {
+    const CanMotor& cm = map.motors[k];
+    const std::string where = "files.can_map: motors[" + std::to_string(k) + "] '" + cm.joint + "'";
+    const auto it = std::find(body.joint_names.begin(), body.joint_names.end(), cm.joint);
+    if (it == body.joint_names.end()) return f.Fail(where, "is not a joint of " + body.urdf_path);
+    const auto j = static_cast<std::size_t>(it - body.joint_names.begin());
+    const UrdfJoint& uj = body.joint_at(j);
+    const MitRange& r = map.range_of(cm);
+    const double tau = std::min({uj.effort_nm, r.t_max, -r.t_min});
+    const double v = std::min({uj.velocity_rad_s, r.v_max, -r.v_min});
+    StreamSpec s = proto;
+    s.name = cm.joint;
+    s.device = static_cast<std::uint32_t>(k);
+    PBPPO_TRY(StartStream(std::move(s), where));
+    MotorSpec mo;
+    mo.joint = cm.joint;
+    mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
+    mo.default_q_rad = body.default_q_rad[j];
+    mo.q_field = static_cast<std::uint32_t>(m.fields.size());
+    PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - margin, uj.upper_rad + margin, where));
+    mo.dq_field = mo.q_field + 1;
+    PBPPO_TRY(AddField("dq_" + cm.joint, -factor * v, factor * v, where));
+    mo.tau_field = mo.q_field + 2;
+    PBPPO_TRY(AddField("tau_" + cm.joint, std::min(r.t_min, -tau), std::max(r.t_max, tau), where));
+    const auto motor = static_cast<std::int32_t>(m.motors.size());
+    auto command = [&](const char* prefix, double lo, double hi, double neutral, StopKind stop, double stop_value,
+                       std::uint32_t* index) -> Status {
+      CommandSpec c;
+      c.name = prefix + cm.joint;
+      c.min = c.degraded_min = lo;
+      c.max = c.degraded_max = hi;
+      c.neutral = neutral;
+      c.stop = stop;
+      c.stop_value = stop_value;
+      c.motor = motor;
+      if (stop == StopKind::kHoldField) c.hold_field = static_cast<std::int32_t>(mo.q_field);
+      *index = static_cast<std::uint32_t>(m.commands.size());
+      return AddCommand(std::move(c), where);
+    };
+    // Safe-stop damps: the measured position, no stiffness, the damping gain, no torque.
+    PBPPO_TRY(command("q_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
+                      StopKind::kHoldField, 0.0, &mo.q));
+    PBPPO_TRY(command("dq_", -v, v, 0.0, StopKind::kValue, 0.0, &mo.dq));
+    PBPPO_TRY(command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, StopKind::kValue, 0.0, &mo.kp));
+    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max, body.kd_nm_s_rad, StopKind::kValue,
+                      body.damping_kd_nm_s_rad, &mo.kd));
+    PBPPO_TRY(command("tau_", -tau, tau, 0.0, StopKind::kValue, 0.0, &mo.tau));
+    m.motors.push_back(mo);
+  }
+  if (map.imus.empty()) return {};
+  PBPPO_TRY(f.Map(root, "imus", "", &imus));
+  PBPPO_TRY(f.Keys(imus, "imus", {"stale_after", "invalid_safe_stop"}));
+  proto.kind = StreamKind::kImu;
+  PBPPO_TRY(ReadStale(imus, "imus", &proto.stale_after));
+  PBPPO_TRY(f.Count(imus, "invalid_safe_stop", "imus", 1, 1000000, &proto.invalid_safe_stop));
+  for (std::size_t k = 0; k < map.imus.size(); ++k) {
+    const std::string& n = map.imus[k].name;
+    const std::string where = "files.can_map: imus[" + std::to_string(k) + "] '" + n + "'";
+    StreamSpec s = proto;
+    s.name = n;
+    s.device = static_cast<std::uint32_t>(k);
+    PBPPO_TRY(StartStream(std::move(s), where));
+    // The codecs' ranges: a quaternion component within 1, 32.8 rad/s, 163.8 m/s^2.
+    for (const char* q : {"_qw", "_qx", "_qy", "_qz"}) PBPPO_TRY(AddField(n + q, -1.001, 1.001, where));
+    for (const char* g : {"_gyro_x", "_gyro_y", "_gyro_z"}) PBPPO_TRY(AddField(n + g, -32.8, 32.8, where));
+    for (const char* a : {"_accel_x", "_accel_y", "_accel_z"}) PBPPO_TRY(AddField(n + a, -163.9, 163.9, where));
+  }
+  return {};
+}
+
+Status Builder::Signals(const YAML::Node& root) {
+  if (!root["signals"]) return {};
+  YAML::Node n;
+  PBPPO_TRY(f.Map(root, "signals", "", &n));
+  using Op = SignalSpec::Op;
+  static const std::pair<const char*, Op> kOps[] = {{"field", Op::kField},
+                                                    {"wrap", Op::kWrap},
+                                                    {"cos", Op::kCos},
+                                                    {"sin", Op::kSin},
+                                                    {"min", Op::kMin},
+                                                    {"gravity_x", Op::kGravityX},
+                                                    {"gravity_y", Op::kGravityY},
+                                                    {"gravity_z", Op::kGravityZ}};
+  for (const auto& kv : n) {
+    const std::string name = kv.first.as<std::string>();
+    const std::string w = "signals." + name;
+    const YAML::Node def = kv.second;
+    PBPPO_TRY(f.Keys(def, w, {"field", "minus", "wrap", "cos", "sin", "min", "gravity_x", "gravity_y", "gravity_z"}));
+    const char* key = nullptr;
+    Op op = Op::kField;
+    for (const auto& [k, o] : kOps) {
+      if (!def[k]) continue;
+      if (key != nullptr) return f.Fail(w, std::string("both '") + key + "' and '" + k + "'");
+      key = k;
+      op = o;
+    }
+    if (key == nullptr) return f.Fail(w, "expected one of field, wrap, cos, sin, min, gravity_x|y|z");
+    std::string arg;
+    PBPPO_TRY(f.Text(def, key, w, &arg, Rule::kToken));
+    double minus = 0;
+    if (def["minus"]) {
+      if (op != Op::kField) return f.Fail(w + ".minus", "goes with 'field' only");
+      std::string p;
+      PBPPO_TRY(f.Text(def, "minus", w, &p, Rule::kToken));
+      auto v = m.Parameter(p);
+      if (!v) return f.Fail(w + ".minus", "'" + p + "' is not a parameter of the robot");
+      minus = *v;
+      op = Op::kMinus;
+    }
+    const bool repeat = name.find("{i}") != std::string::npos;
+    if (repeat && (op == Op::kMin || op >= Op::kGravityX || arg.find("{i}") == std::string::npos))
+      return f.Fail(w, "a signal repeated over {i} needs a field with {i}");
+    std::uint32_t count = 1;
+    if (repeat)
+      for (count = 0; m.FieldIndex(ExpandIndex(arg, count)) >= 0;) ++count;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      SignalSpec s;
+      s.name = ExpandIndex(name, i);
+      s.op = op;
+      s.value = minus;
+      PBPPO_TRY(SignalFields(op, repeat ? ExpandIndex(arg, i) : arg, w + "." + key, &s.fields));
+      for (const auto& o : m.signals)
+        if (o.name == s.name) return f.Fail(w, "signal '" + s.name + "' appears twice");
+      m.signals.push_back(std::move(s));
+    }
+    if (count == 0) return f.Fail(w + "." + key, "'" + arg + "' names no field of the robot");
+  }
+  return {};
+}
+
+// The fields a signal reads: one field; every field of a {i} pattern (min); an IMU's quaternion.
+Status Builder::SignalFields(SignalSpec::Op op, const std::string& arg, const std::string& where,
+                             std::vector<std::uint32_t>* out) {
+  using Op = SignalSpec::Op;
+  out->clear();
+  if (op == Op::kMin) {
+    for (std::uint32_t i = 0;; ++i) {
+      const int k = m.FieldIndex(ExpandIndex(arg, i));
+      if (k < 0) break;
+      out->push_back(static_cast<std::uint32_t>(k));
+      if (arg.find("{i}") == std::string::npos) break;
+    }
+  } else if (op >= Op::kGravityX) {
+    for (const char* q : {"_qw", "_qx", "_qy", "_qz"}) {
+      const int k = m.FieldIndex(arg + q);
+      if (k < 0) return f.Fail(where, "'" + arg + "' is not an IMU of the robot (no field " + arg + q + ")");
+      out->push_back(static_cast<std::uint32_t>(k));
+    }
+  } else {
+    const int k = m.FieldIndex(arg);
+    if (k >= 0) out->push_back(static_cast<std::uint32_t>(k));
+  }
+  if (out->empty()) return f.Fail(where, "'" + arg + "' is not a field of the robot");
+  return {};
+}
+
+}  // namespace pbppo::robot::detail

@@ -1,0 +1,38 @@
+// Pieces of LoadRobotModel (runtime/robot/robot_model.cpp): the fields, streams and commands it
+// adds, those of the CAN map's motors and IMUs, and the declared signals. Internal to pbppo::robot.
+#pragma once
+
+#include <string>
+
+#include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/yaml_fields.hpp"
+
+#define PBPPO_TRY(expr)            \
+  do {                             \
+    if (auto st_ = (expr); !st_) { \
+      return st_.error();          \
+    }                              \
+  } while (false)
+
+namespace pbppo::robot::detail {
+
+struct Builder {
+  RobotModel& m;
+  const YamlFields& f;
+
+  Status StartStream(StreamSpec s, const std::string& where);
+  Status AddField(const std::string& name, double lo, double hi, const std::string& where);
+  Status AddCommand(CommandSpec c, const std::string& where);
+  // A stream's stale_after: {degraded, safe_stop, lost} (sample periods, increasing).
+  Status ReadStale(const YAML::Node& parent, const std::string& where, StaleLimits* out) const;
+  // Streams, fields, commands and motors of the CAN map's MIT motors and IMUs (the motors and imus sections).
+  Status CanDevices(const YAML::Node& root);
+  // The signals section.
+  Status Signals(const YAML::Node& root);
+
+ private:
+  Status SignalFields(SignalSpec::Op op, const std::string& arg, const std::string& where,
+                      std::vector<std::uint32_t>* out);
+};
+
+}  // namespace pbppo::robot::detail

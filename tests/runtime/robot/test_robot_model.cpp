@@ -1,0 +1,171 @@
+// The robot model: both shipped robots load from robot.yaml with every file it names read once,
+// the pieces made from the CAN map and the URDF, per-tick quantities at another tick period, and
+// bad robot files refused naming the file, the field and the value.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/text_file.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+using namespace pbppo::robot;
+
+namespace {
+
+RobotModel Load(const std::string& rel) {
+  auto m = LoadRobotModel(test::SourcePath(rel));
+  REQUIRE_MESSAGE(m.ok(), m.error().message);
+  return std::move(*m);
+}
+
+const FieldSpec& Field(const RobotModel& m, const char* name) {
+  const int k = m.FieldIndex(name);
+  REQUIRE_MESSAGE(k >= 0, name);
+  return m.fields[static_cast<std::size_t>(k)];
+}
+
+const CommandSpec& Command(const RobotModel& m, const char* name) {
+  const int k = m.CommandIndex(name);
+  REQUIRE_MESSAGE(k >= 0, name);
+  return m.commands[static_cast<std::size_t>(k)];
+}
+
+}  // namespace
+
+TEST_CASE("robot model: loading a robot reads each file it names exactly once") {
+  for (const char* robot : {"models/auv/robot.yaml", "models/quadruped/robot.yaml"}) {
+    CAPTURE(robot);
+    const auto before = FileReads();
+    const RobotModel m = Load(robot);
+    const auto after = FileReads();
+    std::size_t files = 0;
+    for (const auto& [path, n] : after) {
+      const auto it = before.find(path);
+      const std::uint64_t delta = n - (it == before.end() ? 0 : it->second);
+      if (delta == 0) continue;
+      CAPTURE(path);
+      CHECK(delta == 1);
+      ++files;
+    }
+    // robot.yaml, and for the AUV the IO layout, plant, DDS profile and three layouts; for the
+    // quadruped the description, its URDF, the CAN map and the stand trajectory.
+    CHECK(files == (m.name == "auv" ? 7u : 5u));
+    CHECK(m.hash != 0);
+  }
+}
+
+TEST_CASE("robot model: the AUV - declared stream, fields with their bounds, commands, signals, documents") {
+  const RobotModel m = Load("models/auv/robot.yaml");
+  CHECK(m.name == "auv");
+  CHECK(m.tick_period_s == 0.1);
+  CHECK(m.policy_period_ticks == 1);
+  REQUIRE(m.streams.size() == 1);
+  CHECK(m.policy_trigger == 0);
+  const StreamSpec& s = m.streams[0];
+  CHECK(s.name == "sensor");
+  CHECK(s.field_count == m.fields.size());
+  CHECK(s.stale_degraded_ticks == 1);
+  CHECK(s.stale_safe_stop_ticks == 2);
+  CHECK(s.lost_ticks == 20);
+  CHECK(s.invalid_safe_stop == 3);
+  CHECK(Field(m, "surge_mps").max == 5.0);
+  CHECK(Field(m, "sonar_15_m").max == 15.0015);
+  CHECK(m.FieldIndex("sonar_16_m") < 0);
+  CHECK(Command(m, "surge_speed").rate == doctest::Approx(0.1));
+  CHECK(Command(m, "surge_speed").degraded_max == 0.75);
+  CHECK(Command(m, "yaw_rate").stop == StopKind::kRamp);
+  CHECK(Command(m, "yaw_rate").stop_rate == doctest::Approx(0.5));
+  CHECK(m.signals.size() == 22 + 16);
+  CHECK(m.io.has_value());
+  CHECK(m.io->robot == "auv");
+  CHECK(m.DocumentGroup("layouts") == std::vector<std::string>{"easy", "hard", "medium"});
+  REQUIRE(m.Document("plant").ok());
+  CHECK((*m.Document("plant"))->yaml["hull"]["mass_kg"].as<double>() == 50.0);
+  CHECK(m.Document("nonexistent").error().message.find("no file for 'nonexistent'") != std::string::npos);
+  CHECK(*m.Parameter("depth_m") == 5.0);
+}
+
+TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the URDF") {
+  const RobotModel m = Load("models/quadruped/robot.yaml");
+  CHECK(m.policy_period_ticks == 20);
+  REQUIRE(m.motors.size() == 12);
+  CHECK(m.streams.size() == 13);
+  CHECK(m.commands.size() == 60);
+  const MotorSpec& lf = m.motors[2];
+  CHECK(lf.joint == "LF_KFE");
+  CHECK(m.fields[lf.q_field].name == "q_LF_KFE");
+  CHECK(m.fields[lf.q_field].min == doctest::Approx(-2.6 - 0.3));
+  CHECK(m.commands[lf.q].name == "q_LF_KFE");
+  CHECK(m.commands[lf.q].stop == StopKind::kHoldField);
+  CHECK(m.commands[lf.q].hold_field == static_cast<std::int32_t>(lf.q_field));
+  CHECK(m.commands[lf.kd].stop_value == m.body->damping_kd_nm_s_rad);
+  CHECK(m.commands[lf.kp].neutral == m.body->kp_nm_rad);
+  CHECK(m.commands[lf.q].neutral == -0.8);
+  const StreamSpec& motor = m.streams[lf.stream];
+  CHECK(motor.stale_degraded_ticks == 1);
+  CHECK(motor.stale_safe_stop_ticks == 2);
+  CHECK(motor.lost_ticks == 499);
+  CHECK(m.StreamIndex("base_imu") == 12);
+  CHECK(m.FieldIndex("base_imu_gyro_z") >= 0);
+  CHECK(m.phases.enable_motors);
+  CHECK(m.phases.arming_timeout_ticks == 1000);
+  CHECK(m.phases.damping_ticks == 500);
+  CHECK(m.Document("stand_trajectory").ok());
+}
+
+TEST_CASE("robot model: another tick period - stale ages, rates and the policy period follow") {
+  const RobotModel m = Load("models/auv/robot.yaml");
+  auto fast = WithTickPeriod(m, 0.001);
+  REQUIRE_MESSAGE(fast.ok(), fast.error().message);
+  // 100 ticks per sample: stale after 1.5 and 2.5 sample periods, lost after 20.
+  CHECK(fast->streams[0].stale_degraded_ticks == 150);
+  CHECK(fast->streams[0].stale_safe_stop_ticks == 250);
+  CHECK(fast->streams[0].lost_ticks == 2000);
+  CHECK(fast->commands[0].rate == doctest::Approx(0.001));
+  CHECK(fast->policy_period_ticks == 100);
+  auto odd = WithTickPeriod(m, 0.03);
+  REQUIRE_FALSE(odd.ok());
+  CHECK(odd.error().message.find("timing.policy_period_s 0.1 is not a whole number of ticks of 0.03 s") !=
+        std::string::npos);
+}
+
+TEST_CASE("robot model: bad robot files are refused naming the file, the field and the value") {
+  const std::string dir = test::ScratchDir("robot_model") + "/auv";
+  std::filesystem::copy(test::SourcePath("models/auv"), dir, std::filesystem::copy_options::recursive);
+  std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string p = dir + "/robot.yaml";
+  auto err = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    REQUIRE_MESSAGE(at != std::string::npos, from);
+    t.replace(at, from.size(), to);
+    std::ofstream(p) << t;
+    auto m = LoadRobotModel(p);
+    REQUIRE_FALSE(m.ok());
+    return m.error().message;
+  };
+  CHECK(err("io_layout: io_layout.yaml", "io_layout: missing.yaml") == dir + "/missing.yaml: cannot open");
+  CHECK(err("tick_period_s: 0.1", "tick_period_s: -1") == p + ": timing.tick_period_s: '-1' is outside [1e-06, 10]");
+  CHECK(err("kind: dds", "kind: usb") == p + ": transports[0].kind: 'usb' is not can or dds");
+  CHECK(err("transport: dds", "transport: can") == p + ": streams[0]: unknown transport 'can'");
+  CHECK(err("{name: y_m, min: -1.0e5, max: 1.0e5}", "{name: x_m, min: -1.0e5, max: 1.0e5}") ==
+        p + ": streams[0].fields[2]: field 'x_m' appears twice");
+  CHECK(err("yaw: {wrap: yaw_rad}", "yaw: {wrap: heading_rad}") ==
+        p + ": signals.yaw.wrap: 'heading_rad' is not a field of the robot");
+  CHECK(err("depth_error: {field: depth_m, minus: depth_m}", "depth_error: {field: depth_m, minus: depth_set}") ==
+        p + ": signals.depth_error.minus: 'depth_set' is not a parameter of the robot");
+  CHECK(err("policy_trigger: sensor", "policy_trigger: sonar") ==
+        p + ": timing.policy_trigger: 'sonar' is not a stream of the robot");
+  CHECK(
+      err("stale_after: {degraded: 1, safe_stop: 2, lost: 20}", "stale_after: {degraded: 3, safe_stop: 2, lost: 20}") ==
+      p + ": streams[0].stale_after: degraded 3, safe_stop 2, lost 20 must increase");
+  CHECK(err("command_limit: count", "command_limit: ignore") ==
+        p + ": supervisor.command_limit: 'ignore' is not count or degraded");
+  CHECK(err("robot: auv", "robot: auv\nwheels: 4") == p + ": wheels: unknown field");
+  CHECK(LoadRobotModel(dir + "/none.yaml").error().message == dir + "/none.yaml: cannot open");
+}
