@@ -286,7 +286,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   if (!opt.plot_png.empty() && opt.trajectory_csv.empty()) opt.trajectory_csv = opt.plot_png + ".csv";
 
   dds::AuvDdsOptions lo;
-  lo.profile_file = (*profile)->path;
+  lo.profile_xml = (*profile)->text;
   lo.domain_id = o.domain_id;
   auto link_r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kVehicle, lo);
   if (!link_r) return fail(link_r.error().message);
@@ -357,7 +357,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
         const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.command_timeout_s);
         while (!have && !stop.load() && std::chrono::steady_clock::now() < deadline) {
           if (!link.WaitForCommand(&in, kNsPerS / 10)) continue;
-          if (in.command.answers == tick)
+          if (in.value.answers == tick)
             have = true;
           else
             ++sum.ignored;
@@ -367,8 +367,8 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
           sum.outcome = AuvHilOutcome::kControllerLost;
           break;
         }
-        v_cmd = in.command.surge_speed_mps;
-        w_cmd = in.command.yaw_rate_radps;
+        v_cmd = in.value.surge_speed_mps;
+        w_cmd = in.value.yaw_rate_radps;
       } else {
         AddNs(&next, period_ns);
         timespec now{};
@@ -377,8 +377,8 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
         clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
         while (link.PopCommand(&in)) {
           have = true;
-          v_cmd = in.command.surge_speed_mps;
-          w_cmd = in.command.yaw_rate_radps;
+          v_cmd = in.value.surge_speed_mps;
+          w_cmd = in.value.yaw_rate_radps;
         }
       }
       if (have) ++sum.applied;

@@ -44,7 +44,7 @@ class DdsAuvLink final : public firmware::AuvLink {
   DdsAuvLink(dds::AuvDdsLink& link, std::int64_t lost_after_ns) : link_(link), lost_after_ns_(lost_after_ns) {}
   bool Latest(robot::AuvSensorSample& out) noexcept override {
     if (link_.ReadSample(&in_) == 0) return false;
-    out = in_.sample;
+    out = in_.value;
     last_flags_.store(in_.flags, std::memory_order_relaxed);
     return true;
   }
@@ -116,11 +116,8 @@ int main(int argc, char** argv) {
   // Everything is loaded and checked before anything moves: the robot once, then the policy.
   auto robot = robot::LoadRobotModel(robot_yaml);
   if (!robot) return Fail(robot.error().message);
-  if (dds_profile.empty()) {
-    auto doc = robot->Document("dds_profile");
-    if (!doc) return Fail(doc.error().message);
-    dds_profile = (*doc)->path;
-  }
+  auto profile = robot->Document("dds_profile");  // read with the robot
+  if (dds_profile.empty() && !profile) return Fail(profile.error().message);
   // Sample ages and rate limits are per tick: a tick period other than the control period scales them.
   auto controller = firmware::AuvController::Create(*robot, blob, lockstep ? 0.0 : period_ms * 1e-3);
   if (!controller) return Fail(controller.error().message);
@@ -130,6 +127,7 @@ int main(int argc, char** argv) {
   dds::AuvDdsOptions dopt;
   dopt.domain_id = domain;
   dopt.profile_file = dds_profile;
+  if (dds_profile.empty()) dopt.profile_xml = (*profile)->text;
   dopt.writer_poll_us = writer_poll_us >= 0 ? writer_poll_us : (lockstep ? 0 : 200);
   auto link = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, dopt);
   if (!link) return Fail(link.error().message);
@@ -173,7 +171,7 @@ int main(int argc, char** argv) {
         lsp->Advance();
         // Wait for the loop to take this tick before allowing the next one.
         while (lsp->started() == started && !done.load()) std::this_thread::yield();
-        if (fresh && in.sample.episode_end) {
+        if (fresh && in.value.episode_end) {
           episode_end.store(true);
           // Let the tick that answers the final sample finish, then stop.
           std::this_thread::sleep_for(std::chrono::milliseconds(20));

@@ -101,13 +101,13 @@ robot::AuvSensorSample Drive(dds::AuvDdsLink& link, std::uint64_t max_ticks, boo
     REQUIRE_MESSAGE(link.WaitForSample(version, 10 * kSecond), "no sample after tick ", k);
     version = link.ReadSample(&in);
     REQUIRE(in.flags == 0);
-    REQUIRE(in.sample.tick == k);  // lock-step: one sample per answered tick, none skipped
-    if (in.sample.episode_end || k >= max_ticks) return in.sample;
+    REQUIRE(in.value.tick == k);  // lock-step: one sample per answered tick, none skipped
+    if (in.value.episode_end || k >= max_ticks) return in.value;
     robot::AuvCommand c;
     c.tick = k + 1;
-    c.answers = in.sample.tick;
+    c.answers = in.value.tick;
     c.surge_speed_mps = 1.0;
-    c.yaw_rate_radps = std::clamp(in.sample.target_bearing_rad, -0.5, 0.5);
+    c.yaw_rate_radps = std::clamp(in.value.target_bearing_rad, -0.5, 0.5);
     REQUIRE(link.PushCommand(c));
   }
 }
@@ -223,16 +223,16 @@ TEST_CASE("auv hil: real-time mode runs at the control period, applies commands 
     version = link->ReadSample(&in);
     ++samples;
     robot::AuvCommand c;
-    c.answers = in.sample.tick;
+    c.answers = in.value.tick;
     c.surge_speed_mps = 0.5;
     REQUIRE(link->PushCommand(c));
-    if (in.sample.episode_end) {
+    if (in.value.episode_end) {
       t_end = MonotonicNs();
       break;
     }
   }
-  REQUIRE(in.sample.episode_end);
-  CHECK(in.sample.tick == 15);
+  REQUIRE(in.value.episode_end);
+  CHECK(in.value.tick == 15);
   // Paced by the wall clock: 15 periods of 0.1 s after the first sample.
   const double wall_s = static_cast<double>(t_end - t0) * 1e-9;
   CHECK(wall_s > 1.3);

@@ -4,102 +4,51 @@
 
 namespace pbppo::dds {
 
-void ToDds(const robot::AuvSensorSample& in, pbppo_idl::auv::SensorState* out) noexcept {
-  out->tick(in.tick);
-  out->stamp_ns(in.stamp_ns);
-  out->x_m(in.x_m);
-  out->y_m(in.y_m);
-  out->depth_m(in.depth_m);
-  out->roll_rad(in.roll_rad);
-  out->pitch_rad(in.pitch_rad);
-  out->yaw_rad(in.yaw_rad);
-  out->surge_mps(in.surge_mps);
-  out->sway_mps(in.sway_mps);
-  out->heave_mps(in.heave_mps);
-  out->roll_rate_radps(in.roll_rate_radps);
-  out->pitch_rate_radps(in.pitch_rate_radps);
-  out->yaw_rate_radps(in.yaw_rate_radps);
-  out->sonar_beams(in.sonar_beams);
+// Each message's scalar fields, named alike in the struct and the IDL.
+// clang-format off
+#define PBPPO_AUV_SAMPLE_FIELDS(X)                                                                          \
+  X(tick) X(stamp_ns) X(x_m) X(y_m) X(depth_m) X(roll_rad) X(pitch_rad) X(yaw_rad) X(surge_mps) X(sway_mps) \
+  X(heave_mps) X(roll_rate_radps) X(pitch_rate_radps) X(yaw_rate_radps) X(sonar_beams) X(target_index)      \
+  X(target_x_m) X(target_y_m) X(target_distance_m) X(target_bearing_rad) X(route_bearing_rad) X(clearance_m) \
+  X(mission_complete) X(episode_end)
+#define PBPPO_AUV_COMMAND_FIELDS(X) X(tick) X(stamp_ns) X(answers) X(surge_speed_mps) X(yaw_rate_radps) X(mode)
+#define PBPPO_AUV_STATUS_FIELDS(X)                                                                   \
+  X(tick) X(mode) X(cause) X(deadline_misses) X(stale_samples) X(invalid_samples) X(limited_commands) \
+  X(tick_median_us) X(tick_max_us)
+// clang-format on
+#define PBPPO_TO_WIRE(f) out->f(in.f);
+#define PBPPO_FROM_WIRE(f) out->f = in.f();
+
+void DdsType<robot::AuvSensorSample>::ToWire(const robot::AuvSensorSample& in, Wire* out) noexcept {
+  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_TO_WIRE)
   std::copy(in.sonar_m.begin(), in.sonar_m.end(), out->sonar_m().begin());
-  out->target_index(in.target_index);
-  out->target_x_m(in.target_x_m);
-  out->target_y_m(in.target_y_m);
-  out->target_distance_m(in.target_distance_m);
-  out->target_bearing_rad(in.target_bearing_rad);
-  out->route_bearing_rad(in.route_bearing_rad);
-  out->clearance_m(in.clearance_m);
-  out->mission_complete(in.mission_complete);
-  out->episode_end(in.episode_end);
 }
 
-void FromDds(const pbppo_idl::auv::SensorState& in, robot::AuvSensorSample* out) noexcept {
-  out->tick = in.tick();
-  out->stamp_ns = in.stamp_ns();
-  out->x_m = in.x_m();
-  out->y_m = in.y_m();
-  out->depth_m = in.depth_m();
-  out->roll_rad = in.roll_rad();
-  out->pitch_rad = in.pitch_rad();
-  out->yaw_rad = in.yaw_rad();
-  out->surge_mps = in.surge_mps();
-  out->sway_mps = in.sway_mps();
-  out->heave_mps = in.heave_mps();
-  out->roll_rate_radps = in.roll_rate_radps();
-  out->pitch_rate_radps = in.pitch_rate_radps();
-  out->yaw_rate_radps = in.yaw_rate_radps();
-  out->sonar_beams = in.sonar_beams();
+void DdsType<robot::AuvSensorSample>::FromWire(const Wire& in, robot::AuvSensorSample* out) noexcept {
+  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_FROM_WIRE)
   std::copy(in.sonar_m().begin(), in.sonar_m().end(), out->sonar_m.begin());
-  out->target_index = in.target_index();
-  out->target_x_m = in.target_x_m();
-  out->target_y_m = in.target_y_m();
-  out->target_distance_m = in.target_distance_m();
-  out->target_bearing_rad = in.target_bearing_rad();
-  out->route_bearing_rad = in.route_bearing_rad();
-  out->clearance_m = in.clearance_m();
-  out->mission_complete = in.mission_complete();
-  out->episode_end = in.episode_end();
 }
 
-void ToDds(const robot::AuvCommand& in, pbppo_idl::auv::Command* out) noexcept {
-  out->tick(in.tick);
-  out->stamp_ns(in.stamp_ns);
-  out->answers(in.answers);
-  out->surge_speed_mps(in.surge_speed_mps);
-  out->yaw_rate_radps(in.yaw_rate_radps);
-  out->mode(in.mode);
+void DdsType<robot::AuvCommand>::ToWire(const robot::AuvCommand& in, Wire* out) noexcept {
+  PBPPO_AUV_COMMAND_FIELDS(PBPPO_TO_WIRE)
 }
 
-void FromDds(const pbppo_idl::auv::Command& in, robot::AuvCommand* out) noexcept {
-  out->tick = in.tick();
-  out->stamp_ns = in.stamp_ns();
-  out->answers = in.answers();
-  out->surge_speed_mps = in.surge_speed_mps();
-  out->yaw_rate_radps = in.yaw_rate_radps();
-  out->mode = in.mode();
+void DdsType<robot::AuvCommand>::FromWire(const Wire& in, robot::AuvCommand* out) noexcept {
+  PBPPO_AUV_COMMAND_FIELDS(PBPPO_FROM_WIRE)
 }
 
-void ToDds(const robot::AuvControllerStatus& in, pbppo_idl::auv::ControllerStatus* out) noexcept {
-  out->tick(in.tick);
-  out->mode(in.mode);
-  out->cause(in.cause);
-  out->deadline_misses(in.deadline_misses);
-  out->stale_samples(in.stale_samples);
-  out->invalid_samples(in.invalid_samples);
-  out->limited_commands(in.limited_commands);
-  out->tick_median_us(in.tick_median_us);
-  out->tick_max_us(in.tick_max_us);
+void DdsType<robot::AuvControllerStatus>::ToWire(const robot::AuvControllerStatus& in, Wire* out) noexcept {
+  PBPPO_AUV_STATUS_FIELDS(PBPPO_TO_WIRE)
 }
 
-void FromDds(const pbppo_idl::auv::ControllerStatus& in, robot::AuvControllerStatus* out) noexcept {
-  out->tick = in.tick();
-  out->mode = in.mode();
-  out->cause = in.cause();
-  out->deadline_misses = in.deadline_misses();
-  out->stale_samples = in.stale_samples();
-  out->invalid_samples = in.invalid_samples();
-  out->limited_commands = in.limited_commands();
-  out->tick_median_us = in.tick_median_us();
-  out->tick_max_us = in.tick_max_us();
+void DdsType<robot::AuvControllerStatus>::FromWire(const Wire& in, robot::AuvControllerStatus* out) noexcept {
+  PBPPO_AUV_STATUS_FIELDS(PBPPO_FROM_WIRE)
 }
+
+#undef PBPPO_FROM_WIRE
+#undef PBPPO_TO_WIRE
+#undef PBPPO_AUV_STATUS_FIELDS
+#undef PBPPO_AUV_COMMAND_FIELDS
+#undef PBPPO_AUV_SAMPLE_FIELDS
 
 }  // namespace pbppo::dds

@@ -1,20 +1,38 @@
-// Conversions between the AUV's plain message structs (runtime/robot/auv_messages.hpp) and the
-// types fastddsgen generates from models/auv/idl/*.idl. Internal to pbppo_dds and its tests.
+// How the AUV's message structs (runtime/robot/auv_messages.hpp) travel over DDS: the types
+// fastddsgen generates from models/auv/idl/*.idl, and the conversions both ways (every field,
+// sonar ranges past sonar_beams included: the array is fixed at 32). Internal to pbppo_dds.
 #pragma once
 
 #include "AuvCommandPubSubTypes.h"
 #include "AuvControllerStatusPubSubTypes.h"
 #include "AuvSensorStatePubSubTypes.h"
 #include "runtime/robot/auv_messages.hpp"
+#include "runtime/transport/dds/dds_endpoint_impl.hpp"
 
 namespace pbppo::dds {
 
-// Every field, including sonar ranges past sonar_beams (the array is fixed at 32).
-void ToDds(const robot::AuvSensorSample& in, pbppo_idl::auv::SensorState* out) noexcept;
-void FromDds(const pbppo_idl::auv::SensorState& in, robot::AuvSensorSample* out) noexcept;
-void ToDds(const robot::AuvCommand& in, pbppo_idl::auv::Command* out) noexcept;
-void FromDds(const pbppo_idl::auv::Command& in, robot::AuvCommand* out) noexcept;
-void ToDds(const robot::AuvControllerStatus& in, pbppo_idl::auv::ControllerStatus* out) noexcept;
-void FromDds(const pbppo_idl::auv::ControllerStatus& in, robot::AuvControllerStatus* out) noexcept;
+template <>
+struct DdsType<robot::AuvSensorSample> {
+  using Wire = pbppo_idl::auv::SensorState;
+  using PubSubType = pbppo_idl::auv::SensorStatePubSubType;
+  static void ToWire(const robot::AuvSensorSample& in, Wire* out) noexcept;
+  static void FromWire(const Wire& in, robot::AuvSensorSample* out) noexcept;
+};
+
+template <>
+struct DdsType<robot::AuvCommand> {
+  using Wire = pbppo_idl::auv::Command;
+  using PubSubType = pbppo_idl::auv::CommandPubSubType;
+  static void ToWire(const robot::AuvCommand& in, Wire* out) noexcept;
+  static void FromWire(const Wire& in, robot::AuvCommand* out) noexcept;
+};
+
+template <>
+struct DdsType<robot::AuvControllerStatus> {
+  using Wire = pbppo_idl::auv::ControllerStatus;
+  using PubSubType = pbppo_idl::auv::ControllerStatusPubSubType;
+  static void ToWire(const robot::AuvControllerStatus& in, Wire* out) noexcept;
+  static void FromWire(const Wire& in, robot::AuvControllerStatus* out) noexcept;
+};
 
 }  // namespace pbppo::dds

@@ -16,7 +16,8 @@
 //    status          -> latest-value mailbox (ReadStatus).
 //
 // Both sides: counters, and a view of the peer (matched readers/writers, age of the last message
-// received). Fast DDS types never appear in this header.
+// received). Built from the generic DDS readers and writers (dds_endpoint.hpp); Fast DDS types
+// never appear in this header.
 #pragma once
 
 #include <cstddef>
@@ -27,13 +28,15 @@
 #include "runtime/core/clock.hpp"  // MonotonicNs: the clock of received_ns and the ages
 #include "runtime/core/result.hpp"
 #include "runtime/robot/auv_messages.hpp"
+#include "runtime/transport/dds/dds_endpoint.hpp"
 
 namespace pbppo::dds {
 
 enum class AuvDdsRole { kController, kVehicle };
 
 struct AuvDdsOptions {
-  std::string profile_file;                            // Fast DDS XML profiles (models/auv/dds_profile.xml)
+  std::string profile_xml;                             // Fast DDS XML profiles: the robot's dds_profile document
+  std::string profile_file;                            // ... or a file (models/auv/dds_profile.xml)
   std::string participant_profile = "pbppo_loopback";  // a <participant profile_name=...> in that file
   int domain_id = 0;                                   // 0 ... 232
   std::string topic_prefix = "pbppo/auv/";             // topics: <prefix>sensor_state, command, controller_status
@@ -61,19 +64,10 @@ struct AuvPeerView {
   std::int64_t last_receive_age_ns = -1;  // since the last sample (controller) or command (vehicle); -1 never
 };
 
-// What the controller's tick gets: the sample, its check flags (auv_message_check.hpp) and when
-// it arrived (CLOCK_MONOTONIC).
-struct AuvSensorInput {
-  robot::AuvSensorSample sample;
-  std::uint32_t flags = 0;
-  std::int64_t received_ns = 0;
-};
-
-struct AuvCommandInput {
-  robot::AuvCommand command;
-  std::uint32_t flags = 0;
-  std::int64_t received_ns = 0;
-};
+// What the controller's tick gets: the sample (value), its check flags (auv_message_check.hpp)
+// and when it arrived (CLOCK_MONOTONIC); and the vehicle, the command.
+using AuvSensorInput = DdsReceived<robot::AuvSensorSample>;
+using AuvCommandInput = DdsReceived<robot::AuvCommand>;
 
 class AuvDdsLink {
  public:
@@ -115,6 +109,7 @@ class AuvDdsLink {
   bool Flush(std::int64_t timeout_ns);
   AuvPeerView Peer() const noexcept;
   AuvLinkCounters counters() const noexcept;
+  int domain_id() const noexcept;
 
   struct Impl;
 

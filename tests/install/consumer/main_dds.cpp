@@ -31,13 +31,13 @@ int main(int argc, char** argv) {
   AuvSensorInput in;
   (*controller)->ReadSample(&in);
   pbppo::robot::AuvCommand c;
-  c.answers = in.sample.tick;
+  c.answers = in.value.tick;
   c.surge_speed_mps = 0.5;
   if (!(*controller)->PushCommand(c)) return 1;
   AuvCommandInput got;
   if (!(*vehicle)->WaitForCommand(&got, kTimeout)) return 1;
   std::printf("consumer_dds: sample tick %llu (flags %u) -> command v = %g answering tick %llu\n",
-              static_cast<unsigned long long>(in.sample.tick), in.flags, got.command.surge_speed_mps,
-              static_cast<unsigned long long>(got.command.answers));
-  return got.command.answers == 7 && got.command.surge_speed_mps == 0.5 ? 0 : 1;
+              static_cast<unsigned long long>(in.value.tick), in.flags, got.value.surge_speed_mps,
+              static_cast<unsigned long long>(got.value.answers));
+  return got.value.answers == 7 && got.value.surge_speed_mps == 0.5 ? 0 : 1;
 }

@@ -118,7 +118,7 @@ TEST_CASE("dds link: samples, commands and status arrive intact") {
   REQUIRE(p.controller->WaitForSample(0, 5 * kSecond));
   dds::AuvSensorInput in;
   REQUIRE(p.controller->ReadSample(&in) == 1);
-  CheckSame(in.sample, sent);
+  CheckSame(in.value, sent);
   CHECK(in.flags == 0);
   CHECK(in.received_ns > 0);
 
@@ -132,12 +132,12 @@ TEST_CASE("dds link: samples, commands and status arrive intact") {
   REQUIRE(p.controller->PushCommand(c));
   dds::AuvCommandInput got;
   REQUIRE(p.vehicle->WaitForCommand(&got, 5 * kSecond));
-  CHECK(got.command.tick == 8);
-  CHECK(got.command.stamp_ns == 99);
-  CHECK(got.command.answers == 7);
-  CHECK(got.command.surge_speed_mps == 1.125);
-  CHECK(got.command.yaw_rate_radps == -0.375);
-  CHECK(got.command.mode == 2);
+  CHECK(got.value.tick == 8);
+  CHECK(got.value.stamp_ns == 99);
+  CHECK(got.value.answers == 7);
+  CHECK(got.value.surge_speed_mps == 1.125);
+  CHECK(got.value.yaw_rate_radps == -0.375);
+  CHECK(got.value.mode == 2);
   CHECK(got.flags == 0);
 
   robot::AuvControllerStatus st;
@@ -187,7 +187,7 @@ TEST_CASE("dds link: implausible samples are delivered flagged and counted, too 
   REQUIRE(p.controller->WaitForSample(0, 5 * kSecond));
   dds::AuvSensorInput in;
   REQUIRE(p.controller->ReadSample(&in) == 1);
-  CHECK(std::isnan(in.sample.x_m));
+  CHECK(std::isnan(in.value.x_m));
   CHECK((in.flags & dds::kSampleNonFinite) != 0);
   CHECK((in.flags & dds::kSampleSonarOutOfRange) != 0);
   CHECK(p.controller->counters().invalid == 1);
@@ -198,12 +198,12 @@ TEST_CASE("dds link: implausible samples are delivered flagged and counted, too 
   REQUIRE(Eventually([&] { return p.controller->counters().received == 2; }));
   CHECK(p.controller->counters().rejected == 1);
   CHECK(p.controller->ReadSample(&in) == 1);  // still the first sample: the rejected one is not delivered
-  CHECK(in.sample.tick == 1);
+  CHECK(in.value.tick == 1);
 
   REQUIRE(p.vehicle->PublishSample(Distinct(3)).ok());
   REQUIRE(p.controller->WaitForSample(1, 5 * kSecond));
   CHECK(p.controller->ReadSample(&in) == 2);
-  CHECK(in.sample.tick == 3);
+  CHECK(in.value.tick == 3);
   CHECK(in.flags == 0);
   CHECK(p.controller->counters().invalid == 1);
 
@@ -239,8 +239,8 @@ TEST_CASE("dds link: a full command queue drops and counts, the rest is written 
   std::uint64_t last = 0, disorder = 0, n = 0;
   dds::AuvCommandInput got;
   while (p.vehicle->WaitForCommand(&got, kSecond / 2)) {
-    if (got.command.tick <= last) ++disorder;
-    last = got.command.tick;
+    if (got.value.tick <= last) ++disorder;
+    last = got.value.tick;
     ++n;
   }
   CHECK(n > 0);
@@ -302,7 +302,7 @@ TEST_CASE("dds link: the tick's calls (ReadSample, PushCommand) do not allocate 
     for (std::uint64_t k = 0; k < 2000; ++k) {
       if (p.controller->ReadSample(&in) != 0) ++seen;
       c.tick = k;
-      c.answers = in.sample.tick;
+      c.answers = in.value.tick;
       if (p.controller->PushCommand(c)) ++pushed;
     }
     allocations = scope.count();

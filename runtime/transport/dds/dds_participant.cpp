@@ -1,0 +1,99 @@
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fstream>
+#include <sstream>
+
+#include "runtime/transport/dds/dds_endpoint_impl.hpp"
+
+namespace pbppo::dds {
+
+using eprosima::fastrtps::types::ReturnCode_t;
+
+Error DdsError(const std::string& what) {
+  return MakeError(ErrorCode::kInvalidValue, "dds: " + what);
+}
+
+// Reliable, and transient-local: discovery is not symmetric (our writer may know a reader before
+// that reader knows our writer, and a volatile reader drops what was written before it matched),
+// so the first lock-step sample or command written right after matching would otherwise be lost.
+// A reader that joins late gets the writer's last `depth` messages.
+fdds::DataWriterQos WriterQos(std::int32_t depth) {
+  fdds::DataWriterQos q = fdds::DATAWRITER_QOS_DEFAULT;
+  q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+  q.history().depth = depth;
+  q.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
+  q.data_sharing().off();  // see ReaderQos
+  return q;
+}
+
+fdds::DataReaderQos ReaderQos(std::int32_t depth) {
+  fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
+  q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+  q.history().depth = depth;
+  // No data-sharing (shared-memory delivery between participants on one host): Fast DDS 2.9's
+  // DataSharingListener can spin forever on a sample it rejects, and deleting the reader then
+  // hangs joining that thread (seen here: a test process at 100 % CPU in
+  // DataSharingListener::process_new_data while ~DataReaderImpl waited; fixed upstream in
+  // eProsima/Fast-DDS#6490, not in Debian's 2.9). Samples take the loopback UDP transport of the
+  // profile, like between machines.
+  q.data_sharing().off();
+  return q;
+}
+
+DdsParticipant::Impl::~Impl() {
+  if (participant == nullptr) return;
+  participant->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+}
+
+fdds::Topic* DdsParticipant::Impl::TopicFor(const std::string& name, fdds::TypeSupport type) {
+  std::lock_guard<std::mutex> lk(topics_mu);
+  if (const auto it = topics.find(name); it != topics.end()) return it->second;
+  if (type.register_type(participant) != ReturnCode_t::RETCODE_OK) return nullptr;
+  fdds::Topic* t = participant->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  if (t != nullptr) topics[name] = t;
+  return t;
+}
+
+Result<std::unique_ptr<DdsParticipant>> DdsParticipant::Create(const DdsOptions& o) {
+  if (o.domain_id < 0 || o.domain_id > 232)
+    return DdsError("domain_id " + std::to_string(o.domain_id) + " is outside 0..232");
+  std::string xml = o.profile_xml;
+  std::string origin = "the robot's profile";
+  if (xml.empty()) {
+    std::ifstream f(o.profile_file, std::ios::binary);
+    if (!f) return MakeError(ErrorCode::kIo, "dds: profile_file '" + o.profile_file + "' cannot be read");
+    std::ostringstream text;
+    text << f.rdbuf();
+    xml = text.str();
+    origin = "profile_file '" + o.profile_file + "'";
+  }
+  auto* factory = fdds::DomainParticipantFactory::get_instance();
+  // Loading the same profiles a second time in one process is harmless; profiles Fast DDS cannot
+  // parse make the lookup below fail, which names both.
+  const bool loaded = factory->load_XML_profiles_string(xml.data(), xml.size()) == ReturnCode_t::RETCODE_OK;
+  auto impl = std::make_unique<Impl>();
+  impl->domain_id = o.domain_id;
+  impl->participant =
+      factory->create_participant_with_profile(static_cast<fdds::DomainId_t>(o.domain_id), o.participant_profile);
+  if (impl->participant == nullptr)
+    return DdsError("participant_profile '" + o.participant_profile + "' from " + origin +
+                    (loaded ? "" : " (the profiles did not load)") + ": no participant on domain " +
+                    std::to_string(o.domain_id));
+  impl->publisher = impl->participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  impl->subscriber = impl->participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  if (impl->publisher == nullptr || impl->subscriber == nullptr) return DdsError("cannot create publisher/subscriber");
+  return std::unique_ptr<DdsParticipant>(new DdsParticipant(std::move(impl)));
+}
+
+DdsParticipant::DdsParticipant(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+DdsParticipant::~DdsParticipant() = default;
+
+int DdsParticipant::domain_id() const noexcept {
+  return impl_->domain_id;
+}
+
+}  // namespace pbppo::dds
