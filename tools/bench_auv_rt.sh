@@ -20,7 +20,7 @@ domain=$((20 + $$ % 200))
 echo "== 1: real time, controller at 1000 Hz for ${duration} s (vehicle at 10 Hz)"
 "$hil" auv --layout hard --seed 3 --realtime --domain "$domain" --max-time $((duration + 30)) >"$out/rt.hil.log" 2>&1 &
 hpid=$!
-"$ctl" --robot models/auv/robot.yaml --policy "$blob" --transport dds --domain "$domain" --period-ms 1 \
+"$ctl" --robot models/auv/robot.yaml --policy "$blob" --domain "$domain" --period-ms 1 \
   --duration "$duration" --writer-poll-us "${POLL_US:-200}" --quiet --profile "$out/rt_profile.json" --profile-plot "$out/rt_profile.png" | tee "$out/rt.ctl.log"
 kill -INT "$hpid" 2>/dev/null || true
 wait "$hpid" || true
@@ -28,7 +28,7 @@ echo
 echo "== 2: lock-step HIL speed (hard, seed 3, whole episode)"
 "$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" >"$out/ls.hil.log" 2>&1 &
 hpid=$!
-"$ctl" --robot models/auv/robot.yaml --policy "$blob" --transport dds --lockstep --domain "$domain" --quiet >"$out/ls.ctl.log"
+"$ctl" --robot models/auv/robot.yaml --policy "$blob" --lockstep --domain "$domain" --quiet >"$out/ls.ctl.log"
 wait "$hpid"
 sed -n 2p "$out/ls.hil.log"
 python3 - "$out/ls.hil.log" <<'PY'

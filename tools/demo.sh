@@ -24,7 +24,7 @@ build/default/sim_hil/pbppo-hil auv --layout "$layout" --seed "$seed" --lockstep
 hil=$!
 trap 'kill $hil 2>/dev/null || true' EXIT
 set +e
-build/default/firmware/pbppo-controller --robot models/auv/robot.yaml --policy "$blob" --transport dds --lockstep \
+build/default/firmware/pbppo-controller --robot models/auv/robot.yaml --policy "$blob" --lockstep \
   --domain "$domain" --profile "$out/profile.json" --profile-plot "$out/profile.png" --quiet \
   > "$out/controller.txt" 2> "$out/controller.err"
 crc=$?

@@ -27,7 +27,7 @@ for layout in $layouts; do
     log="$out/$layout.$seed"
     "$hil" auv --layout "$layout" --seed "$seed" --lockstep --domain "$domain" >"$log.hil.log" 2>&1 &
     pid=$!
-    "$ctl" --robot models/auv/robot.yaml --policy "$blob" --transport dds --lockstep --domain "$domain" --quiet \
+    "$ctl" --robot models/auv/robot.yaml --policy "$blob" --lockstep --domain "$domain" --quiet \
       >"$log.ctl.log" 2>&1 || true
     wait "$pid" || true
     # The simulator's second line: "pbppo-hil auv: <result> after <t> s simulated (...): <k>/3 targets, ..."

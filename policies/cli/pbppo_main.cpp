@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "policies/cli/inspect.hpp"
+#include "policies/cli/replay.hpp"
 #include "policies/cli/train.hpp"
 
 int main(int argc, char** argv) {
@@ -30,6 +31,9 @@ int main(int argc, char** argv) {
   auto* eval = app.add_subcommand("eval", "Run a policy blob on an environment with the runtime forward");
   pbppo::cli::AddEvalOptions(*eval, eval_opts);
 
+  pbppo::cli::ReplayOptions replay_opts;
+  auto* replay = pbppo::cli::AddReplay(app, replay_opts);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -39,5 +43,6 @@ int main(int argc, char** argv) {
   if (*synth) return pbppo::cli::Synth(synth_opts);
   if (*train) return pbppo::cli::Train(train_opts);
   if (*eval) return pbppo::cli::Eval(eval_opts);
+  if (*replay) return pbppo::cli::Replay(replay_opts);
   return 2;
 }

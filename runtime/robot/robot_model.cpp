@@ -203,10 +203,10 @@ struct Loader : detail::Builder {
       const std::string sw = w + ".stop";
       PBPPO_TRY(f.Keys(stop, sw, {"ramp_per_s", "value"}));
       if (stop["ramp_per_s"]) {
-        c.stop = StopKind::kRamp;
+        c.stop = safety::StopKind::kRamp;
         PBPPO_TRY(f.Number(stop, "ramp_per_s", sw, 1e-9, kInf, &c.stop_ramp_per_s));
       } else {
-        c.stop = StopKind::kValue;
+        c.stop = safety::StopKind::kValue;
         PBPPO_TRY(f.Number(stop, "value", sw, c.min, c.max, &c.stop_value));
       }
       PBPPO_TRY(AddCommand(std::move(c), w));
@@ -297,6 +297,31 @@ Status Derive(RobotModel& m, double tick_s) {
     c.rate = c.rate_per_s * tick_s;
     c.stop_rate = c.stop_ramp_per_s * tick_s;
   }
+  safety::SupervisorModel& sm = m.supervisor_model;
+  sm = safety::SupervisorModel{};
+  for (const CommandSpec& c : m.commands)
+    sm.commands.push_back({c.name, c.min, c.max, c.degraded_min, c.degraded_max, c.rate, c.stop, c.stop_rate,
+                           c.stop_value, c.hold_input});
+  for (const StreamSpec& s : m.streams)
+    sm.streams.push_back({s.name, s.stale_degraded_ticks, s.stale_safe_stop_ticks, s.lost_ticks, s.invalid_safe_stop});
+  for (const FieldSpec& f : m.fields) sm.input_names.push_back(f.name);
+  for (TransportSpec& t : m.transports) {
+    t.first_link = static_cast<std::uint32_t>(sm.transport_names.size());
+    if (t.kind == "can" && m.can) {
+      for (const CanBus& b : m.can->buses) sm.transport_names.push_back(t.name + "/" + b.name);
+    } else {
+      sm.transport_names.push_back(t.name);
+    }
+    t.link_count = static_cast<std::uint32_t>(sm.transport_names.size()) - t.first_link;
+  }
+  for (std::size_t k = 0; k < m.supervisor.signal_limits.size(); ++k) {
+    const SignalLimitSpec& l = m.supervisor.signal_limits[k];
+    sm.signal_limits.push_back({l.signal, static_cast<std::uint32_t>(k), l.stream, l.min, l.max});
+  }
+  sm.command_limit_degrades = m.supervisor.command_limit_degrades;
+  sm.overrun_degraded = m.supervisor.overrun_degraded;
+  sm.overrun_safe_stop = m.supervisor.overrun_safe_stop;
+  if (auto st = safety::ValidateSupervisorModel(sm); !st) return fail(st.error().message);
   PhaseSpec& p = m.phases;
   p.arming_timeout_ticks = Ticks(p.arming_timeout_s, tick_s);
   p.stand_up_ticks = Ticks(p.stand_up_s, tick_s);
@@ -395,6 +420,13 @@ Result<RobotModel> LoadRobotModel(const std::string& robot_yaml) {
   PBPPO_TRY(l.Signals(root));
   PBPPO_TRY(l.Phases(root));
   PBPPO_TRY(l.Supervisor(root));
+  for (SignalLimitSpec& limit : m.supervisor.signal_limits) {
+    int field = m.FieldIndex(limit.signal);
+    for (const SignalSpec& s : m.signals)
+      if (s.name == limit.signal) field = static_cast<int>(s.fields[0]);
+    if (field < 0) return f.Fail("supervisor.signal_limits", "'" + limit.signal + "' is not a signal of the robot");
+    limit.stream = m.fields[static_cast<std::size_t>(field)].stream;
+  }
   if (const YAML::Node t = root["timing"]["policy_trigger"]) {
     std::string s;
     PBPPO_TRY(f.Text(root["timing"], "policy_trigger", "timing", &s, Rule::kToken));

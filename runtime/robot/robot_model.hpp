@@ -32,6 +32,7 @@
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/urdf.hpp"
 #include "runtime/robot/yaml_fields.hpp"
+#include "runtime/safety/supervisor.hpp"
 
 namespace pbppo::robot {
 
@@ -61,21 +62,16 @@ struct StreamSpec {
   std::uint32_t stale_degraded_ticks = 0, stale_safe_stop_ticks = 0, lost_ticks = 0;
 };
 
-// What safe-stop sends for a command.
-enum class StopKind : std::uint8_t {
-  kRamp,       // towards zero at stop_rate per tick
-  kValue,      // stop_value at once
-  kHoldField,  // the measured value of hold_field (a joint's position), inside the range
-};
-
 struct CommandSpec {
   std::string name, unit;
   double min = 0, max = 0;                    // limits: the supervisor clamps into them
   double degraded_min = 0, degraded_max = 0;  // limits in degraded mode
   double rate_per_s = HUGE_VAL;               // largest change per second (inf: none)
-  StopKind stop = StopKind::kValue;
+  // What safe-stop sends: a ramp to zero (stop_ramp_per_s), stop_value, or the measured value of
+  // the field hold_input (a joint's position), inside the range.
+  safety::StopKind stop = safety::StopKind::kValue;
   double stop_ramp_per_s = 0, stop_value = 0;
-  std::int32_t hold_field = -1;
+  std::int32_t hold_input = -1;
   double neutral = 0;       // before a command source writes it: the default pose, the gains, zero
   std::int32_t motor = -1;  // the motor it drives (MotorSpec), -1: none
   double rate = HUGE_VAL;   // per tick (derived)
@@ -104,6 +100,8 @@ struct SignalSpec {
 struct TransportSpec {
   std::string name, kind;                      // kind: "can" or "dds"
   std::map<std::string, std::string> options;  // everything else of its robot.yaml entry
+  // Its links, whose health the supervisor watches: one per CAN bus ("can/front"), else itself.
+  std::uint32_t first_link = 0, link_count = 1;
 };
 
 struct PhaseSpec {
@@ -117,6 +115,7 @@ struct PhaseSpec {
 struct SignalLimitSpec {
   std::string signal;
   double min = 0, max = 0;
+  std::uint32_t stream = 0;  // the stream the signal is computed from (checked once it was seen)
 };
 
 struct SupervisorSpec {
@@ -152,6 +151,8 @@ struct RobotModel {
   SupervisorSpec supervisor;
   std::map<std::string, RobotDocument> documents;  // by role: "plant", "layouts.hard", "stand_trajectory", ...
   std::uint64_t hash = 0;                          // FNV-1a over every file read, in order
+  // The supervisor's model at this tick period (derived; validated at load).
+  safety::SupervisorModel supervisor_model;
 
   int FieldIndex(std::string_view name) const noexcept;
   int CommandIndex(std::string_view name) const noexcept;

@@ -24,7 +24,7 @@ Status Builder::ReadStale(const YAML::Node& parent, const std::string& where, St
 Status Builder::AddField(const std::string& name, double lo, double hi, const std::string& where) {
   if (m.FieldIndex(name) >= 0) return f.Fail(where, "field '" + name + "' appears twice");
   if (!(lo <= hi)) return f.Fail(where, "min " + YamlFields::Num(lo) + " is above max " + YamlFields::Num(hi));
-  m.fields.push_back(FieldSpec{name, lo, hi, static_cast<std::uint32_t>(m.streams.size())});
+  m.fields.push_back(FieldSpec{name, lo, hi, static_cast<std::uint32_t>(m.streams.size() - 1)});
   ++m.streams.back().field_count;
   return {};
 }
@@ -96,8 +96,8 @@ Status Builder::CanDevices(const YAML::Node& root) {
     mo.tau_field = mo.q_field + 2;
     PBPPO_TRY(AddField("tau_" + cm.joint, std::min(r.t_min, -tau), std::max(r.t_max, tau), where));
     const auto motor = static_cast<std::int32_t>(m.motors.size());
-    auto command = [&](const char* prefix, double lo, double hi, double neutral, StopKind stop, double stop_value,
-                       std::uint32_t* index) -> Status {
+    auto command = [&](const char* prefix, double lo, double hi, double neutral, safety::StopKind stop,
+                       double stop_value, std::uint32_t* index) -> Status {
       CommandSpec c;
       c.name = prefix + cm.joint;
       c.min = c.degraded_min = lo;
@@ -106,18 +106,18 @@ Status Builder::CanDevices(const YAML::Node& root) {
       c.stop = stop;
       c.stop_value = stop_value;
       c.motor = motor;
-      if (stop == StopKind::kHoldField) c.hold_field = static_cast<std::int32_t>(mo.q_field);
+      if (stop == safety::StopKind::kHoldInput) c.hold_input = static_cast<std::int32_t>(mo.q_field);
       *index = static_cast<std::uint32_t>(m.commands.size());
       return AddCommand(std::move(c), where);
     };
     // Safe-stop damps: the measured position, no stiffness, the damping gain, no torque.
-    PBPPO_TRY(command("q_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
-                      StopKind::kHoldField, 0.0, &mo.q));
-    PBPPO_TRY(command("dq_", -v, v, 0.0, StopKind::kValue, 0.0, &mo.dq));
-    PBPPO_TRY(command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, StopKind::kValue, 0.0, &mo.kp));
-    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max, body.kd_nm_s_rad, StopKind::kValue,
+    PBPPO_TRY(command("q_des_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
+                      safety::StopKind::kHoldInput, 0.0, &mo.q));
+    PBPPO_TRY(command("dq_des_", -v, v, 0.0, safety::StopKind::kValue, 0.0, &mo.dq));
+    PBPPO_TRY(command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, safety::StopKind::kValue, 0.0, &mo.kp));
+    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max, body.kd_nm_s_rad, safety::StopKind::kValue,
                       body.damping_kd_nm_s_rad, &mo.kd));
-    PBPPO_TRY(command("tau_", -tau, tau, 0.0, StopKind::kValue, 0.0, &mo.tau));
+    PBPPO_TRY(command("tau_ff_", -tau, tau, 0.0, safety::StopKind::kValue, 0.0, &mo.tau));
     m.motors.push_back(mo);
   }
   if (map.imus.empty()) return {};

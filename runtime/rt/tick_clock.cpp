@@ -76,4 +76,14 @@ bool LockStepClock::Wait(TickTiming& t) noexcept {
   return true;
 }
 
+bool PacedClock::Wait(TickTiming& t) noexcept {
+  if (stop_.load(std::memory_order_relaxed)) return false;
+  t.tick = tick_++;
+  t.wake_ns = t.deadline_ns = MonotonicNs();
+  t.jitter_ns = 0;
+  t.missed = false;
+  t.consecutive_misses = 0;
+  return true;
+}
+
 }  // namespace pbppo::rt

@@ -7,6 +7,8 @@
 //                     and skips whole periods that have already passed (no catch-up burst).
 //                     Wake-up jitter = actual wake - deadline.
 //   LockStepClock     the tick advances when a driver (a simulator in lock-step) calls Advance().
+//   PacedClock        the next tick starts when the last one ended: the transport paces the loop
+//                     (a CAN transport in lock-step waits for each tick's replies).
 //
 // Wait() allocates nothing and takes no lock; it blocks, by design, until the tick is due.
 #pragma once
@@ -71,6 +73,17 @@ class LockStepClock final : public TickClock {
  private:
   std::atomic<std::uint64_t> allowed_{0};
   std::atomic<std::uint64_t> started_{0};
+  std::atomic<bool> stop_{false};
+};
+
+class PacedClock final : public TickClock {
+ public:
+  bool Wait(TickTiming& t) noexcept override;
+  void Stop() noexcept override { stop_.store(true, std::memory_order_relaxed); }
+  std::uint64_t deadline_misses() const noexcept override { return 0; }
+
+ private:
+  std::uint64_t tick_ = 0;
   std::atomic<bool> stop_{false};
 };
 

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numbers>
 
-#include "runtime/robot/auv_signals.hpp"
 #include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::sim {
@@ -162,11 +161,40 @@ Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const st
   if (!l) return std::move(l).error();
   c.layout = std::move(*l);
   c.io = *model.io;
+  auto signals = robot::SignalProgram::Create(model, robot::SignalNames(model));
+  if (!signals) return std::move(signals).error();
+  c.signals = std::move(*signals);
+  AuvFieldIndex& f = c.fields;
+  f.count = static_cast<std::uint32_t>(model.fields.size());
+  Status st;
+  auto index = [&](const std::string& name, std::uint32_t* out) {
+    const int k = model.FieldIndex(name);
+    if (k < 0 && st)
+      st = MakeError(ErrorCode::kMismatch,
+                     model.path + ": the AUV task measures '" + name + "', the robot has no such field");
+    *out = k < 0 ? 0 : static_cast<std::uint32_t>(k);
+  };
+  const std::pair<const char*, std::uint32_t*> named[] = {{"x_m", &f.x},
+                                                          {"y_m", &f.y},
+                                                          {"depth_m", &f.depth},
+                                                          {"yaw_rad", &f.yaw},
+                                                          {"surge_mps", &f.surge},
+                                                          {"sway_mps", &f.sway},
+                                                          {"yaw_rate_radps", &f.yaw_rate},
+                                                          {"target_distance_m", &f.target_distance},
+                                                          {"target_bearing_rad", &f.target_bearing},
+                                                          {"route_bearing_rad", &f.route_bearing},
+                                                          {"clearance_m", &f.clearance},
+                                                          {"target_index", &f.target_index},
+                                                          {"target_x_m", &f.target_x},
+                                                          {"target_y_m", &f.target_y},
+                                                          {"episode_end", &f.episode_end}};
+  for (const auto& [name, out] : named) index(name, out);
+  f.sonar.assign(static_cast<std::size_t>(c.sonar.beams), 0);
+  for (std::size_t i = 0; i < f.sonar.size(); ++i)
+    index(robot::ExpandIndex("sonar_{i}_m", static_cast<std::uint32_t>(i)), &f.sonar[i]);
+  if (!st) return st.error();
   return c;
-}
-
-std::vector<std::string> AuvNavTask::SignalNames() const {
-  return robot::AuvSignalNames(static_cast<std::uint32_t>(config_.sonar.beams));
 }
 
 Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
@@ -183,8 +211,7 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
     return MakeError(ErrorCode::kInvalidValue, "sonar.beams " + std::to_string(config.sonar.beams) +
                                                    " exceeds the sensor sample's " +
                                                    std::to_string(robot::kAuvMaxSonarBeams));
-  const std::vector<std::string> names = t.SignalNames();
-  auto builder = robot::ObservationBuilder::Create(config.io, names);
+  auto builder = robot::ObservationBuilder::Create(config.io, config.signals.names());
   if (!builder) return std::move(builder).error();
   t.observe_ = std::move(*builder);
   if (config.io.actions.size() != 2)
@@ -206,7 +233,9 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   t.io_hash_ = config.io.Hash();
   t.obs_size_ = config.io.observation_size();
   t.last_obs_.assign(t.obs_size_, 0.0f);
-  t.signals_.assign(names.size(), 0.0);
+  t.fields_.assign(config.fields.count, 0.0);
+  t.signals_.assign(config.signals.size(), 0.0);
+  t.last_action_.assign(config.io.actions.size(), 0.0f);
   t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
   t.chart_.emplace(config.layout.world.arena, kGeodesicCellM);
   t.chart_->SetObstacles(config.layout.world);
@@ -342,29 +371,30 @@ void AuvNavTask::Measure() {
 }
 
 void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
-  // The controller's path too: the signal table (robot::AuvSignals) through the IO layout
-  // (robot::ObservationBuilder). The plant's yaw is not wrapped; the yaw signal is.
+  // The controller's path too: the robot model's fields, its signals (runtime/robot/signals.hpp),
+  // the IO layout (robot::ObservationBuilder). The plant's yaw is not wrapped; the yaw signal is.
   const AuvState& s = plant_.State();
-  robot::AuvSignalInputs in;
-  in.x_m = s.x_m;
-  in.y_m = s.y_m;
-  in.depth_m = -s.z_m;
-  in.yaw_rad = s.yaw_rad;
-  in.surge_mps = s.u_mps;
-  in.sway_mps = s.v_mps;
-  in.yaw_rate_radps = s.r_radps;
-  in.target_distance_m = l_at_;
-  in.target_bearing_rad = phi_at_;
-  in.route_bearing_rad = route_phi_;
-  in.clearance_m = clearance_;
-  in.target_index = target_;
+  const AuvFieldIndex& i = config_.fields;
+  double* f = fields_.data();
+  f[i.x] = s.x_m;
+  f[i.y] = s.y_m;
+  f[i.depth] = -s.z_m;
+  f[i.yaw] = s.yaw_rad;
+  f[i.surge] = s.u_mps;
+  f[i.sway] = s.v_mps;
+  f[i.yaw_rate] = s.r_radps;
+  f[i.target_distance] = l_at_;
+  f[i.target_bearing] = phi_at_;
+  f[i.route_bearing] = route_phi_;
+  f[i.clearance] = clearance_;
+  f[i.target_index] = target_;
   const auto& tgt = config_.layout.targets[static_cast<std::size_t>(
       std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
-  in.target_x_m = tgt[0];
-  in.target_y_m = tgt[1];
-  in.episode_end = episode_end;
-  robot::AuvSignals(in, config_.task.depth_m, sonar_.data(), static_cast<std::uint32_t>(sonar_.size()),
-                    signals_.data());
+  f[i.target_x] = tgt[0];
+  f[i.target_y] = tgt[1];
+  f[i.episode_end] = episode_end ? 1.0 : 0.0;
+  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = sonar_[k];
+  config_.signals.Compute(fields_, last_action_, signals_.data());
   observe_.Build(signals_.data(), first, last_obs_.data());
   std::copy(last_obs_.begin(), last_obs_.end(), obs);
 }
@@ -409,6 +439,11 @@ AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
   // Action -> command through the IO layout: clamp(a * scale + offset, low, high).
   double cmd[2];
   stats_.nonfinite_actions += std::popcount(act_.Map(action, cmd));
+  // The previous action as the controller's policy source sees it: (command - offset) / scale.
+  for (std::size_t k = 0; k < last_action_.size() && k < 2; ++k) {
+    const robot::ActionElement& a = config_.io.actions[k];
+    last_action_[k] = static_cast<float>((cmd[k] - a.offset) / a.scale);
+  }
   return StepCommand(cmd[static_cast<std::size_t>(action_of_[0])], cmd[static_cast<std::size_t>(action_of_[1])], obs);
 }
 

@@ -26,6 +26,7 @@
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/signals.hpp"
 #include "sim_hil/plants/auv_plant.hpp"
 #include "sim_hil/scenarios/auv_geodesic.hpp"
 #include "sim_hil/scenarios/auv_layout.hpp"
@@ -74,6 +75,16 @@ struct AuvTaskParams {
 // "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).
 bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noexcept;
 
+// The AUV's sample as the robot model's fields (models/auv/robot.yaml streams[sensor]): where the
+// task writes each quantity it measures, so that the model's signals (runtime/robot/signals.hpp)
+// compute the observation exactly as the controller does from a received sample.
+struct AuvFieldIndex {
+  std::uint32_t count = 0;  // fields of the robot
+  std::uint32_t x, y, depth, yaw, surge, sway, yaw_rate, target_distance, target_bearing, route_bearing, clearance,
+      target_index, target_x, target_y, episode_end;
+  std::vector<std::uint32_t> sonar;  // per beam
+};
+
 // Everything a task instance needs, loaded once and shared read-only between instances.
 struct AuvTaskConfig {
   AuvParams plant;
@@ -81,6 +92,8 @@ struct AuvTaskConfig {
   AuvTaskParams task;
   AuvLayout layout;
   robot::IoLayout io;
+  robot::SignalProgram signals;  // every signal of the robot (robot::SignalNames order)
+  AuvFieldIndex fields;
 };
 
 // Read the sonar and task sections of the plant file (models/auv/auv.yaml); `path` names it in
@@ -168,7 +181,7 @@ class AuvNavTask {
   double commanded_speed_mps() const noexcept { return v_cmd_; }
   double commanded_yaw_rate_radps() const noexcept { return w_cmd_; }
   // The names of every signal an IO layout may use.
-  std::vector<std::string> SignalNames() const;
+  const std::vector<std::string>& SignalNames() const noexcept { return config_.signals.names(); }
 
  private:
   AuvNavTask(const AuvTaskConfig& config, AuvPlant plant);
@@ -186,7 +199,9 @@ class AuvNavTask {
   robot::ObservationBuilder observe_;
   robot::ActionMapper act_;
   std::array<int, 2> action_of_;  // action index of surge_speed and yaw_rate
-  std::vector<double> signals_;   // robot::AuvSignalNames order
+  std::vector<double> fields_;    // the robot model's fields (AuvFieldIndex)
+  std::vector<double> signals_;   // config_.signals order
+  std::vector<float> last_action_;
   std::vector<float> last_obs_;
   std::vector<double> sonar_;
   World2d world_;

@@ -1,7 +1,9 @@
-// The AUV controller core and its loop: loading (errors naming file and field, a blob for another
-// layout refused naming the difference, a corrupted blob refused), observe -> infer -> supervise
-// with no allocation over 100,000 ticks, and the loop over an in-process link (a kinematic
-// unicycle stands in for the vehicle) through the fresh, stale-sample, lost-peer and shutdown paths.
+// The AUV through runtime/loop, without DDS: the robot model's limits and refusals (errors naming
+// file and field, a blob for another layout refused naming the difference, a corrupted blob),
+// the one sample check on the AUV's sample mapped to the model's fields, observe -> infer ->
+// supervise with no allocation over 100,000 ticks, and the loop on a thread over an in-process
+// link (a kinematic unicycle stands in for the vehicle) through the fresh, stale-sample,
+// lost-peer and shutdown paths.
 #include <doctest/doctest.h>
 
 #include <array>
@@ -12,27 +14,25 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <thread>
 #include <vector>
 
-#include "firmware/auv/auv_controller.hpp"
-#include "firmware/auv/controller_loop.hpp"
+#include "firmware/auv/auv_transport.hpp"
 #include "runtime/core/alloc_probe.hpp"
+#include "runtime/loop/policy_source.hpp"
+#include "runtime/loop/runner.hpp"
 #include "runtime/policy/blob.hpp"
-#include "runtime/robot/auv_signals.hpp"
 #include "tests/support/robot_models.hpp"
+#include "tests/support/scripted_transport.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo;
-using firmware::AuvController;
+using safety::Mode;
 
 namespace {
 
-const std::string kRobotYaml = test::SourcePath("models/auv/robot.yaml");
-
-robot::IoLayout Layout() {
-  return *test::AuvRobot().io;
+const robot::RobotModel& Robot() {
+  return test::AuvRobot();
 }
 
 // A blob with random weights whose names, hash and action map are the given layout's.
@@ -46,10 +46,27 @@ std::string WriteBlob(const std::string& dir, const robot::IoLayout& layout, con
   return path;
 }
 
-std::unique_ptr<AuvController> MakeController(const std::string& dir) {
-  auto c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, Layout(), "auv.blob"));
-  REQUIRE_MESSAGE(c.ok(), c.error().message);
-  return std::move(*c);
+struct Controller {
+  policy::PolicyModel policy;
+  std::unique_ptr<loop::PolicySource> source;
+  Controller(policy::PolicyModel p) : policy(std::move(p)) {
+    auto s = loop::PolicySource::Create(Robot(), policy);
+    REQUIRE_MESSAGE(s.ok(), s.error().message);
+    source = std::move(*s);
+  }
+};
+
+std::unique_ptr<Controller> MakeController(const std::string& dir) {
+  auto p = policy::PolicyModel::FromFile(WriteBlob(dir, *Robot().io, "auv.blob"));
+  REQUIRE(p.ok());
+  return std::make_unique<Controller>(std::move(*p));
+}
+
+Result<std::unique_ptr<loop::PolicySource>> SourceFor(const std::string& blob, policy::PolicyModel* keep) {
+  auto p = policy::PolicyModel::FromFile(blob);
+  if (!p) return std::move(p).error();
+  *keep = std::move(*p);
+  return loop::PolicySource::Create(Robot(), *keep);
 }
 
 robot::AuvSensorSample Sample(std::uint64_t tick) {
@@ -68,22 +85,53 @@ robot::AuvSensorSample Sample(std::uint64_t tick) {
   return s;
 }
 
+auv::SampleFields Fields() {
+  auto f = auv::SampleFields::Create(Robot());
+  REQUIRE_MESSAGE(f.ok(), f.error().message);
+  return *f;
+}
+
+// The loop in this thread over a scripted transport fed with AUV samples.
+struct Rig {
+  const robot::RobotModel& m = Robot();
+  std::unique_ptr<Controller> c;
+  robot::RobotData data = robot::MakeRobotData(Robot());
+  std::unique_ptr<loop::LoopData> loop;
+  test::ScriptedTransport t{Robot()};
+  robot::Transport* ts[1] = {&t};
+  auv::SampleFields fields = Fields();
+  std::vector<double> values = std::vector<double>(Robot().fields.size());
+
+  explicit Rig(const std::string& dir) : c(MakeController(dir)), loop(loop::MakeLoopData(Robot(), c->source.get())) {}
+  void Tick(const robot::AuvSensorSample* s, std::uint64_t tick) {
+    if (s != nullptr) {
+      fields.Write(*s, values);
+      t.Put(m, 0, values);
+    }
+    rt::TickTiming timing;
+    timing.tick = tick;
+    loop::Tick(m, data, *loop, ts, timing);
+  }
+  double v() const { return t.command[0]; }
+  double w() const { return t.command[1]; }
+};
+
 }  // namespace
 
-TEST_CASE("auv controller: configuration from robot.yaml - bad fields named with their value") {
-  auto c = firmware::AuvControllerConfigOf(test::AuvRobot());
-  REQUIRE_MESSAGE(c.ok(), c.error().message);
-  CHECK(c->control_period_s == 0.1);
-  CHECK(c->depth_setpoint_m == 5.0);
-  CHECK(c->supervisor.v_max_mps == 1.5);
-  CHECK(c->supervisor.dv_max_mps == doctest::Approx(0.1));
-  CHECK(c->supervisor.stop_dv_mps == doctest::Approx(0.3));
-  CHECK(c->supervisor.sonar_beams == 16);
+TEST_CASE("auv controller: limits from robot.yaml - bad fields named with their value") {
+  const robot::RobotModel& m = Robot();
+  const safety::SupervisorModel& s = m.supervisor_model;
+  CHECK(m.tick_period_s == 0.1);
+  CHECK(*m.Parameter("depth_m") == 5.0);
+  CHECK(s.commands[0].max == 1.5);
+  CHECK(s.commands[0].rate == doctest::Approx(0.1));
+  CHECK(s.commands[0].stop_rate == doctest::Approx(0.3));
+  CHECK(m.FieldIndex("sonar_15_m") >= 0);
 
   // A copy of the robot's folder with one change in robot.yaml.
   const std::string dir = test::ScratchDir("auv_controller_yaml") + "/auv";
   std::filesystem::copy(test::SourcePath("models/auv"), dir, std::filesystem::copy_options::recursive);
-  std::ifstream in(kRobotYaml);
+  std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string p = dir + "/robot.yaml";
   auto with = [&](const std::string& from, const std::string& to) {
@@ -92,8 +140,7 @@ TEST_CASE("auv controller: configuration from robot.yaml - bad fields named with
     REQUIRE(at != std::string::npos);
     t.replace(at, from.size(), to);
     std::ofstream(p) << t;
-    auto m = robot::LoadRobotModel(p);
-    auto r = m ? firmware::AuvControllerConfigOf(*m) : Result<firmware::AuvControllerConfig>(m.error());
+    auto r = robot::LoadRobotModel(p);
     REQUIRE_FALSE(r.ok());
     return r.error().message;
   };
@@ -101,9 +148,8 @@ TEST_CASE("auv controller: configuration from robot.yaml - bad fields named with
   CHECK(with("invalid_safe_stop: 3", "invalid_safe_stop: 2.5") ==
         p + ": streams[0].invalid_safe_stop: '2.5' is not an integer");
   CHECK(with("range: [0.0, 1.5]", "range: [1.5, 0.0]") == p + ": commands[0].range: low 1.5 is above high 0");
-  CHECK(with("stop: {ramp_per_s: 3.0}", "stop: {ramp_per_s: 0.5}")
-            .find("supervisor: stop_dv_mps = 0.05: must be >= "
-                  "dv_max_mps") != std::string::npos);
+  CHECK(with("stop: {ramp_per_s: 3.0}", "stop: {ramp_per_s: 0.5}") ==
+        p + ": supervisor: command 'surge_speed': stop_rate = 0.05: must be > 0 and >= the rate 0.1");
   CHECK(with("invalid_safe_stop: 3", "invalid_safe_stop_typo: 3") ==
         p + ": streams[0].invalid_safe_stop_typo: unknown field");
 }
@@ -112,65 +158,65 @@ TEST_CASE(
     "auv controller: ticking at 1 kHz the limits keep their time - a sample a tick late is on time, a missed "
     "one is stale") {
   auto at = [](double tick_s) {
-    auto m = robot::WithTickPeriod(test::AuvRobot(), tick_s);
+    auto m = robot::WithTickPeriod(Robot(), tick_s);
     REQUIRE_MESSAGE(m.ok(), m.error().message);
-    auto config = firmware::AuvControllerConfigOf(*m);
-    REQUIRE_MESSAGE(config.ok(), config.error().message);
-    return *config;
+    return *m;
   };
-  const auto c = std::optional(at(0.1));
+  const robot::RobotModel same = at(0.1), fast = at(0.001);
   // At the control period nothing changes.
-  const auto same = at(c->control_period_s);
-  CHECK(same.supervisor.stale_degraded_ticks == c->supervisor.stale_degraded_ticks);
-  CHECK(same.supervisor.stale_safe_stop_ticks == c->supervisor.stale_safe_stop_ticks);
-  CHECK(same.supervisor.lost_peer_ticks == c->supervisor.lost_peer_ticks);
-  CHECK(same.supervisor.dv_max_mps == c->supervisor.dv_max_mps);
+  CHECK(same.streams[0].stale_degraded_ticks == Robot().streams[0].stale_degraded_ticks);
+  CHECK(same.streams[0].stale_safe_stop_ticks == Robot().streams[0].stale_safe_stop_ticks);
+  CHECK(same.streams[0].lost_ticks == Robot().streams[0].lost_ticks);
+  CHECK(same.supervisor_model.commands[0].rate == Robot().supervisor_model.commands[0].rate);
   // 100 ticks per period: stale after 1.5 and 2.5 periods, lost after 20, rates per tick / 100.
-  const auto fast = at(0.001);
-  CHECK(fast.supervisor.stale_degraded_ticks == 150);
-  CHECK(fast.supervisor.stale_safe_stop_ticks == 250);
-  CHECK(fast.supervisor.lost_peer_ticks == 2000);
-  CHECK(fast.supervisor.dv_max_mps == doctest::Approx(c->supervisor.dv_max_mps / 100));
-  char why[256];
-  CHECK(safety::ValidateAuvSupervisorConfig(fast.supervisor, why, sizeof why));
+  CHECK(fast.streams[0].stale_degraded_ticks == 150);
+  CHECK(fast.streams[0].stale_safe_stop_ticks == 250);
+  CHECK(fast.streams[0].lost_ticks == 2000);
+  CHECK(fast.supervisor_model.commands[0].rate == doctest::Approx(Robot().supervisor_model.commands[0].rate / 100));
+  CHECK(fast.policy_period_ticks == 100);
   // The 10 Hz sample due at tick 100 arrives at tick 101 (age 101): on time. One missed (age 151):
   // degraded. Two missed (age 251): safe-stop.
-  const robot::AuvSensorSample sample = Sample(1);
-  safety::AuvSupervisorInput in;
-  in.sample = &sample;
-  in.v_mps = 0.05;
   const auto mode_at = [&](std::uint32_t age) {
-    in.sample_age_ticks = age;
-    return safety::SuperviseAuv(fast.supervisor, in, safety::AuvSupervisorState{}).state.mode;
+    const double command[2] = {0.05, 0.0};
+    const safety::StreamState stream{true, age, -1, 0};
+    const safety::TransportHealth link;
+    safety::SupervisorInput in;
+    in.command = command;
+    in.streams = {&stream, 1};
+    in.transports = {&link, 1};
+    safety::SupervisorState s = safety::MakeSupervisorState(fast.supervisor_model);
+    std::vector<double> out(2);
+    return safety::Supervise(fast.supervisor_model, in, 0, s, out).mode;
   };
-  CHECK(mode_at(101) == safety::AuvMode::kNominal);
-  CHECK(mode_at(150) == safety::AuvMode::kNominal);
-  CHECK(mode_at(151) == safety::AuvMode::kDegraded);
-  CHECK(mode_at(251) == safety::AuvMode::kSafeStop);
+  CHECK(mode_at(101) == Mode::kNominal);
+  CHECK(mode_at(150) == Mode::kNominal);
+  CHECK(mode_at(151) == Mode::kDegraded);
+  CHECK(mode_at(251) == Mode::kSafeStop);
 }
 
 TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refused, naming why") {
   const std::string dir = test::ScratchDir("auv_controller_blobs");
-  robot::IoLayout other = Layout();
+  policy::PolicyModel keep =
+      std::move(policy::PolicyModel::FromSpec(policy::MakeRandomSpec({1, 1}, policy::Activation::kTanh, 1))).value();
+  robot::IoLayout other = *Robot().io;
   other.observations[17].scale = 0.5;  // same names, other scale: only the hash differs
-  auto c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "scale.blob"));
+  auto c = SourceFor(WriteBlob(dir, other, "scale.blob"), &keep);
   REQUIRE_FALSE(c.ok());
-  CHECK(c.error().message.find("scale.blob on " + test::AuvRobot().path +
-                               ": policy does not fit robot layout 'auv': same names, "
+  CHECK(c.error().message.find("policy does not fit robot layout 'auv': same names, "
                                "but scales, offsets, clips, units or limits differ (layout hash") != std::string::npos);
-  other = Layout();
+  other = *Robot().io;
   other.observations[16].history = 2;
-  c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "history.blob"));
+  c = SourceFor(WriteBlob(dir, other, "history.blob"), &keep);
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("the policy takes 25 observations, the layout gives 24") != std::string::npos);
-  other = Layout();
+  other = *Robot().io;
   std::swap(other.observations[0], other.observations[1]);
-  c = AuvController::Create(test::AuvRobot(), WriteBlob(dir, other, "order.blob"));
+  c = SourceFor(WriteBlob(dir, other, "order.blob"), &keep);
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("observation 0 is 'sonar_1' in the policy, 'sonar_0' in the layout") !=
         std::string::npos);
 
-  const std::string good = WriteBlob(dir, Layout(), "good.blob");
+  const std::string good = WriteBlob(dir, *Robot().io, "good.blob");
   std::vector<char> bytes;
   {
     std::ifstream f(good, std::ios::binary);
@@ -179,66 +225,118 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
   bytes[bytes.size() / 2] ^= 0x5a;
   std::ofstream(dir + "/corrupt.blob", std::ios::binary)
       .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  c = AuvController::Create(test::AuvRobot(), dir + "/corrupt.blob");
+  c = SourceFor(dir + "/corrupt.blob", &keep);
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("corrupt.blob") != std::string::npos);
-  c = AuvController::Create(test::AuvRobot(), dir + "/missing.blob");
+  c = SourceFor(dir + "/missing.blob", &keep);
   REQUIRE_FALSE(c.ok());
   CHECK(c.error().message.find("missing.blob") != std::string::npos);
 }
 
+TEST_CASE("auv controller: the one sample check names the field - the sample's beams and bearings included") {
+  const robot::RobotModel& m = Robot();
+  robot::RobotData d = robot::MakeRobotData(m);
+  const auv::SampleFields f = Fields();
+  auto check = [&](const robot::AuvSensorSample& s) {
+    f.Write(s, d.fields);
+    d.fresh[0] = 1;
+    loop::CheckSample(m, d);
+    const std::int32_t k = d.streams[0].invalid_input;
+    return k < 0 ? std::string("valid") : m.fields[static_cast<std::size_t>(k)].name;
+  };
+  robot::AuvSensorSample s = Sample(1);
+  CHECK(check(s) == "valid");
+  s.sonar_beams = 8;
+  CHECK(check(s) == "sonar_beams");
+  CHECK(d.streams[0].invalid_value == 8.0);
+  s = Sample(1);
+  s.route_bearing_rad = std::numeric_limits<double>::quiet_NaN();
+  CHECK(check(s) == "route_bearing_rad");
+  s = Sample(1);
+  s.surge_mps = 9.0;  // beyond 5 m/s
+  CHECK(check(s) == "surge_mps");
+  s = Sample(1);
+  s.sonar_m[5] = std::numeric_limits<float>::infinity();
+  CHECK(check(s) == "sonar_5_m");
+  s = Sample(1);
+  s.sonar_m[3] = -1.0f;
+  CHECK(check(s) == "sonar_3_m");
+  s = Sample(1);
+  s.x_m = std::numeric_limits<double>::quiet_NaN();
+  CHECK(check(s) == "x_m");
+  // Angles are wrapped to [-pi, pi]: the route bearing like the target bearing and the yaw.
+  struct Angle {
+    const char* field;
+    double robot::AuvSensorSample::* member;
+  };
+  for (const Angle& a : {Angle{"route_bearing_rad", &robot::AuvSensorSample::route_bearing_rad},
+                         Angle{"target_bearing_rad", &robot::AuvSensorSample::target_bearing_rad},
+                         Angle{"yaw_rad", &robot::AuvSensorSample::yaw_rad}}) {
+    s = Sample(1);
+    s.*a.member = 3.14159265;
+    CHECK(check(s) == "valid");
+    s.*a.member = -3.5;
+    CHECK(check(s) == a.field);
+    CHECK(d.streams[0].invalid_value == -3.5);
+  }
+}
+
 TEST_CASE("auv controller: the tick observes the sample through the layout, infers, and stays within limits") {
-  auto c = MakeController(test::ScratchDir("auv_controller_tick"));
-  robot::AuvCommand cmd;
+  Rig r(test::ScratchDir("auv_controller_tick"));
   const robot::AuvSensorSample s = Sample(1);
-  c->Tick(&s, 0, cmd);  // disarmed: zero
-  CHECK(cmd.surge_speed_mps == 0.0);
-  CHECK(c->policy_runs() == 0);
-  c->Arm();
-  c->Tick(&s, 1, cmd);
-  CHECK(c->policy_runs() == 1);
+  r.Tick(&s, 0);  // disarmed: zero
+  CHECK(r.v() == 0.0);
+  CHECK(r.c->source->runs() == 0);
+  r.loop->Arm();
+  const robot::AuvSensorSample s2 = Sample(2);
+  r.Tick(&s2, 2);
+  CHECK(r.c->source->runs() == 1);
   // The observation is the layout's: sonar_0 / 15, target distance / 40, the nearest echo / 5
   // (5 m here: clipped at 1), the route bearing / pi and its cos/sin.
-  CHECK(c->observation()[0] == doctest::Approx(s.sonar_m[0] / 15.0));
-  CHECK(c->observation()[16] == doctest::Approx(0.5));
-  CHECK(c->observation()[20] == 1.0f);
-  CHECK(c->observation()[21] == doctest::Approx(-0.4 / 3.14159265358979));
-  CHECK(c->observation()[22] == doctest::Approx(std::cos(-0.4)));
-  CHECK(c->observation()[23] == doctest::Approx(std::sin(-0.4)));
-  CHECK(cmd.answers == 1);
-  CHECK(cmd.tick == 1);
-  CHECK(cmd.mode == 0);
-  CHECK(std::abs(cmd.surge_speed_mps) <= 0.1 + 1e-12);  // the first step from rest is rate limited
-  double v_prev = cmd.surge_speed_mps;
-  for (std::uint64_t k = 2; k < 50; ++k) {
+  const auto obs = r.c->source->observation();
+  CHECK(obs[0] == doctest::Approx(s2.sonar_m[0] / 15.0));
+  CHECK(obs[16] == doctest::Approx(0.5));
+  CHECK(obs[20] == 1.0f);
+  CHECK(obs[21] == doctest::Approx(-0.4 / 3.14159265358979));
+  CHECK(obs[22] == doctest::Approx(std::cos(-0.4)));
+  CHECK(obs[23] == doctest::Approx(std::sin(-0.4)));
+  CHECK(r.t.tick == 2);
+  CHECK(r.t.mode == Mode::kNominal);
+  CHECK(std::abs(r.v()) <= 0.1 + 1e-12);  // the first step from rest is rate limited
+  double v_prev = r.v();
+  for (std::uint64_t k = 3; k < 50; ++k) {
     const robot::AuvSensorSample sk = Sample(k);
-    c->Tick(&sk, k, cmd);
-    CHECK(cmd.surge_speed_mps >= 0.0);
-    CHECK(cmd.surge_speed_mps <= 1.5);
-    CHECK(std::abs(cmd.yaw_rate_radps) <= 0.5);
-    CHECK(std::abs(cmd.surge_speed_mps - v_prev) <= 0.1 + 1e-12);
-    v_prev = cmd.surge_speed_mps;
+    r.Tick(&sk, k);
+    CHECK(r.v() >= 0.0);
+    CHECK(r.v() <= 1.5);
+    CHECK(std::abs(r.w()) <= 0.5);
+    CHECK(std::abs(r.v() - v_prev) <= 0.1 + 1e-12);
+    v_prev = r.v();
   }
-  CHECK(c->supervisor().mode == safety::AuvMode::kNominal);
-  // A shutdown command is zero speed, e-stop mode.
-  c->ShutdownCommand(99, cmd);
-  CHECK(cmd.surge_speed_mps == 0.0);
-  CHECK(cmd.yaw_rate_radps == 0.0);
-  CHECK(cmd.mode == 3);
+  CHECK(r.loop->supervisor().mode == Mode::kNominal);
+  // The stop command: zero speed, zero yaw rate, e-stop mode.
+  robot::Transport* ts[] = {&r.t};
+  robot::RobotData copy = r.data;
+  loop::Shutdown(r.m, copy, *r.loop, ts, 99);
+  CHECK(r.v() == 0.0);
+  CHECK(r.w() == 0.0);
+  CHECK(r.t.mode == Mode::kEStop);
   // Reset only while disarmed.
-  c->RequestEStop();
-  c->Tick(&s, 50, cmd);
-  CHECK(c->supervisor().mode == safety::AuvMode::kEStop);
-  CHECK_FALSE(c->ResetSupervisor());
-  c->Disarm();
-  CHECK(c->ResetSupervisor());
-  CHECK(c->supervisor().mode == safety::AuvMode::kNominal);
+  auto rig = Rig(test::ScratchDir("auv_controller_reset"));
+  rig.loop->Arm();
+  rig.loop->RequestEStop();
+  rig.Tick(&s, 0);
+  CHECK(rig.loop->supervisor().mode == Mode::kEStop);
+  CHECK_FALSE(rig.loop->ResetSupervisor());
+  rig.loop->Disarm();
+  rig.Tick(&s, 1);
+  CHECK(rig.loop->ResetSupervisor());
+  CHECK(rig.loop->supervisor().mode == Mode::kNominal);
 }
 
 TEST_CASE("auv controller: 100,000 ticks allocate nothing - the profiler saw every stage") {
-  auto c = MakeController(test::ScratchDir("auv_controller_alloc"));
-  c->Arm();
-  robot::AuvCommand cmd;
+  Rig r(test::ScratchDir("auv_controller_alloc"));
+  r.loop->Arm();
   std::vector<robot::AuvSensorSample> samples;
   for (std::uint64_t k = 0; k < 64; ++k) samples.push_back(Sample(k));
   std::uint64_t nominal = 0;
@@ -247,20 +345,20 @@ TEST_CASE("auv controller: 100,000 ticks allocate nothing - the profiler saw eve
     for (std::uint64_t k = 0; k < 100000; ++k) {
       robot::AuvSensorSample& s = samples[k % 64];
       s.tick = k;
-      c->Tick(&s, k, cmd);
-      nominal += cmd.mode == 0;
+      r.Tick(&s, k);
+      nominal += r.t.mode == Mode::kNominal;
     }
     CHECK(scope.count() == 0);
   }
   CHECK(nominal == 100000);
-  CHECK(c->policy_runs() == 100000);
-  CHECK(c->profiler().histogram(rt::Stage::kInfer).Snapshot().count() == 100000);
+  CHECK(r.c->source->runs() == 100000);
+  CHECK(r.loop->profiler().histogram(rt::Stage::kInfer).Snapshot().count() == 100000);
 }
 
 namespace {
 
-// In-process link: a vehicle thread (kinematic unicycle) and the controller exchange the newest
-// sample and the newest command through seqlocks (no lock, no allocation on either side).
+// In-process link: a vehicle thread (kinematic unicycle) and the loop exchange the newest sample
+// and every command through seqlocks and a preallocated log (no lock, no allocation either side).
 template <typename T>
 class SeqBox {
  public:
@@ -296,32 +394,53 @@ class SeqBox {
   std::atomic<std::uint64_t> words_[kWords] = {};
 };
 
-class TestLink final : public firmware::AuvLink {
- public:
-  bool Latest(robot::AuvSensorSample& out) noexcept override { return samples.Get(out); }
-  bool Send(const robot::AuvCommand& c) noexcept override {
-    const std::uint64_t n = sent.load(std::memory_order_relaxed);
-    if (n < log.size()) log[n] = c;  // every command kept (lock-step tests), in a preallocated log
-    commands.Put(c);
-    sent.store(n + 1, std::memory_order_release);
-    return true;
-  }
-  firmware::PeerState Peer() noexcept override { return peer.load(std::memory_order_relaxed); }
-
-  SeqBox<robot::AuvSensorSample> samples;
-  SeqBox<robot::AuvCommand> commands;
-  std::array<robot::AuvCommand, 256> log{};
-  std::atomic<std::uint64_t> sent{0};
-  std::atomic<firmware::PeerState> peer{firmware::PeerState::kAlive};
+struct Sent {
+  std::uint64_t tick = 0, answers = 0;
+  double v = 0, w = 0;
+  std::uint64_t mode = 0;
 };
 
-// The vehicle in lock-step: publish the state, let the controller tick, wait for its command,
-// integrate a unicycle over one period. `publish_until`: later ticks publish nothing new.
+class TestLink final : public robot::Transport {
+ public:
+  TestLink() : fields_(Fields()) {}
+  void Read(const robot::RobotModel&, robot::RobotData& d) noexcept override {
+    if (samples.Get(sample_) && (!have_ || sample_.tick != last_)) {
+      have_ = true;
+      last_ = sample_.tick;
+      fields_.Write(sample_, d.fields);
+      d.fresh[fields_.stream()] = 1;
+    }
+    d.transports[0].lost = peer_lost.load(std::memory_order_relaxed);
+  }
+  void Write(const robot::RobotModel&, robot::RobotData& d) noexcept override {
+    const Sent s{d.tick, static_cast<std::uint64_t>(d.fields[fields_.tick_field()]), d.command[0], d.command[1],
+                 static_cast<std::uint64_t>(d.mode)};
+    const std::uint64_t n = sent.load(std::memory_order_relaxed);
+    if (n < log.size()) log[n] = s;  // every command kept (lock-step tests), in a preallocated log
+    commands.Put(s);
+    sent.store(n + 1, std::memory_order_release);
+  }
+
+  SeqBox<robot::AuvSensorSample> samples;
+  SeqBox<Sent> commands;
+  std::array<Sent, 256> log{};
+  std::atomic<std::uint64_t> sent{0};
+  std::atomic<bool> peer_lost{false};
+
+ private:
+  auv::SampleFields fields_;
+  robot::AuvSensorSample sample_;
+  bool have_ = false;
+  std::uint64_t last_ = 0;
+};
+
+// The vehicle in lock-step: publish the state, let the loop tick, wait for its command, integrate
+// a unicycle over one period. `publish_until`: later ticks publish nothing new.
 struct Vehicle {
   TestLink& link;
   rt::LockStepClock& clock;
   std::uint64_t ticks, publish_until;
-  std::vector<robot::AuvCommand> seen;
+  std::vector<Sent> seen;
   double x = 0, y = 0, yaw = 0;
   std::uint64_t lose_peer_at = ~std::uint64_t{0};  // from this tick on the link reports the peer lost
 
@@ -336,26 +455,31 @@ struct Vehicle {
         s.yaw_rad = robot::WrapAngleRad(yaw);
         link.samples.Put(s);
       }
-      if (k == lose_peer_at) link.peer.store(firmware::PeerState::kLost);
+      if (k == lose_peer_at) link.peer_lost.store(true);
       const std::uint64_t before = link.sent.load(std::memory_order_acquire);
       clock.Advance();
       while (link.sent.load(std::memory_order_acquire) == before) std::this_thread::yield();
-      const robot::AuvCommand c = link.log[before];
+      const Sent c = link.log[before];
       seen.push_back(c);
-      yaw += c.yaw_rate_radps * 0.1;
-      x += c.surge_speed_mps * std::cos(yaw) * 0.1;
-      y += c.surge_speed_mps * std::sin(yaw) * 0.1;
+      yaw += c.w * 0.1;
+      x += c.v * std::cos(yaw) * 0.1;
+      y += c.v * std::sin(yaw) * 0.1;
     }
   }
 };
 
 // The loop on its own thread against the vehicle on this one, for `ticks` lock-step ticks.
-firmware::LoopResult RunLockStep(AuvController& c, TestLink& link, rt::LockStepClock& clock, Vehicle& vehicle) {
-  firmware::ClearLoopStop();
-  firmware::LoopResult r;
-  std::thread loop([&] { r = firmware::RunAuvControlLoop(c, link, clock, {.max_ticks = vehicle.ticks}); });
+loop::RunResult RunLockStep(Controller& c, TestLink& link, rt::LockStepClock& clock, Vehicle& vehicle,
+                            std::unique_ptr<loop::LoopData>& l) {
+  loop::ClearStop();
+  const robot::RobotModel& m = Robot();
+  robot::RobotData d = robot::MakeRobotData(m);
+  l = loop::MakeLoopData(m, c.source.get());
+  robot::Transport* ts[] = {&link};
+  loop::RunResult r;
+  std::thread thread([&] { r = loop::Run(m, d, *l, ts, clock, {vehicle.ticks, true}); });
   vehicle.Run();
-  loop.join();
+  thread.join();
   return r;
 }
 
@@ -366,7 +490,8 @@ TEST_CASE("auv control loop: lock-step with fresh samples, then stale samples, t
   TestLink link;
   rt::LockStepClock clock;
   Vehicle vehicle{link, clock, 80, 40, {}};
-  const firmware::LoopResult r = RunLockStep(*c, link, clock, vehicle);
+  std::unique_ptr<loop::LoopData> l;
+  const loop::RunResult r = RunLockStep(*c, link, clock, vehicle, l);
   CHECK(r.ticks == 80);
   REQUIRE(vehicle.seen.size() == 80);
   for (std::uint64_t k = 0; k < 40; ++k) {
@@ -374,21 +499,20 @@ TEST_CASE("auv control loop: lock-step with fresh samples, then stale samples, t
     CHECK(vehicle.seen[k].answers == k);  // each command answers the sample of its tick
   }
   CHECK(std::hypot(vehicle.x, vehicle.y) > 0.0);
-  // Last new sample at tick 39: age 2 at tick 41 degrades, age 4 at tick 43 stops, age 21 at
+  // Last new sample at tick 39: age 2 at tick 41 degrades, age 3 at tick 42 stops, age 21 at
   // tick 60 is a lost peer (e-stop).
   CHECK(vehicle.seen[40].mode == 0);
   CHECK(vehicle.seen[41].mode == 1);
   CHECK(vehicle.seen[43].mode == 2);
   CHECK(vehicle.seen[59].mode == 2);
   CHECK(vehicle.seen[60].mode == 3);
-  CHECK(vehicle.seen[50].surge_speed_mps == 0.0);  // ramped to zero within 5 stop steps
-  CHECK(vehicle.seen[50].yaw_rate_radps == 0.0);
-  CHECK(r.final_mode == safety::AuvMode::kEStop);
-  robot::AuvCommand last;
-  REQUIRE(link.commands.Get(last));  // the shutdown command after the loop
-  CHECK(last.surge_speed_mps == 0.0);
+  CHECK(vehicle.seen[50].v == 0.0);  // ramped to zero within 5 stop steps
+  CHECK(vehicle.seen[50].w == 0.0);
+  Sent last;
+  REQUIRE(link.commands.Get(last));  // the stop command after the loop
+  CHECK(last.v == 0.0);
   CHECK(last.mode == 3);
-  CHECK(c->supervisor().cause_ticks[4] > 0);  // stale counted
+  CHECK(l->supervisor().counts[safety::Cause::kStaleSample] > 0);
 }
 
 TEST_CASE("auv control loop: the transport reporting the peer lost e-stops at once") {
@@ -397,22 +521,25 @@ TEST_CASE("auv control loop: the transport reporting the peer lost e-stops at on
   rt::LockStepClock clock;
   Vehicle vehicle{link, clock, 30, 30, {}};
   vehicle.lose_peer_at = 15;
-  (void)RunLockStep(*c, link, clock, vehicle);
+  std::unique_ptr<loop::LoopData> l;
+  (void)RunLockStep(*c, link, clock, vehicle, l);
   CHECK(vehicle.seen[14].mode == 0);
   CHECK(vehicle.seen[15].mode == 3);  // at once
   CHECK(vehicle.seen[29].tick == 29);
   CHECK(vehicle.seen[29].mode == 3);
-  CHECK(vehicle.seen[29].surge_speed_mps == 0.0);
-  CHECK_MESSAGE(c->supervisor().latched_cause == safety::kAuvCauseLostPeer,
-                "mode " << int(c->supervisor().mode) << " transitions " << c->supervisor().transitions << " lost "
-                        << c->supervisor().cause_ticks[5] << " ticks " << c->supervisor().ticks);
+  CHECK(vehicle.seen[29].v == 0.0);
+  const auto& s = l->supervisor();
+  CHECK_MESSAGE(s.entered[3].cause == safety::Cause::kLostPeer,
+                "mode " << int(s.mode) << " transitions " << s.transitions << " ticks " << s.ticks);
+  CHECK(safety::Describe(Robot().supervisor_model, s.entered[3]) ==
+        "e-stop: lost peer: transport 'dds' reports the peer gone");
 }
 
 TEST_CASE("auv control loop: free-running clock - SIGTERM sends the safe command and ends the loop") {
   auto c = MakeController(test::ScratchDir("auv_loop_signal"));
   TestLink link;
-  firmware::ClearLoopStop();
-  firmware::InstallLoopSignalHandlers();
+  loop::ClearStop();
+  loop::InstallStopSignals();
   std::atomic<bool> done{false};
   std::thread vehicle([&] {  // publishes every 2 ms on its own, not in lock-step
     std::uint64_t k = 0;
@@ -422,31 +549,38 @@ TEST_CASE("auv control loop: free-running clock - SIGTERM sends the safe command
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   });
+  auto m = robot::WithTickPeriod(Robot(), 0.002);
+  REQUIRE(m.ok());
   rt::FreeRunningClock clock(2000000);
-  firmware::LoopResult r;
+  robot::RobotData d = robot::MakeRobotData(*m);
+  auto source = loop::PolicySource::Create(*m, c->policy);
+  REQUIRE(source.ok());
+  auto l = loop::MakeLoopData(*m, source->get());
+  robot::Transport* ts[] = {&link};
+  loop::RunResult r;
   std::uint64_t allocations = 0;
-  std::thread loop([&] {
+  std::thread thread([&] {
     AllocationScope scope;
-    r = firmware::RunAuvControlLoop(*c, link, clock, {});
+    r = loop::Run(*m, d, *l, ts, clock, {});
     allocations = scope.count();
   });
   while (link.sent.load() < 100) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   std::raise(SIGTERM);
-  loop.join();
+  thread.join();
   done.store(true);
   vehicle.join();
   CHECK(r.stopped);
   CHECK(r.ticks >= 100);
   CHECK(allocations == 0);
-  robot::AuvCommand last;
+  Sent last;
   REQUIRE(link.commands.Get(last));
-  CHECK(last.surge_speed_mps == 0.0);
-  CHECK(last.yaw_rate_radps == 0.0);
+  CHECK(last.v == 0.0);
+  CHECK(last.w == 0.0);
   CHECK(last.mode == 3);
-  const rt::ProfileReport rep = rt::TakeReport(c->profiler());
+  const rt::ProfileReport rep = rt::TakeReport(l->profiler());
   CHECK(rep.stats[static_cast<std::size_t>(rt::Stage::kTick)].count == r.ticks);
   CHECK(rep.stats[static_cast<std::size_t>(rt::Stage::kJitter)].count == r.ticks);
   MESSAGE(rt::FormatText(rep));
-  firmware::ClearLoopStop();
+  loop::ClearStop();
   std::signal(SIGTERM, SIG_DFL);
 }

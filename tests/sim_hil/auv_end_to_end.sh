@@ -8,7 +8,9 @@
 #   3. the shipped policy completes the mission on fixed seeds of the layouts in MISSIONS;
 #   4. NaN and out-of-range samples (the simulator's fault injection): the supervisor degrades,
 #      then holds a safe-stop, and its counters show it;
-#   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause.
+#   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause;
+#   6. record and replay: a lock-step run recorded (--record) replays (pbppo replay) to
+#      bit-identical commands; a truncated or corrupted log is refused naming the offset.
 # usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
@@ -32,11 +34,11 @@ echo "== 1: start-up refusals"
 cp "$blob" "$work/corrupt.blob"
 printf '\x55' | dd of="$work/corrupt.blob" bs=1 seek=200 conv=notrunc status=none
 rc=0
-"$ctl" --robot "$robot" --policy "$work/corrupt.blob" --transport dds --domain "$domain" >"$work/r1.log" 2>&1 || rc=$?
+"$ctl" --robot "$robot" --policy "$work/corrupt.blob" --domain "$domain" >"$work/r1.log" 2>&1 || rc=$?
 [ "$rc" -ne 0 ] || fail "a corrupted blob was accepted"
 expect "$work/r1.log" "corrupt.blob"
 rc=0
-"$ctl" --robot "$robot" --policy tests/data/blobs/p3.blob --transport dds --domain "$domain" >"$work/r2.log" 2>&1 || rc=$?
+"$ctl" --robot "$robot" --policy tests/data/blobs/p3.blob --domain "$domain" >"$work/r2.log" 2>&1 || rc=$?
 [ "$rc" -ne 0 ] || fail "a blob for another layout was accepted"
 expect "$work/r2.log" "does not fit robot layout 'auv'"
 # Same names, one scale changed: only the layout hash differs.
@@ -46,17 +48,17 @@ sed -i 's/name: yaw_rate, signal: yaw_rate, unit: rad\/s, scale: 1.66666667/name
 "$pbppo" train --models "$work/models" --env auv-nav --layout easy --steps 2048 --envs 2 --rollout 1024 --epochs 1 \
   --no-plots --quiet --out "$work/other" >/dev/null
 rc=0
-"$ctl" --robot "$robot" --policy "$work/other/policy.blob" --transport dds --domain "$domain" >"$work/r3.log" 2>&1 || rc=$?
+"$ctl" --robot "$robot" --policy "$work/other/policy.blob" --domain "$domain" >"$work/r3.log" 2>&1 || rc=$?
 [ "$rc" -ne 0 ] || fail "a blob trained for another layout hash was accepted"
 expect "$work/r3.log" "layout hash"
 rc=0
-"$ctl" --robot "$work/none.yaml" --policy "$blob" --transport dds >"$work/r4.log" 2>&1 || rc=$?
+"$ctl" --robot "$work/none.yaml" --policy "$blob" >"$work/r4.log" 2>&1 || rc=$?
 [ "$rc" -ne 0 ] || fail "a missing robot file was accepted"
 expect "$work/r4.log" "none.yaml"
 rc=0
-"$ctl" --robot "$robot" --policy "$blob" --transport can >"$work/r5.log" 2>&1 || rc=$?
-[ "$rc" -eq 2 ] || fail "--transport can: exit $rc"
-expect "$work/r5.log" "--transport: 'can' unknown"
+"$ctl" --robot "$robot" --policy "$blob" --period-ms 0 >"$work/r5.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "--period-ms 0: exit $rc"
+expect "$work/r5.log" "--period-ms: Value 0 not in range"
 cat "$work"/r[1-5].log | sed 's/^/   /'
 
 run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to completion
@@ -66,7 +68,7 @@ run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to com
     --events "$work/$name.json" "$@" >"$work/$name.hil.log" 2>&1 &
   local pid=$!
   local rc=0
-  "$ctl" --robot "$robot" --policy "$blob" --transport dds --lockstep --domain "$domain" --quiet \
+  "$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet \
     >"$work/$name.ctl.log" 2>&1 || rc=$?
   wait "$pid" || fail "$name: pbppo-hil exited $?: $(cat "$work/$name.hil.log")"
   [ "$rc" -eq 0 ] || fail "$name: pbppo-controller exited $rc: $(cat "$work/$name.ctl.log")"
@@ -93,21 +95,21 @@ done
 
 echo "== 4: NaN and out-of-range samples"
 run_pair nan easy 5 --fault nan@3 --max-time 12
-expect "$work/nan.ctl.log" "mode change: tick 30: degraded: invalid sensor sample: (yaw_rad|surge_mps) = nan"
-expect "$work/nan.ctl.log" "mode change: tick 32: safe-stop: invalid sensor sample"
-expect "$work/nan.ctl.log" "invalid sensor sample [1-9][0-9]"
+expect "$work/nan.ctl.log" "mode change: tick 30: degraded: invalid sample: (yaw_rad|surge_mps) = nan"
+expect "$work/nan.ctl.log" "mode change: tick 32: safe-stop: invalid sample"
+expect "$work/nan.ctl.log" "invalid sample [1-9][0-9]"
 # Holding: the commands the simulator applied after the fault ramp to zero and stay there.
 awk -F, 'NR > 1 && $1 >= 4.0 && ($5 != 0 || $6 != 0) {bad = 1} END {exit bad}' "$work/nan.csv" ||
   fail "commands after the safe-stop were not zero"
 run_pair range easy 5 --fault range@3 --max-time 6
-expect "$work/range.ctl.log" "degraded: invalid sensor sample: surge_mps = 99"
-expect "$work/range.ctl.log" "safe-stop: invalid sensor sample"
+expect "$work/range.ctl.log" "degraded: invalid sample: surge_mps = 99"
+expect "$work/range.ctl.log" "safe-stop: invalid sample"
 grep -E "mode change|supervisor:" "$work/nan.ctl.log" "$work/range.ctl.log" | sed 's/^/   /'
 
 echo "== 5: the simulator is killed mid-run (real time, 10 Hz)"
 "$hil" auv --layout hard --seed 2 --realtime --domain "$domain" >"$work/kill.hil.log" 2>&1 &
 hpid=$!
-"$ctl" --robot "$robot" --policy "$blob" --transport dds --domain "$domain" --quiet >"$work/kill.ctl.log" 2>&1 &
+"$ctl" --robot "$robot" --policy "$blob" --domain "$domain" --quiet >"$work/kill.ctl.log" 2>&1 &
 cpid=$!
 sleep 3
 kill -KILL "$hpid"
@@ -117,7 +119,30 @@ kill -TERM "$cpid"
 rc=0
 wait "$cpid" || rc=$?
 [ "$rc" -eq 0 ] || fail "controller exited $rc after SIGTERM: $(cat "$work/kill.ctl.log")"
-expect "$work/kill.ctl.log" "degraded: stale sensor sample: age 2 ticks > 1"
-expect "$work/kill.ctl.log" "safe-stop: stale sensor sample: age 3 ticks > 2"
+expect "$work/kill.ctl.log" "degraded: stale sample: sensor: age 2 ticks > 1"
+expect "$work/kill.ctl.log" "safe-stop: stale sample: sensor: age 3 ticks > 2"
 grep -E "mode change|final mode" "$work/kill.ctl.log" | sed 's/^/   /'
+echo "== 6: record and replay"
+"$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" --max-time 30 >"$work/rec.hil.log" 2>&1 &
+hpid=$!
+"$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet --record "$work/run.log" \
+  >"$work/rec.ctl.log" 2>&1 || fail "recording: $(cat "$work/rec.ctl.log")"
+wait "$hpid" || fail "recording: pbppo-hil exited $?"
+expect "$work/rec.ctl.log" "log: .*run.log, [0-9]+ records, 0 dropped"
+"$pbppo" replay "$work/run.log" --robot "$robot" --policy "$blob" --out "$work/replayed.txt" >"$work/replay.log" 2>&1 ||
+  fail "replay: $(cat "$work/replay.log")"
+expect "$work/replay.log" "replay: .*run.log: [0-9]+ ticks, [0-9]+ commands compared, 0 different$"
+[ "$(wc -l <"$work/replayed.txt")" -gt 290 ] || fail "replay: short output"
+head -c 1000 "$work/run.log" >"$work/truncated.log"
+rc=0
+"$pbppo" replay "$work/truncated.log" --robot "$robot" --policy "$blob" >"$work/replay2.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "a truncated log: exit $rc"
+expect "$work/replay2.log" "truncated.log: offset [0-9]+: (record [0-9]+|end)"
+cp "$work/run.log" "$work/corrupt.log"
+printf '\x55' | dd of="$work/corrupt.log" bs=1 seek=3000 conv=notrunc status=none
+rc=0
+"$pbppo" replay "$work/corrupt.log" --robot "$robot" --policy "$blob" >"$work/replay3.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "a corrupted log: exit $rc"
+expect "$work/replay3.log" "corrupt.log: offset [0-9]+: record [0-9]+"
+cat "$work/replay.log" "$work/replay2.log" "$work/replay3.log" | sed 's/^/   /'
 echo "auv end to end: all checks passed"

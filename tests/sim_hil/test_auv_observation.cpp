@@ -1,5 +1,7 @@
 // Training and deployment build the AUV observation by one code path: an AuvSensorSample filled
-// from the task's state (what the HIL publishes) gives the task's own observation.
+// from the task's state (what the HIL publishes), mapped onto the robot's fields as the
+// controller's transport does (firmware/auv) and run through the robot's signals, gives the task's
+// own observation.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -7,8 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/robot/auv_signals.hpp"
+#include "firmware/auv/auv_transport.hpp"
 #include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/signals.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 #include "tests/support/robot_models.hpp"
 
@@ -60,8 +63,13 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   auto task = sim::AuvNavTask::Create(*c);
   REQUIRE_MESSAGE(task.ok(), task.error().message);
   const auto n = static_cast<std::size_t>(task->observation_size());
-  auto builder = robot::ObservationBuilder::Create(c->io, robot::AuvSignalNames(16));
+  const robot::RobotModel& m = test::AuvRobot();
+  auto program = robot::SignalProgram::ForLayout(m, c->io);
+  REQUIRE_MESSAGE(program.ok(), program.error().message);
+  auto builder = robot::ObservationBuilder::Create(c->io, program->names());
   REQUIRE_MESSAGE(builder.ok(), builder.error().message);
+  auto sample_fields = auv::SampleFields::Create(m);
+  REQUIRE_MESSAGE(sample_fields.ok(), sample_fields.error().message);
   REQUIRE(builder->observation_size() == n);
   std::vector<std::string> signal_of;  // the signal behind each input
   for (const auto& e : c->io.observations)
@@ -69,7 +77,7 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   REQUIRE(signal_of.size() == n);
 
   std::vector<float> task_obs(n), ctrl_obs(n);
-  std::vector<double> g(robot::kAuvSignalCapacity);
+  std::vector<double> fields(m.fields.size(), 0.0), g(program->size());
   task->Reset(5, task_obs.data());
   std::size_t compared = 0, sonar_ulp = 0;
   for (int k = 0; k < 300; ++k) {
@@ -83,7 +91,8 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
     robot::AuvSensorSample planned;  // the route comes from the mission computer (here: the task)
     task->FillSensorSample(planned);
     s.route_bearing_rad = planned.route_bearing_rad;
-    robot::AuvSignalsFromSample(s, c->task.depth_m, g.data());
+    sample_fields->Write(s, fields);
+    program->Compute(fields, {}, g.data());
     builder->Build(g.data(), k == 0, ctrl_obs.data());
     for (std::size_t i = 0; i < n; ++i) {
       CAPTURE(signal_of[i]);

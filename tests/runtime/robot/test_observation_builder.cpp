@@ -7,8 +7,9 @@
 #include <vector>
 
 #include "runtime/core/alloc_probe.hpp"
-#include "runtime/robot/auv_signals.hpp"
 #include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/signals.hpp"
+#include "tests/support/robot_models.hpp"
 
 using namespace pbppo::robot;
 
@@ -83,7 +84,28 @@ TEST_CASE("action mapper: scale, offset, limits - non-finite elements flagged an
   CHECK(cmd[1] == 0.0);
 }
 
-TEST_CASE("observation builder and AUV signals allocate nothing per tick") {
+namespace {
+// The AUV's signals for a layout and its fields, set by name.
+struct AuvSignals {
+  const RobotModel& m = pbppo::test::AuvRobot();
+  SignalProgram program;
+  std::vector<double> fields = std::vector<double>(m.fields.size(), 0.0), g;
+
+  explicit AuvSignals(const IoLayout& l) {
+    auto p = SignalProgram::ForLayout(m, l);
+    REQUIRE_MESSAGE(p.ok(), p.error().message);
+    program = std::move(*p);
+    g.assign(program.size(), 0.0);
+  }
+  void Set(const std::string& field, double v) { fields[static_cast<std::size_t>(m.FieldIndex(field))] = v; }
+  const double* Compute() {
+    program.Compute(fields, {}, g.data());
+    return g.data();
+  }
+};
+}  // namespace
+
+TEST_CASE("observation builder and the AUV's signals allocate nothing per tick") {
   auto l = ParseIoLayout(R"(
 robot: auv
 observations:
@@ -95,19 +117,17 @@ actions:
 )",
                          "auv.yaml");
   REQUIRE(l.ok());
-  auto b = ObservationBuilder::Create(*l, AuvSignalNames(8));
+  AuvSignals sig(*l);
+  auto b = ObservationBuilder::Create(*l, sig.program.names());
   REQUIRE_MESSAGE(b.ok(), b.error().message);
-  AuvSensorSample s;
-  s.sonar_beams = 8;
-  s.depth_m = 5.5;
-  s.yaw_rad = 3.5;  // wrapped by the yaw signal
-  double g[kAuvSignalCapacity];
+  sig.Set("depth_m", 5.5);  // the mission depth (robot.yaml's parameters.depth_m) is 5
+  sig.Set("yaw_rad", 3.5);  // wrapped by the yaw signal
+  const std::size_t sonar3 = static_cast<std::size_t>(sig.m.FieldIndex("sonar_3_m"));
   float obs[6];
   pbppo::AllocationScope scope;
   for (int k = 0; k < 1000; ++k) {
-    s.sonar_m[3] = static_cast<float>(k);
-    AuvSignalsFromSample(s, 5.0, g);
-    b->Build(g, k == 0, obs);
+    sig.fields[sonar3] = static_cast<double>(k);
+    b->Build(sig.Compute(), k == 0, obs);
   }
   CHECK(scope.count() == 0);
   CHECK(obs[0] == doctest::Approx(99.9));
@@ -116,7 +136,7 @@ actions:
   CHECK(obs[5] == doctest::Approx(3.5 - 2 * 3.14159265358979323846));
 }
 
-TEST_CASE("AUV signals: nearest_echo is the shortest sonar range, +inf (the element's clip) without a sonar") {
+TEST_CASE("AUV signals: nearest_echo is the shortest sonar range, +inf (the element's clip) without an echo") {
   auto l = ParseIoLayout(R"(
 robot: auv
 observations:
@@ -126,28 +146,22 @@ actions:
 )",
                          "auv.yaml");
   REQUIRE(l.ok());
-  auto b = ObservationBuilder::Create(*l, AuvSignalNames(4));
+  AuvSignals sig(*l);
+  auto b = ObservationBuilder::Create(*l, sig.program.names());
   REQUIRE_MESSAGE(b.ok(), b.error().message);
-  AuvSensorSample s;
-  s.sonar_beams = 4;
-  s.sonar_m[0] = 15.0f;
-  s.sonar_m[1] = 3.5f;
-  s.sonar_m[2] = 2.5f;
-  s.sonar_m[3] = 9.0f;
-  s.sonar_m[4] = 0.5f;  // beyond the sample's beam count: not a range
-  double g[kAuvSignalCapacity];
+  for (std::uint32_t i = 0; i < 16; ++i) sig.Set(ExpandIndex("sonar_{i}_m", i), 15.0);
+  sig.Set("sonar_1_m", 3.5);
+  sig.Set("sonar_2_m", 2.5);
+  sig.Set("sonar_9_m", 9.0);
   float obs[1];
-  AuvSignalsFromSample(s, 5.0, g);
-  CHECK(g[kAuvNearestEcho] == 2.5);
-  b->Build(g, true, obs);
+  CHECK(sig.Compute()[0] == 2.5);
+  b->Build(sig.g.data(), true, obs);
   CHECK(obs[0] == doctest::Approx(0.5));
-  s.sonar_m[3] = 0.25f;
-  AuvSignalsFromSample(s, 5.0, g);
-  b->Build(g, false, obs);
+  sig.Set("sonar_15_m", 0.25);
+  b->Build(sig.Compute(), false, obs);
   CHECK(obs[0] == doctest::Approx(0.05));
-  s.sonar_beams = 0;
-  AuvSignalsFromSample(s, 5.0, g);
-  CHECK(std::isinf(g[kAuvNearestEcho]));
-  b->Build(g, false, obs);
+  for (std::uint32_t i = 0; i < 16; ++i) sig.Set(ExpandIndex("sonar_{i}_m", i), HUGE_VAL);
+  CHECK(std::isinf(sig.Compute()[0]));
+  b->Build(sig.g.data(), false, obs);
   CHECK(obs[0] == 1.0f);
 }

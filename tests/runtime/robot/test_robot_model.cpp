@@ -13,6 +13,7 @@
 
 using namespace pbppo;
 using namespace pbppo::robot;
+using safety::StopKind;
 
 namespace {
 
@@ -68,6 +69,7 @@ TEST_CASE("robot model: the AUV - declared stream, fields with their bounds, com
   const StreamSpec& s = m.streams[0];
   CHECK(s.name == "sensor");
   CHECK(s.field_count == m.fields.size());
+  for (const FieldSpec& f : m.fields) CHECK(f.stream == 0);
   CHECK(s.stale_degraded_ticks == 1);
   CHECK(s.stale_safe_stop_ticks == 2);
   CHECK(s.lost_ticks == 20);
@@ -99,9 +101,10 @@ TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the 
   CHECK(lf.joint == "LF_KFE");
   CHECK(m.fields[lf.q_field].name == "q_LF_KFE");
   CHECK(m.fields[lf.q_field].min == doctest::Approx(-2.6 - 0.3));
-  CHECK(m.commands[lf.q].name == "q_LF_KFE");
-  CHECK(m.commands[lf.q].stop == StopKind::kHoldField);
-  CHECK(m.commands[lf.q].hold_field == static_cast<std::int32_t>(lf.q_field));
+  CHECK(m.commands[lf.q].name == "q_des_LF_KFE");
+  CHECK(m.commands[lf.tau].name == "tau_ff_LF_KFE");
+  CHECK(m.commands[lf.q].stop == StopKind::kHoldInput);
+  CHECK(m.commands[lf.q].hold_input == static_cast<std::int32_t>(lf.q_field));
   CHECK(m.commands[lf.kd].stop_value == m.body->damping_kd_nm_s_rad);
   CHECK(m.commands[lf.kp].neutral == m.body->kp_nm_rad);
   CHECK(m.commands[lf.q].neutral == -0.8);
@@ -110,6 +113,8 @@ TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the 
   CHECK(motor.stale_safe_stop_ticks == 2);
   CHECK(motor.lost_ticks == 499);
   CHECK(m.StreamIndex("base_imu") == 12);
+  CHECK(m.fields[lf.q_field].stream == lf.stream);
+  CHECK(m.fields[static_cast<std::size_t>(m.FieldIndex("base_imu_qw"))].stream == 12);
   CHECK(m.FieldIndex("base_imu_gyro_z") >= 0);
   CHECK(m.phases.enable_motors);
   CHECK(m.phases.arming_timeout_ticks == 1000);

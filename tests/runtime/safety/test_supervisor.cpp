@@ -1,5 +1,6 @@
-// The safety supervisor as a pure function: each check, latching, the cause reported, counters,
-// and a randomised property (limited commands always within limits, modes never fall).
+// The safety supervisor as a pure function, on a robot of two joints (commands q, tau; a position
+// reply each) on two buses: each check, latching, the cause reported, counters by cause, and a
+// randomised property (the command sent is always within its limits, modes never fall).
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -14,184 +15,230 @@ using namespace pbppo::safety;
 
 namespace {
 
-// Two joints (command q, tau; feedback q) on two buses.
+// Two joints (command q, tau; reply q) on two buses, like the quadruped's motors: a command
+// outside its limits degrades, safe-stop holds the measured position with no torque, a reply is
+// stale after 1 tick (degraded), 2 (safe-stop), lost after 499 (e-stop: its 500th silent tick).
 SupervisorModel Model() {
   SupervisorModel m;
-  m.channels = 2;
-  m.command_fields = 2;
-  m.feedback_fields = 1;
-  m.transports = 2;
-  m.command_min = {-1.0, -10.0, -2.0, -20.0};
-  m.command_max = {1.0, 10.0, 2.0, 20.0};
-  m.feedback_min = {-1.2, -2.2};
-  m.feedback_max = {1.2, 2.2};
-  m.channel_names = {"HIP", "KNEE"};
-  m.command_field_names = {"q_rad", "tau_nm"};
-  m.feedback_field_names = {"q_rad"};
-  m.transport_names = {"vcan0", "vcan1"};
+  m.commands = {
+      {"q_HIP", -1.0, 1.0, -1.0, 1.0, HUGE_VAL, StopKind::kHoldInput, 0, 0, 0},
+      {"tau_HIP", -10.0, 10.0, -10.0, 10.0, HUGE_VAL, StopKind::kValue, 0, 0, -1},
+      {"q_KNEE", -2.0, 2.0, -2.0, 2.0, HUGE_VAL, StopKind::kHoldInput, 0, 0, 1},
+      {"tau_KNEE", -20.0, 20.0, -20.0, 20.0, HUGE_VAL, StopKind::kValue, 0, 0, -1},
+  };
+  m.streams = {{"HIP", 1, 2, 499, 1}, {"KNEE", 1, 2, 499, 1}};
+  m.input_names = {"q_HIP", "q_KNEE"};
+  m.transport_names = {"can/front", "can/hind"};
+  m.command_limit_degrades = true;
   return m;
 }
 
 struct Tick {
   std::vector<double> command{0.1, 1.0, 0.2, 2.0};
-  std::vector<double> feedback{0.1, 0.2};
-  std::vector<std::uint32_t> age{0, 0};
+  std::vector<double> inputs{0.1, 0.2};
+  std::vector<StreamState> streams{{true, 0, -1, 0}, {true, 0, -1, 0}};
   std::vector<TransportHealth> transports{{}, {}};
   bool estop = false;
-  SupervisorInput In() const { return {command, feedback, age, transports, estop}; }
+  SupervisorInput In() const {
+    SupervisorInput in;
+    in.command = command;
+    in.inputs = inputs;
+    in.streams = streams;
+    in.transports = transports;
+    in.estop_request = estop;
+    return in;
+  }
+  // The sample check's finding on an input outside [-1.2, 1.2] / [-2.2, 2.2] or non-finite.
+  void Check() {
+    const double lim[] = {1.2, 2.2};
+    for (std::size_t s = 0; s < 2; ++s) {
+      streams[s].invalid_input = -1;
+      if (!(std::abs(inputs[s]) <= lim[s])) {
+        streams[s].invalid_input = static_cast<std::int32_t>(s);
+        streams[s].invalid_value = inputs[s];
+      }
+    }
+  }
 };
+
+// One decision from `previous` (a fresh state at that mode).
+Decision Once(const SupervisorModel& m, Tick t, Mode previous = Mode::kNominal) {
+  t.Check();
+  SupervisorState s = MakeSupervisorState(m);
+  s.mode = previous;
+  std::vector<double> out(m.commands.size());
+  return Supervise(m, t.In(), 0, s, out);
+}
 
 }  // namespace
 
 TEST_CASE("supervisor: model validation names the field") {
   auto m = Model();
   CHECK(ValidateSupervisorModel(m).ok());
-  m.command_max[3] = -30;
-  CHECK(ValidateSupervisorModel(m).error().message ==
-        "supervisor model: channel 'KNEE' command field 'tau_nm': min -20.000000 is not below max -30.000000");
+  m.commands[3].max = -30;
+  CHECK(ValidateSupervisorModel(m).error().message == "supervisor: command 'tau_KNEE': min -20 is not below max -30");
   m = Model();
-  m.stale_safe_stop_ticks = 1;
+  m.streams[1].stale_safe_stop_ticks = 1;
   CHECK(ValidateSupervisorModel(m).error().message ==
-        "supervisor model: stale thresholds 2 (degraded), 1 (safe-stop), 500 (e-stop) must satisfy 0 < degraded <= "
-        "safe-stop < e-stop");
+        "supervisor: stream 'KNEE': stale limits 1 (degraded), 1 (safe-stop), 499 (lost) must increase");
   m = Model();
-  m.command_min.pop_back();
-  CHECK_FALSE(ValidateSupervisorModel(m).ok());
+  m.commands[0].hold_input = 7;
+  CHECK(ValidateSupervisorModel(m).error().message == "supervisor: command 'q_HIP': hold_input 7 is not an input");
 }
 
 TEST_CASE("supervisor: each check - the mode it asks for - the cause it names") {
   const auto m = Model();
   Tick t;
-  Decision d = Supervise(m, t.In(), Mode::kNominal);
+  Decision d = Once(m, t);
   CHECK(d.mode == Mode::kNominal);
-  CHECK(d.fault == Fault::kNone);
+  CHECK_FALSE(d.any);
   CHECK_FALSE(d.transition);
 
   t = Tick{};
   t.command[3] = 25.0;  // KNEE tau beyond 20
-  d = Supervise(m, t.In(), Mode::kNominal);
+  d = Once(m, t);
   CHECK(d.mode == Mode::kDegraded);
-  CHECK(d.fault == Fault::kCommandLimit);
-  CHECK(d.channel == 1);
-  CHECK(d.field == 1);
+  CHECK(d.cause == Cause::kCommandLimit);
+  CHECK(d.subject == 3);
   CHECK(d.transition);
-  CHECK(Describe(m, d) == "degraded: command outside limits, channel 'KNEE', command tau_nm");
+  CHECK(Describe(m, d) == "degraded: command limit: tau_KNEE = 25 (limit 20)");
 
   t = Tick{};
-  t.age[1] = 2;
-  d = Supervise(m, t.In(), Mode::kNominal);
+  t.streams[1].age_ticks = 2;
+  d = Once(m, t);
   CHECK(d.mode == Mode::kDegraded);
-  CHECK(d.fault == Fault::kStaleFeedback);
-  CHECK(d.channel == 1);
-  t.age[1] = 3;
-  d = Supervise(m, t.In(), Mode::kNominal);
+  CHECK(d.cause == Cause::kStaleSample);
+  CHECK(d.subject == 1);
+  t.streams[1].age_ticks = 3;
+  d = Once(m, t);
   CHECK(d.mode == Mode::kSafeStop);
-  CHECK(Describe(m, d) == "safe-stop: stale feedback, channel 'KNEE'");
-  t.age[1] = 500;
-  CHECK(Supervise(m, t.In(), Mode::kSafeStop).mode == Mode::kEStop);
+  CHECK(Describe(m, d) == "safe-stop: stale sample: KNEE: age 3 ticks > 2");
+  t.streams[1].age_ticks = 500;
+  CHECK(Once(m, t, Mode::kSafeStop).mode == Mode::kEStop);
 
   t = Tick{};
   t.command[0] = std::numeric_limits<double>::quiet_NaN();
-  d = Supervise(m, t.In(), Mode::kNominal);
+  d = Once(m, t);
   CHECK(d.mode == Mode::kSafeStop);
-  CHECK(d.fault == Fault::kNonFiniteCommand);
-  CHECK(d.channel == 0);
-  CHECK(d.field == 0);
+  CHECK(d.cause == Cause::kNonFiniteCommand);
+  CHECK(d.subject == 0);
 
   t = Tick{};
-  t.feedback[1] = std::numeric_limits<double>::infinity();
-  d = Supervise(m, t.In(), Mode::kNominal);
-  CHECK(d.fault == Fault::kNonFiniteFeedback);
+  t.inputs[1] = std::numeric_limits<double>::infinity();
+  d = Once(m, t);
+  CHECK(d.cause == Cause::kInvalidSample);
+  CHECK(d.input == 1);
   CHECK(d.mode == Mode::kSafeStop);
-  t.feedback[1] = 2.3;
-  d = Supervise(m, t.In(), Mode::kNominal);
-  CHECK(d.fault == Fault::kFeedbackLimit);
+  t.inputs[1] = 2.3;
+  d = Once(m, t);
+  CHECK(d.cause == Cause::kInvalidSample);
   CHECK(d.mode == Mode::kSafeStop);
+  CHECK(Describe(m, d) == "safe-stop: invalid sample: q_KNEE = 2.3 (1 in a row)");
 
   t = Tick{};
   t.transports[1].fault = true;  // bus-off
-  d = Supervise(m, t.In(), Mode::kNominal);
+  d = Once(m, t);
   CHECK(d.mode == Mode::kSafeStop);
-  CHECK(Describe(m, d) == "safe-stop: transport fault, transport 'vcan1'");
+  CHECK(Describe(m, d) == "safe-stop: transport fault: 'can/hind'");
   t = Tick{};
   t.transports[0].degraded = true;
-  CHECK(Supervise(m, t.In(), Mode::kNominal).mode == Mode::kDegraded);
+  CHECK(Once(m, t).mode == Mode::kDegraded);
 
   t = Tick{};
   t.estop = true;
-  d = Supervise(m, t.In(), Mode::kNominal);
+  d = Once(m, t);
   CHECK(d.mode == Mode::kEStop);
-  CHECK(d.fault == Fault::kEStopRequest);
+  CHECK(d.cause == Cause::kEStopRequest);
 
-  // The most severe finding wins; among equals the first channel.
+  // The most severe finding wins; among equals the first stream.
   t = Tick{};
-  t.age = {3, 3};
+  t.streams[0].age_ticks = t.streams[1].age_ticks = 3;
   t.command[3] = 99;
-  d = Supervise(m, t.In(), Mode::kNominal);
+  d = Once(m, t);
   CHECK(d.mode == Mode::kSafeStop);
-  CHECK(d.fault == Fault::kStaleFeedback);
-  CHECK(d.channel == 0);
+  CHECK(d.cause == Cause::kStaleSample);
+  CHECK(d.subject == 0);
 
   // Inputs of the wrong size never pass as nominal.
   t = Tick{};
-  t.age.pop_back();
-  CHECK(Supervise(m, t.In(), Mode::kNominal).mode == Mode::kSafeStop);
+  t.streams.pop_back();
+  CHECK(Once(m, t).mode == Mode::kSafeStop);
 }
 
-TEST_CASE("supervisor: modes latch - counters - the decision that entered each mode - no allocation") {
+TEST_CASE("supervisor: safe-stop holds the measured position with the stop values - e-stop zero") {
   const auto m = Model();
-  SupervisorData data;
+  SupervisorState s = MakeSupervisorState(m);
+  std::vector<double> out(4);
+  Tick t;
+  t.inputs = {0.7, -3.0};  // the knee's measurement is beyond its command limits: held at the limit
+  t.streams[0].age_ticks = 3;
+  Supervise(m, t.In(), 0, s, out);
+  REQUIRE(s.mode == Mode::kSafeStop);
+  CHECK(out == std::vector<double>{0.7, 0.0, -2.0, 0.0});
+  t.estop = true;
+  Supervise(m, t.In(), 1, s, out);
+  CHECK(out == std::vector<double>{0.0, 0.0, 0.0, 0.0});
+}
+
+TEST_CASE("supervisor: modes latch - counters by cause - the decision that entered each mode - no allocation") {
+  const auto m = Model();
+  SupervisorState s = MakeSupervisorState(m);
+  std::vector<double> out(4);
   Tick t;
   pbppo::AllocationScope scope;
-  for (std::uint64_t k = 0; k < 10; ++k) Step(m, t.In(), k, data);
-  t.age[0] = 2;
-  Step(m, t.In(), 10, data);
-  t.age[0] = 0;  // the motor answers again: still degraded (latched)
-  for (std::uint64_t k = 11; k < 20; ++k) CHECK(Step(m, t.In(), k, data).mode == Mode::kDegraded);
+  for (std::uint64_t k = 0; k < 10; ++k) Supervise(m, t.In(), k, s, out);
+  t.streams[0].age_ticks = 2;
+  Supervise(m, t.In(), 10, s, out);
+  t.streams[0].age_ticks = 0;  // the motor answers again: still degraded (latched)
+  for (std::uint64_t k = 11; k < 20; ++k) CHECK(Supervise(m, t.In(), k, s, out).mode == Mode::kDegraded);
   t.transports[0].fault = true;
-  Step(m, t.In(), 20, data);
+  Supervise(m, t.In(), 20, s, out);
   t.transports[0].fault = false;
-  Step(m, t.In(), 21, data);
+  Supervise(m, t.In(), 21, s, out);
   CHECK(scope.count() == 0);
-  CHECK(data.mode == Mode::kSafeStop);
-  CHECK(data.decisions == 22);
-  CHECK(data.transitions == 2);
-  CHECK(data.ticks_in_mode[0] == 10);
-  CHECK(data.ticks_in_mode[1] == 10);
-  CHECK(data.ticks_in_mode[2] == 2);
-  CHECK(data.entered_tick[1] == 10);
-  CHECK(data.entered[1].fault == Fault::kStaleFeedback);
-  CHECK(data.entered[1].channel == 0);
-  CHECK(data.entered_tick[2] == 20);
-  CHECK(data.entered[2].transport == 0);
-  CHECK(data.findings[static_cast<int>(Fault::kNone)] == 20);
+  CHECK(s.mode == Mode::kSafeStop);
+  CHECK(s.ticks == 22);
+  CHECK(s.transitions == 2);
+  CHECK(s.ticks_in_mode[0] == 10);
+  CHECK(s.ticks_in_mode[1] == 10);
+  CHECK(s.ticks_in_mode[2] == 2);
+  CHECK(s.entered_tick[1] == 10);
+  CHECK(s.entered[1].cause == Cause::kStaleSample);
+  CHECK(s.entered[1].subject == 0);
+  CHECK(s.entered_tick[2] == 20);
+  CHECK(s.entered[2].cause == Cause::kTransportFault);
+  CHECK(s.entered[2].subject == 0);
+  CHECK(s.counts[Cause::kStaleSample] == 1);
+  CHECK(s.counts[Cause::kTransportFault] == 1);
 }
 
-TEST_CASE("supervisor property: limited commands are within limits - modes never fall (random inputs)") {
+TEST_CASE("supervisor property: the command sent is within limits - modes never fall (random inputs)") {
   const auto m = Model();
   std::mt19937_64 rng(1234);
   std::uniform_real_distribution<double> u(-50, 50);
   std::uniform_int_distribution<int> pick(0, 19);
   const double specials[] = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
                              -std::numeric_limits<double>::infinity(), 1e308, -0.0};
-  Mode mode = Mode::kNominal;
+  SupervisorState s = MakeSupervisorState(m);
+  std::vector<double> out(4);
   for (int i = 0; i < 20000; ++i) {
+    if (i % 100 == 0) Reset(s, false);
+    const Mode before = s.mode;
     Tick t;
     for (double& v : t.command) v = pick(rng) == 0 ? specials[static_cast<std::size_t>(pick(rng)) % 5] : u(rng) / 10;
-    for (double& v : t.feedback) v = pick(rng) == 0 ? specials[static_cast<std::size_t>(pick(rng)) % 5] : u(rng) / 30;
-    for (auto& a : t.age) a = static_cast<std::uint32_t>(pick(rng) < 18 ? 0 : pick(rng));
-    const Decision d = Supervise(m, t.In(), i % 100 == 0 ? Mode::kNominal : mode);
-    if (i % 100 != 0) CHECK(d.mode >= mode);
-    mode = i % 100 == 0 ? Mode::kNominal : d.mode;
-    LimitCommand(m, t.command);
-    for (std::size_t k = 0; k < t.command.size(); ++k) {
-      REQUIRE(std::isfinite(t.command[k]));
-      REQUIRE(t.command[k] >= m.command_min[k]);
-      REQUIRE(t.command[k] <= m.command_max[k]);
+    for (double& v : t.inputs) v = pick(rng) == 0 ? specials[static_cast<std::size_t>(pick(rng)) % 5] : u(rng) / 30;
+    for (auto& st : t.streams) st.age_ticks = static_cast<std::uint32_t>(pick(rng) < 18 ? 0 : pick(rng));
+    t.Check();
+    const Decision d = Supervise(m, t.In(), static_cast<std::uint64_t>(i), s, out);
+    CHECK(d.mode >= before);
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      REQUIRE(std::isfinite(out[k]));
+      REQUIRE(out[k] >= m.commands[k].min);
+      REQUIRE(out[k] <= m.commands[k].max);
     }
-    // A limited, finite command never raises a command finding.
-    t.feedback = {0, 0};
-    t.age = {0, 0};
-    CHECK(Supervise(m, t.In(), Mode::kNominal).fault == Fault::kNone);
+    // A command within its limits, with fresh valid inputs, never raises a finding.
+    Tick ok;
+    ok.command = out;
+    CHECK_FALSE(Once(m, ok).any);
   }
 }

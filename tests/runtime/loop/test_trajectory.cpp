@@ -3,20 +3,20 @@
 
 #include <string>
 
-#include "firmware/quadruped/stand_controller.hpp"
+#include "runtime/loop/trajectory_source.hpp"
+#include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo;
 
 TEST_CASE("stand trajectory: the shipped file loads - errors name the field") {
-  auto d = robot::LoadRobotDescription(test::SourcePath("models/quadruped/quadruped.yaml"));
-  REQUIRE(d.ok());
-  auto t = firmware::LoadTrajectory(test::SourcePath("models/quadruped/stand_trajectory.yaml"), *d);
+  const robot::RobotModel& d = test::QuadrupedRobot();
+  auto t = loop::RobotTrajectory(d);
   REQUIRE_MESSAGE(t.ok(), t.error().message);
   CHECK(t->joints.size() == 12);
   CHECK(t->duration_s == 2.0);
   auto err = [&](const std::string& y) {
-    auto r = firmware::ParseTrajectory(y, "traj.yaml", *d);
+    auto r = loop::ParseTrajectory(y, "traj.yaml", d);
     REQUIRE_FALSE(r.ok());
     return r.error().message;
   };

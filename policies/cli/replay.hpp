@@ -1,0 +1,24 @@
+// `pbppo replay LOG --robot models/<robot>/robot.yaml [--policy BLOB | --trajectory FILE]`: runs
+// the robot's loop tick over a log recorded by pbppo-controller --record (runtime/loop/replay.hpp)
+// and compares every command with the recorded one, bit for bit. Exit 0: identical; 1: a
+// difference (the first one named), or a log, robot or source refused (naming the offset and
+// field, or what differs from the recording); 2: usage.
+#pragma once
+
+#include <string>
+
+namespace CLI {
+class App;
+}
+
+namespace pbppo::cli {
+
+struct ReplayOptions {
+  std::string log, robot, policy, trajectory, out;
+};
+
+// Adds the subcommand to `app`; Replay runs it.
+CLI::App* AddReplay(CLI::App& app, ReplayOptions& o);
+int Replay(const ReplayOptions& o);
+
+}  // namespace pbppo::cli

@@ -1,0 +1,428 @@
+#include "runtime/loop/log.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "runtime/core/crc32.hpp"
+
+namespace pbppo::loop {
+namespace {
+
+constexpr char kMagic[8] = {'P', 'B', 'P', 'P', 'O', 'L', 'O', 'G'};
+enum RecordType : std::uint8_t { kInputs = 1, kOutputs = 2, kEnd = 3 };
+
+const char* TypeName(std::uint8_t t) {
+  return t == kInputs ? "inputs" : t == kOutputs ? "outputs" : t == kEnd ? "end" : "unknown";
+}
+
+// Appends little-endian values to a fixed buffer (sized for the largest record at Open).
+struct Out {
+  std::uint8_t* p;
+  template <typename T>
+  void Put(T v) noexcept {
+    std::memcpy(p, &v, sizeof v);  // the supported hosts are little-endian (x86-64, aarch64)
+    p += sizeof v;
+  }
+};
+
+std::vector<std::uint8_t> Frame(std::uint8_t type, const std::uint8_t* payload, std::size_t n) {
+  std::vector<std::uint8_t> r(1 + 4 + n + 4);
+  r[0] = type;
+  const auto len = static_cast<std::uint32_t>(n);
+  std::memcpy(&r[1], &len, 4);
+  if (n > 0) std::memcpy(&r[5], payload, n);
+  const std::uint32_t crc = Crc32(r.data(), 5 + n);
+  std::memcpy(&r[5 + n], &crc, 4);
+  return r;
+}
+
+}  // namespace
+
+std::uint64_t LogHash(std::span<const std::uint8_t> bytes) noexcept {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (std::uint8_t b : bytes) {
+    h ^= b;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+LogHeader MakeLogHeader(const robot::RobotModel& m, SourceKind source, std::uint64_t source_hash,
+                        const LoopOptions& options) {
+  LogHeader h;
+  h.robot_hash = m.hash;
+  h.source_hash = source_hash;
+  h.tick_period_s = m.tick_period_s;
+  h.source = source;
+  h.options = options.shutdown_after_source ? 1u : 0u;
+  h.fields = static_cast<std::uint32_t>(m.fields.size());
+  h.streams = static_cast<std::uint32_t>(m.streams.size());
+  h.links = static_cast<std::uint32_t>(m.supervisor_model.transport_names.size());
+  h.commands = static_cast<std::uint32_t>(m.commands.size());
+  h.motors = static_cast<std::uint32_t>(m.motors.size());
+  h.robot = m.name;
+  return h;
+}
+
+// Fixed-size slots between the tick (one producer) and the writer thread (one consumer).
+struct Recorder::Ring {
+  std::size_t slot_bytes = 0, capacity = 0;
+  std::vector<std::uint8_t> bytes;
+  std::vector<std::uint32_t> sizes;
+  alignas(64) std::atomic<std::size_t> head{0};
+  alignas(64) std::atomic<std::size_t> tail{0};
+};
+
+Result<std::unique_ptr<Recorder>> Recorder::Open(const std::string& path, const robot::RobotModel& m,
+                                                 const LogHeader& h, std::size_t queue_records) {
+  std::unique_ptr<Recorder> r(new Recorder());
+  r->path_ = path;
+  const std::size_t inputs = 8 + 4 + 1 + 4 + 8 * m.streams.size() + 8 * m.fields.size() + 4 + 5 * h.links;
+  const std::size_t outputs = 8 + 2 + 8 * m.commands.size() + m.motors.size();
+  r->scratch_.assign(std::max(inputs, outputs), 0);
+  r->ring_ = std::make_unique<Ring>();
+  r->ring_->slot_bytes = r->scratch_.size() + 9;
+  r->ring_->capacity = std::max<std::size_t>(queue_records, 2);
+  r->ring_->bytes.assign(r->ring_->slot_bytes * r->ring_->capacity, 0);
+  r->ring_->sizes.assign(r->ring_->capacity, 0);
+  r->file_ = std::fopen(path.c_str(), "wb");
+  if (r->file_ == nullptr) return MakeError(ErrorCode::kIo, "log " + path + ": cannot write");
+  std::vector<std::uint8_t> p;
+  auto put = [&p](const auto v) {
+    const auto* b = reinterpret_cast<const std::uint8_t*>(&v);
+    p.insert(p.end(), b, b + sizeof v);
+  };
+  put(h.robot_hash);
+  put(h.source_hash);
+  put(h.tick_period_s);
+  put(static_cast<std::uint32_t>(h.source));
+  for (std::uint32_t v : {h.options, h.fields, h.streams, h.links, h.commands, h.motors}) put(v);
+  put(static_cast<std::uint16_t>(h.robot.size()));
+  p.insert(p.end(), h.robot.begin(), h.robot.end());
+  const auto n = static_cast<std::uint32_t>(p.size());
+  const std::uint32_t crc = Crc32(p.data(), p.size());
+  const bool ok = std::fwrite(kMagic, 1, 8, r->file_) == 8 && std::fwrite(&kLogVersion, 4, 1, r->file_) == 1 &&
+                  std::fwrite(&n, 4, 1, r->file_) == 1 && std::fwrite(p.data(), 1, p.size(), r->file_) == p.size() &&
+                  std::fwrite(&crc, 4, 1, r->file_) == 1;
+  if (!ok) return MakeError(ErrorCode::kIo, "log " + path + ": cannot write the header");
+  Recorder* self = r.get();
+  r->thread_ = std::thread([self] { self->Run(); });
+  return r;
+}
+
+Recorder::~Recorder() {
+  (void)Stop();
+}
+
+void Recorder::Push(std::uint8_t type, const std::uint8_t* payload, std::size_t n) noexcept {
+  Ring& q = *ring_;
+  const std::size_t head = q.head.load(std::memory_order_relaxed);
+  if (head - q.tail.load(std::memory_order_acquire) >= q.capacity || n + 9 > q.slot_bytes) {
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  std::uint8_t* s = &q.bytes[(head % q.capacity) * q.slot_bytes];
+  s[0] = type;
+  const auto len = static_cast<std::uint32_t>(n);
+  std::memcpy(s + 1, &len, 4);
+  std::memcpy(s + 5, payload, n);
+  const std::uint32_t crc = Crc32(s, 5 + n);
+  std::memcpy(s + 5 + n, &crc, 4);
+  q.sizes[head % q.capacity] = static_cast<std::uint32_t>(n + 9);
+  q.head.store(head + 1, std::memory_order_release);
+}
+
+void Recorder::Inputs(const robot::RobotModel& m, const robot::RobotData& d, const rt::TickTiming& t,
+                      const TickEvents& e) noexcept {
+  Out o{scratch_.data()};
+  o.Put(d.tick);
+  o.Put(t.consecutive_misses);
+  o.Put(static_cast<std::uint8_t>((e.arm ? 1 : 0) | (e.disarm ? 2 : 0) | (e.stop ? 4 : 0) | (e.estop ? 8 : 0) |
+                                  (t.missed ? 16 : 0)));
+  std::uint8_t* count = o.p;
+  o.Put(std::uint32_t{0});
+  std::uint32_t fresh = 0;
+  for (std::size_t s = 0; s < m.streams.size(); ++s) {
+    if (d.fresh[s] == 0) continue;
+    ++fresh;
+    const robot::StreamSpec& spec = m.streams[s];
+    o.Put(static_cast<std::uint32_t>(s));
+    o.Put(spec.field_count);
+    for (std::uint32_t f = 0; f < spec.field_count; ++f) o.Put(d.fields[spec.first_field + f]);
+  }
+  std::memcpy(count, &fresh, 4);
+  count = o.p;
+  o.Put(std::uint32_t{0});
+  std::uint32_t news = 0;
+  for (std::size_t k = 0; k < d.transports.size(); ++k) {
+    const safety::TransportHealth& h = d.transports[k];
+    const auto bits = static_cast<std::uint8_t>((h.degraded ? 1 : 0) | (h.fault ? 2 : 0) | (h.lost ? 4 : 0));
+    if (bits == 0) continue;
+    ++news;
+    o.Put(static_cast<std::uint32_t>(k));
+    o.Put(bits);
+  }
+  std::memcpy(count, &news, 4);
+  Push(kInputs, scratch_.data(), static_cast<std::size_t>(o.p - scratch_.data()));
+}
+
+void Recorder::Outputs(const robot::RobotModel&, const robot::RobotData& d, Phase phase) noexcept {
+  Out o{scratch_.data()};
+  o.Put(d.tick);
+  o.Put(static_cast<std::uint8_t>(phase));
+  o.Put(static_cast<std::uint8_t>(d.mode));
+  for (double c : d.command) o.Put(c);
+  for (robot::MotorCommand c : d.motors) o.Put(static_cast<std::uint8_t>(c));
+  Push(kOutputs, scratch_.data(), static_cast<std::size_t>(o.p - scratch_.data()));
+}
+
+void Recorder::Run() {
+  Ring& q = *ring_;
+  for (;;) {
+    const bool stopping = stop_.load(std::memory_order_acquire);
+    std::size_t tail = q.tail.load(std::memory_order_relaxed);
+    const std::size_t head = q.head.load(std::memory_order_acquire);
+    for (; tail != head; ++tail) {
+      const std::size_t slot = tail % q.capacity;
+      if (std::fwrite(&q.bytes[slot * q.slot_bytes], 1, q.sizes[slot], file_) != q.sizes[slot]) write_failed_ = true;
+      written_.fetch_add(1, std::memory_order_relaxed);
+    }
+    q.tail.store(tail, std::memory_order_release);
+    if (stopping) return;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+Status Recorder::Stop() {
+  if (file_ == nullptr) return {};
+  stop_.store(true, std::memory_order_release);
+  if (thread_.joinable()) thread_.join();
+  const std::uint64_t dropped = dropped_.load(std::memory_order_relaxed);
+  const auto end = Frame(kEnd, reinterpret_cast<const std::uint8_t*>(&dropped), 8);
+  if (std::fwrite(end.data(), 1, end.size(), file_) != end.size()) write_failed_ = true;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (write_failed_ || !closed) return MakeError(ErrorCode::kIo, "log " + path_ + ": write failed");
+  return {};
+}
+
+// ---- reading -------------------------------------------------------------------------------------
+
+namespace {
+
+class Reader {
+ public:
+  Reader(std::span<const std::uint8_t> b, std::size_t base, std::string origin)
+      : b_(b), base_(base), origin_(std::move(origin)) {}
+  std::size_t offset() const noexcept { return base_ + at_; }
+  std::size_t left() const noexcept { return b_.size() - at_; }
+  Error Fail(std::size_t offset, const std::string& where, const std::string& what) const {
+    return MakeError(ErrorCode::kFormat, origin_ + ": offset " + std::to_string(offset) + ": " + where + ": " + what);
+  }
+  // `n` more bytes for `field`, or the error naming it.
+  Status Need(std::size_t n, const std::string& where, const char* field) const {
+    if (left() >= n) return {};
+    return Fail(offset(), where,
+                std::string("field '") + field + "': truncated (needs " + std::to_string(n) + " bytes, " +
+                    std::to_string(left()) + " left)");
+  }
+  template <typename T>
+  Result<T> Get(const std::string& where, const char* field) {
+    if (auto st = Need(sizeof(T), where, field); !st) return st.error();
+    T v;
+    std::memcpy(&v, b_.data() + at_, sizeof v);
+    at_ += sizeof v;
+    return v;
+  }
+  // A count that must not exceed `max` (each element at least `each` bytes).
+  Result<std::uint32_t> Count(const std::string& where, const char* field, std::uint32_t max, std::size_t each) {
+    const std::size_t at = offset();
+    auto n = Get<std::uint32_t>(where, field);
+    if (!n) return n;
+    if (*n > max)
+      return Fail(at, where,
+                  std::string("field '") + field + "': " + std::to_string(*n) + " is above " + std::to_string(max));
+    if (auto st = Need(static_cast<std::size_t>(*n) * each, where, field); !st) return st.error();
+    return n;
+  }
+  std::span<const std::uint8_t> Take(std::size_t n) noexcept {
+    const auto s = b_.subspan(at_, n);
+    at_ += n;
+    return s;
+  }
+
+ private:
+  std::span<const std::uint8_t> b_;
+  std::size_t base_ = 0;
+  std::string origin_;
+  std::size_t at_ = 0;
+};
+
+#define PBPPO_GET(var, r, T, where, field)           \
+  T var{};                                           \
+  do {                                               \
+    auto v_ = (r).template Get<T>((where), (field)); \
+    if (!v_) return std::move(v_).error();           \
+    var = *v_;                                       \
+  } while (false)
+#define PBPPO_COUNT(var, r, where, field, max, each)      \
+  std::uint32_t var = 0;                                  \
+  do {                                                    \
+    auto v_ = (r).Count((where), (field), (max), (each)); \
+    if (!v_) return std::move(v_).error();                \
+    var = *v_;                                            \
+  } while (false)
+
+Status ParseHeader(Reader& r, LogHeader& h) {
+  const std::string w = "header";
+  PBPPO_GET(robot_hash, r, std::uint64_t, w, "robot_hash");
+  PBPPO_GET(source_hash, r, std::uint64_t, w, "source_hash");
+  PBPPO_GET(period, r, double, w, "tick_period_s");
+  const std::size_t kind_at = r.offset();
+  PBPPO_GET(kind, r, std::uint32_t, w, "source");
+  if (kind > 2) return r.Fail(kind_at, w, "field 'source': " + std::to_string(kind) + " is not 0, 1 or 2");
+  h.robot_hash = robot_hash;
+  h.source_hash = source_hash;
+  h.tick_period_s = period;
+  h.source = static_cast<SourceKind>(kind);
+  std::uint32_t* counts[] = {&h.options, &h.fields, &h.streams, &h.links, &h.commands, &h.motors};
+  const char* names[] = {"options", "fields", "streams", "links", "commands", "motors"};
+  for (int i = 0; i < 6; ++i) {
+    PBPPO_GET(v, r, std::uint32_t, w, names[i]);
+    if (i > 0 && v > 65536)
+      return r.Fail(r.offset() - 4, w,
+                    std::string("field '") + names[i] + "': " + std::to_string(v) + " is above 65536");
+    *counts[i] = v;
+  }
+  PBPPO_GET(len, r, std::uint16_t, w, "robot");
+  if (auto st = r.Need(len, w, "robot"); !st) return st;
+  const auto name = r.Take(len);
+  h.robot.assign(name.begin(), name.end());
+  if (!(std::isfinite(h.tick_period_s) && h.tick_period_s > 0))
+    return r.Fail(r.offset(), w, "field 'tick_period_s': " + std::to_string(h.tick_period_s) + " is not a period");
+  return {};
+}
+
+Status ParseRecord(Reader& r, const LogHeader& h, const std::string& w, LogRecord& rec, Log& log) {
+  if (rec.type == kInputs) {
+    LogInputs& in = rec.inputs;
+    PBPPO_GET(tick, r, std::uint64_t, w, "tick");
+    PBPPO_GET(misses, r, std::uint32_t, w, "consecutive_misses");
+    PBPPO_GET(flags, r, std::uint8_t, w, "flags");
+    in.tick = tick;
+    in.consecutive_misses = misses;
+    in.flags = flags;
+    PBPPO_COUNT(fresh, r, w, "streams", h.streams, 8);
+    for (std::uint32_t k = 0; k < fresh; ++k) {
+      const std::size_t at = r.offset();
+      PBPPO_GET(stream, r, std::uint32_t, w, "stream");
+      if (stream >= h.streams)
+        return r.Fail(at, w,
+                      "field 'stream': " + std::to_string(stream) + " is not below " + std::to_string(h.streams));
+      PBPPO_COUNT(n, r, w, "values", h.fields, 8);
+      in.streams.push_back(stream);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        PBPPO_GET(v, r, double, w, "values");
+        in.values.push_back(v);
+      }
+    }
+    PBPPO_COUNT(links, r, w, "links", h.links, 5);
+    for (std::uint32_t k = 0; k < links; ++k) {
+      const std::size_t at = r.offset();
+      PBPPO_GET(link, r, std::uint32_t, w, "link");
+      PBPPO_GET(bits, r, std::uint8_t, w, "health");
+      if (link >= h.links || bits > 7)
+        return r.Fail(at, w, "field 'link': " + std::to_string(link) + " health " + std::to_string(bits));
+      in.links.emplace_back(link, bits);
+    }
+  } else if (rec.type == kOutputs) {
+    LogOutputs& out = rec.outputs;
+    PBPPO_GET(tick, r, std::uint64_t, w, "tick");
+    const std::size_t at = r.offset();
+    PBPPO_GET(phase, r, std::uint8_t, w, "phase");
+    PBPPO_GET(mode, r, std::uint8_t, w, "mode");
+    if (phase >= kPhaseCount || mode > 3)
+      return r.Fail(at, w, "field 'phase': " + std::to_string(phase) + ", mode " + std::to_string(mode));
+    out.tick = tick;
+    out.phase = phase;
+    out.mode = mode;
+    if (auto st = r.Need(8 * std::size_t{h.commands} + h.motors, w, "commands"); !st) return st;
+    for (std::uint32_t k = 0; k < h.commands; ++k) out.commands.push_back(*r.Get<double>(w, "commands"));
+    for (std::uint32_t k = 0; k < h.motors; ++k) {
+      const std::uint8_t c = *r.Get<std::uint8_t>(w, "motors");
+      if (c > 3) return r.Fail(r.offset() - 1, w, "field 'motors': " + std::to_string(c) + " is not a motor command");
+      out.motors.push_back(c);
+    }
+  } else if (rec.type == kEnd) {
+    PBPPO_GET(dropped, r, std::uint64_t, w, "dropped");
+    log.dropped = dropped;
+    log.complete = true;
+  } else {
+    return r.Fail(r.offset(), w, "field 'type': " + std::to_string(rec.type) + " is not a record type");
+  }
+  if (r.left() != 0) return r.Fail(r.offset(), w, std::to_string(r.left()) + " bytes after the last field");
+  return {};
+}
+
+}  // namespace
+
+Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin) {
+  Log log;
+  Reader r(bytes, 0, origin);
+  if (auto st = r.Need(16, "header", "magic"); !st) return st.error();
+  const auto magic = r.Take(8);
+  if (std::memcmp(magic.data(), kMagic, 8) != 0)
+    return r.Fail(0, "header", "field 'magic': not a pbppo log (PBPPOLOG)");
+  PBPPO_GET(version, r, std::uint32_t, "header", "version");
+  if (version != kLogVersion)
+    return r.Fail(
+        8, "header",
+        "field 'version': " + std::to_string(version) + " (this reader knows " + std::to_string(kLogVersion) + ")");
+  PBPPO_GET(n, r, std::uint32_t, "header", "length");
+  if (auto st = r.Need(std::size_t{n} + 4, "header", "payload"); !st) return st.error();
+  const std::size_t payload_at = r.offset();
+  const auto payload = r.Take(n);
+  const std::uint32_t crc = *r.Get<std::uint32_t>("header", "crc");
+  if (Crc32(payload.data(), payload.size()) != crc)
+    return r.Fail(payload_at + n, "header", "CRC does not match its payload");
+  Reader hr(payload, payload_at, origin);
+  if (auto st = ParseHeader(hr, log.header); !st) return st.error();
+  if (hr.left() != 0) return hr.Fail(hr.offset(), "header", std::to_string(hr.left()) + " bytes after the last field");
+  for (std::size_t k = 0; r.left() > 0; ++k) {
+    LogRecord rec;
+    rec.offset = r.offset();
+    if (log.complete) return r.Fail(rec.offset, "record " + std::to_string(k), "after the end record");
+    PBPPO_GET(type, r, std::uint8_t, "record " + std::to_string(k), "type");
+    rec.type = type;
+    const std::string w = "record " + std::to_string(k) + " (" + TypeName(type) + ")";
+    const std::size_t len_at = r.offset();
+    PBPPO_GET(len, r, std::uint32_t, w, "length");
+    if (len > (1u << 24)) return r.Fail(len_at, w, "field 'length': " + std::to_string(len) + " is above 16 MiB");
+    if (auto st = r.Need(std::size_t{len} + 4, w, "payload"); !st) return st.error();
+    const auto body = r.Take(len);
+    const std::uint32_t stored = *r.Get<std::uint32_t>(w, "crc");
+    if (Crc32(bytes.data() + rec.offset, 5 + std::size_t{len}) != stored)
+      return r.Fail(rec.offset, w, "CRC does not match the record");
+    Reader rr(body, rec.offset + 5, origin);
+    if (auto st = ParseRecord(rr, log.header, w, rec, log); !st) return st.error();
+    if (type != kEnd) log.records.push_back(std::move(rec));
+  }
+  if (!log.complete) return r.Fail(bytes.size(), "end", "no end record: the log is truncated");
+  return log;
+}
+
+#undef PBPPO_COUNT
+#undef PBPPO_GET
+
+Result<Log> ReadLog(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return ParseLog(bytes, path);
+}
+
+}  // namespace pbppo::loop

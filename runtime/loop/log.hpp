@@ -1,0 +1,126 @@
+// Record and replay. A Recorder attached to the loop logs every input a tick consumed (the fields
+// of each stream that had a new sample, the links' health, the deadline misses, the requests) and
+// the commands it wrote, with the tick of arrival, to a versioned, CRC-guarded binary file; the
+// tick queues them (no allocation, lock or file access; drops counted) and a thread writes them.
+// Replay (runtime/loop/replay.hpp) runs the same Tick over a log and compares the commands.
+//
+// Format (little-endian), version 1:
+//   header   "PBPPOLOG" u32 version, u32 n, n bytes of payload, u32 CRC-32 of the payload:
+//            u64 robot hash, u64 source hash, f64 tick period, u32 source kind, u32 options,
+//            u32 fields, u32 streams, u32 links, u32 commands, u32 motors, u16 + robot name
+//   records  u8 type, u32 n, n bytes of payload, u32 CRC-32 of type, n and payload:
+//            1 inputs   u64 tick, u32 consecutive misses, u8 flags (1 arm, 2 disarm, 4 stop,
+//                       8 e-stop, 16 missed), u32 fresh streams, each u32 stream + f64 per field,
+//                       u32 links with news, each u32 link + u8 health (1 degraded, 2 fault, 4 lost)
+//            2 outputs  u64 tick, u8 phase, u8 mode, f64 per command, u8 per motor (MotorCommand)
+//            3 end      u64 records dropped while recording
+// A reader refuses a truncated or corrupt log naming the offset and the field.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+#include "runtime/loop/loop.hpp"
+
+namespace pbppo::loop {
+
+inline constexpr std::uint32_t kLogVersion = 1;
+
+enum class SourceKind : std::uint32_t { kNone = 0, kPolicy = 1, kTrajectory = 2 };
+
+struct LogHeader {
+  std::uint64_t robot_hash = 0;   // RobotModel::hash
+  std::uint64_t source_hash = 0;  // the policy blob's or the trajectory's (LogHash of its bytes)
+  double tick_period_s = 0;
+  SourceKind source = SourceKind::kNone;
+  std::uint32_t options = 0;  // 1: shutdown after the source
+  std::uint32_t fields = 0, streams = 0, links = 0, commands = 0, motors = 0;
+  std::string robot;
+};
+
+// FNV-1a 64 of bytes (a blob's, a trajectory's).
+std::uint64_t LogHash(std::span<const std::uint8_t> bytes) noexcept;
+
+// The header of a run of `model` (its hash, counts and tick period) with a source.
+LogHeader MakeLogHeader(const robot::RobotModel& model, SourceKind source, std::uint64_t source_hash,
+                        const LoopOptions& options = {});
+
+class Recorder {
+ public:
+  // Opens `path` for writing, writes the header, starts the writer thread.
+  static Result<std::unique_ptr<Recorder>> Open(const std::string& path, const robot::RobotModel& model,
+                                                const LogHeader& header, std::size_t queue_records = 4096);
+  ~Recorder();  // Stop()
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
+  // The tick's side (noexcept, no allocation): queue a record; dropped (counted) when full.
+  void Inputs(const robot::RobotModel& model, const robot::RobotData& data, const rt::TickTiming& timing,
+              const TickEvents& events) noexcept;
+  void Outputs(const robot::RobotModel& model, const robot::RobotData& data, Phase phase) noexcept;
+  // Writes what is queued and the end record, closes the file. Idempotent; errors name the file.
+  Status Stop();
+
+  std::uint64_t records() const noexcept { return written_.load(std::memory_order_relaxed); }
+  std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
+
+  struct Ring;
+
+ private:
+  Recorder() = default;
+  void Push(std::uint8_t type, const std::uint8_t* payload, std::size_t n) noexcept;
+  void Run();
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  std::unique_ptr<Ring> ring_;
+  std::vector<std::uint8_t> scratch_;  // the record being built (sized at Open)
+  std::atomic<std::uint64_t> written_{0}, dropped_{0};
+  std::atomic<bool> stop_{false};
+  bool write_failed_ = false;
+  std::thread thread_;
+};
+
+// A log as read back.
+struct LogInputs {
+  std::uint64_t tick = 0;
+  std::uint32_t consecutive_misses = 0;
+  std::uint8_t flags = 0;
+  std::vector<std::uint32_t> streams;  // fresh streams
+  std::vector<double> values;          // their fields, stream by stream
+  std::vector<std::pair<std::uint32_t, std::uint8_t>> links;
+};
+
+struct LogOutputs {
+  std::uint64_t tick = 0;
+  std::uint8_t phase = 0, mode = 0;
+  std::vector<double> commands;
+  std::vector<std::uint8_t> motors;
+};
+
+struct LogRecord {
+  std::uint8_t type = 0;
+  std::size_t offset = 0;  // in the file
+  LogInputs inputs;
+  LogOutputs outputs;
+};
+
+struct Log {
+  LogHeader header;
+  std::vector<LogRecord> records;
+  std::uint64_t dropped = 0;
+  bool complete = false;  // an end record closes it
+};
+
+// Parses a whole log. `origin` names it in errors: "run.log: offset 312: record 5 (inputs): field
+// 'values': truncated (needs 312 bytes, 40 left)", "...: CRC 0x1234abcd does not match 0x...".
+// With a model, the counts are checked against it too (a log of another robot is refused).
+Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin);
+Result<Log> ReadLog(const std::string& path);
+
+}  // namespace pbppo::loop

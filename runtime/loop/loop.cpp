@@ -1,0 +1,327 @@
+#include "runtime/loop/loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "runtime/core/clock.hpp"
+#include "runtime/loop/log.hpp"
+
+namespace pbppo::loop {
+
+using robot::MotorCommand;
+using robot::RobotData;
+using robot::RobotModel;
+using safety::Mode;
+
+const char* ToString(Phase phase) noexcept {
+  switch (phase) {
+    case Phase::kDisarmed: return "disarmed";
+    case Phase::kArming: return "arming";
+    case Phase::kStandUp: return "stand-up";
+    case Phase::kHold: return "hold";
+    case Phase::kRun: return "run";
+    case Phase::kDamping: return "damping";
+    case Phase::kMotorOff: return "motor-off";
+    case Phase::kDone: return "done";
+    case Phase::kFailed: return "failed";
+  }
+  return "?";
+}
+
+std::unique_ptr<LoopData> MakeLoopData(const RobotModel& model, CommandSource* source, const LoopOptions& options) {
+  std::unique_ptr<LoopData> l(new LoopData());
+  l->source_ = source;
+  l->options_ = options;
+  l->answered_.assign(model.motors.size(), 0);
+  l->q0_.assign(model.motors.size(), 0.0);
+  for (const robot::CommandSpec& c : model.commands) l->desired_.push_back(c.neutral);
+  std::vector<std::string> limited;
+  for (const auto& s : model.supervisor_model.signal_limits) limited.push_back(s.name);
+  // The model checked every supervised signal's name at load.
+  l->limit_signals_ = std::move(robot::SignalProgram::Create(model, limited)).value();
+  l->limit_values_.assign(limited.size(), 0.0);
+  l->sup_ = safety::MakeSupervisorState(model.supervisor_model);
+  return l;
+}
+
+LoopStatus LoopData::Status() const noexcept {
+  LoopStatus s;
+  (void)status_.Read(&s);  // version 0: no tick yet, the zero status
+  return s;
+}
+
+bool LoopData::ResetSupervisor() noexcept {
+  if (!safety::Reset(sup_, phase_ != Phase::kDisarmed)) return false;
+  estop_.store(false, std::memory_order_relaxed);
+  return true;
+}
+
+struct TickImpl {
+  static void Enter(LoopData& l, Phase p, std::uint64_t tick) noexcept {
+    if (l.phase_count_ < LoopData::kMaxChanges) l.phases_[l.phase_count_] = PhaseChange{tick, l.phase_, p};
+    ++l.phase_count_;
+    l.phase_ = p;
+    l.phase_start_[static_cast<std::size_t>(p)] = tick;
+    std::fill(l.answered_.begin(), l.answered_.end(), std::uint8_t{0});
+  }
+
+  static void StartRun(const RobotModel& m, const RobotData& d, LoopData& l) noexcept {
+    Enter(l, Phase::kRun, d.tick);
+    if (l.source_ != nullptr) l.source_->Start(m, d, l);
+  }
+
+  // The value safe-stop (and shutdown damping) sends for command k.
+  static double StopValue(const RobotModel& m, const RobotData& d, std::size_t k) noexcept {
+    const safety::CommandLimit& c = m.supervisor_model.commands[k];
+    double v = 0.0;
+    if (c.stop == safety::StopKind::kValue) v = c.stop_value;
+    if (c.stop == safety::StopKind::kHoldInput) v = d.fields[static_cast<std::size_t>(c.hold_input)];
+    return std::clamp(std::isfinite(v) ? v : 0.0, c.min, c.max);
+  }
+
+  // Arm / disarm / stop requests, then the phase's own transitions and its command.
+  static void Phases(const RobotModel& m, RobotData& d, LoopData& l, const TickEvents& ev) noexcept {
+    const std::uint64_t tick = d.tick;
+    const bool motors = m.phases.enable_motors;
+    for (std::size_t k = 0; k < m.motors.size(); ++k)
+      if (d.fresh[m.motors[k].stream] != 0) l.answered_[k] = 1;
+    if (ev.disarm && !motors && l.phase_ == Phase::kRun) Enter(l, Phase::kDisarmed, tick);
+    if (ev.arm && l.phase_ == Phase::kDisarmed) {
+      if (motors) {
+        Enter(l, Phase::kArming, tick);
+      } else {
+        StartRun(m, d, l);
+      }
+    }
+    if (ev.stop) {
+      switch (l.phase_) {
+        case Phase::kArming: Enter(l, Phase::kMotorOff, tick); break;
+        case Phase::kDisarmed:
+        case Phase::kStandUp:
+        case Phase::kHold:
+        case Phase::kRun:
+          Enter(l, !motors ? Phase::kDone : m.phases.damping_ticks > 0 ? Phase::kDamping : Phase::kMotorOff, tick);
+          break;
+        default: break;
+      }
+    }
+    for (std::size_t k = 0; k < m.commands.size(); ++k) l.desired_[k] = m.commands[k].neutral;
+    const std::uint64_t in_phase = tick - l.phase_start_[static_cast<std::size_t>(l.phase_)];
+    const bool all = std::all_of(l.answered_.begin(), l.answered_.end(), [](std::uint8_t a) { return a != 0; });
+    switch (l.phase_) {
+      case Phase::kArming:
+        if (all) {
+          for (std::size_t k = 0; k < m.motors.size(); ++k) {
+            l.q0_[k] = d.fields[m.motors[k].q_field];
+            d.streams[m.motors[k].stream].age_ticks = 0;
+          }
+          if (m.phases.stand_up_ticks > 0) {
+            Enter(l, Phase::kStandUp, tick);
+            StandUp(m, l, 0);
+          } else {
+            Enter(l, Phase::kHold, tick);
+          }
+        } else if (in_phase >= m.phases.arming_timeout_ticks) {
+          Enter(l, Phase::kFailed, tick);
+        }
+        break;
+      case Phase::kStandUp:
+        if (StandUp(m, l, in_phase)) Enter(l, Phase::kHold, tick);
+        break;
+      case Phase::kHold:
+        if (l.source_ != nullptr && !l.source_done_ && in_phase >= m.phases.hold_ticks) StartRun(m, d, l);
+        break;
+      case Phase::kRun:
+        ++l.run_ticks_;
+        if (l.source_ != nullptr && !l.source_->Compute(m, d, l, l.desired_)) {
+          l.source_done_ = true;
+          if (l.options_.shutdown_after_source) {
+            Enter(l, motors ? Phase::kDamping : Phase::kDone, tick);
+          } else if (motors) {
+            Enter(l, Phase::kHold, tick);
+          }
+        }
+        break;
+      case Phase::kDamping:
+        if (in_phase >= m.phases.damping_ticks) Enter(l, Phase::kMotorOff, tick);
+        break;
+      case Phase::kMotorOff:
+        if (in_phase > 0 && (all || in_phase >= m.phases.motor_off_timeout_ticks)) Enter(l, Phase::kDone, tick);
+        break;
+      case Phase::kDisarmed:
+      case Phase::kDone:
+      case Phase::kFailed: break;
+    }
+    if (l.phase_ == Phase::kDamping)
+      for (std::size_t k = 0; k < m.commands.size(); ++k) l.desired_[k] = StopValue(m, d, k);
+  }
+
+  // The stand-up ramp: a smoothstep from the measured pose to the default pose. True at its end.
+  static bool StandUp(const RobotModel& m, LoopData& l, std::uint64_t in_phase) noexcept {
+    const double T = static_cast<double>(m.phases.stand_up_ticks) * m.tick_period_s;
+    const double x = std::min(1.0, static_cast<double>(in_phase) / static_cast<double>(m.phases.stand_up_ticks));
+    const double s = x * x * (3 - 2 * x), ds = 6 * x * (1 - x) / T;
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const robot::MotorSpec& mo = m.motors[k];
+      l.desired_[mo.q] = l.q0_[k] + (mo.default_q_rad - l.q0_[k]) * s;
+      l.desired_[mo.dq] = (mo.default_q_rad - l.q0_[k]) * ds;
+    }
+    return x >= 1.0;
+  }
+
+  static void Supervise(const RobotModel& m, RobotData& d, LoopData& l, const rt::TickTiming& timing,
+                        const TickEvents& ev) noexcept {
+    const bool supervised = l.phase_ != Phase::kArming && l.phase_ != Phase::kFailed;
+    if (supervised) {
+      l.limit_signals_.Compute(d.fields, {}, l.limit_values_.data());
+      const char* failure = l.source_ != nullptr && l.phase_ == Phase::kRun ? l.source_->failure() : nullptr;
+      safety::SupervisorInput in;
+      in.command = l.desired_;
+      in.inputs = d.fields;
+      in.streams = d.streams;
+      in.signals = l.limit_values_;
+      in.transports = d.transports;
+      in.consecutive_deadline_misses = timing.consecutive_misses;
+      in.inference_failed = failure != nullptr;
+      in.inference_status = failure != nullptr ? failure : "";
+      in.estop_request = ev.estop;
+      const safety::Decision dec = safety::Supervise(m.supervisor_model, in, d.tick, l.sup_, d.command);
+      if (dec.transition) {
+        if (l.mode_count_ < LoopData::kMaxChanges) {
+          ModeChange& c = l.modes_[l.mode_count_];
+          c.tick = d.tick;
+          c.mode = l.sup_.mode;
+          safety::Describe(m.supervisor_model, dec, c.reason, sizeof c.reason);
+        }
+        ++l.mode_count_;
+      }
+    } else {
+      std::copy(l.desired_.begin(), l.desired_.end(), d.command.begin());
+    }
+    if (l.phase_ == Phase::kDisarmed) {  // nothing moves (the supervisor still watches and latches)
+      for (std::size_t k = 0; k < m.commands.size(); ++k) d.command[k] = l.sup_.previous[k] = Idle(m, k);
+    }
+    d.mode = l.sup_.mode;
+    // What each motor is sent.
+    const std::uint64_t in_phase = d.tick - l.phase_start_[static_cast<std::size_t>(l.phase_)];
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      MotorCommand& mc = d.motors[k];
+      switch (l.phase_) {
+        case Phase::kDisarmed:
+        case Phase::kDone: mc = MotorCommand::kNone; break;
+        case Phase::kArming: mc = l.answered_[k] != 0 ? MotorCommand::kNone : MotorCommand::kEnable; break;
+        case Phase::kFailed: mc = MotorCommand::kDisable; break;
+        case Phase::kMotorOff:
+          mc = in_phase > 0 && l.answered_[k] != 0 ? MotorCommand::kNone : MotorCommand::kDisable;
+          break;
+        default: mc = l.sup_.mode == Mode::kEStop ? MotorCommand::kDisable : MotorCommand::kCommand; break;
+      }
+    }
+  }
+
+  static double Idle(const RobotModel& m, std::size_t k) noexcept {
+    const safety::CommandLimit& c = m.supervisor_model.commands[k];
+    return std::clamp(0.0, c.min, c.max);
+  }
+
+  static void Publish(LoopData& l, const RobotData& d) noexcept {
+    LoopStatus s;
+    s.tick = d.tick;
+    s.phase = l.phase_;
+    s.mode = l.sup_.mode;
+    const safety::Mode mode = l.sup_.mode;
+    s.any_latched = mode != Mode::kNominal && l.sup_.entered[static_cast<std::size_t>(mode)].any;
+    if (s.any_latched) s.latched = l.sup_.entered[static_cast<std::size_t>(mode)].cause;
+    s.counts = l.sup_.counts;
+    l.status_.Write(s);
+  }
+
+  static TickStatus Tick(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+                         const rt::TickTiming& timing) noexcept;
+  static void Shutdown(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+                       std::uint64_t tick) noexcept;
+};
+
+void CheckSample(const RobotModel& m, RobotData& d) noexcept {
+  for (std::size_t s = 0; s < m.streams.size(); ++s) {
+    safety::StreamState& st = d.streams[s];
+    if (d.fresh[s] != 0) {
+      st.seen = true;
+      st.age_ticks = 0;
+      ++d.samples[s];
+    } else if (st.age_ticks < 0xffffffffu) {
+      ++st.age_ticks;
+    }
+    st.invalid_input = -1;
+    if (!st.seen) continue;
+    const robot::StreamSpec& spec = m.streams[s];
+    for (std::uint32_t f = spec.first_field; f < spec.first_field + spec.field_count; ++f) {
+      const double v = d.fields[f];
+      if (!(v >= m.fields[f].min && v <= m.fields[f].max)) {
+        st.invalid_input = static_cast<std::int32_t>(f);
+        st.invalid_value = v;
+        break;
+      }
+    }
+  }
+}
+
+TickStatus Tick(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+                const rt::TickTiming& timing) noexcept {
+  return TickImpl::Tick(m, d, l, transports, timing);
+}
+
+void Shutdown(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+              std::uint64_t tick) noexcept {
+  TickImpl::Shutdown(m, d, l, transports, tick);
+}
+
+TickStatus TickImpl::Tick(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+                          const rt::TickTiming& timing) noexcept {
+  rt::TickProfiler& prof = l.profiler_;
+  if (timing.missed) prof.CountDeadlineMiss();
+  prof.Record(rt::Stage::kJitter, timing.jitter_ns);
+  const std::int64_t t0 = MonotonicNs();
+  d.tick = timing.tick;
+  // Read.
+  std::fill(d.fresh.begin(), d.fresh.end(), std::uint8_t{0});
+  for (robot::Transport* t : transports) t->Read(m, d);
+  TickEvents ev;
+  ev.arm = l.arm_.exchange(false, std::memory_order_relaxed);
+  ev.disarm = l.disarm_.exchange(false, std::memory_order_relaxed);
+  ev.stop = l.stop_.load(std::memory_order_relaxed);
+  ev.estop = l.estop_.load(std::memory_order_relaxed);
+  if (l.recorder != nullptr) l.recorder->Inputs(m, d, timing, ev);
+  CheckSample(m, d);
+  const std::int64_t t1 = MonotonicNs();
+  prof.Record(rt::Stage::kReceive, t1 - t0);
+  // Observe, infer (the source, in the run phase), supervise.
+  Phases(m, d, l, ev);
+  const std::int64_t t2 = MonotonicNs();
+  Supervise(m, d, l, timing, ev);
+  const std::int64_t t3 = MonotonicNs();
+  prof.Record(rt::Stage::kSupervise, t3 - t2);
+  // Write.
+  for (robot::Transport* t : transports) t->Write(m, d);
+  if (l.recorder != nullptr) l.recorder->Outputs(m, d, l.phase_);
+  const std::int64_t t4 = MonotonicNs();
+  prof.Record(rt::Stage::kSend, t4 - t3);
+  prof.Record(rt::Stage::kTick, t4 - timing.wake_ns);
+  Publish(l, d);
+  if (l.phase_ == Phase::kDone) return TickStatus::kDone;
+  if (l.phase_ == Phase::kFailed) return TickStatus::kFailed;
+  return TickStatus::kRunning;
+}
+
+void TickImpl::Shutdown(const RobotModel& m, RobotData& d, LoopData& l, std::span<robot::Transport* const> transports,
+                        std::uint64_t tick) noexcept {
+  d.tick = tick;
+  if (l.phase_ != Phase::kDone) Enter(l, Phase::kDone, tick);
+  for (std::size_t k = 0; k < m.commands.size(); ++k) d.command[k] = Idle(m, k);
+  std::fill(d.motors.begin(), d.motors.end(), MotorCommand::kDisable);
+  d.mode = Mode::kEStop;
+  for (robot::Transport* t : transports) t->Write(m, d);
+  if (l.recorder != nullptr) l.recorder->Outputs(m, d, l.phase_);
+}
+
+}  // namespace pbppo::loop

@@ -1,0 +1,176 @@
+// One tick for every robot (ros2_control's read -> update -> write; Drake's const system and
+// context):
+//
+//   read       every transport drains what arrived into the RobotData (the only code that
+//              knows sockets or DDS)
+//   check      the one sample check: every stream's fields against the model's bounds; ages
+//   observe    \  the command source: a policy builds its observation from the model's signals
+//   infer      /  and runs Forward on its period (the action held between), or a trajectory
+//   supervise  the phase (arming, stand-up, hold, run, damping, motor off) and the supervisor,
+//              whose causes (transport health, inference status, deadline misses ...) are named
+//   write      every transport sends the supervised command
+//
+// Tick is noexcept and allocates nothing; time comes in as the tick index (the clock is the
+// caller's: runtime/loop/runner.hpp). Each stage is timed into the loop's profiler; with a
+// recorder attached, every input the tick consumed is logged (runtime/loop/log.hpp) so that a
+// replay reproduces the commands bit for bit.
+//
+// Phases. Arm() starts arming: robots with motors switch each on until it answers, then stand up
+// (a smoothstep from the measured pose to the default pose), hold, and run the command source;
+// robots without motors run at once. RequestStop() shuts down: motors are damped (the
+// supervisor's safe-stop values), then switched off until each answers; a robot without motors
+// sends its e-stop command once (Shutdown). Every transition and every rise of the supervisor's
+// mode is logged with its tick and reason.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "runtime/core/latest_mailbox.hpp"
+#include "runtime/robot/robot_data.hpp"
+#include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/signals.hpp"
+#include "runtime/rt/tick_clock.hpp"
+#include "runtime/rt/tick_profiler.hpp"
+#include "runtime/safety/supervisor.hpp"
+
+namespace pbppo::loop {
+
+enum class Phase : std::uint8_t { kDisarmed, kArming, kStandUp, kHold, kRun, kDamping, kMotorOff, kDone, kFailed };
+inline constexpr std::size_t kPhaseCount = 9;
+const char* ToString(Phase phase) noexcept;
+
+class LoopData;
+class Recorder;
+
+// What the run phase commands: a policy (policy_source.hpp), a scripted trajectory
+// (trajectory_source.hpp), ... The loop does not care which.
+class CommandSource {
+ public:
+  virtual ~CommandSource() = default;
+  // The run phase begins (the first run tick follows).
+  virtual void Start(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop) noexcept = 0;
+  // A run tick: writes its commands into `desired` (holding each command's neutral value on
+  // entry); false when it has finished (the loop holds the default pose, or shuts down).
+  virtual bool Compute(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop,
+                       std::span<double> desired) noexcept = 0;
+  // The inference status to supervise (a policy's Forward); nullptr: fine.
+  virtual const char* failure() const noexcept { return nullptr; }
+};
+
+struct LoopOptions {
+  bool shutdown_after_source = false;  // the source finished: shut down (else hold the default pose)
+};
+
+// The requests a tick consumed (LoopData::Arm ...), as the log records them.
+struct TickEvents {
+  bool arm = false, disarm = false, stop = false, estop = false;
+};
+
+struct ModeChange {
+  std::uint64_t tick = 0;
+  safety::Mode mode = safety::Mode::kNominal;
+  char reason[120] = {};
+};
+
+struct PhaseChange {
+  std::uint64_t tick = 0;
+  Phase from = Phase::kDisarmed, to = Phase::kDisarmed;
+};
+
+// A snapshot for another (non-real-time) thread: status publication, progress lines.
+struct LoopStatus {
+  std::uint64_t tick = 0;
+  Phase phase = Phase::kDisarmed;
+  safety::Mode mode = safety::Mode::kNominal;
+  safety::Cause latched = safety::Cause::kEStopRequest;
+  bool any_latched = false;
+  safety::CauseCounts counts;
+};
+
+class LoopData {
+ public:
+  static constexpr std::size_t kMaxChanges = 32;
+
+  Phase phase() const noexcept { return phase_; }
+  std::uint64_t phase_start(Phase p) const noexcept { return phase_start_[static_cast<std::size_t>(p)]; }
+  const safety::SupervisorState& supervisor() const noexcept { return sup_; }
+  const safety::Decision& decision() const noexcept { return sup_.last; }
+  rt::TickProfiler& profiler() noexcept { return profiler_; }
+  const rt::TickProfiler& profiler() const noexcept { return profiler_; }
+  std::span<const ModeChange> mode_changes() const noexcept { return Changes(modes_, mode_count_); }
+  std::span<const PhaseChange> phase_changes() const noexcept { return Changes(phases_, phase_count_); }
+  std::uint64_t run_ticks() const noexcept { return run_ticks_; }
+  // Another thread's view (single reader).
+  LoopStatus Status() const noexcept;
+
+  // Any thread, async-signal-safe: take effect at the next tick.
+  void Arm() noexcept { arm_.store(true, std::memory_order_relaxed); }
+  void Disarm() noexcept { disarm_.store(true, std::memory_order_relaxed); }
+  void RequestStop() noexcept { stop_.store(true, std::memory_order_relaxed); }
+  void RequestEStop() noexcept { estop_.store(true, std::memory_order_relaxed); }
+  bool stop_requested() const noexcept { return stop_.load(std::memory_order_relaxed); }
+  // Back to nominal, only while disarmed.
+  bool ResetSupervisor() noexcept;
+
+  Recorder* recorder = nullptr;  // logs every consumed input when set (set-up time)
+
+ private:
+  friend std::unique_ptr<LoopData> MakeLoopData(const robot::RobotModel&, CommandSource*, const LoopOptions&);
+  friend struct TickImpl;
+  template <typename T>
+  static std::span<const T> Changes(const std::array<T, kMaxChanges>& a, std::size_t n) noexcept {
+    return {a.data(), n < kMaxChanges ? n : kMaxChanges};
+  }
+
+  CommandSource* source_ = nullptr;
+  LoopOptions options_;
+  Phase phase_ = Phase::kDisarmed;
+  std::array<std::uint64_t, kPhaseCount> phase_start_{};
+  bool source_done_ = false;
+  std::uint64_t run_ticks_ = 0;
+  std::vector<std::uint8_t> answered_;  // per motor: answered since the phase began
+  std::vector<double> q0_;              // per motor: the pose the stand-up starts from
+  std::vector<double> desired_;         // the source's (or the phase's) command
+  robot::SignalProgram limit_signals_;  // the supervised signals
+  std::vector<double> limit_values_;
+  safety::SupervisorState sup_;
+  rt::TickProfiler profiler_;
+  std::array<ModeChange, kMaxChanges> modes_{};
+  std::size_t mode_count_ = 0;
+  std::array<PhaseChange, kMaxChanges> phases_{};
+  std::size_t phase_count_ = 0;
+  mutable LatestMailbox<LoopStatus> status_;
+  std::atomic<bool> arm_{false}, disarm_{false}, stop_{false}, estop_{false};
+};
+
+// The loop's data for a model and a command source (null: hold the default pose); the only
+// allocation. The source must outlive it.
+std::unique_ptr<LoopData> MakeLoopData(const robot::RobotModel& model, CommandSource* source,
+                                       const LoopOptions& options = {});
+
+enum class TickStatus : std::uint8_t {
+  kRunning,  // keep ticking
+  kDone,     // shut down: the robot is safe (motors off, the stop command sent)
+  kFailed,   // arming failed (a motor never answered): motors switched off
+};
+
+// The check stage: every stream's age (0 when fresh this tick), and its current fields against
+// the model's bounds (the one sample check; the first invalid field is the supervisor's input).
+void CheckSample(const robot::RobotModel& model, robot::RobotData& data) noexcept;
+
+// One tick: read -> check -> observe -> infer -> supervise -> write. `timing` is the clock's
+// (tick index, wake time, consecutive deadline misses).
+TickStatus Tick(const robot::RobotModel& model, robot::RobotData& data, LoopData& loop,
+                std::span<robot::Transport* const> transports, const rt::TickTiming& timing) noexcept;
+
+// The last write of a robot whose clock stopped, as tick `tick`: every command at its e-stop
+// value, motors switched off, the mode e-stop (the AUV's stop command). Phase done.
+void Shutdown(const robot::RobotModel& model, robot::RobotData& data, LoopData& loop,
+              std::span<robot::Transport* const> transports, std::uint64_t tick) noexcept;
+
+}  // namespace pbppo::loop

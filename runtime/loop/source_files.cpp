@@ -1,0 +1,54 @@
+#include "runtime/loop/source_files.hpp"
+
+#include <filesystem>
+
+#include "runtime/loop/policy_source.hpp"
+#include "runtime/policy/self_test.hpp"
+#include "runtime/robot/text_file.hpp"
+
+namespace pbppo::loop {
+namespace {
+
+std::span<const std::uint8_t> Bytes(const std::string& s) {
+  return {reinterpret_cast<const std::uint8_t*>(s.data()), s.size()};
+}
+
+}  // namespace
+
+Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFiles& files) {
+  LoadedSource s;
+  if (!files.policy.empty() && !files.trajectory.empty())
+    return MakeError(ErrorCode::kInvalidValue, "--policy and --trajectory: one command source at a time");
+  if (!files.policy.empty()) {
+    auto bytes = robot::ReadTextFile(files.policy);
+    if (!bytes) return std::move(bytes).error();
+    auto model = policy::PolicyModel::FromBlob(Bytes(*bytes));
+    if (!model) return MakeError(model.error().code, files.policy + ": " + model.error().message);
+    s.policy = std::make_unique<policy::PolicyModel>(std::move(*model));
+    if (files.self_test)
+      if (auto st = policy::SelfTest(*s.policy, files.policy); !st)
+        return MakeError(st.error().code, "refusing to arm: " + st.error().message);
+    auto src = PolicySource::Create(robot, *s.policy);
+    if (!src) return MakeError(src.error().code, files.policy + " on " + robot.path + ": " + src.error().message);
+    s.source = std::move(*src);
+    s.kind = SourceKind::kPolicy;
+    s.hash = LogHash(Bytes(*bytes));
+  } else if (!files.trajectory.empty()) {
+    // The robot's own trajectory was read with the robot; another file is read here.
+    auto doc = robot.Document("stand_trajectory");
+    std::error_code ec;
+    const bool own = doc && std::filesystem::equivalent((*doc)->path, files.trajectory, ec);
+    auto text = own ? Result<std::string>((*doc)->text) : robot::ReadTextFile(files.trajectory);
+    if (!text) return std::move(text).error();
+    auto t = ParseTrajectory(*text, std::filesystem::path(files.trajectory).filename().string(), robot);
+    if (!t) return std::move(t).error();
+    auto src = std::make_unique<TrajectorySource>(robot, std::move(*t));
+    s.trajectory = src.get();
+    s.source = std::move(src);
+    s.kind = SourceKind::kTrajectory;
+    s.hash = LogHash(Bytes(*text));
+  }
+  return s;
+}
+
+}  // namespace pbppo::loop

@@ -1,0 +1,22 @@
+// libFuzzer target: the record/replay log reader (runtime/loop/log.hpp) on any bytes: it returns
+// a log or an error naming the offset and the field, never reads out of bounds; a log it accepts
+// formats back without trouble.
+#include <cstdint>
+#include <cstdlib>
+#include <span>
+
+#include "runtime/loop/log.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  auto log = pbppo::loop::ParseLog(std::span<const std::uint8_t>(data, size), "fuzz.log");
+  if (!log) {
+    if (log.error().message.rfind("fuzz.log: offset ", 0) != 0) std::abort();
+    return 0;
+  }
+  if (!log->complete) std::abort();
+  for (const auto& r : log->records) {
+    if (r.type == 2 && r.outputs.commands.size() != log->header.commands) std::abort();
+    if (r.type == 1 && r.inputs.links.size() > log->header.links) std::abort();
+  }
+  return 0;
+}

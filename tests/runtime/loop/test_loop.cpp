@@ -1,0 +1,309 @@
+// runtime/loop over an in-memory transport: the quadruped's phases with the stand trajectory
+// (what each motor is sent in each phase, no allocation), a silent motor (safe-stop naming it,
+// then e-stop switching every motor off), a walking policy's observation from generic signal
+// names (IMU gyro, gravity from the orientation, an operator's command, joint q / dq, the last
+// action) run every 20 ticks with its action held between, and the source's failure as a named
+// supervisor cause.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "runtime/core/alloc_probe.hpp"
+#include "runtime/loop/loop.hpp"
+#include "runtime/loop/policy_source.hpp"
+#include "runtime/loop/trajectory_source.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/robot/signals.hpp"
+#include "tests/support/robot_models.hpp"
+#include "tests/support/scripted_transport.hpp"
+
+using namespace pbppo;
+using loop::Phase;
+using robot::MotorCommand;
+using safety::Mode;
+
+namespace {
+
+// A robot on a test bench: motors answer every frame they get (position as commanded, like a
+// stiff joint; `silent` stops one from tick `silent_from`), the IMU reports `quat` every tick.
+struct Bench {
+  const robot::RobotModel& m;
+  robot::RobotData data;
+  std::unique_ptr<loop::LoopData> loop;
+  test::ScriptedTransport t;
+  robot::Transport* ts[1];
+  int silent = -1;
+  std::uint64_t silent_from = ~0ull;
+  double quat[4] = {1, 0, 0, 0};
+  std::uint64_t tick = 0;
+
+  Bench(const robot::RobotModel& model, loop::CommandSource* source)
+      : m(model), data(robot::MakeRobotData(model)), loop(loop::MakeLoopData(model, source)), t(model), ts{&t} {}
+
+  loop::TickStatus Step() {
+    // Replies to what was sent last tick.
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const robot::MotorSpec& mo = m.motors[k];
+      if (t.writes == 0 || t.motors[k] == MotorCommand::kNone) continue;
+      if (static_cast<int>(k) == silent && tick >= silent_from) continue;
+      const double q = t.motors[k] == MotorCommand::kCommand ? t.command[mo.q] : data.fields[mo.q_field];
+      const double reply[3] = {q, 0.0, 0.0};
+      t.Put(m, mo.stream, reply);
+    }
+    const int imu = m.StreamIndex("base_imu");
+    if (imu >= 0) {
+      const double sample[10] = {quat[0], quat[1], quat[2], quat[3], 0.1, -0.2, 0.3, 0, 0, 9.81};
+      t.Put(m, static_cast<std::uint32_t>(imu), sample);
+    }
+    rt::TickTiming timing;
+    timing.tick = tick++;
+    return loop::Tick(m, data, *loop, ts, timing);
+  }
+  void Until(Phase p, int limit) {
+    for (int k = 0; k < limit && loop->phase() != p; ++k) Step();
+    REQUIRE(loop->phase() == p);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("loop: the quadruped's phases - arming, stand-up, hold, the trajectory, damping, motor off") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto trajectory = loop::RobotTrajectory(m);
+  REQUIRE_MESSAGE(trajectory.ok(), trajectory.error().message);
+  loop::TrajectorySource source(m, *trajectory);
+  Bench b(m, &source);
+  b.loop->Arm();
+  b.Step();
+  CHECK(b.loop->phase() == Phase::kArming);
+  for (auto c : b.t.motors) CHECK(c == MotorCommand::kEnable);
+  b.Step();  // every motor answered: stand up from the measured pose (all zero)
+  CHECK(b.loop->phase() == Phase::kStandUp);
+  for (auto c : b.t.motors) CHECK(c == MotorCommand::kCommand);
+  CHECK(b.t.command[m.motors[2].q] == 0.0);
+  CHECK(b.t.command[m.motors[2].kp] == m.body->kp_nm_rad);
+  const std::uint64_t up = b.loop->phase_start(Phase::kStandUp);
+  {
+    AllocationScope scope;
+    b.Until(Phase::kHold, 1100);
+    b.Until(Phase::kRun, 300);
+    for (int k = 0; k < 100; ++k) b.Step();
+    CHECK(scope.count() == 0);
+  }
+  CHECK(b.loop->phase_start(Phase::kHold) - up == m.phases.stand_up_ticks);
+  CHECK(b.loop->phase_start(Phase::kRun) - b.loop->phase_start(Phase::kHold) == m.phases.hold_ticks);
+  CHECK(b.t.command[m.motors[2].q] != doctest::Approx(m.motors[2].default_q_rad));  // sinusoids
+  b.Until(Phase::kHold, 2100);  // the trajectory ended: the default pose again
+  CHECK(source.ticks() == 2000);
+  CHECK(source.rms_tracking_error_rad() < 0.01);  // the bench's joints follow exactly, a tick late
+  b.loop->RequestStop();
+  b.Step();
+  CHECK(b.loop->phase() == Phase::kDamping);
+  for (const auto& mo : m.motors) {
+    CHECK(b.t.command[mo.kp] == 0.0);
+    CHECK(b.t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
+    CHECK(b.t.command[mo.tau] == 0.0);
+  }
+  b.Until(Phase::kMotorOff, 600);
+  CHECK(b.loop->phase_start(Phase::kMotorOff) - b.loop->phase_start(Phase::kDamping) == m.phases.damping_ticks);
+  for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
+  CHECK(b.Step() == loop::TickStatus::kDone);  // every motor answered the motor-off frame
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+}
+
+TEST_CASE("loop: a silent motor - degraded, safe-stop naming it within 3 ticks, e-stop after 500 switches off") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  Bench b(m, nullptr);
+  b.silent = 2;  // LF_KFE
+  b.loop->Arm();
+  b.Until(Phase::kHold, 1100);
+  b.silent_from = b.tick;
+  const std::uint64_t from = b.tick;
+  for (int k = 0; k < 5; ++k) b.Step();
+  const safety::SupervisorState& s = b.loop->supervisor();
+  REQUIRE(s.mode == Mode::kSafeStop);
+  CHECK(s.entered[2].cause == safety::Cause::kStaleSample);
+  CHECK(s.entered[2].subject == 2);
+  CHECK(s.entered_tick[2] <= from + 4);
+  CHECK(safety::Describe(m.supervisor_model, s.entered[2]) == "safe-stop: stale sample: LF_KFE: age 3 ticks > 2");
+  for (const auto& mo : m.motors) CHECK(b.t.command[mo.kp] == 0.0);
+  while (s.mode != Mode::kEStop && b.tick < from + 600) b.Step();
+  CHECK(s.entered[3].cause == safety::Cause::kLostPeer);
+  CHECK(s.entered[3].subject == 2);
+  for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
+}
+
+namespace {
+
+// The quadruped with a walking policy's layout and an operator's velocity command (issue 18's
+// signals), in a copy of its folder.
+std::string WalkingRobot() {
+  const std::string dir = test::ScratchDir("walking") + "/quadruped";
+  std::filesystem::copy(test::SourcePath("models/quadruped"), dir, std::filesystem::copy_options::recursive);
+  const auto& m = test::QuadrupedRobot();
+  std::ofstream io(dir + "/io_layout.yaml");
+  io << "robot: quadruped\nobservations:\n";
+  for (const char* s : {"base_ang_vel_x", "base_ang_vel_y", "base_ang_vel_z", "projected_gravity_x",
+                        "projected_gravity_y", "projected_gravity_z", "command_vx", "command_vy", "command_yaw_rate"})
+    io << "  - {name: " << s << "}\n";
+  for (const auto& mo : m.motors) io << "  - {name: q_" << mo.joint << ", offset: " << mo.default_q_rad << "}\n";
+  for (const auto& mo : m.motors) io << "  - {name: dq_" << mo.joint << "}\n";
+  for (const auto& mo : m.motors) io << "  - {name: last_action_" << mo.joint << "}\n";
+  io << "actions:\n";
+  for (const auto& mo : m.motors)
+    io << "  - {name: " << mo.joint << ", command: q_des_" << mo.joint
+       << ", unit: rad, scale: 0.25, offset: " << mo.default_q_rad << ", low: " << mo.default_q_rad - 0.25
+       << ", high: " << mo.default_q_rad + 0.25 << "}\n";
+  io.close();
+  std::ifstream in(dir + "/robot.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("files:\n"), 7, "files:\n  io_layout: io_layout.yaml\n");
+  text.replace(text.find("transports:\n"), 12, "transports:\n  - {name: operator, kind: dds, messages: operator}\n");
+  text +=
+      "streams:\n  - name: operator\n    transport: operator\n    period_s: 0.02\n"
+      "    stale_after: {degraded: 5, safe_stop: 10, lost: 50}\n    invalid_safe_stop: 1\n    fields:\n"
+      "      - {name: command_vx, min: -2, max: 2}\n      - {name: command_vy, min: -1, max: 1}\n"
+      "      - {name: command_yaw_rate, min: -2, max: 2}\n";
+  std::ofstream(dir + "/robot.yaml") << text;
+  return dir + "/robot.yaml";
+}
+
+}  // namespace
+
+TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the action held between") {
+  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
+  const robot::RobotModel& m = *loaded;
+  REQUIRE(m.policy_period_ticks == 20);
+  policy::PolicySpec spec =
+      policy::MakeRandomSpec({m.io->observation_size(), 32, m.io->action_size()}, policy::Activation::kTanh, 3);
+  robot::ApplyLayoutToSpec(*m.io, spec);
+  auto policy = policy::PolicyModel::FromSpec(spec);
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  Bench b(m, source->get());
+  // A body rolled by 0.2 rad about x: gravity in the base frame (0, -sin 0.2, -cos 0.2).
+  b.quat[0] = std::cos(0.1);
+  b.quat[1] = std::sin(0.1);
+  const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("operator"));
+  const double command[3] = {0.5, -0.25, 0.75};
+  b.loop->Arm();
+  for (int k = 0; k < 1400 && b.loop->phase() != Phase::kRun; ++k) {
+    if (k % 20 == 0) b.t.Put(m, op, command);  // the operator is there from the start
+    b.Step();
+  }
+  REQUIRE(b.loop->phase() == Phase::kRun);
+  auto commanded = [&] {
+    std::vector<double> q;
+    for (const auto& mo : m.motors) q.push_back(b.t.command[mo.q]);
+    return q;
+  };
+  std::vector<double> held = commanded(), before;  // before: what the last run's predecessor held
+  std::uint64_t runs = (*source)->runs(), changes = 0;
+  for (int k = 0; k < 200; ++k) {
+    if (b.tick % 20 == 0) b.t.Put(m, op, command);
+    b.Step();
+    const std::vector<double> q = commanded();
+    if (q != held) {
+      ++changes;
+      before = held;
+    }
+    held = q;
+  }
+  CHECK((*source)->runs() - runs == 10);  // every 20th tick
+  CHECK(changes <= 10);                   // held between runs
+  const std::span<const float> obs = (*source)->observation();
+  CHECK(obs[0] == doctest::Approx(0.1));  // base_ang_vel_x: the IMU's gyro
+  CHECK(obs[2] == doctest::Approx(0.3));
+  CHECK(obs[3] == doctest::Approx(0.0).epsilon(1e-6));  // projected_gravity_x
+  CHECK(obs[4] == doctest::Approx(-std::sin(0.2)));
+  CHECK(obs[5] == doctest::Approx(-std::cos(0.2)));
+  CHECK(obs[6] == 0.5f);  // command_vx
+  CHECK(obs[8] == 0.75f);
+  // last_action_<joint>: the previous run's action in policy units, (q - default) / 0.25.
+  REQUIRE(!before.empty());
+  const double last = (before[0] - m.motors[0].default_q_rad) / 0.25;
+  CHECK(obs[9 + 24] == doctest::Approx(last).epsilon(1e-5));
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  // Tilted past 60 degrees: safe-stop naming the signal.
+  b.quat[0] = std::cos(0.6);
+  b.quat[1] = std::sin(0.6);
+  b.Step();
+  CHECK(b.loop->supervisor().mode == Mode::kSafeStop);
+  CHECK(b.loop->supervisor().entered[2].cause == safety::Cause::kSignalLimit);
+}
+
+namespace {
+
+// A source that fails as a policy whose Forward returned non-finite actions.
+class Failing final : public loop::CommandSource {
+ public:
+  void Start(const robot::RobotModel&, const robot::RobotData&, loop::LoopData&) noexcept override {}
+  bool Compute(const robot::RobotModel&, const robot::RobotData& d, loop::LoopData&,
+               std::span<double>) noexcept override {
+    fail = d.tick >= 5;
+    return true;
+  }
+  const char* failure() const noexcept override { return fail ? "non-finite action" : nullptr; }
+  bool fail = false;
+};
+
+}  // namespace
+
+TEST_CASE("loop: the command source's failure (the inference status) is a named supervisor cause") {
+  const robot::RobotModel& m = test::AuvRobot();
+  Failing source;
+  Bench b(m, &source);
+  b.loop->Arm();
+  for (int k = 0; k < 8; ++k) {
+    b.t.PutField(m, static_cast<std::uint32_t>(m.FieldIndex("sonar_beams")), 16.0);  // a valid sample
+    b.Step();
+  }
+  const auto& s = b.loop->supervisor();
+  CHECK(s.mode == Mode::kSafeStop);
+  CHECK(s.entered[2].cause == safety::Cause::kInferenceFailed);
+  CHECK(safety::Describe(m.supervisor_model, s.entered[2]) == "safe-stop: inference failed: non-finite action");
+  CHECK(s.counts[safety::Cause::kInferenceFailed] == 3);
+}
+
+TEST_CASE("signals: gravity in the IMU's frame, wrapped angles, the least of fields, last actions, unknown names") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto p = robot::SignalProgram::Create(
+      m, {"projected_gravity_x", "projected_gravity_y", "projected_gravity_z", "base_ang_vel_y", "q_RH_KFE"});
+  REQUIRE_MESSAGE(p.ok(), p.error().message);
+  std::vector<double> f(m.fields.size(), 0.0), out(5);
+  const int qw = m.FieldIndex("base_imu_qw");
+  // A pitch of 0.3 rad about y (unnormalised: scaled by 2): gravity (sin 0.3, 0, -cos 0.3).
+  f[static_cast<std::size_t>(qw)] = 2 * std::cos(0.15);
+  f[static_cast<std::size_t>(qw) + 2] = 2 * std::sin(0.15);
+  f[static_cast<std::size_t>(m.FieldIndex("base_imu_gyro_y"))] = 0.7;
+  f[static_cast<std::size_t>(m.FieldIndex("q_RH_KFE"))] = 1.25;
+  p->Compute(f, {}, out.data());
+  CHECK(out[0] == doctest::Approx(std::sin(0.3)));
+  CHECK(out[1] == doctest::Approx(0.0));
+  CHECK(out[2] == doctest::Approx(-std::cos(0.3)));
+  CHECK(out[3] == 0.7);
+  CHECK(out[4] == 1.25);
+  const robot::RobotModel& auv = test::AuvRobot();
+  auto a = robot::SignalProgram::Create(auv, {"yaw", "nearest_echo", "depth_error", "cos_route_bearing"});
+  REQUIRE(a.ok());
+  std::vector<double> g(auv.fields.size(), 10.0), o(4);
+  g[static_cast<std::size_t>(auv.FieldIndex("yaw_rad"))] = 3 * 3.14159265358979;  // wrapped to about pi
+  g[static_cast<std::size_t>(auv.FieldIndex("sonar_7_m"))] = 2.5;
+  g[static_cast<std::size_t>(auv.FieldIndex("depth_m"))] = 6.5;
+  g[static_cast<std::size_t>(auv.FieldIndex("route_bearing_rad"))] = 0.5;
+  a->Compute(g, {}, o.data());
+  CHECK(std::abs(o[0]) == doctest::Approx(3.14159265358979));
+  CHECK(o[1] == 2.5);
+  CHECK(o[2] == 1.5);  // depth - the mission depth 5 m
+  CHECK(o[3] == std::cos(0.5));
+  auto bad = robot::SignalProgram::Create(m, {"base_ang_vel_w"});
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("signal 'base_ang_vel_w' is not provided (known: base_ang_vel_x") !=
+        std::string::npos);
+}
