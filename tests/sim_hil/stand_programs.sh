@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The two programs over vcan (label vcan): pbppo-hil in lock-step and pbppo-controller-quadruped
-# waiting for each tick's replies. 1) --duration: arming, ramp, hold, shutdown -> exit 0.
+# The two programs over vcan (label vcan): pbppo-hil in lock-step and pbppo-controller
+# (--robot models/quadruped/robot.yaml) waiting for each tick's replies.
+# 1) --duration: arming, stand-up, hold, damping, motor off -> exit 0.
 # 2) SIGINT during the trajectory -> damping -> motor off -> exit 0.
 # usage: stand_programs.sh HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
@@ -23,22 +24,22 @@ stop_hil() {
 echo "== 1: --duration 1.3"
 run_hil 1
 rc=0
-"$ctl" --can "$can" --mode stand-test --duration 1.3 --lockstep-wait-ms 200 >"$work/ctl.1.log" 2>&1 || rc=$?
+"$ctl" --robot models/quadruped/robot.yaml --can "$can" --duration 1.3 --lockstep-wait-ms 200 >"$work/ctl.1.log" 2>&1 || rc=$?
 cat "$work/ctl.1.log"
 stop_hil 1
 [ "$rc" -eq 0 ] || { echo "controller exited with $rc"; exit 1; }
-grep -q "hold -> shutdown-damping" "$work/ctl.1.log"
+grep -q "hold -> damping" "$work/ctl.1.log"
 grep -q "motor-off -> done" "$work/ctl.1.log"
-grep -q "supervisor nominal" "$work/ctl.1.log"
+grep -q "final mode nominal" "$work/ctl.1.log"
 grep -Eq "LF_HAA .* motor_mode 0" "$work/hil.1.log"
 
 echo "== 2: SIGINT during the trajectory"
 run_hil 2
-"$ctl" --can "$can" --mode stand-test --trajectory models/quadruped/stand_trajectory.yaml \
+"$ctl" --robot models/quadruped/robot.yaml --can "$can" --trajectory models/quadruped/stand_trajectory.yaml \
   --lockstep-wait-ms 200 >"$work/ctl.2.log" 2>&1 &
 ctl_pid=$!
 for _ in $(seq 1 600); do
-  grep -q -- "-> trajectory" "$work/ctl.2.log" 2>/dev/null && break
+  grep -q -- "now run" "$work/ctl.2.log" 2>/dev/null && break
   sleep 0.1
 done
 sleep 1
@@ -48,6 +49,6 @@ wait "$ctl_pid" || rc=$?
 cat "$work/ctl.2.log"
 stop_hil 2
 [ "$rc" -eq 0 ] || { echo "controller exited with $rc"; exit 1; }
-grep -q "trajectory -> shutdown-damping" "$work/ctl.2.log"
+grep -q "run -> damping" "$work/ctl.2.log"
 grep -q "motor-off -> done" "$work/ctl.2.log"
 echo "stand_programs: OK"
