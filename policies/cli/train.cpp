@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "policies/cli/eval_walk.hpp"
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/trainer.hpp"
@@ -90,7 +91,7 @@ std::string Human(double v) {
 }  // namespace
 
 void AddTrainOptions(CLI::App& s, TrainOptions& o) {
-  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
+  s.add_option("--env", o.env, "Environment: pendulum, auv-nav, quadruped-walk");
   s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--exploring-starts", o.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
@@ -110,6 +111,9 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--extra-obstacles", o.extra_obstacles,
                "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
                "so that the policy has to steer by its sonar rather than learn a route");
+  s.add_option("--terrain", o.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
+  s.add_option("--commands", o.commands,
+               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
   s.add_option("--schedule", o.schedule,
                "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
   s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
@@ -165,6 +169,8 @@ int Train(const TrainOptions& o) {
   c.geodesic_margin = o.geodesic_margin;
   c.clearance_penalty = o.clearance_penalty;
   c.extra_obstacles = o.extra_obstacles;
+  c.terrain = o.terrain;
+  c.commands = o.commands;
   if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
   c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
   c.seed = o.seed;
@@ -229,6 +235,8 @@ int Train(const TrainOptions& o) {
     eo.geodesic_margin = c.geodesic_margin;
     eo.clearance_penalty = c.clearance_penalty;
     eo.extra_obstacles = c.extra_obstacles;
+    eo.terrain = c.terrain;
+    eo.commands = c.commands;
     if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
   }
 
@@ -271,9 +279,15 @@ int Train(const TrainOptions& o) {
 
 void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("blob", o.blob, "Policy blob file")->required();
-  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
+  s.add_option("--env", o.env, "Environment: pendulum, auv-nav, quadruped-walk");
   s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
-  s.add_option("--episodes", o.episodes, "Episodes")->check(CLI::Range(1, 1000000));
+  s.add_option("--episodes", o.episodes, "Episodes (quadruped-walk: robots; default 100, quadruped-walk 50)")
+      ->check(CLI::Range(1, 1000000));
+  s.add_option("--terrain", o.terrain, "quadruped-walk: flat, or mixed (flat and blocks 1:1)");
+  s.add_option("--commands", o.commands, "quadruped-walk: VX:VY:YAW command maxima (default: walk.yaml's ranges)");
+  s.add_flag("--randomize", o.randomize,
+             "quadruped-walk: randomised robots as in training (friction, mass, gains, latency, pushes); default: "
+             "the nominal robot");
   s.add_option("--seed", o.seed, "Seed for the initial states");
   s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
@@ -391,7 +405,15 @@ void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, doubl
 
 }  // namespace
 
-int Eval(const EvalOptions& o) {
+int Eval(const EvalOptions& o_in) {
+  if (o_in.env == "quadruped-walk") return EvalWalk(o_in);
+  if (o_in.terrain != "flat" || !o_in.commands.empty() || o_in.randomize) {
+    std::fprintf(stderr, "pbppo eval: --terrain, --commands and --randomize are quadruped-walk's, not %s's\n",
+                 o_in.env.c_str());
+    return 2;
+  }
+  EvalOptions o = o_in;
+  if (o.episodes == 0) o.episodes = 100;
   auto model = policy::PolicyModel::FromFile(o.blob);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());

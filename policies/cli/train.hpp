@@ -18,6 +18,8 @@ struct TrainOptions {
   std::string geodesic_margin;
   std::string clearance_penalty;
   int extra_obstacles = 0;
+  std::string terrain = "flat";
+  std::string commands;
   std::string schedule = "pbppo";
   std::string arms = "0.02:0.5:6";
   std::string feedback = "eval";
@@ -66,10 +68,13 @@ struct EvalOptions {
   std::string plot;          // PNG of the trajectories over the map (auv-nav)
   std::string trajectories;  // CSV of every episode's trajectory (auv-nav)
   std::string outcomes;      // CSV, one row per episode: outcome, end pose, random obstacles (auv-nav)
-  int episodes = 100;
+  int episodes = 0;          // 0: the environment's test size (100; quadruped-walk: the paper's 50 robots)
   std::uint64_t seed = 7;
   std::string models;
   bool json = false;
+  std::string terrain = "flat";  // quadruped-walk
+  std::string commands;          // quadruped-walk: "VX:VY:YAW" maxima
+  bool randomize = false;        // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes)
 };
 void AddEvalOptions(CLI::App& sub, EvalOptions& o);
 int Eval(const EvalOptions& o);

@@ -4,11 +4,12 @@
 
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/pendulum.hpp"
+#include "policies/envs/quadruped_walk.hpp"
 
 namespace pbppo::envs {
 
 std::vector<std::string> EnvNames() {
-  return {"pendulum", "auv-nav"};
+  return {"pendulum", "auv-nav", "quadruped-walk"};
 }
 
 std::string DefaultModelsDir() {
@@ -39,6 +40,20 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
                             options.extra_obstacles);
     if (!env) return std::move(env).error();
     (*env)->set_exploring_starts(options.exploring_starts);
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
+  if (name == "quadruped-walk") {
+    if (!options.progress.empty() || !options.geodesic_margin.empty() || !options.clearance_penalty.empty() ||
+        options.extra_obstacles != 0)
+      return MakeError(ErrorCode::kInvalidValue,
+                       "--progress, --geodesic-margin, --clearance-penalty and --extra-obstacles are auv-nav's, not "
+                       "quadruped-walk's");
+    QuadrupedWalkOptions o;
+    o.models_dir = dir;
+    o.terrain = options.terrain;
+    o.commands = options.commands;
+    auto env = QuadrupedWalk::Make(o);
+    if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }
   std::string known;

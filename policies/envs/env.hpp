@@ -58,6 +58,13 @@ class Env {
   virtual std::unique_ptr<Env> Clone() const = 0;
 
   virtual EpisodeInfo episode_info() const noexcept { return {}; }
+
+  // Asymmetric actor-critic: an environment may give the value function a privileged observation
+  // (state no device of the robot measures) beside the policy's. 0: the critic sees the policy's
+  // observation. Otherwise CriticObservation writes the critic's observation of the state the last
+  // Reset() or Step() left.
+  virtual std::uint32_t critic_observation_size() const noexcept { return 0; }
+  virtual void CriticObservation(std::span<float> out) const noexcept { (void)out; }
 };
 
 struct EnvOptions {
@@ -76,6 +83,10 @@ struct EnvOptions {
   std::string clearance_penalty;
   // auv-nav, training only: random obstacles per episode beyond each layout's count (AuvNav::Make).
   int extra_obstacles = 0;
+  // quadruped-walk: "flat" or "mixed" (flat and block episodes 1:1), and the command ranges
+  // "VX:VY:YAW" (maxima; empty: walk.yaml's).
+  std::string terrain = "flat";
+  std::string commands;
 };
 
 // The names MakeEnv() knows.

@@ -884,6 +884,10 @@ Result<TrainResult> Trainer::Run(const std::function<void(const Progress&)>& pro
     if (!c_.clearance_penalty.empty()) j["clearance_penalty"] = c_.clearance_penalty;
     if (c_.snapshots > 0) j["snapshots"] = c_.snapshots;
     if (c_.extra_obstacles > 0) j["extra_obstacles"] = c_.extra_obstacles;
+    if (c_.env == "quadruped-walk") {
+      j["terrain"] = c_.terrain;
+      if (!c_.commands.empty()) j["commands"] = c_.commands;
+    }
     if (c_.critic_warmup > 0) j["critic_warmup"] = c_.critic_warmup;
     j["seed"] = c_.seed;
     if (!c_.init_blob.empty()) j["init"] = c_.init_blob;
@@ -929,6 +933,8 @@ Result<TrainResult> Train(const TrainConfig& config, const std::function<void(co
   eo.geodesic_margin = config.geodesic_margin;
   eo.clearance_penalty = config.clearance_penalty;
   eo.extra_obstacles = config.extra_obstacles;
+  eo.terrain = config.terrain;
+  eo.commands = config.commands;
   auto env = envs::MakeEnv(config.env, eo);
   if (!env) return std::move(env).error();
   Trainer t(config, std::move(env).value());

@@ -26,6 +26,8 @@ struct TrainConfig {
   std::string geodesic_margin;    // auv-nav: "D:C", the geodesic path's margin; empty: auv.yaml's
   std::string clearance_penalty;  // auv-nav: "D:W", the reward's clearance term; empty: auv.yaml's
   int extra_obstacles = 0;        // auv-nav, training: random obstacles beyond each layout's count
+  std::string terrain = "flat";   // quadruped-walk: flat or mixed
+  std::string commands;           // quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's
   std::uint64_t seed = 1;
   std::uint64_t total_steps = 200000;  // training environment steps (evaluation steps are extra)
   int num_envs = 1;
