@@ -66,17 +66,11 @@ class Writer {
        << "  <option timestep=\"" << Num(o_.timestep_s) << "\" integrator=\"Euler\"/>\n"
        << "  <size njmax=\"1000\" nconmax=\"250\"/>\n"
        << "  <default><geom condim=\"3\" friction=\"" << Num(o_.friction) << " 0.005 0.0001\"/></default>\n";
-    const bool hfield = o_.hfield_cells > 0;
-    if (hfield) {
-      s_ << "  <asset><hfield name=\"terrain\" nrow=\"" << o_.hfield_cells << "\" ncol=\"" << o_.hfield_cells
-         << "\" size=\"" << Num(o_.hfield_half_size_m) << " " << Num(o_.hfield_half_size_m) << " "
-         << Num(o_.hfield_max_height_m) << " 0.1\"/></asset>\n";
-    }
     s_ << "  <worldbody>\n"
-       << "    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" pos=\"0 0 "
-       << Num(hfield ? -o_.floor_below_hfield_m : 0.0) << "\" contype=\"0\" conaffinity=\"1\"/>\n";
-    if (hfield)
-      s_ << "    <geom name=\"terrain\" type=\"hfield\" hfield=\"terrain\" contype=\"0\" conaffinity=\"1\"/>\n";
+       << "    <geom name=\"floor\" type=\"plane\" size=\"0 0 1\" contype=\"0\" conaffinity=\"1\"/>\n";
+    for (int k = 0; k < o_.block_geoms; ++k)
+      s_ << "    <geom name=\"block_" << k
+         << "\" type=\"box\" size=\"0.1 0.1 0.1\" pos=\"0 0 -10\" contype=\"0\" conaffinity=\"0\"/>\n";
     s_ << "    <body name=\"" << u.links[u.root].name << "\" pos=\"0 0 " << Num(o_.base_height_m) << "\">\n"
        << "      <freejoint name=\"root\"/>\n";
     if (auto st = Body(u.root, "      "); !st) return st.error();
@@ -152,9 +146,9 @@ class Writer {
 Result<std::string> GenerateMjcf(const robot::RobotDescription& robot, const MjcfOptions& options) {
   if (!(options.timestep_s > 0 && options.timestep_s <= 0.05))
     return MakeError(ErrorCode::kInvalidValue, "mjcf: timestep " + Num(options.timestep_s) + " s is not in (0, 0.05]");
-  if (options.hfield_cells < 0 || options.hfield_cells > 4000)
+  if (options.block_geoms < 0 || options.block_geoms > 256)
     return MakeError(ErrorCode::kInvalidValue,
-                     "mjcf: hfield_cells " + std::to_string(options.hfield_cells) + " is not in [0, 4000]");
+                     "mjcf: block_geoms " + std::to_string(options.block_geoms) + " is not in [0, 256]");
   return Writer(robot, options).Run();
 }
 

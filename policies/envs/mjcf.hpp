@@ -8,15 +8,17 @@
 //     friction loss, every fixed joint a body without a joint (MuJoCo welds it);
 //   - the URDF's inertials (mass, centre of mass, full inertia) and collision shapes (spheres,
 //     boxes, and cylinders as capsules, which collide faster and more smoothly);
-//   - a floor plane, and optionally a height field over the middle of the floor for rough terrain
-//     (its heights are filled at run time in the model's hfield_data);
+//   - a floor plane, and optionally a pool of box geoms for block terrain ("block_<k>", parked
+//     below the floor; the environment moves the blocks near the robot into them at run time:
+//     MuJoCo 2.2's broad phase costs every static geom on every step, and a height field gives
+//     many contacts per foot, both several times slower than a small pool);
 //   - one torque motor per actuated joint (gear 1, limited to the URDF effort), in the robot's
 //     joint order, so that ctrl[i] is the torque of actuated joint i;
 //   - no self-collision: robot geoms touch only the ground (contype 1 / conaffinity 0 on the
 //     robot, contype 0 / conaffinity 1 on the ground).
 //
 // Names: bodies and geoms keep the URDF link names (geom "<link>_<k>" for the k-th collision
-// shape), hinges and motors the joint names, the floor geom "floor", the height field "terrain".
+// shape), hinges and motors the joint names, the floor geom "floor", the blocks "block_<k>".
 #pragma once
 
 #include <string>
@@ -31,14 +33,8 @@ namespace pbppo::envs {
 struct MjcfOptions {
   double timestep_s = 0.005;
   double friction = 1.0;  // sliding friction of every geom (MuJoCo uses the larger of a pair)
-  // Height field centred on the origin: half sizes (m), cells per side, the height of a data
-  // value of 1 (m). cells 0: no height field.
-  double hfield_half_size_m = 10.0;
-  int hfield_cells = 0;
-  double hfield_max_height_m = 0.2;
-  // The floor plane lies this far below the height field's base (0 without a height field), so
-  // that it only carries the robot once it walks off the field.
-  double floor_below_hfield_m = 0.05;
+  // Box geoms for block terrain (0: none).
+  int block_geoms = 0;
   // Initial base height (m): the free joint's reference position.
   double base_height_m = 0.5;
 };

@@ -3,8 +3,8 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <ctime>
 #include <numbers>
 
 #include "policies/envs/mjcf.hpp"
@@ -49,7 +49,8 @@ struct QuadrupedWalk::Shared {
   std::vector<can::MitRange> range;    // per actuated joint: the reply ranges
   std::vector<double> soft_lower, soft_upper, effort;
   std::vector<float> low, high;
-  int base_body = 0, floor_geom = -1, terrain_geom = -1, hfield = -1;
+  int base_body = 0, floor_geom = -1;
+  std::vector<int> block_geom;  // the pool of box geoms for blocks
   double base_mass = 0;
   ~Shared() {
     if (model != nullptr) mj_deleteModel(model);
@@ -136,11 +137,7 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   MjcfOptions mo;
   mo.timestep_s = p.timestep_s;
   mo.base_height_m = p.init_base_height_m;
-  if (options.terrain == "mixed") {
-    mo.hfield_half_size_m = p.field_half_size_m;
-    mo.hfield_cells = static_cast<int>(std::lround(2 * p.field_half_size_m / p.cell_m)) + 1;
-    mo.hfield_max_height_m = std::max(p.block_height_m[1], 0.01);
-  }
+  if (options.terrain == "mixed") mo.block_geoms = p.pool;
   auto xml = GenerateMjcf(r, mo);
   if (!xml) return std::move(xml).error();
   auto model = CompileMjcf(*xml, "quadruped");
@@ -160,8 +157,8 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   sh->base_body = mj_name2id(m, mjOBJ_BODY, r.urdf.links[r.urdf.root].name.c_str());
   sh->base_mass = m->body_mass[sh->base_body];
   sh->floor_geom = mj_name2id(m, mjOBJ_GEOM, "floor");
-  sh->terrain_geom = mj_name2id(m, mjOBJ_GEOM, "terrain");
-  sh->hfield = mj_name2id(m, mjOBJ_HFIELD, "terrain");
+  for (int k = 0; k < mo.block_geoms; ++k)
+    sh->block_geom.push_back(mj_name2id(m, mjOBJ_GEOM, ("block_" + std::to_string(k)).c_str()));
   int feet = 0;
   for (int g = 0; g < m->ngeom; ++g) {
     GeomKind kind = GeomKind::kGround;
@@ -200,6 +197,9 @@ QuadrupedWalk::QuadrupedWalk(std::shared_ptr<const Shared> shared) : shared_(std
   const std::size_t n = s.robot.joint_count();
   for (auto* v : {&kp_, &kd_, &target_, &prev_target_, &action_, &last_action_, &last_dq_, &torque_}) v->assign(n, 0.0);
   air_time_.assign(kFeet, 0.0);
+  blocks_.reserve(static_cast<std::size_t>(s.params.blocks));
+  block_slot_.reserve(static_cast<std::size_t>(s.params.blocks));
+  slot_block_.assign(s.block_geom.size(), -1);
 }
 
 QuadrupedWalk::~QuadrupedWalk() {
@@ -255,47 +255,75 @@ EpisodeInfo QuadrupedWalk::episode_info() const noexcept {
 
 void QuadrupedWalk::BuildTerrain(bool blocks) noexcept {
   const Shared& s = *shared_;
-  on_blocks_ = blocks && s.hfield >= 0;
-  if (s.hfield < 0) return;
-  m_->geom_contype[s.terrain_geom] = 0;
-  m_->geom_conaffinity[s.terrain_geom] = on_blocks_ ? 1 : 0;
-  m_->geom_conaffinity[s.floor_geom] = on_blocks_ ? 0 : 1;
-  if (!on_blocks_) return;
   const QuadrupedWalkParams& p = s.params;
-  const int cells = m_->hfield_ncol[s.hfield];
-  float* h = m_->hfield_data + m_->hfield_adr[s.hfield];
-  std::fill(h, h + static_cast<std::ptrdiff_t>(cells) * cells, 0.0f);
-  const double half = m_->hfield_size[4 * s.hfield], top = m_->hfield_size[4 * s.hfield + 2];
-  const double step = 2 * half / (cells - 1);
-  auto cell = [&](double x) { return static_cast<int>(std::lround((x + half) / step)); };
+  on_blocks_ = blocks && !s.block_geom.empty();
+  blocks_.clear();
+  block_slot_.clear();
+  for (std::size_t k = 0; k < s.block_geom.size(); ++k) {
+    const int g = s.block_geom[k];
+    m_->geom_conaffinity[g] = 0;
+    m_->geom_pos[3 * g + 2] = -10.0;
+    slot_block_[k] = -1;
+  }
+  if (!on_blocks_) return;
+  const double half = p.field_half_size_m, r2 = p.clear_radius_m * p.clear_radius_m;
   for (int b = 0; b < p.blocks; ++b) {
     const double cx = rng_.Uniform(-half, half), cy = rng_.Uniform(-half, half);
     const double sx = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
     const double sy = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
-    const auto z = static_cast<float>(rng_.Uniform(p.block_height_m[0], p.block_height_m[1]) / top);
-    const int c0 = std::max(0, cell(cx - sx / 2)), c1 = std::min(cells - 1, cell(cx + sx / 2));
-    const int r0 = std::max(0, cell(cy - sy / 2)), r1 = std::min(cells - 1, cell(cy + sy / 2));
-    for (int rr = r0; rr <= r1; ++rr)
-      for (int cc = c0; cc <= c1; ++cc) h[rr * cells + cc] = std::max(h[rr * cells + cc], z);
+    const double h = rng_.Uniform(p.block_height_m[0], p.block_height_m[1]);
+    const Block k{cx - sx / 2, cx + sx / 2, cy - sy / 2, cy + sy / 2, h};
+    // The start area stays flat: a block reaching into it is left out.
+    const double dx = std::max({k.x0, -k.x1, 0.0}), dy = std::max({k.y0, -k.y1, 0.0});
+    if (dx * dx + dy * dy < r2) continue;
+    blocks_.push_back(k);
+    block_slot_.push_back(-1);
   }
-  const int reach = static_cast<int>(std::ceil(p.clear_radius_m / step));
-  const int mid = (cells - 1) / 2;
-  for (int rr = mid - reach; rr <= mid + reach; ++rr)
-    for (int cc = mid - reach; cc <= mid + reach; ++cc) {
-      const double x = (cc - mid) * step, y = (rr - mid) * step;
-      if (x * x + y * y <= p.clear_radius_m * p.clear_radius_m) h[rr * cells + cc] = 0.0f;
-    }
+}
+
+// The blocks within near_m of the base (in x and y) go into the pool's geoms and stay in the same
+// geom while they are near; blocks that are no longer near leave it. Where more blocks are near
+// than the pool holds, the later ones wait (the pool is sized so that this does not happen).
+void QuadrupedWalk::UpdateBlockPool() noexcept {
+  if (!on_blocks_) return;
+  const Shared& s = *shared_;
+  const double r = s.params.near_m, x = d_->qpos[0], y = d_->qpos[1];
+  auto near = [&](const Block& b) { return b.x1 > x - r && b.x0 < x + r && b.y1 > y - r && b.y0 < y + r; };
+  for (std::size_t k = 0; k < slot_block_.size(); ++k) {
+    const int b = slot_block_[k];
+    if (b < 0 || near(blocks_[static_cast<std::size_t>(b)])) continue;
+    const int g = s.block_geom[k];
+    m_->geom_conaffinity[g] = 0;
+    m_->geom_pos[3 * g + 2] = -10.0;
+    block_slot_[static_cast<std::size_t>(b)] = -1;
+    slot_block_[k] = -1;
+  }
+  std::size_t free_slot = 0;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    if (block_slot_[b] >= 0 || !near(blocks_[b])) continue;
+    while (free_slot < slot_block_.size() && slot_block_[free_slot] >= 0) ++free_slot;
+    if (free_slot == slot_block_.size()) break;
+    const Block& k = blocks_[b];
+    const int g = s.block_geom[free_slot];
+    const double hx = (k.x1 - k.x0) / 2, hy = (k.y1 - k.y0) / 2, hz = k.height / 2;
+    m_->geom_pos[3 * g] = k.x0 + hx;
+    m_->geom_pos[3 * g + 1] = k.y0 + hy;
+    m_->geom_pos[3 * g + 2] = hz;
+    m_->geom_size[3 * g] = hx;
+    m_->geom_size[3 * g + 1] = hy;
+    m_->geom_size[3 * g + 2] = hz;
+    m_->geom_rbound[g] = std::sqrt(hx * hx + hy * hy + hz * hz);
+    m_->geom_conaffinity[g] = 1;
+    slot_block_[free_slot] = static_cast<int>(b);
+    block_slot_[b] = static_cast<int>(free_slot);
+  }
 }
 
 double QuadrupedWalk::GroundHeight(double x, double y) const noexcept {
-  const Shared& s = *shared_;
-  if (!on_blocks_) return 0.0;
-  const int cells = m_->hfield_ncol[s.hfield];
-  const double half = m_->hfield_size[4 * s.hfield], top = m_->hfield_size[4 * s.hfield + 2];
-  const double step = 2 * half / (cells - 1);
-  const int c = static_cast<int>(std::lround((x + half) / step)), r = static_cast<int>(std::lround((y + half) / step));
-  if (c < 0 || r < 0 || c >= cells || r >= cells) return 0.0;
-  return static_cast<double>(m_->hfield_data[m_->hfield_adr[s.hfield] + r * cells + c]) * top;
+  double h = 0.0;
+  for (const Block& b : blocks_)
+    if (x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1) h = std::max(h, b.height);
+  return h;
 }
 
 void QuadrupedWalk::ResampleCommand() noexcept {
@@ -339,6 +367,7 @@ void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
     last_dq_[j] = torque_[j] = 0.0;
   }
   for (int k = 0; k < 6; ++k) d_->qvel[k] = rng_.Uniform(-p.init_base_velocity, p.init_base_velocity);
+  UpdateBlockPool();
   mj_forward(m_, d_);
   std::fill(air_time_.begin(), air_time_.end(), 0.0);
   foot_contact_.fill(false);
@@ -503,6 +532,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
     action_[j] = (target_[j] - e.offset) / e.scale;
     last_dq_[j] = d_->qvel[s.dof_adr[j]];
   }
+  UpdateBlockPool();
   ApplyTargets(prev_target_.data(), std::min(latency_substeps_, p.decimation));
   ApplyTargets(target_.data(), p.decimation - std::min(latency_substeps_, p.decimation));
   prev_target_ = target_;
@@ -527,8 +557,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   StepResult res;
   res.reward = Reward();
   res.terminated = fell_;
-  const double edge = m_->nhfield > 0 ? m_->hfield_size[0] - 0.3 : 1e9;
-  res.truncated = step_ >= p.episode_steps() || std::fabs(d_->qpos[0]) > edge || std::fabs(d_->qpos[1]) > edge;
+  res.truncated = step_ >= p.episode_steps();
   Observe(observation, false);
   mjtNum v[3];
   mju_mulMatTVec(v, rot, d_->qvel, 3, 3);
@@ -542,16 +571,26 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   return res;
 }
 
-double QuadrupedWalk::BarePhysicsRate(const QuadrupedWalk& env, int steps) {
-  mjModel* m = mj_copyModel(nullptr, env.m_);
+double QuadrupedWalk::BarePhysicsRate(int steps) const {
+  const Shared& s = *shared_;
+  mjModel* m = mj_copyModel(nullptr, m_);
   mjData* d = mj_makeData(m);
-  mj_copyData(d, m, env.d_);
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < steps; ++k) mj_step(m, d);
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  mj_copyData(d, m, d_);
+  auto cpu = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  };
+  const double t0 = cpu();
+  for (int k = 0; k < steps; ++k) {
+    for (std::size_t j = 0; j < kp_.size(); ++j)
+      d->ctrl[j] = kp_[j] * (s.robot.default_q_rad[j] - d->qpos[s.qpos_adr[j]]) - kd_[j] * d->qvel[s.dof_adr[j]];
+    mj_step(m, d);
+  }
+  const double seconds = cpu() - t0;
   mj_deleteData(d);
   mj_deleteModel(m);
-  return steps / s;
+  return steps / seconds;
 }
 
 }  // namespace pbppo::envs

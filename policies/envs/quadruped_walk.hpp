@@ -15,7 +15,8 @@
 //   commands    vx, vy, heading (-> yaw rate) resampled every resample_s
 //   reward      legged_gym's flat-terrain terms
 //   randomised  friction, added base mass, PD gains, actuation latency, pushes
-//   terrain     flat, or mixed: each episode flat or on random blocks (a height field), 1:1
+//   terrain     flat, or mixed: each episode flat or on random blocks, 1:1 (the blocks near the
+//               robot are moved into a small pool of box geoms every policy step)
 //
 // One compiled template model is shared read-only by every copy of the environment; each copy owns
 // a model copy (friction, base mass and the terrain are randomised per episode, and MuJoCo reads
@@ -85,8 +86,10 @@ class QuadrupedWalk final : public Env {
   const WalkTelemetry& telemetry() const noexcept { return tel_; }
   const QuadrupedWalkParams& params() const noexcept;
   const robot::RobotDescription& robot() const noexcept;
-  // Physics steps per second of the bare model (no policy, zero torques), for benchmarks.
-  static double BarePhysicsRate(const QuadrupedWalk& env, int steps);
+  // Benchmarks: `steps` MuJoCo steps of a copy of the current state with only the joint PD
+  // holding the default pose (no policy, observation or reward); the physics steps per second of
+  // this thread's CPU time.
+  double BarePhysicsRate(int steps) const;
   // The signal names the environment provides, in table order (set-up; allocates).
   static std::vector<std::string> SignalNames(const std::vector<std::string>& joint_names);
 
@@ -94,7 +97,11 @@ class QuadrupedWalk final : public Env {
 
  private:
   explicit QuadrupedWalk(std::shared_ptr<const Shared> shared);
+  struct Block {
+    double x0, x1, y0, y1, height;
+  };
   void BuildTerrain(bool blocks) noexcept;
+  void UpdateBlockPool() noexcept;
   double GroundHeight(double x, double y) const noexcept;
   void ResampleCommand() noexcept;
   void ApplyTargets(const double* target_rad, int substeps) noexcept;
@@ -120,6 +127,9 @@ class QuadrupedWalk final : public Env {
   std::array<double, 4> command_{};  // vx, vy, yaw rate, heading
   int step_ = 0;
   bool on_blocks_ = false, fell_ = false, done_ = true;
+  std::vector<Block> blocks_;    // this episode's blocks
+  std::vector<int> block_slot_;  // per block: its pool geom, or -1
+  std::vector<int> slot_block_;  // per pool geom: its block, or -1
   WalkTelemetry tel_;
 };
 

@@ -27,7 +27,7 @@ Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path) {
                            std::pair{"randomization", &rnd}, std::pair{"terrain", &ter}})
     if (auto st = f.Map(*root, key, "", node); !st) return st.error();
   if (auto st = f.Map(rew, "scales", "rewards", &sc); !st) return st.error();
-  long decimation = 0, blocks = 0;
+  long decimation = 0, blocks = 0, pool = 0;
   double heading_command = 1, only_positive = 1, base_contact = 1;
   auto flag = [&](const YAML::Node& n, const char* key, const std::string& where, double* out) -> Status {
     const YAML::Node v = n[key];
@@ -103,24 +103,25 @@ Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path) {
            f.Range(rnd, "latency_periods", "randomization", 0, 1, &p.latency_periods),
            f.Number(rnd, "push_interval_s", "randomization", 0, 3600, &p.push_interval_s),
            f.Number(rnd, "push_velocity_mps", "randomization", 0, 10, &p.push_velocity_mps),
-           f.Keys(ter, "terrain",
-                  {"field_half_size_m", "cell_m", "blocks", "block_size_m", "block_height_m", "clear_radius_m"}),
+           f.Keys(
+               ter, "terrain",
+               {"field_half_size_m", "blocks", "block_size_m", "block_height_m", "clear_radius_m", "near_m", "pool"}),
            f.Number(ter, "field_half_size_m", "terrain", 1, 100, &p.field_half_size_m),
-           f.Number(ter, "cell_m", "terrain", 0.01, 1, &p.cell_m),
            f.Integer(ter, "blocks", "terrain", 0, 100000, &blocks),
            f.Range(ter, "block_size_m", "terrain", 0.05, 20, &p.block_size_m),
            f.Range(ter, "block_height_m", "terrain", 0, 1, &p.block_height_m),
            f.Number(ter, "clear_radius_m", "terrain", 0, 100, &p.clear_radius_m),
+           f.Number(ter, "near_m", "terrain", 0.1, 10, &p.near_m),
+           f.Integer(ter, "pool", "terrain", 1, 256, &pool),
        }) {
     if (!st) return st.error();
   }
   p.decimation = static_cast<int>(decimation);
   p.blocks = static_cast<int>(blocks);
+  p.pool = static_cast<int>(pool);
   p.heading_command = heading_command != 0;
   p.only_positive = only_positive != 0;
   p.terminate_on_base_contact = base_contact != 0;
-  if (2 * p.field_half_size_m / p.cell_m > 4000)
-    return f.Fail("terrain.cell_m", "'" + sim::YamlFields::Num(p.cell_m) + "' gives more than 4000 cells per side");
   if (p.episode_steps() < 1) return f.Fail("simulation.episode_s", "is shorter than one policy period");
   return p;
 }

@@ -51,10 +51,12 @@ struct QuadrupedWalkParams {
   Range friction{0.5, 1.25}, added_mass_kg{-1, 1}, gain_scale{0.9, 1.1}, latency_periods{0, 1};
   double push_interval_s = 15.0, push_velocity_mps = 1.0;
   // terrain
-  double field_half_size_m = 10.0, cell_m = 0.05;
+  double field_half_size_m = 10.0;
   int blocks = 300;
   Range block_size_m{0.3, 1.0}, block_height_m{0.05, 0.15};
   double clear_radius_m = 0.8;
+  double near_m = 1.0;
+  int pool = 16;
 
   double policy_dt_s() const noexcept { return timestep_s * decimation; }
   int episode_steps() const noexcept;

@@ -44,19 +44,25 @@ std::string Read(const std::string& path) {
   return ss.str();
 }
 
-// A copy of models/quadruped with one file's text replaced, for refusal tests.
-std::string ModelsWith(const std::string& name, const std::string& file, const std::string& from,
-                       const std::string& to) {
+// A copy of models/quadruped with texts of one file replaced (from, to, from, to, ...).
+std::string ModelsWith(const std::string& name, const std::string& file, const std::vector<std::string>& edits) {
   const std::string dir = test::ScratchDir(name);
   std::filesystem::create_directories(dir + "/quadruped");
   for (const auto& f : std::filesystem::directory_iterator(test::SourcePath("models/quadruped")))
     std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
   std::string text = Read(dir + "/quadruped/" + file);
-  const auto at = text.find(from);
-  REQUIRE_MESSAGE(at != std::string::npos, from);
-  text.replace(at, from.size(), to);
+  for (std::size_t k = 0; k + 1 < edits.size(); k += 2) {
+    const auto at = text.find(edits[k]);
+    REQUIRE_MESSAGE(at != std::string::npos, edits[k]);
+    text.replace(at, edits[k].size(), edits[k + 1]);
+  }
   std::ofstream(dir + "/quadruped/" + file) << text;
   return dir;
+}
+
+std::string ModelsWith(const std::string& name, const std::string& file, const std::string& from,
+                       const std::string& to) {
+  return ModelsWith(name, file, std::vector<std::string>{from, to});
 }
 
 std::string ErrorOf(const QuadrupedWalkOptions& o) {
@@ -100,12 +106,13 @@ TEST_CASE("quadruped-walk: the generated MJCF is the URDF - free base, 12 hinges
   }
   CHECK(spheres == 4);
   CHECK(capsules == 8);  // thighs and shanks
+  const int geoms = model->ngeom;
   mj_deleteModel(model);
-  o.hfield_cells = 101;
-  auto with_field = CompileMjcf(*GenerateMjcf(*robot, o), "q");
-  REQUIRE(with_field.ok());
-  CHECK((*with_field)->nhfield == 1);
-  mj_deleteModel(*with_field);
+  o.block_geoms = 16;
+  auto with_blocks = CompileMjcf(*GenerateMjcf(*robot, o), "q");
+  REQUIRE(with_blocks.ok());
+  CHECK((*with_blocks)->ngeom == geoms + 16);
+  mj_deleteModel(*with_blocks);
   o.timestep_s = 0;
   CHECK(GenerateMjcf(*robot, o).error().message == "mjcf: timestep 0 s is not in (0, 0.05]");
 }
@@ -202,6 +209,27 @@ TEST_CASE("quadruped-walk: mixed terrain - half the episodes on blocks 5-15 cm h
   for (int k = 0; k < 5; ++k) {
     flat->Reset(rng, obs);
     CHECK_FALSE(flat->telemetry().on_blocks);
+  }
+}
+
+TEST_CASE("quadruped-walk: blocks carry the robot - large blocks under the start, it stands on them") {
+  QuadrupedWalkOptions o = Nominal("mixed");
+  // 300 blocks 4 m a side over 20 m x 20 m, none kept out of the start: the robot starts on one.
+  o.models_dir = ModelsWith(
+      "walk_dense", "walk.yaml",
+      {"clear_radius_m: 0.8", "clear_radius_m: 0.0", "block_size_m: [0.3, 1.0]", "block_size_m: [4.0, 4.0]"});
+  o.blocks_fraction = 1.0;
+  auto e = MakeWalk(o);
+  Rng rng(23);
+  std::vector<float> obs(45), critic(56), act(12, 0.f);
+  for (int k = 0; k < 4; ++k) {
+    e->Reset(rng, obs);
+    for (int t = 0; t < 100; ++t) REQUIRE_FALSE(e->Step(act, obs).terminated);
+    e->CriticObservation(critic);
+    const double over_ground = critic[45 + 3], world_z = e->telemetry().position[2];
+    CHECK(over_ground > 0.38);
+    CHECK(over_ground < 0.48);
+    CHECK(world_z > over_ground + 0.049);  // on top of a block 5-15 cm high
   }
 }
 
