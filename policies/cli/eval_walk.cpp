@@ -60,6 +60,7 @@ int EvalWalk(const EvalOptions& o) {
   wo.terrain = o.terrain;
   wo.commands = o.commands;
   wo.randomize = o.randomize;
+  wo.resample_s = envs::kWalkEvalResampleS;
   auto env = envs::QuadrupedWalk::Make(wo);
   if (!env) {
     std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
@@ -113,6 +114,13 @@ int EvalWalk(const EvalOptions& o) {
                                    {"yaw_rate_radps", r->mean_abs_error_settled[2]},
                                    {"settle_s", eo.settle_s}};
     j["falls"] = r->falls;
+    nlohmann::json falls = nlohmann::json::array();
+    for (const auto& f : r->fall_list)
+      falls.push_back({{"robot", f.robot},
+                       {"time_s", f.time_s},
+                       {"command", {f.command[0], f.command[1], f.command[2]}},
+                       {"on_blocks", f.on_blocks}});
+    j["fall_list"] = falls;
     j["robots_on_blocks"] = r->robots_on_blocks;
     j["falls_on_blocks"] = r->falls_on_blocks;
     j["steps"] = r->steps;
@@ -133,6 +141,9 @@ int EvalWalk(const EvalOptions& o) {
     if (r->robots_on_blocks > 0) std::printf("  (on blocks %d/%d)", r->falls_on_blocks, r->robots_on_blocks);
     std::printf("  mean return %.2f  steps %llu  forward problems %llu\n", r->mean_return,
                 static_cast<unsigned long long>(r->steps), static_cast<unsigned long long>(r->forward_problems));
+    for (const auto& f : r->fall_list)
+      std::printf("  fall: robot %d at %.2f s%s, command vx %.2f vy %.2f yaw rate %.2f\n", f.robot, f.time_s,
+                  f.on_blocks ? " on blocks" : "", f.command[0], f.command[1], f.command[2]);
     if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
   }
   return 0;

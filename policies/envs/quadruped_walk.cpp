@@ -86,6 +86,10 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   sh->params = *params;
   if (auto st = ApplyCommandSpec(options.commands, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "commands: " + st.error().message);
+  if (options.resample_s < 0 || options.resample_s > 3600)
+    return MakeError(ErrorCode::kInvalidValue,
+                     "command resampling: " + std::to_string(options.resample_s) + " s is not in [0, 3600]");
+  if (options.resample_s > 0) sh->params.resample_s = options.resample_s;
   auto map = robot::LoadCanMap(dir + "can_map.yaml");
   if (!map) return std::move(map).error();
 

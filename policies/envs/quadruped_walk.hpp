@@ -47,6 +47,7 @@ struct QuadrupedWalkOptions {
   bool noise = true;             // observation noise
   bool randomize = true;         // friction, mass, gains, latency, pushes (false: the nominal robot)
   double blocks_fraction = 0.5;  // mixed: the fraction of episodes on blocks
+  double resample_s = 0;         // > 0: resample commands this often instead of walk.yaml's period
 };
 
 // What happened in the last policy step, for evaluation and tests.

@@ -7,6 +7,10 @@ namespace pbppo::envs {
 Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedWalk& env, const WalkEvalOptions& o) {
   if (auto st = robot::CheckPolicyMatchesLayout(model.description(), env.layout()); !st) return st.error();
   if (o.robots < 1) return MakeError(ErrorCode::kInvalidValue, "robots: " + std::to_string(o.robots) + " is below 1");
+  if (env.params().resample_s != kWalkEvalResampleS)
+    return MakeError(ErrorCode::kInvalidValue, "the test resamples commands every " +
+                                                   std::to_string(kWalkEvalResampleS) + " s, the environment every " +
+                                                   std::to_string(env.params().resample_s) + " s");
   auto data = policy::MakePolicyData(model);
   if (!data) return std::move(data).error();
   const policy::PolicySpec& spec = model.description();
@@ -49,6 +53,7 @@ Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedW
     if (env.telemetry().fell) {
       ++res.falls;
       res.falls_on_blocks += blocks;
+      res.fall_list.push_back({robot, env.telemetry().time_s, env.telemetry().command, blocks});
     }
     if (robot < o.trace_robots) res.traces.push_back(std::move(trace));
   }
