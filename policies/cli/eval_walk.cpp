@@ -119,7 +119,8 @@ int EvalWalk(const EvalOptions& o) {
       falls.push_back({{"robot", f.robot},
                        {"time_s", f.time_s},
                        {"command", {f.command[0], f.command[1], f.command[2]}},
-                       {"on_blocks", f.on_blocks}});
+                       {"on_blocks", f.on_blocks},
+                       {"cause", f.base_contact ? "base contact" : "tilt"}});
     j["fall_list"] = falls;
     j["robots_on_blocks"] = r->robots_on_blocks;
     j["falls_on_blocks"] = r->falls_on_blocks;
@@ -142,8 +143,9 @@ int EvalWalk(const EvalOptions& o) {
     std::printf("  mean return %.2f  steps %llu  forward problems %llu\n", r->mean_return,
                 static_cast<unsigned long long>(r->steps), static_cast<unsigned long long>(r->forward_problems));
     for (const auto& f : r->fall_list)
-      std::printf("  fall: robot %d at %.2f s%s, command vx %.2f vy %.2f yaw rate %.2f\n", f.robot, f.time_s,
-                  f.on_blocks ? " on blocks" : "", f.command[0], f.command[1], f.command[2]);
+      std::printf("  fall: robot %d at %.2f s%s (%s), command vx %.2f vy %.2f yaw rate %.2f\n", f.robot, f.time_s,
+                  f.on_blocks ? " on blocks" : "", f.base_contact ? "base contact" : "tilt", f.command[0], f.command[1],
+                  f.command[2]);
     if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
   }
   return 0;

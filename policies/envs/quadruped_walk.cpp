@@ -572,6 +572,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   tel_.yaw_rad = yaw;
   tel_.on_blocks = on_blocks_;
   tel_.fell = fell_;
+  tel_.base_contact = p.terminate_on_base_contact && base_contact_;
   return res;
 }
 

@@ -59,6 +59,7 @@ struct WalkTelemetry {
   double yaw_rad = 0;
   bool on_blocks = false;
   bool fell = false;                // the episode ended by base contact or tilt
+  bool base_contact = false;        // ... by base contact (else by tilt)
   std::uint32_t command_index = 0;  // incremented at each resample
 };
 

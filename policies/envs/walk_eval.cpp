@@ -53,7 +53,8 @@ Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedW
     if (env.telemetry().fell) {
       ++res.falls;
       res.falls_on_blocks += blocks;
-      res.fall_list.push_back({robot, env.telemetry().time_s, env.telemetry().command, blocks});
+      res.fall_list.push_back(
+          {robot, env.telemetry().time_s, env.telemetry().command, blocks, env.telemetry().base_contact});
     }
     if (robot < o.trace_robots) res.traces.push_back(std::move(trace));
   }

@@ -32,6 +32,7 @@ struct WalkFall {
   double time_s = 0;
   std::array<double, 3> command{};  // at the fall
   bool on_blocks = false;
+  bool base_contact = false;  // else a tilt beyond the limit
 };
 
 struct WalkEvalResult {
