@@ -18,6 +18,7 @@
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/trainer.hpp"
+#include "report/plots.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
@@ -299,59 +300,26 @@ std::pair<double, double> Wilson95(double k, double n) {
   return {std::max(0.0, c - h), std::min(1.0, c + h)};
 }
 
-std::string PlotTrajectories(const std::string& png, const sim::AuvTaskConfig& cfg,
-                             const std::vector<EpisodeTrace>& traces, const std::string& title) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return "gnuplot not found (tools/setup.sh installs it)";
-  const std::string base = png + ".d";
-  std::error_code ec;
-  std::filesystem::create_directories(base, ec);
-  if (ec) return "cannot create " + base + ": " + ec.message();
-  std::ofstream ob(base + "/obstacles.dat"), rnd(base + "/random.dat"), bx(base + "/boxes.dat"),
-      ok(base + "/success.dat"), bad(base + "/failure.dat"), tg(base + "/targets.dat"), st(base + "/starts.dat");
+// Every episode's path over the layout: success green, failure red; the random obstacles of all
+// episodes drawn light over the layout's.
+Status PlotTrajectories(const std::string& png, const sim::AuvTaskConfig& cfg, const std::vector<EpisodeTrace>& traces,
+                        const std::string& title) {
+  const sim::World2d& world = cfg.layout.world;
+  report::MapPlot m;
+  m.title = title;
+  m.arena = {world.arena.x_min_m, world.arena.x_max_m, world.arena.y_min_m, world.arena.y_max_m};
+  for (const auto& b : world.boxes) m.boxes.push_back({b.x_min_m, b.x_max_m, b.y_min_m, b.y_max_m});
+  for (const auto& c : world.circles) m.obstacles.push_back({c.x_m, c.y_m, c.radius_m});
   // The layout's obstacles come first in every episode's world; the rest are the episode's own.
-  const std::size_t fixed = cfg.layout.world.circles.size();
-  for (const auto& c : cfg.layout.world.circles) ob << c.x_m << ' ' << c.y_m << ' ' << c.radius_m << '\n';
   for (const auto& t : traces)
-    for (std::size_t i = fixed; i < t.circles.size(); ++i)
-      rnd << t.circles[i].x_m << ' ' << t.circles[i].y_m << ' ' << t.circles[i].radius_m << '\n';
-  for (const auto& b : cfg.layout.world.boxes)
-    bx << b.x_min_m << ' ' << b.x_max_m << ' ' << b.y_min_m << ' ' << b.y_max_m << '\n';
-  for (std::size_t i = 0; i < cfg.layout.targets.size(); ++i)
-    tg << cfg.layout.targets[i][0] << ' ' << cfg.layout.targets[i][1] << ' ' << i + 1 << '\n';
+    for (std::size_t i = world.circles.size(); i < t.circles.size(); ++i)
+      m.random_obstacles.push_back({t.circles[i].x_m, t.circles[i].y_m, t.circles[i].radius_m});
+  for (const auto& t : cfg.layout.targets) m.targets.push_back({t[0], t[1]});
   for (const auto& t : traces) {
-    std::ofstream& f = t.success ? ok : bad;
-    for (const auto& p : t.xy) f << p[0] << ' ' << p[1] << '\n';
-    f << "\n\n";
-    if (!t.xy.empty()) st << t.xy.front()[0] << ' ' << t.xy.front()[1] << '\n';
+    m.paths.push_back({{}, t.success ? report::MapPlot::PathKind::kSuccess : report::MapPlot::PathKind::kFailure});
+    for (const auto& p : t.xy) m.paths.back().xy.push_back({p[0], p[1]});
   }
-  ok << "nan nan\n";
-  bad << "nan nan\n";
-  ob << "nan nan nan\n";
-  rnd << "nan nan nan\n";
-  bx << "nan nan nan nan\n";
-  for (auto* f : {&ob, &rnd, &bx, &ok, &bad, &tg, &st}) f->close();
-  const auto& a = cfg.layout.world.arena;
-  std::ofstream gp(base + "/plot.gp");
-  gp << "set terminal pngcairo size 900,900\nset output '" << png << "'\nset size ratio -1\nset title '" << title
-     << "'\n"
-     << "set xrange [" << a.x_min_m - 1 << ':' << a.x_max_m + 1 << "]\nset yrange [" << a.y_min_m - 1 << ':'
-     << a.y_max_m + 1 << "]\nset xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside bottom center horizontal\n"
-     << "set object 1 rect from " << a.x_min_m << ',' << a.y_min_m << " to " << a.x_max_m << ',' << a.y_max_m
-     << " fs empty border lc rgb 'black' lw 2\n"
-     << "plot '" << base << "/random.dat' using 1:2:3 with circles fs transparent solid 0.12 noborder lc rgb "
-     << "'gray40' title 'random obstacles (all episodes)', '" << base
-     << "/obstacles.dat' using 1:2:3 with circles fs solid 0.6 noborder lc rgb 'gray20' title 'layout obstacles', '"
-     << base
-     << "/boxes.dat' using (($1+$2)/2):(($3+$4)/2):1:2:3:4 with boxxyerror fs solid 0.6 lc rgb 'gray20' notitle, '"
-     << base << "/success.dat' with lines lw 1 lc rgb '#2a9d3a' title 'success', '" << base
-     << "/failure.dat' with lines lw 1.5 lc rgb '#d62728' title 'failure', '" << base
-     << "/starts.dat' with points pt 7 ps 0.5 lc rgb 'blue' title 'start', '" << base
-     << "/targets.dat' using 1:2 with points pt 6 ps 3 lw 2 lc rgb 'orange' title 'targets', '' using 1:2:3 with "
-        "labels offset 1.5,1.5 notitle\n";
-  gp.close();
-  const std::string cmd = "gnuplot '" + base + "/plot.gp' 2>'" + base + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0) return "gnuplot failed: see " + base + "/gnuplot.log";
-  return "";
+  return report::PlotMap(m, png);
 }
 
 // Opens an eval CSV output and writes its header; an empty path writes nothing (true).
@@ -502,8 +470,10 @@ int Eval(const EvalOptions& o) {
     char title[200];
     std::snprintf(title, sizeof title, "%s, %d episodes from seed %llu: %d successes, %d collisions, %d timeouts",
                   e.name().c_str(), o.episodes, static_cast<unsigned long long>(o.seed), successes, failures, timeouts);
-    plot_note = PlotTrajectories(o.plot, auv->config(), traces, title);
-    if (!plot_note.empty()) std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+    if (auto st = PlotTrajectories(o.plot, auv->config(), traces, title); !st) {
+      plot_note = st.error().message;
+      std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+    }
   }
   if (o.json) {
     nlohmann::json j;

@@ -21,6 +21,7 @@
 #include "policies/trainer/ppo_loss.hpp"
 #include "policies/trainer/running_stats.hpp"
 #include "policies/trainer/worker_pool.hpp"
+#include "report/plots.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
 #include "runtime/robot/io_layout.hpp"
@@ -641,39 +642,17 @@ std::string Trainer::CsvRow(const IterationStats& s) const {
 }
 
 std::string Trainer::Plots(const std::vector<IterationStats>& its) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
-    return "plots skipped: gnuplot not found (install gnuplot-nox, see tools/setup.sh)";
-  }
-  const std::string dir = c_.out_dir;
-  const int na = static_cast<int>(c_.schedule.arms.size());
-  std::ostringstream gp;
-  gp << "set datafile separator ','\nset terminal png size 900,500\nset key autotitle columnhead\nset grid\n"
-     << "set output '" << dir << "/return.png'\nset xlabel 'environment steps'\nset ylabel 'return'\n"
-     << "plot '" << dir
-     << "/log.csv' using 2:12 with lines title 'training return (last 100 episodes)', '' using "
-        "2:7 with linespoints pt 7 ps 0.4 title 'feedback R'\n"
-     << "set output '" << dir << "/epsilon.png'\nset ylabel 'clip bound'\n"
-     << "plot '" << dir << "/log.csv' using 2:6 with steps title 'chosen epsilon'\n"
-     << "set output '" << dir << "/arms.png'\nset xlabel 'arm (clip bound)'\nset ylabel 'pulls'\nset style fill solid\n"
-     << "set boxwidth 0.6\nunset key\nset xrange [-0.5:" << na - 0.5 << "]\nset yrange [0:*]\n"
-     << "plot '" << dir << "/arms.dat' using 0:2:xtic(1) with boxes\n";
-  const bool task = !its.empty() && std::isfinite(its.back().task_success_100);
-  if (task) {
-    gp << "set output '" << dir << "/success.png'\nset key\nset autoscale x\nset xtics auto\nset yrange [0:1]\n"
-       << "set xlabel 'environment steps'\nset ylabel 'fraction'\nplot '" << dir
-       << "/log.csv' using 2:23 with lines title 'task success (last 100 training episodes)'\n";
-  }
-  std::ostringstream arms;
-  std::vector<int> pulls(static_cast<std::size_t>(na), 0);
-  for (const auto& s : its) pulls[static_cast<std::size_t>(s.arm)]++;
-  for (int i = 0; i < na; ++i)
-    arms << c_.schedule.arms[static_cast<std::size_t>(i)] << ',' << pulls[static_cast<std::size_t>(i)] << "\n";
-  if (!WriteText(dir + "/arms.dat", arms.str()) || !WriteText(dir + "/plots.gp", gp.str())) {
-    return "plots skipped: cannot write the gnuplot script in " + dir;
-  }
-  const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>'" + dir + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0) return "plots failed: see " + dir + "/gnuplot.log";
-  return "plots: " + dir + "/return.png, epsilon.png, arms.png" + (task ? ", success.png" : "");
+  report::TrainingCurves curves;
+  curves.dir = c_.out_dir;
+  curves.arms = c_.schedule.arms;
+  curves.pulls.assign(curves.arms.size(), 0);
+  for (const auto& s : its) curves.pulls[static_cast<std::size_t>(s.arm)]++;
+  curves.task_success = !its.empty() && std::isfinite(its.back().task_success_100);
+  auto pngs = report::PlotTrainingCurves(curves);
+  if (!pngs) return "plots skipped: " + pngs.error().message;
+  std::string note = "plots:";
+  for (const auto& p : *pngs) note += (note.size() > 6 ? ", " : " ") + p;
+  return note;
 }
 
 Status Trainer::WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name) {

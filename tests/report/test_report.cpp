@@ -1,0 +1,139 @@
+// report/: every figure is a real PNG of the size its script asks for (the CI machine has
+// gnuplot, so a missing gnuplot fails here), written beside the script that drew it; bad requests
+// are refused naming the file.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "report/gnuplot.hpp"
+#include "report/plots.hpp"
+#include "tests/support/test_paths.hpp"
+
+namespace pbppo::report {
+namespace {
+
+struct PngSize {
+  std::uint32_t width = 0, height = 0;
+};
+
+// Width and height from the PNG signature and IHDR chunk; zeros when the file is not a PNG.
+PngSize ReadPngSize(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  unsigned char h[24] = {};
+  f.read(reinterpret_cast<char*>(h), sizeof h);
+  const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (!f || !std::equal(sig, sig + 8, h) || std::string(reinterpret_cast<char*>(h + 12), 4) != "IHDR") return {};
+  auto be32 = [&](int at) {
+    return (std::uint32_t{h[at]} << 24) | (std::uint32_t{h[at + 1]} << 16) | (std::uint32_t{h[at + 2]} << 8) |
+           std::uint32_t{h[at + 3]};
+  };
+  return {be32(16), be32(20)};
+}
+
+TEST_CASE("gnuplot is installed (the CI machine has it: tools/setup.sh)") {
+  REQUIRE(GnuplotAvailable());
+}
+
+TEST_CASE("latency histograms: a PNG of every recorded stage, its script beside it") {
+  rt::TickProfiler p;
+  for (int i = 0; i < 10000; ++i) {
+    p.Record(rt::Stage::kReceive, 300 + i % 50);
+    p.Record(rt::Stage::kInfer, 9000 + (i % 100) * 10);
+    p.Record(rt::Stage::kTick, 12000 + (i % 100) * 10);
+  }
+  const std::string dir = test::ScratchDir("report_latency");
+  const auto st = PlotLatency(rt::TakeReport(p), dir + "/latency.png", "test's tick");
+  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  const PngSize size = ReadPngSize(dir + "/latency.png");
+  CHECK(size.width == 1000);
+  CHECK(size.height == 560);
+  std::ifstream gp(dir + "/latency.png.gp");
+  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  CHECK(script.find("$infer << EOD") != std::string::npos);
+  CHECK(script.find("$observe") == std::string::npos);  // nothing recorded there
+  CHECK(script.find("'test''s tick'") != std::string::npos);
+
+  const auto empty = PlotLatency(rt::TakeReport(rt::TickProfiler{}), dir + "/empty.png", "none");
+  REQUIRE_FALSE(empty.ok());
+  CHECK(empty.error().message == "plot " + dir + "/empty.png: nothing recorded");
+  const auto unwritable = PlotLatency(rt::TakeReport(p), dir + "/no/such/dir/l.png", "x");
+  REQUIRE_FALSE(unwritable.ok());
+  CHECK(unwritable.error().message.find("plot " + dir + "/no/such/dir/l.png: cannot write") == 0);
+}
+
+TEST_CASE("training curves: return, clip bound, arm pulls and task success from log.csv by column name") {
+  const std::string dir = test::ScratchDir("report_training");
+  {
+    // Columns in another order than the trainer writes them, with one the plots do not use.
+    std::ofstream log(dir + "/log.csv");
+    log << "iteration,epsilon,env_steps,unused,feedback,train_return_100,task_success_100\n";
+    for (int i = 0; i < 20; ++i)
+      log << i << ',' << (i % 3 == 0 ? 0.1 : 0.3) << ',' << 1024 * (i + 1) << ",7," << (i % 2 ? "nan" : "-50") << ','
+          << -100 + 4 * i << ',' << i / 20.0 << '\n';
+  }
+  TrainingCurves c{dir, {0.1, 0.2, 0.3}, {7, 0, 13}, true};
+  auto pngs = PlotTrainingCurves(c);
+  REQUIRE_MESSAGE(pngs.ok(), pngs.error().message);
+  CHECK(*pngs ==
+        std::vector<std::string>{dir + "/return.png", dir + "/epsilon.png", dir + "/arms.png", dir + "/success.png"});
+  for (const auto& png : *pngs) {
+    const PngSize size = ReadPngSize(png);
+    CHECK_MESSAGE(size.width == 900, png);
+    CHECK_MESSAGE(size.height == 500, png);
+  }
+  std::ifstream gp(dir + "/plots.gp");
+  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  CHECK(script.find("$arms << EOD\nepsilon,pulls\n0.1,7\n0.2,0\n0.3,13\nEOD\n") == 0);  // a header: no arm is lost
+
+  // No task success: three figures.
+  std::filesystem::remove(dir + "/success.png");
+  c.task_success = false;
+  pngs = PlotTrainingCurves(c);
+  REQUIRE(pngs.ok());
+  CHECK(pngs->size() == 3);
+  CHECK_FALSE(std::filesystem::exists(dir + "/success.png"));
+
+  c.pulls = {1, 2};
+  pngs = PlotTrainingCurves(c);
+  REQUIRE_FALSE(pngs.ok());
+  CHECK(pngs.error().message == "training curves: 3 arms, 2 pull counts");
+  // A log without the columns: gnuplot's own error, in the log the message names.
+  const std::string bad = test::ScratchDir("report_training_bad");
+  std::ofstream(bad + "/log.csv") << "a,b\n1,2\n";
+  pngs = PlotTrainingCurves({bad, {0.2}, {1}, false});
+  REQUIRE_FALSE(pngs.ok());
+  CHECK(pngs.error().message == "gnuplot failed, see " + bad + "/gnuplot.log");
+}
+
+TEST_CASE("map: arena, obstacles, targets and paths of every kind") {
+  MapPlot m;
+  m.title = "a map";
+  m.arena = {0, 40, 0, 30};
+  m.boxes = {{10, 12, 5, 25}};
+  m.obstacles = {{20, 15, 2}};
+  m.random_obstacles = {{30, 10, 1}, {30, 20, 1.5}};
+  m.targets = {{35, 25}, {5, 25}};
+  m.target_radius_m = 1.5;
+  m.paths = {{{{2, 2}, {8, 3}, {20, 28}, {35, 25}}, MapPlot::PathKind::kSuccess},
+             {{{2, 3}, {9, 10}}, MapPlot::PathKind::kFailure},
+             {{{1, 1}, {5, 5}}, MapPlot::PathKind::kTrajectory}};
+  const std::string dir = test::ScratchDir("report_map");
+  auto st = PlotMap(m, dir + "/map.png");
+  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  PngSize size = ReadPngSize(dir + "/map.png");
+  CHECK(size.width == 900);
+  CHECK(size.height == 900);
+  // The arena alone (no series at all) is still a figure.
+  MapPlot empty;
+  empty.arena = {0, 10, 0, 10};
+  st = PlotMap(empty, dir + "/empty.png");
+  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  size = ReadPngSize(dir + "/empty.png");
+  CHECK(size.width == 900);
+}
+
+}  // namespace
+}  // namespace pbppo::report
