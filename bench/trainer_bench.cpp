@@ -7,7 +7,7 @@
 #include "policies/trainer/trainer.hpp"
 
 int main(int argc, char** argv) {
-  pbppo::trainer::TrainConfig c;
+  pbppo::trainer::TrainOptions c;
   c.total_steps = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 204800;
   c.threads = argc > 2 ? std::atoi(argv[2]) : 2;
   c.num_envs = argc > 3 ? std::atoi(argv[3]) : 1;

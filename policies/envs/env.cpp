@@ -16,34 +16,33 @@ std::string DefaultModelsDir() {
   return PBPPO_DEFAULT_MODELS_DIR;
 }
 
-Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options) {
-  const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
+Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
+  const std::string& name = options.name;
+  if (name == "auv-nav") {
+    auto env = AuvNav::Make(options);
+    if (!env) return std::move(env).error();
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
   if (name == "pendulum") {
-    if (!options.progress.empty())
+    auto none = [&](const char* flag, const std::string& what) {
       return MakeError(ErrorCode::kInvalidValue,
-                       "progress: only auv-nav has a progress term to choose, not 'pendulum'");
-    if (!options.geodesic_margin.empty())
-      return MakeError(ErrorCode::kInvalidValue, "geodesic margin: only auv-nav has one, not 'pendulum'");
-    if (!options.clearance_penalty.empty())
-      return MakeError(ErrorCode::kInvalidValue, "clearance penalty: only auv-nav has one, not 'pendulum'");
-    if (options.extra_obstacles != 0)
-      return MakeError(ErrorCode::kInvalidValue, "extra obstacles: only auv-nav has obstacles, not 'pendulum'");
+                       std::string(flag) + ": only auv-nav has " + what + ", not '" + name + "'");
+    };
+    if (!options.progress.empty()) return none("--progress", "a progress term to choose");
+    if (!options.geodesic_margin.empty()) return none("--geodesic-margin", "one");
+    if (!options.clearance_penalty.empty()) return none("--clearance-penalty", "one");
+    if (options.extra_obstacles != 0) return none("--extra-obstacles", "obstacles");
+    if (options.exploring_starts != 0) return none("--exploring-starts", "exploring starts");
+    const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }
-  if (name == "auv-nav") {
-    auto env = AuvNav::Make(dir, options.layout, options.progress, options.geodesic_margin, options.clearance_penalty,
-                            options.extra_obstacles);
-    if (!env) return std::move(env).error();
-    (*env)->set_exploring_starts(options.exploring_starts);
-    return std::unique_ptr<Env>(std::move(env).value());
-  }
   std::string known;
   for (const auto& n : EnvNames()) known += (known.empty() ? "" : ", ") + n;
-  return MakeError(ErrorCode::kInvalidValue, "env: '" + name + "' unknown (known: " + known + ")");
+  return MakeError(ErrorCode::kInvalidValue, "--env: '" + name + "' unknown (known: " + known + ")");
 }
 
 }  // namespace pbppo::envs

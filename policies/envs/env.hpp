@@ -4,6 +4,13 @@
 // built for, so blob names, layout hash and action map come from the same file the controller
 // reads. The policy's action (before the layout's action map) is what Step() receives; the
 // environment clips it to its bounds.
+//
+// Asymmetric actor-critic: an environment may give the critic a privileged observation (state the
+// robot cannot measure: true base velocity, height, friction) beside the actor's deployable one.
+// critic_observation_size() > 0 says so; Reset() and Step() then write it into their second span
+// whenever that span is not empty. The trainer's value network takes it (with its own normaliser);
+// the blob carries only the actor, which sees only `observation`. Size 0 (the default): the critic
+// sees the actor's observation and the second span is always empty.
 #pragma once
 
 #include <cstdint>
@@ -47,11 +54,20 @@ class Env {
   virtual std::uint32_t max_episode_steps() const noexcept = 0;
   virtual const robot::IoLayout& layout() const noexcept = 0;
 
-  // Starts an episode with a state drawn from `rng`; writes the first observation.
-  virtual void Reset(Rng& rng, std::span<float> observation) = 0;
-  // Applies one action and writes the next observation. After terminated or truncated the
-  // caller must Reset() before the next Step().
-  virtual StepResult Step(std::span<const float> action, std::span<float> observation) = 0;
+  // Size of the critic's privileged observation; 0: the critic sees the actor's observation.
+  virtual std::uint32_t critic_observation_size() const noexcept { return 0; }
+
+  // Starts an episode with a state drawn from `rng`; writes the first observation and, when
+  // critic_observation is not empty (then it has critic_observation_size() elements), the
+  // critic's. The draws from `rng` must not depend on whether the critic's is asked for.
+  virtual void Reset(Rng& rng, std::span<float> observation, std::span<float> critic_observation) = 0;
+  // Applies one action and writes the next observation (and the critic's, as Reset()). After
+  // terminated or truncated the caller must Reset() before the next Step().
+  virtual StepResult Step(std::span<const float> action, std::span<float> observation,
+                          std::span<float> critic_observation) = 0;
+  // The same without the critic's observation (evaluation, deployment-side tests).
+  void Reset(Rng& rng, std::span<float> observation) { Reset(rng, observation, {}); }
+  StepResult Step(std::span<const float> action, std::span<float> observation) { return Step(action, observation, {}); }
 
   // An independent copy in the same configuration, for parallel workers. Environments whose
   // state cannot be copied (a Simbody system) return a fresh instance: Reset() it before use.
@@ -60,29 +76,36 @@ class Env {
   virtual EpisodeInfo episode_info() const noexcept { return {}; }
 };
 
+// What an environment is built from: the `pbppo train` / `pbppo eval` flags that choose and shape
+// it, passed as they are to MakeEnv(), which checks them (errors name the flag and the value).
 struct EnvOptions {
-  // Folder holding models/<robot>/io_layout.yaml; empty: the source tree's models/ folder.
+  std::string name = "pendulum";  // --env: one of EnvNames()
+  // --models: folder holding models/<robot>/...; empty: DefaultModelsDir().
   std::string models_dir;
-  // Obstacle layout of tasks that have several (auv-nav: easy, medium, hard).
+  // --layout: obstacle layout of tasks that have several (auv-nav: easy, medium, hard, mixed).
   std::string layout = "hard";
-  // auv-nav, training only: probability of an exploring start (sim::AuvNavTask::set_exploring_starts).
+  // --exploring-starts, auv-nav, training only: probability of an exploring start
+  // (sim::AuvNavTask::set_exploring_starts).
   double exploring_starts = 0.0;
-  // auv-nav: the reward's progress term, "euclidean" or "geodesic" (sim::AuvTaskParams::progress);
-  // empty: as models/auv/auv.yaml says.
+  // --progress, auv-nav: the reward's progress term, "euclidean" or "geodesic", for every layout or
+  // per layout (AuvNav::ProgressFor); empty: as models/auv/auv.yaml says.
   std::string progress;
-  // auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin (AuvNav::Make); empty keeps it.
+  // --geodesic-margin, auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin; empty keeps it.
   std::string geodesic_margin;
-  // auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty (AuvNav::Make); empty keeps it.
+  // --clearance-penalty, auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty; empty keeps it.
   std::string clearance_penalty;
-  // auv-nav, training only: random obstacles per episode beyond each layout's count (AuvNav::Make).
+  // --extra-obstacles, auv-nav, training only: random obstacles per episode beyond each layout's
+  // count, 0-16.
   int extra_obstacles = 0;
 };
 
 // The names MakeEnv() knows.
 std::vector<std::string> EnvNames();
 
-// Builds an environment by name; unknown names and bad layout files are errors that say so.
-Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options = {});
+// Builds the environment `options.name` and checks every option it was given: an unknown name, a
+// bad value, an option the environment does not have and a bad layout file are errors that name
+// the flag and the value ("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'").
+Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options);
 
 // The default models folder (the source tree's, overridable with PBPPO_MODELS_DIR).
 std::string DefaultModelsDir();

@@ -19,8 +19,8 @@
 namespace pbppo::trainer {
 namespace {
 
-TrainConfig Small() {
-  TrainConfig c;
+TrainOptions Small() {
+  TrainOptions c;
   c.num_envs = 4;
   c.rollout_steps = 256;
   c.total_steps = 4096;
@@ -32,7 +32,7 @@ TrainConfig Small() {
 
 TEST_CASE("same seed and thread count give a bit-identical run") {
   for (int threads : {1, 2}) {
-    TrainConfig c = Small();
+    TrainOptions c = Small();
     c.threads = threads;
     c.normalize_observations = true;
     c.scale_rewards = true;
@@ -59,8 +59,8 @@ TEST_CASE("same seed and thread count give a bit-identical run") {
 }
 
 // rl-zoo's Pendulum settings on a small budget.
-TrainConfig RlZoo() {
-  TrainConfig c;
+TrainOptions RlZoo() {
+  TrainOptions c;
   c.num_envs = 4;
   c.rollout_steps = 1024;
   c.gamma = 0.9;
@@ -71,7 +71,7 @@ TrainConfig RlZoo() {
 }
 
 TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)") {
-  TrainConfig c = RlZoo();
+  TrainOptions c = RlZoo();
   auto r = Train(c);
   REQUIRE(r.ok());
   const double first = r->iterations.front().train_return;
@@ -82,7 +82,7 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
 
 TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the runtime loads the blob") {
   const std::string out = test::ScratchDir("trainer_files") + "/run";
-  TrainConfig c = Small();
+  TrainOptions c = Small();
   c.schedule = ParseSchedule("pbppo", {0.1, 0.2, 0.3}).value();
   c.schedule.eval_episodes = 2;
   c.normalize_observations = true;
@@ -119,7 +119,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the r
   CHECK(spec->action_low == std::vector<float>{-2.f});
   CHECK(spec->obs_clip == 10.f);
   CHECK(spec->obs_mean != std::vector<float>(3, 0.f));
-  auto env = envs::MakeEnv("pendulum");
+  auto env = envs::MakeEnv(envs::EnvOptions{});
   REQUIRE(env.ok());
   CHECK(robot::CheckPolicyMatchesLayout(spec.value(), (*env)->layout()).ok());
   CHECK(std::filesystem::exists(out + "/policy.golden"));
@@ -138,7 +138,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the r
 
 TEST_CASE("--snapshots N writes N blobs spread over the run, the last one the final policy") {
   const std::string out = test::ScratchDir("trainer_snapshots") + "/run";
-  TrainConfig c = Small();  // 4 iterations of 1024 steps
+  TrainOptions c = Small();  // 4 iterations of 1024 steps
   c.snapshots = 2;
   c.out_dir = out;
   c.plots = false;
@@ -168,8 +168,8 @@ TEST_CASE("--snapshots N writes N blobs spread over the run, the last one the fi
 }
 
 TEST_CASE("trainer errors name the field and value") {
-  TrainConfig c = Small();
-  c.env = "cartpole";
+  TrainOptions c = Small();
+  c.env.name = "cartpole";
   CHECK(Train(c).error().message.find("'cartpole' unknown") != std::string::npos);
   c = Small();
   c.num_envs = 0;
@@ -178,34 +178,34 @@ TEST_CASE("trainer errors name the field and value") {
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);
   c = Small();
-  c.progress = "geodesic";  // Small() is pendulum
+  c.env.progress = "geodesic";  // Small() is pendulum
   CHECK(Train(c).error().message.find("--progress: only auv-nav has a progress term to choose, not 'pendulum'") !=
         std::string::npos);
-  c.env = "auv-nav";
-  c.progress = "crow-flies";
+  c.env.name = "auv-nav";
+  c.env.progress = "crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'crow-flies': unknown (euclidean, geodesic, or LAYOUT=MODE,...)") !=
         std::string::npos);
-  c.progress = "hard=crow-flies";
+  c.env.progress = "hard=crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'hard=crow-flies': 'crow-flies' for hard is not euclidean or "
                                       "geodesic") != std::string::npos);
-  c.progress = "";
-  c.geodesic_margin = "2:four";
+  c.env.progress = "";
+  c.env.geodesic_margin = "2:four";
   CHECK(Train(c).error().message.find("--geodesic-margin: '2:four': cost 'four' is not a number in [0, 100]") !=
         std::string::npos);
   c = Small();
-  c.geodesic_margin = "2:4";  // pendulum
+  c.env.geodesic_margin = "2:4";  // pendulum
   CHECK(Train(c).error().message.find("--geodesic-margin: only auv-nav has one, not 'pendulum'") != std::string::npos);
-  c.geodesic_margin = "";
-  c.clearance_penalty = "1.5:1";  // pendulum
+  c.env.geodesic_margin = "";
+  c.env.clearance_penalty = "1.5:1";  // pendulum
   CHECK(Train(c).error().message.find("--clearance-penalty: only auv-nav has one, not 'pendulum'") !=
         std::string::npos);
-  c.clearance_penalty = "";
-  c.extra_obstacles = 2;  // pendulum
+  c.env.clearance_penalty = "";
+  c.env.extra_obstacles = 2;  // pendulum
   CHECK(Train(c).error().message.find("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'") !=
         std::string::npos);
-  c.extra_obstacles = 0;
-  c.env = "auv-nav";
-  c.clearance_penalty = "1.5:1:2";
+  c.env.extra_obstacles = 0;
+  c.env.name = "auv-nav";
+  c.env.clearance_penalty = "1.5:1:2";
   CHECK(Train(c).error().message.find("--clearance-penalty: '1.5:1:2': per-step cost '1:2' is not a number in "
                                       "[0, 100]") != std::string::npos);
   c = Small();
@@ -220,7 +220,7 @@ TEST_CASE("trainer errors name the field and value") {
 TEST_CASE("a stop request ends the run cleanly with a blob") {
   const std::string out = test::ScratchDir("trainer_stop") + "/run";
   std::atomic<bool> stop{true};
-  TrainConfig c = Small();
+  TrainOptions c = Small();
   c.out_dir = out;
   c.plots = false;
   c.stop = &stop;
@@ -234,7 +234,7 @@ TEST_CASE("a stop request ends the run cleanly with a blob") {
 TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches are refused") {
   const std::string dir = test::ScratchDir("trainer_init");
   // A learned Pendulum policy (rl-zoo settings as above), with a running normaliser.
-  TrainConfig a = RlZoo();
+  TrainOptions a = RlZoo();
   a.normalize_observations = true;
   auto ra = Train(a);
   REQUIRE(ra.ok());
@@ -245,7 +245,7 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
 
   // Warm start with a learning rate too small to move anything: the first rollout is already
   // the learned policy's (a random one scores below -900), and the frozen result is the blob.
-  TrainConfig b = Small();
+  TrainOptions b = Small();
   b.seed = 9;
   b.learning_rate = 1e-12;
   b.total_steps = 1024;
@@ -276,7 +276,7 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
         d = std::max(d, std::abs(spec.layers[l].weight[i] - ra->spec.layers[l].weight[i]));
     return d;
   };
-  TrainConfig w = Small();  // 1024 steps per iteration
+  TrainOptions w = Small();  // 1024 steps per iteration
   w.total_steps = 2048;
   w.init_blob = blob;
   w.critic_warmup = 2;
@@ -293,12 +293,12 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
   REQUIRE_FALSE(no_init.ok());
   CHECK(no_init.error().message.find("--critic-warmup: needs --init") != std::string::npos);
 
-  auto error_of = [&](TrainConfig c) {
+  auto error_of = [&](TrainOptions c) {
     auto r = Train(c);
     REQUIRE_FALSE(r.ok());
     return r.error().message;
   };
-  TrainConfig c = b;
+  TrainOptions c = b;
   c.policy_hidden = {32};
   CHECK(error_of(c).find("--init: '" + blob + "' has 3 layers, --hidden gives 2") != std::string::npos);
   c = b;

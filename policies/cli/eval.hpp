@@ -1,0 +1,28 @@
+// `pbppo eval`: a frozen blob on an environment through the runtime's forward, episode by episode.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "policies/envs/env.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace pbppo::cli {
+
+struct EvalOptions {
+  std::string blob;
+  envs::EnvOptions env;      // --env, --layout, --models
+  std::string plot;          // PNG of the trajectories over the map (auv-nav)
+  std::string trajectories;  // CSV of every episode's trajectory (auv-nav)
+  std::string outcomes;      // CSV, one row per episode: outcome, end pose, random obstacles (auv-nav)
+  int episodes = 100;
+  std::uint64_t seed = 7;
+  bool json = false;
+};
+void AddEvalOptions(CLI::App& sub, EvalOptions& o);
+int Eval(const EvalOptions& o);
+
+}  // namespace pbppo::cli
