@@ -1,5 +1,6 @@
 // The project's figures, drawn with gnuplot (report/gnuplot.hpp): training curves from a run's
-// log.csv, latency histograms from a tick profile, and maps of a navigation task with trajectories.
+// log.csv, latency histograms from a tick profile, maps of a navigation task with trajectories, and
+// time series in stacked panels.
 // Each writes its PNGs and the gnuplot script that drew them; errors name the file and the cause.
 #pragma once
 
@@ -56,5 +57,25 @@ struct MapPlot {
   std::vector<Path> paths;               // each starts with a dot
 };
 Status PlotMap(const MapPlot& map, const std::string& png_path);
+
+// Stacked panels sharing the x axis (time), each with its series: for instance commanded (dashed)
+// against measured (solid) velocities of a few robots. Series of the same `group` share a colour.
+// Script (data inline): png_path + ".gp".
+struct TimeSeriesPlot {
+  struct Series {
+    std::string title;
+    int group = 0;
+    bool dashed = false;
+    std::vector<double> x, y;
+  };
+  struct Panel {
+    std::string ylabel;
+    std::vector<Series> series;
+  };
+  std::string title;
+  std::string xlabel = "time [s]";
+  std::vector<Panel> panels;
+};
+Status PlotTimeSeries(const TimeSeriesPlot& plot, const std::string& png_path);
 
 }  // namespace pbppo::report

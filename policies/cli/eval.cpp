@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "policies/cli/eval_walk.hpp"
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "report/plots.hpp"
@@ -24,7 +25,13 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--env", o.env.name, "Environment: pendulum, auv-nav");
   s.add_option("--layout", o.env.layout,
                "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
-  s.add_option("--episodes", o.episodes, "Episodes")->check(CLI::Range(1, 1000000));
+  s.add_option("--episodes", o.episodes, "Episodes (quadruped-walk: robots; default 100, quadruped-walk 50)")
+      ->check(CLI::Range(1, 1000000));
+  s.add_option("--terrain", o.env.terrain, "quadruped-walk: flat, or mixed (flat and blocks 1:1)");
+  s.add_option("--commands", o.env.commands, "quadruped-walk: VX:VY:YAW command maxima (default: walk.yaml's ranges)");
+  s.add_flag("--randomize", o.env.randomize,
+             "quadruped-walk: randomised robots as in training (friction, mass, gains, latency, pushes); default: "
+             "the nominal robot");
   s.add_option("--seed", o.seed, "Seed for the initial states");
   s.add_option("--models", o.env.models_dir, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
@@ -109,7 +116,15 @@ void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, doubl
 
 }  // namespace
 
-int Eval(const EvalOptions& o) {
+int Eval(const EvalOptions& o_in) {
+  if (o_in.env.name == "quadruped-walk") return EvalWalk(o_in);
+  if (o_in.env.randomize) {
+    std::fprintf(stderr, "pbppo eval: --randomize: only quadruped-walk has randomised robots, not '%s'\n",
+                 o_in.env.name.c_str());
+    return 2;
+  }
+  EvalOptions o = o_in;
+  if (o.episodes == 0) o.episodes = 100;
   auto model = policy::PolicyModel::FromFile(o.blob);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());

@@ -89,7 +89,7 @@ std::string Human(double v) {
 
 void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   envs::EnvOptions& env = o.env;
-  s.add_option("--env", env.name, "Environment: pendulum, auv-nav");
+  s.add_option("--env", env.name, "Environment: pendulum, auv-nav, quadruped-walk");
   s.add_option("--layout", env.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
@@ -109,6 +109,9 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_option("--extra-obstacles", env.extra_obstacles,
                "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
                "so that the policy has to steer by its sonar rather than learn a route");
+  s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
+  s.add_option("--commands", env.commands,
+               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
   s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
 
   // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default

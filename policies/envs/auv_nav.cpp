@@ -160,13 +160,12 @@ void AuvNav::set_exploring_starts(double probability) noexcept {
   for (auto& t : tasks_) t.set_exploring_starts(probability);
 }
 
-void AuvNav::Reset(Rng& rng, std::span<float> observation, std::span<float> /*critic_observation*/) {
+void AuvNav::Reset(Rng& rng, std::span<float> observation) {
   current_ = tasks_.size() > 1 ? static_cast<std::size_t>(rng.Below(tasks_.size())) : 0;
   tasks_[current_].Reset(rng.Next(), observation.data());
 }
 
-StepResult AuvNav::Step(std::span<const float> action, std::span<float> observation,
-                        std::span<float> /*critic_observation*/) {
+StepResult AuvNav::Step(std::span<const float> action, std::span<float> observation) {
   float a[2];
   for (std::size_t i = 0; i < 2; ++i)
     a[i] = std::isfinite(action[i]) ? std::clamp(action[i], low_[i], high_[i]) : action[i];

@@ -48,11 +48,8 @@ class AuvNav final : public Env {
   std::uint32_t max_episode_steps() const noexcept override;
   const robot::IoLayout& layout() const noexcept override { return configs_[0]->io; }
 
-  using Env::Reset;
-  using Env::Step;
-  void Reset(Rng& rng, std::span<float> observation, std::span<float> critic_observation) override;
-  StepResult Step(std::span<const float> action, std::span<float> observation,
-                  std::span<float> critic_observation) override;
+  void Reset(Rng& rng, std::span<float> observation) override;
+  StepResult Step(std::span<const float> action, std::span<float> observation) override;
   std::unique_ptr<Env> Clone() const override;
   EpisodeInfo episode_info() const noexcept override;
 

@@ -4,11 +4,12 @@
 
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/pendulum.hpp"
+#include "policies/envs/quadruped_walk.hpp"
 
 namespace pbppo::envs {
 
 std::vector<std::string> EnvNames() {
-  return {"pendulum", "auv-nav"};
+  return {"pendulum", "auv-nav", "quadruped-walk"};
 }
 
 std::string DefaultModelsDir() {
@@ -18,25 +19,42 @@ std::string DefaultModelsDir() {
 
 Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
   const std::string& name = options.name;
+  // An environment's flags given to another one are refused naming the flag.
+  auto only = [&](const char* flag, const char* env, const std::string& what) {
+    return MakeError(ErrorCode::kInvalidValue,
+                     std::string(flag) + ": only " + env + " has " + what + ", not '" + name + "'");
+  };
+  if (name != "auv-nav") {
+    if (!options.progress.empty()) return only("--progress", "auv-nav", "a progress term to choose");
+    if (!options.geodesic_margin.empty()) return only("--geodesic-margin", "auv-nav", "one");
+    if (!options.clearance_penalty.empty()) return only("--clearance-penalty", "auv-nav", "one");
+    if (options.extra_obstacles != 0) return only("--extra-obstacles", "auv-nav", "obstacles");
+    if (options.exploring_starts != 0) return only("--exploring-starts", "auv-nav", "exploring starts");
+  }
+  if (name != "quadruped-walk") {
+    if (options.terrain != "flat") return only("--terrain", "quadruped-walk", "terrains to choose");
+    if (!options.commands.empty()) return only("--commands", "quadruped-walk", "velocity commands");
+  }
+  const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
+  if (name == "pendulum") {
+    auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
+    if (!layout) return std::move(layout).error();
+    auto env = Pendulum::Make(std::move(layout).value());
+    if (!env) return std::move(env).error();
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
   if (name == "auv-nav") {
     auto env = AuvNav::Make(options);
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }
-  if (name == "pendulum") {
-    auto none = [&](const char* flag, const std::string& what) {
-      return MakeError(ErrorCode::kInvalidValue,
-                       std::string(flag) + ": only auv-nav has " + what + ", not '" + name + "'");
-    };
-    if (!options.progress.empty()) return none("--progress", "a progress term to choose");
-    if (!options.geodesic_margin.empty()) return none("--geodesic-margin", "one");
-    if (!options.clearance_penalty.empty()) return none("--clearance-penalty", "one");
-    if (options.extra_obstacles != 0) return none("--extra-obstacles", "obstacles");
-    if (options.exploring_starts != 0) return none("--exploring-starts", "exploring starts");
-    const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
-    auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
-    if (!layout) return std::move(layout).error();
-    auto env = Pendulum::Make(std::move(layout).value());
+  if (name == "quadruped-walk") {
+    QuadrupedWalkOptions o;
+    o.models_dir = dir;
+    o.terrain = options.terrain;
+    o.commands = options.commands;
+    o.randomize = options.randomize;
+    auto env = QuadrupedWalk::Make(o);
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }

@@ -6,11 +6,11 @@
 // environment clips it to its bounds.
 //
 // Asymmetric actor-critic: an environment may give the critic a privileged observation (state the
-// robot cannot measure: true base velocity, height, friction) beside the actor's deployable one.
-// critic_observation_size() > 0 says so; Reset() and Step() then write it into their second span
-// whenever that span is not empty. The trainer's value network takes it (with its own normaliser);
-// the blob carries only the actor, which sees only `observation`. Size 0 (the default): the critic
-// sees the actor's observation and the second span is always empty.
+// robot cannot measure: true base velocity, height, friction) beside the actor's deployable one:
+// critic_observation_size() > 0, and CriticObservation() after every Reset() and Step(). The
+// trainer's value network takes it (with its own normaliser under --normalize-obs); the blob
+// carries only the actor, which sees only Reset()'s and Step()'s `observation`. Size 0 (the
+// default, pendulum and auv-nav): the critic sees the actor's observation.
 #pragma once
 
 #include <cstdint>
@@ -54,26 +54,24 @@ class Env {
   virtual std::uint32_t max_episode_steps() const noexcept = 0;
   virtual const robot::IoLayout& layout() const noexcept = 0;
 
-  // Size of the critic's privileged observation; 0: the critic sees the actor's observation.
-  virtual std::uint32_t critic_observation_size() const noexcept { return 0; }
-
-  // Starts an episode with a state drawn from `rng`; writes the first observation and, when
-  // critic_observation is not empty (then it has critic_observation_size() elements), the
-  // critic's. The draws from `rng` must not depend on whether the critic's is asked for.
-  virtual void Reset(Rng& rng, std::span<float> observation, std::span<float> critic_observation) = 0;
-  // Applies one action and writes the next observation (and the critic's, as Reset()). After
-  // terminated or truncated the caller must Reset() before the next Step().
-  virtual StepResult Step(std::span<const float> action, std::span<float> observation,
-                          std::span<float> critic_observation) = 0;
-  // The same without the critic's observation (evaluation, deployment-side tests).
-  void Reset(Rng& rng, std::span<float> observation) { Reset(rng, observation, {}); }
-  StepResult Step(std::span<const float> action, std::span<float> observation) { return Step(action, observation, {}); }
+  // Starts an episode with a state drawn from `rng`; writes the first observation.
+  virtual void Reset(Rng& rng, std::span<float> observation) = 0;
+  // Applies one action and writes the next observation. After terminated or truncated the
+  // caller must Reset() before the next Step().
+  virtual StepResult Step(std::span<const float> action, std::span<float> observation) = 0;
 
   // An independent copy in the same configuration, for parallel workers. Environments whose
   // state cannot be copied (a Simbody system) return a fresh instance: Reset() it before use.
   virtual std::unique_ptr<Env> Clone() const = 0;
 
   virtual EpisodeInfo episode_info() const noexcept { return {}; }
+
+  // Asymmetric actor-critic (see the top): the size of the critic's privileged observation, 0 when
+  // the critic sees the actor's observation; CriticObservation writes it (critic_observation_size()
+  // elements) for the state the last Reset() or Step() left, before any next Reset() (so after a
+  // truncated step it describes the episode's final state).
+  virtual std::uint32_t critic_observation_size() const noexcept { return 0; }
+  virtual void CriticObservation(std::span<float> out) const noexcept { (void)out; }
 };
 
 // What an environment is built from: the `pbppo train` / `pbppo eval` flags that choose and shape
@@ -97,6 +95,13 @@ struct EnvOptions {
   // --extra-obstacles, auv-nav, training only: random obstacles per episode beyond each layout's
   // count, 0-16.
   int extra_obstacles = 0;
+  // --terrain, quadruped-walk: "flat" or "mixed" (flat and block episodes 1:1).
+  std::string terrain = "flat";
+  // --commands, quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's ranges.
+  std::string commands;
+  // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes): always in training,
+  // in pbppo eval with --randomize.
+  bool randomize = true;
 };
 
 // The names MakeEnv() knows.

@@ -55,15 +55,14 @@ void Pendulum::Observe(std::span<float> observation) const noexcept {
   observation[2] = static_cast<float>(thdot_);
 }
 
-void Pendulum::Reset(Rng& rng, std::span<float> observation, std::span<float> /*critic_observation*/) {
+void Pendulum::Reset(Rng& rng, std::span<float> observation) {
   th_ = rng.Uniform(-std::numbers::pi, std::numbers::pi);
   thdot_ = rng.Uniform(-1.0, 1.0);
   elapsed_ = 0;
   Observe(observation);
 }
 
-StepResult Pendulum::Step(std::span<const float> action, std::span<float> observation,
-                          std::span<float> /*critic_observation*/) {
+StepResult Pendulum::Step(std::span<const float> action, std::span<float> observation) {
   // numpy: u = clip(float32 action) stays float32; u**2 with a Python int exponent promotes the
   // scalar pair to float64 (NumPy 1.x rules), as do all other mixed expressions.
   const float uf = std::clamp(action[0], low_, high_);

@@ -32,11 +32,8 @@ class Pendulum final : public Env {
   std::uint32_t max_episode_steps() const noexcept override { return kEpisodeSteps; }
   const robot::IoLayout& layout() const noexcept override { return layout_; }
 
-  using Env::Reset;
-  using Env::Step;
-  void Reset(Rng& rng, std::span<float> observation, std::span<float> critic_observation) override;
-  StepResult Step(std::span<const float> action, std::span<float> observation,
-                  std::span<float> critic_observation) override;
+  void Reset(Rng& rng, std::span<float> observation) override;
+  StepResult Step(std::span<const float> action, std::span<float> observation) override;
   std::unique_ptr<Env> Clone() const override { return std::make_unique<Pendulum>(*this); }
 
   // Direct state access for tests and replays.

@@ -44,8 +44,8 @@ Runner::Runner(const TrainOptions& o, std::unique_ptr<envs::Env> env)
   for (int e = 0; e < N_; ++e) {
     envs_.push_back(proto_->Clone());
     env_rng_.emplace_back(Mix(o.seed, 1000 + static_cast<std::uint64_t>(e)));
-    envs_.back()->Reset(env_rng_.back(), {raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)},
-                        {raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
+    envs_.back()->Reset(env_rng_.back(), {raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)});
+    if (cd_ > 0) envs_.back()->CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
   }
   const int W = std::min(pool_.size(), N_);
   workers_.assign(static_cast<std::size_t>(W), Worker{});
@@ -104,7 +104,8 @@ void Runner::RolloutWorker(Worker& w) {
       r.log_prob[ui] = lp - static_cast<float>(a_ * half_log_2pi);
       const std::span<float> raw{raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)};
       const std::span<float> raw_c{raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)};
-      const envs::StepResult s = env.Step(act, raw, raw_c);
+      const envs::StepResult s = env.Step(act, raw);
+      if (cd_ > 0) env.CriticObservation(raw_c);
       r.rewards[ui] = static_cast<float>(s.reward);
       r.terminated[ui] = s.terminated;
       r.truncated[ui] = s.truncated && !s.terminated;
@@ -115,7 +116,8 @@ void Runner::RolloutWorker(Worker& w) {
         w.episodes.emplace_back(i, ep_return_[static_cast<std::size_t>(e)],
                                 info.available ? (info.success ? 1 : 0) : -1);
         ep_return_[static_cast<std::size_t>(e)] = 0;
-        env.Reset(rng, raw, raw_c);
+        env.Reset(rng, raw);
+        if (cd_ > 0) env.CriticObservation(raw_c);
       }
     }
   }

@@ -3,6 +3,7 @@
 // are refused naming the file.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -133,6 +134,41 @@ TEST_CASE("map: arena, obstacles, targets and paths of every kind") {
   REQUIRE_MESSAGE(st.ok(), st.error().message);
   size = ReadPngSize(dir + "/empty.png");
   CHECK(size.width == 900);
+}
+
+TEST_CASE("time series: stacked panels of commanded (dashed) and measured series, one colour per group") {
+  TimeSeriesPlot p;
+  p.title = "two robots";
+  for (const char* label : {"vx [m/s]", "yaw rate [rad/s]"}) {
+    TimeSeriesPlot::Panel panel;
+    panel.ylabel = label;
+    for (int robot = 0; robot < 2; ++robot) {
+      TimeSeriesPlot::Series command{"robot " + std::to_string(robot) + " command", robot, true, {}, {}};
+      TimeSeriesPlot::Series measured{"robot " + std::to_string(robot) + " measured", robot, false, {}, {}};
+      for (int k = 0; k < 50; ++k) {
+        command.x.push_back(0.02 * k);
+        command.y.push_back(robot + 0.5);
+        measured.x.push_back(0.02 * k);
+        measured.y.push_back((robot + 0.5) * (1 - std::exp(-0.1 * k)));
+      }
+      panel.series.push_back(command);
+      panel.series.push_back(measured);
+    }
+    p.panels.push_back(panel);
+  }
+  const std::string dir = test::ScratchDir("report_time_series");
+  auto st = PlotTimeSeries(p, dir + "/ts.png");
+  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  const PngSize size = ReadPngSize(dir + "/ts.png");
+  CHECK(size.width == 1100);
+  CHECK(size.height == 600);  // 300 per panel
+  p.panels[0].series[1].y.pop_back();
+  st = PlotTimeSeries(p, dir + "/bad.png");
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message == "plot " + dir + "/bad.png: series 'robot 0 measured' has 50 x and 49 y values");
+  st = PlotTimeSeries(TimeSeriesPlot{}, dir + "/none.png");
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message == "plot " + dir + "/none.png: no panel");
 }
 
 }  // namespace
