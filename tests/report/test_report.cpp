@@ -47,7 +47,7 @@ TEST_CASE("latency histograms: a PNG of every recorded stage, its script beside 
   }
   const std::string dir = test::ScratchDir("report_latency");
   const auto st = PlotLatency(rt::TakeReport(p), dir + "/latency.png", "test's tick");
-  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
   const PngSize size = ReadPngSize(dir + "/latency.png");
   CHECK(size.width == 1000);
   CHECK(size.height == 560);
@@ -77,7 +77,7 @@ TEST_CASE("training curves: return, clip bound, arm pulls and task success from 
   }
   TrainingCurves c{dir, {0.1, 0.2, 0.3}, {7, 0, 13}, true};
   auto pngs = PlotTrainingCurves(c);
-  REQUIRE_MESSAGE(pngs.ok(), pngs.error().message);
+  REQUIRE_MESSAGE(pngs.ok(), (pngs.ok() ? "" : pngs.error().message));
   CHECK(*pngs ==
         std::vector<std::string>{dir + "/return.png", dir + "/epsilon.png", dir + "/arms.png", dir + "/success.png"});
   for (const auto& png : *pngs) {
@@ -123,7 +123,7 @@ TEST_CASE("map: arena, obstacles, targets and paths of every kind") {
              {{{1, 1}, {5, 5}}, MapPlot::PathKind::kTrajectory}};
   const std::string dir = test::ScratchDir("report_map");
   auto st = PlotMap(m, dir + "/map.png");
-  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
   PngSize size = ReadPngSize(dir + "/map.png");
   CHECK(size.width == 900);
   CHECK(size.height == 900);
@@ -131,7 +131,7 @@ TEST_CASE("map: arena, obstacles, targets and paths of every kind") {
   MapPlot empty;
   empty.arena = {0, 10, 0, 10};
   st = PlotMap(empty, dir + "/empty.png");
-  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
   size = ReadPngSize(dir + "/empty.png");
   CHECK(size.width == 900);
 }
@@ -158,7 +158,7 @@ TEST_CASE("time series: stacked panels of commanded (dashed) and measured series
   }
   const std::string dir = test::ScratchDir("report_time_series");
   auto st = PlotTimeSeries(p, dir + "/ts.png");
-  REQUIRE_MESSAGE(st.ok(), st.error().message);
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
   const PngSize size = ReadPngSize(dir + "/ts.png");
   CHECK(size.width == 1100);
   CHECK(size.height == 600);  // 300 per panel
