@@ -21,7 +21,7 @@ std::string Logger::CsvHeader(std::size_t arms) {
   std::ostringstream h;
   h << "iteration,env_steps,eval_steps,total_steps,arm,epsilon,feedback,feedback_before,improved,success_rate,"
        "train_return,train_return_100,episodes,approx_kl,clip_fraction,explained_variance,entropy,policy_loss,"
-       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100,learning_rate";
+       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100,learning_rate,kl";
   for (std::size_t i = 0; i < arms; ++i)
     h << ",arm" << i << "_epsilon,arm" << i << "_value,arm" << i << "_bonus,arm" << i << "_count";
   h << "\n";
@@ -36,7 +36,7 @@ std::string Logger::CsvRow(const IterationStats& s) {
     << s.success_rate << ',' << s.train_return << ',' << s.train_return_100 << ',' << s.episodes << ',' << s.approx_kl
     << ',' << s.clip_fraction << ',' << s.explained_variance << ',' << s.entropy << ',' << s.policy_loss << ','
     << s.value_loss << ',' << s.grad_norm << ',' << s.log_std_mean << ',' << s.steps_per_second << ','
-    << s.task_success_100 << ',' << s.learning_rate;
+    << s.task_success_100 << ',' << s.learning_rate << ',' << s.kl;
   for (const auto& a : s.arms) r << ',' << a.epsilon << ',' << a.value << ',' << a.bonus << ',' << a.count;
   r << "\n";
   return r.str();

@@ -124,7 +124,8 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
   const Mat<float>& value_in = r.value_inputs();
   // Squared gradient norms per minibatch, [policy, value] in two slots alternating by parity.
   double sq[2][2] = {{0, 0}, {0, 0}};
-  double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0;
+  double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0, gauss_kl = 0;
+  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
   // With two threads or more the policy's and the value network's halves of each minibatch run side
   // by side, meeting before the shared gradient clip.
   const bool split = pool.size() >= 2;
@@ -154,7 +155,7 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
     sq[k & 1][1] = SquaredNorm(critic_grad_);
   };
   auto policy_loop = [&](bool sequential_value, PolicyWorkspace<float>& wsp, ValueWorkspace<float>& wsv) {
-    Mat<float> o(d, mb), act(a, mb), v_in(vd, mb);
+    Mat<float> o(d, mb), act(a, mb), old_mu(a, mb), v_in(vd, mb);
     std::vector<float> lp(static_cast<std::size_t>(mb)), ad(static_cast<std::size_t>(mb)),
         rt(static_cast<std::size_t>(mb)), ov(static_cast<std::size_t>(mb));
     for (long k = 0; k < total; ++k) {
@@ -162,10 +163,12 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
       const long s0 = (k % per_epoch) * mb, n = std::min(mb, B - s0);
       o.resize(d, n);
       act.resize(a, n);
+      old_mu.resize(a, n);
       for (long j = 0; j < n; ++j) {
         const long i = p[static_cast<std::size_t>(s0 + j)];
         o.col(j) = r.obs.col(i);
         act.col(j) = r.actions.col(i);
+        old_mu.col(j) = r.action_mean.col(i);
         lp[static_cast<std::size_t>(j)] = r.log_prob[static_cast<std::size_t>(i)];
         ad[static_cast<std::size_t>(j)] = r.advantages[static_cast<std::size_t>(i)];
       }
@@ -175,6 +178,12 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
       ent += ps.entropy;
       kl += ps.approx_kl;
       clipfrac += ps.clip_fraction;
+      // The KL divergence from the rollout's policy, before this minibatch's step; the adaptive
+      // schedule sets the step's rate from it (the value thread reads it after the barrier).
+      const double mb_kl =
+          SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data()) / static_cast<double>(n);
+      gauss_kl += mb_kl;
+      if (adaptive) lr_ = o_.lr_schedule.Adapt(lr_, mb_kl);
       sq[k & 1][0] = critic_only ? 0.0 : SquaredNorm(actor_grad_);  // a held actor takes no part in the clip
       if (sequential_value) {
         gather_value(k, v_in, rt, ov);
@@ -216,6 +225,7 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
   st.clip_fraction = clipfrac / m;
   st.value_loss = vloss / m;
   st.grad_norm = gnorm / m;
+  st.kl = gauss_kl / m;
   double ls = 0;
   for (int j = 0; j < a; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
   st.log_std_mean = ls / a;

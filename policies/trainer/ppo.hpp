@@ -23,6 +23,7 @@ namespace pbppo::trainer {
 struct UpdateStats {
   double approx_kl = 0, clip_fraction = 0, explained_variance = 0, entropy = 0;
   double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;
+  double kl = 0;  // the Gaussian KL divergence from the rollout's policy (SumGaussianKl), before each step
 };
 
 class Ppo {
@@ -46,7 +47,8 @@ class Ppo {
   static double ExplainedVariance(const RolloutStorage& rollout);
 
   // `epochs` passes over the rollout in minibatches with clip bound `eps`. critic_only: the actor
-  // is held (its loss is still computed for the log).
+  // is held (its loss is still computed for the log). With the adaptive learning-rate schedule
+  // each minibatch's KL divergence sets the rate of its step (and of the steps after it).
   UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool);
 
  private:

@@ -120,6 +120,27 @@ PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, cons
   return st;
 }
 
+// The KL divergence of the current policy (means `mu`, log-std `log_std`) from the one that
+// collected the rollout (`old_mu`, `old_log_std`), as rsl_rl computes it for its adaptive learning
+// rate: per column, sum over the actions of log(std / old_std + 1e-5) + (old_std^2 + (old_mu -
+// mu)^2) / (2 std^2) - 1/2; returned summed over the columns (in double, in column order).
+template <typename S, typename DM, typename DO>
+double SumGaussianKl(const Eigen::MatrixBase<DM>& mu, const S* log_std, const Eigen::MatrixBase<DO>& old_mu,
+                     const S* old_log_std) {
+  double sum = 0;
+  for (Eigen::Index i = 0; i < mu.cols(); ++i) {
+    S kl = 0;
+    for (Eigen::Index j = 0; j < mu.rows(); ++j) {
+      const S std = std::exp(log_std[j]), old_std = std::exp(old_log_std[j]);
+      const S d = old_mu(j, i) - mu(j, i);
+      kl += std::log(std / old_std + static_cast<S>(1e-5)) + (old_std * old_std + d * d) / (S(2) * std * std) -
+            static_cast<S>(0.5);
+    }
+    sum += static_cast<double>(kl);
+  }
+  return sum;
+}
+
 template <typename S>
 struct ValueWorkspace {
   typename Mlp<S>::Workspace net;

@@ -9,6 +9,8 @@ RolloutStorage::RolloutStorage(int steps_, int envs_, int obs_size_, int critic_
   obs.resize(obs_size, B);
   critic_obs.resize(critic_size, critic_size > 0 ? B : 0);
   actions.resize(action_size, B);
+  action_mean.resize(action_size, B);
+  log_std.assign(static_cast<std::size_t>(action_size), 0.f);
   raw_obs.assign(b * static_cast<std::size_t>(obs_size), 0.f);
   raw_critic_obs.assign(b * static_cast<std::size_t>(critic_size), 0.f);
   truncation_value_inputs.resize(value_input_size(), B);

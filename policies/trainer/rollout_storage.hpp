@@ -30,6 +30,8 @@ struct RolloutStorage {
   Mat<float> obs;                     // [obs_size x B], normalised
   Mat<float> critic_obs;              // [critic_size x B], normalised (empty without)
   Mat<float> actions;                 // [action_size x B], as sampled (before the environment's clipping)
+  Mat<float> action_mean;             // [action_size x B], the actor's mean where it sampled them
+  std::vector<float> log_std;         // [action_size], the actor's log-std during the rollout
   std::vector<float> raw_obs;         // [B][obs_size], for the actor's normaliser
   std::vector<float> raw_critic_obs;  // [B][critic_size]
   std::vector<float> log_prob, rewards;

@@ -97,6 +97,7 @@ void Runner::RolloutWorker(Worker& w) {
         const auto k = static_cast<std::size_t>(j);
         const float sample = mu(j, c) + stdv[k] * static_cast<float>(rng.Normal());
         r.actions(j, i) = sample;
+        r.action_mean(j, i) = mu(j, c);
         const float z = (sample - mu(j, c)) * std::exp(-log_std[j]);
         lp += -0.5f * z * z - log_std[j];
         act[k] = std::clamp(sample, env.action_low()[k], env.action_high()[k]);
@@ -127,6 +128,7 @@ void Runner::RolloutWorker(Worker& w) {
 void Runner::CollectRollout() {
   obs_norm_.Freeze();
   critic_norm_.Freeze();
+  std::copy(ppo_.log_std(), ppo_.log_std() + a_, rollout_.log_std.begin());
   pool_.Run([&](int w) {
     if (w < static_cast<int>(workers_.size())) RolloutWorker(workers_[static_cast<std::size_t>(w)]);
   });

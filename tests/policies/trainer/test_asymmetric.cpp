@@ -88,7 +88,8 @@ double LateExplainedVariance(const TrainResult& r) {
   return sum / static_cast<double>(n - from);
 }
 
-TEST_CASE("a privileged critic observation explains the returns the actor's cannot; the blob holds the actor only") {
+TEST_CASE(
+    "a privileged critic observation explains the returns the actor's cannot, and the blob holds the actor only") {
   auto plain = Train(Options(1), std::make_unique<HiddenOffset>(false));
   auto privileged = Train(Options(1), std::make_unique<HiddenOffset>(true));
   REQUIRE_MESSAGE(plain.ok(), (plain.ok() ? "" : plain.error().message));

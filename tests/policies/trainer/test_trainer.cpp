@@ -80,6 +80,35 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   CHECK(r->final_return > -600);  // real progress, far above random
 }
 
+TEST_CASE("--lr-schedule adaptive: the KL divergence steers the learning rate within [1e-5, 1e-2], logged") {
+  auto run = [](double desired_kl) {
+    TrainOptions c = RlZoo();
+    c.total_steps = 16384;
+    c.lr_schedule = ParseLrSchedule("adaptive:" + std::to_string(desired_kl)).value();
+    auto r = Train(c);
+    REQUIRE(r.ok());
+    return std::move(r).value();
+  };
+  // Tiny KL target: the rate falls from 1e-3; generous target: it rises to the ceiling.
+  const TrainResult small = run(1e-5), large = run(0.5);
+  for (const auto* r : {&small, &large})
+    for (const auto& it : r->iterations) {
+      CHECK(it.learning_rate >= 1e-5);
+      CHECK(it.learning_rate <= 1e-2);
+      CHECK(it.kl >= 0);
+    }
+  CHECK(small.iterations.back().learning_rate < 1e-4);
+  CHECK(large.iterations.back().learning_rate == doctest::Approx(1e-2));
+  MESSAGE("late KL: target 1e-5 -> " << small.iterations.back().kl << ", target 0.5 -> " << large.iterations.back().kl);
+  CHECK(small.iterations.back().kl < large.iterations.back().kl);
+  // A constant schedule logs its rate unchanged.
+  TrainOptions c = RlZoo();
+  c.total_steps = 8192;
+  auto constant = Train(c);
+  REQUIRE(constant.ok());
+  for (const auto& it : constant->iterations) CHECK(it.learning_rate == 1e-3);
+}
+
 TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the runtime loads the blob") {
   const std::string out = test::ScratchDir("trainer_files") + "/run";
   TrainOptions c = Small();
