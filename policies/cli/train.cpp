@@ -173,8 +173,11 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_option("--seed", o.seed, "Seed");
   s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
   s.add_option("--threads", o.threads,
-               "Worker threads: the environments' steps, and the update (policy and value network side by side, or "
-               "each large minibatch's columns)");
+               "Worker threads: the environments' steps and the update (see --chunked-minibatch)");
+  s.add_option("--chunked-minibatch", o.chunked_minibatch,
+               "Minibatches of at least N samples are computed in column chunks on every thread, summed in a fixed "
+               "order (the same result for any --threads); smaller ones run the policy and value network side by "
+               "side");
   s.add_option("--envs", o.num_envs, "Parallel environments");
   s.add_option("--rollout", o.rollout_steps, "Steps per environment and iteration");
   s.add_option("--minibatch", o.minibatch, "Minibatch size");

@@ -12,14 +12,17 @@ namespace pbppo::trainer {
 namespace {
 
 // In a fixed order (eight interleaved partial sums), independent of alignment and vector width.
-double SquaredNorm(const Vec<float>& v) {
+double SquaredNorm(const float* x, Eigen::Index n) {
   double acc[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-  const Eigen::Index n = v.size(), n8 = n - n % 8;
-  const float* x = v.data();
+  const Eigen::Index n8 = n - n % 8;
   for (Eigen::Index i = 0; i < n8; i += 8)
     for (int k = 0; k < 8; ++k) acc[k] += static_cast<double>(x[i + k]) * static_cast<double>(x[i + k]);
   for (Eigen::Index i = n8; i < n; ++i) acc[0] += static_cast<double>(x[i]) * static_cast<double>(x[i]);
   return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
+
+double SquaredNorm(const Vec<float>& v) {
+  return SquaredNorm(v.data(), v.size());
 }
 
 std::vector<int> Widths(int in, const std::vector<int>& hidden, int out) {
@@ -108,18 +111,31 @@ double Ppo::ExplainedVariance(const RolloutStorage& r) {
 }
 
 UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, WorkerPool& pool) {
+  Minibatches m;
   const long B = r.size();
-  const long mb = std::min<long>(o_.minibatch, B);
-  const long per_epoch = (B + mb - 1) / mb;
-  std::vector<std::vector<long>> perms(static_cast<std::size_t>(o_.epochs));
-  for (auto& p : perms) {
+  m.size = std::min<long>(o_.minibatch, B);
+  m.per_epoch = (B + m.size - 1) / m.size;
+  m.total = m.per_epoch * o_.epochs;
+  m.perms.resize(static_cast<std::size_t>(o_.epochs));
+  for (auto& p : m.perms) {
     p.resize(static_cast<std::size_t>(B));
     for (long i = 0; i < B; ++i) p[static_cast<std::size_t>(i)] = i;
     for (long i = B - 1; i > 0; --i)
       std::swap(p[static_cast<std::size_t>(i)],
                 p[static_cast<std::size_t>(rng_.Below(static_cast<std::uint64_t>(i + 1)))]);
   }
-  const long total = per_epoch * o_.epochs;
+  UpdateStats st = m.size >= o_.chunked_minibatch ? UpdateChunked(r, m, eps, critic_only, pool)
+                                               : UpdateSplit(r, m, eps, critic_only, pool);
+  double ls = 0;
+  for (int j = 0; j < r.action_size; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
+  st.log_std_mean = ls / r.action_size;
+  return st;
+}
+
+UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, double eps, bool critic_only,
+                             WorkerPool& pool) {
+  const long B = r.size(), mb = mbs.size, per_epoch = mbs.per_epoch, total = mbs.total;
+  const auto& perms = mbs.perms;
   const int d = r.obs_size, a = r.action_size, vd = r.value_input_size();
   const Mat<float>& value_in = r.value_inputs();
   // Squared gradient norms per minibatch, [policy, value] in two slots alternating by parity.
@@ -226,9 +242,140 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
   st.value_loss = vloss / m;
   st.grad_norm = gnorm / m;
   st.kl = gauss_kl / m;
-  double ls = 0;
-  for (int j = 0; j < a; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
-  st.log_std_mean = ls / a;
+  return st;
+}
+
+UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, double eps, bool critic_only,
+                               WorkerPool& pool) {
+  const long B = r.size();
+  const int W = pool.size(), K = kChunks, S = kSegments;
+  const int d = r.obs_size, a = r.action_size, vd = r.value_input_size();
+  const Eigen::Index P = actor_params_.size(), V = critic_params_.size();
+  const Mat<float>& value_in = r.value_inputs();
+  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
+  std::vector<Vec<float>> actor_grads(static_cast<std::size_t>(K), Vec<float>::Zero(P));
+  std::vector<Vec<float>> critic_grads(static_cast<std::size_t>(K), Vec<float>::Zero(V));
+  struct ChunkStats {
+    PolicyLossStats policy;
+    double value_loss = 0, gaussian_kl = 0;
+  };
+  std::vector<ChunkStats> chunk(static_cast<std::size_t>(K));
+  std::vector<double> seg_sq(static_cast<std::size_t>(2 * S), 0.0);  // actor segments, then critic's
+  double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0, gauss_kl = 0, lr_end = lr_;
+  SpinBarrier sync(W);
+  auto segment = [](Eigen::Index n, int s, int count) {
+    return std::pair<Eigen::Index, Eigen::Index>(n * s / count, n * (s + 1) / count);
+  };
+
+  pool.Run([&](int w) {
+    Mat<float> o(d, 0), act(a, 0), old_mu(a, 0), v_in(vd, 0);
+    Vec<float> adv;
+    std::vector<float> lp, rt, ov;
+    PolicyWorkspace<float> wsp;
+    ValueWorkspace<float> wsv;
+    double lr = lr_;  // every thread follows the same rate
+    for (long k = 0; k < mbs.total; ++k) {
+      const auto& p = mbs.perms[static_cast<std::size_t>(k / mbs.per_epoch)];
+      const long s0 = (k % mbs.per_epoch) * mbs.size, n = std::min(mbs.size, B - s0);
+      // The minibatch's advantages, normalised over the whole minibatch (each thread the same).
+      adv.resize(n);
+      for (long j = 0; j < n; ++j) adv[j] = r.advantages[static_cast<std::size_t>(p[static_cast<std::size_t>(s0 + j)])];
+      if (o_.normalize_advantages && n > 1) {
+        const float m = adv.mean();
+        const float var = (adv.array() - m).square().sum() / static_cast<float>(n - 1);
+        adv = (adv.array() - m) / (std::sqrt(var) + 1e-8f);
+      }
+      // 1. Each chunk's gradient of the minibatch's mean loss.
+      for (int c = w; c < K; c += W) {
+        const long c0 = n * c / K, nc = n * (c + 1) / K - c0;
+        o.resize(d, nc);
+        act.resize(a, nc);
+        old_mu.resize(a, nc);
+        v_in.resize(vd, nc);
+        lp.resize(static_cast<std::size_t>(nc));
+        rt.resize(static_cast<std::size_t>(nc));
+        ov.resize(static_cast<std::size_t>(nc));
+        for (long j = 0; j < nc; ++j) {
+          const long i = p[static_cast<std::size_t>(s0 + c0 + j)];
+          const auto u = static_cast<std::size_t>(i), uj = static_cast<std::size_t>(j);
+          o.col(j) = r.obs.col(i);
+          act.col(j) = r.actions.col(i);
+          old_mu.col(j) = r.action_mean.col(i);
+          v_in.col(j) = value_in.col(i);
+          lp[uj] = r.log_prob[u];
+          rt[uj] = r.returns[u];
+          ov[uj] = r.values[u];
+        }
+        ChunkStats& cs = chunk[static_cast<std::size_t>(c)];
+        cs.policy = PolicyLossAndGrad(actor_, actor_params_.data(), o, act, lp.data(), adv.data() + c0, eps,
+                                      c == 0 ? o_.ent_coef : 0.0, false, wsp,
+                                      actor_grads[static_cast<std::size_t>(c)].data(), static_cast<int>(n));
+        cs.gaussian_kl = SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data());
+        cs.value_loss =
+            ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf, o_.vf_coef, wsv,
+                             critic_grads[static_cast<std::size_t>(c)].data(), static_cast<int>(n));
+      }
+      sync.ArriveAndWait();
+      // 2. The minibatch's gradient: the chunks' summed in chunk order, segment by segment, with each
+      // segment's squared norm.
+      for (int sg = w; sg < 2 * S; sg += W) {
+        const bool actor = sg < S;
+        const auto [b, e] = segment(actor ? P : V, actor ? sg : sg - S, S);
+        auto& grads = actor ? actor_grads : critic_grads;
+        auto total = (actor ? actor_grad_ : critic_grad_).segment(b, e - b);
+        total = grads[0].segment(b, e - b);
+        for (int c = 1; c < K; ++c) total += grads[static_cast<std::size_t>(c)].segment(b, e - b);
+        seg_sq[static_cast<std::size_t>(sg)] = actor && critic_only ? 0.0 : SquaredNorm(total.data(), e - b);
+      }
+      if (w == 0) {
+        if (!critic_only) actor_adam_.Advance();
+        critic_adam_.Advance();
+      }
+      sync.ArriveAndWait();
+      // 3. Every thread: the norm, the clip factor, the rate; then the Adam steps of its segments.
+      double sq = 0, kl_sum = 0;
+      for (double x : seg_sq) sq += x;
+      for (const ChunkStats& cs : chunk) kl_sum += cs.gaussian_kl;
+      const double mb_kl = kl_sum / static_cast<double>(n);
+      if (adaptive) lr = o_.lr_schedule.Adapt(lr, mb_kl);
+      const double norm = std::sqrt(sq);
+      const float scale =
+          o_.max_grad_norm > 0 && norm > 0 ? static_cast<float>(std::min(1.0, o_.max_grad_norm / (norm + 1e-6))) : 1.f;
+      if (w == 0) {
+        for (const ChunkStats& cs : chunk) {
+          pol_loss += cs.policy.policy_loss;
+          kl += cs.policy.approx_kl;
+          clipfrac += cs.policy.clip_fraction;
+          vloss += cs.value_loss;
+        }
+        ent += chunk[0].policy.entropy;
+        gnorm += norm;
+        gauss_kl += mb_kl;
+        lr_end = lr;
+      }
+      for (int sg = w; sg < 2 * S; sg += W) {
+        const bool actor = sg < S;
+        if (actor && critic_only) continue;
+        const auto [b, e] = segment(actor ? P : V, actor ? sg : sg - S, S);
+        if (actor) {
+          actor_adam_.Apply(actor_params_.data(), actor_grad_.data(), lr, scale, b, e);
+        } else {
+          critic_adam_.Apply(critic_params_.data(), critic_grad_.data(), lr, scale, b, e);
+        }
+      }
+      sync.ArriveAndWait();  // the parameters are whole again before the next minibatch reads them
+    }
+  });
+  lr_ = lr_end;
+  UpdateStats st;
+  const double m = static_cast<double>(mbs.total);
+  st.policy_loss = pol_loss / m;
+  st.entropy = ent / m;
+  st.approx_kl = kl / m;
+  st.clip_fraction = clipfrac / m;
+  st.value_loss = vloss / m;
+  st.grad_norm = gnorm / m;
+  st.kl = gauss_kl / m;
   return st;
 }
 

@@ -51,7 +51,23 @@ class Ppo {
   // each minibatch's KL divergence sets the rate of its step (and of the steps after it).
   UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool);
 
+  // Minibatches of at least options.chunked_minibatch samples are cut into kChunks column chunks
+  // whose gradients the threads compute side by side and sum in chunk order (the same arithmetic
+  // for any thread count; the sums, gradient norm and Adam step are split over kSegments parameter
+  // segments). Smaller ones run the actor's and the critic's halves of each minibatch on two threads.
+  static constexpr int kChunks = 4;
+  static constexpr int kSegments = 8;
+
  private:
+  struct Minibatches {
+    long size = 0, per_epoch = 0, total = 0;  // samples per minibatch, minibatches per epoch and in all
+    std::vector<std::vector<long>> perms;     // per epoch, the rollout's columns in minibatch order
+  };
+  UpdateStats UpdateSplit(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
+                          WorkerPool& pool);
+  UpdateStats UpdateChunked(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
+                            WorkerPool& pool);
+
   const TrainOptions& o_;
   GaussianPolicy<float> actor_;
   Mlp<float> critic_;

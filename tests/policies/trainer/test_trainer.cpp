@@ -10,6 +10,7 @@
 #include <string>
 
 #include "policies/envs/env.hpp"
+#include "policies/trainer/ppo.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
@@ -78,6 +79,72 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   MESSAGE("first rollout return " << first << ", last-100 return " << r->final_return);
   CHECK(first < -900);            // a random policy
   CHECK(r->final_return > -600);  // real progress, far above random
+}
+
+TEST_CASE("chunked minibatches: PPO still learns Pendulum, deterministically") {
+  // Every minibatch in column chunks (--chunked-minibatch 2; rl-zoo's minibatch of 64 in chunks of 16).
+  TrainOptions c = RlZoo();
+  c.chunked_minibatch = 2;
+  c.threads = 2;
+  auto a = Train(c), b = Train(c);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  MESSAGE("chunked updates: last-100 return " << a->final_return);
+  CHECK(a->final_return > -600);  // as the split update above
+  for (std::size_t l = 0; l < a->spec.layers.size(); ++l) CHECK(a->spec.layers[l].weight == b->spec.layers[l].weight);
+}
+
+// A rollout of random observations and actions the actor sampled, with random advantages and
+// returns, for the update alone.
+RolloutStorage RandomRollout(const Ppo& ppo, int steps, int envs, int obs, int critic, int actions) {
+  RolloutStorage r(steps, envs, obs, critic, actions);
+  Rng rng(3);
+  for (long i = 0; i < r.size(); ++i) {
+    for (int j = 0; j < obs; ++j) r.obs(j, i) = static_cast<float>(rng.Normal());
+    for (int j = 0; j < critic; ++j) r.critic_obs(j, i) = static_cast<float>(rng.Normal());
+    for (int j = 0; j < actions; ++j) {
+      r.action_mean(j, i) = static_cast<float>(0.1 * rng.Normal());
+      r.actions(j, i) = r.action_mean(j, i) + static_cast<float>(rng.Normal());
+    }
+    const auto u = static_cast<std::size_t>(i);
+    r.log_prob[u] = static_cast<float>(-actions * 1.4 + 0.3 * rng.Normal());
+    r.advantages[u] = static_cast<float>(rng.Normal());
+    r.returns[u] = static_cast<float>(rng.Normal());
+    r.values[u] = static_cast<float>(rng.Normal());
+  }
+  std::copy(ppo.log_std(), ppo.log_std() + actions, r.log_std.begin());
+  return r;
+}
+
+TEST_CASE("chunked update: the same parameters for 1, 2 and 3 threads (the split update: per thread count)") {
+  TrainOptions o;
+  o.policy_hidden = {64, 32};
+  o.activation = policy::Activation::kElu;
+  o.minibatch = 1500;
+  o.epochs = 3;
+  o.clip_vf = 0.2;
+  o.ent_coef = 0.01;
+  o.lr_schedule = ParseLrSchedule("adaptive").value();
+  std::vector<std::vector<float>> actor, critic_out;
+  std::vector<double> lr;
+  for (int threads : {1, 2, 3}) {
+    Ppo ppo(o, 10, 14, 4);
+    RolloutStorage r = RandomRollout(ppo, 25, 240, 10, 14, 4);  // 6000 samples: 4 minibatches of 1500
+    WorkerPool pool(threads);
+    const UpdateStats st = ppo.Update(r, 0.2, false, pool);
+    CHECK(std::isfinite(st.value_loss));
+    CHECK(st.kl > 0);
+    actor.emplace_back(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
+    ppo.ComputeReturns(r, pool);
+    critic_out.emplace_back(r.values.begin(), r.values.end());
+    lr.push_back(ppo.learning_rate());
+  }
+  for (int k = 1; k < 3; ++k) {
+    CAPTURE(k + 1);
+    CHECK(actor[static_cast<std::size_t>(k)] == actor[0]);
+    CHECK(critic_out[static_cast<std::size_t>(k)] == critic_out[0]);
+    CHECK(lr[static_cast<std::size_t>(k)] == lr[0]);
+  }
 }
 
 TEST_CASE("--lr-schedule adaptive: the KL divergence steers the learning rate within [1e-5, 1e-2], logged") {
