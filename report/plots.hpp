@@ -12,6 +12,22 @@
 
 namespace pbppo::report {
 
+// Groups of runs against each other (one group per clip schedule, say, one run per seed): per group
+// the mean over its runs of one log.csv column against env_steps, with a band of one standard
+// deviation over the runs either side where two runs or more have a value there (NaN rows are left
+// out). Errors name the run and the missing file or column.
+struct CurveBands {
+  struct Group {
+    std::string name;
+    std::vector<std::string> runs;  // run folders, each holding log.csv
+  };
+  std::string title;
+  std::string column = "train_return_100";
+  std::string ylabel;  // empty: the column's name
+  std::vector<Group> groups;
+};
+Status PlotCurveBands(const CurveBands& bands, const std::string& png_path);
+
 // A training run's curves, from DIR/log.csv (the trainer's per-iteration log, read by column name):
 // return.png (last-100 training return and the bandit feedback over environment steps), epsilon.png
 // (the clip bound chosen each iteration), arms.png (pulls per candidate clip bound) and, where the

@@ -1,6 +1,7 @@
 // pbppo: the project's command-line tool.
 #include <CLI/CLI.hpp>
 
+#include "policies/cli/curves.hpp"
 #include "policies/cli/eval.hpp"
 #include "policies/cli/inspect.hpp"
 #include "policies/cli/train.hpp"
@@ -32,6 +33,11 @@ int main(int argc, char** argv) {
   auto* eval = app.add_subcommand("eval", "Run a policy blob on an environment with the runtime forward");
   pbppo::cli::AddEvalOptions(*eval, eval_opts);
 
+  pbppo::cli::CurvesOptions curves_opts;
+  auto* curves = app.add_subcommand(
+      "curves", "Draw groups of training runs against each other: per group the mean of a log.csv column and a band");
+  pbppo::cli::AddCurvesOptions(*curves, curves_opts);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -41,5 +47,6 @@ int main(int argc, char** argv) {
   if (*synth) return pbppo::cli::Synth(synth_opts);
   if (*train) return pbppo::cli::Train(train_opts, train_quiet);
   if (*eval) return pbppo::cli::Eval(eval_opts);
+  if (*curves) return pbppo::cli::Curves(curves_opts);
   return 2;
 }

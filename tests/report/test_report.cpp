@@ -171,5 +171,42 @@ TEST_CASE("time series: stacked panels of commanded (dashed) and measured series
   CHECK(st.error().message == "plot " + dir + "/none.png: no panel");
 }
 
+TEST_CASE("curve bands: each group's mean over its runs with a one-sd band, NaN rows left out") {
+  const std::string dir = test::ScratchDir("report_bands");
+  // Three runs of one group (the third with a NaN row and one step fewer) and one of another.
+  auto run = [&](const std::string& name, double offset, int rows) {
+    std::filesystem::create_directories(dir + "/" + name);
+    std::ofstream log(dir + "/" + name + "/log.csv");
+    log << "iteration,env_steps,train_return_100\n";
+    for (int i = 0; i < rows; ++i)
+      log << i << ',' << 100 * (i + 1) << ',' << (i == 2 ? "nan" : "") << offset + i << '\n';
+    return dir + "/" + name;
+  };
+  CurveBands c;
+  c.title = "two groups";
+  c.groups = {{"a", {run("a1", 0, 10), run("a2", 2, 10), run("a3", 4, 9)}}, {"b", {run("b1", -5, 10)}}};
+  auto st = PlotCurveBands(c, dir + "/bands.png");
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
+  const PngSize size = ReadPngSize(dir + "/bands.png");
+  CHECK(size.width == 900);
+  CHECK(size.height == 500);
+  std::ifstream gp(dir + "/bands.png.gp");
+  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  CHECK(script.find("$g0 << EOD\n100 2 0 4\n200 3 1 5\n400 5 3 7\n") == 0);  // the NaN row (300) is left out
+  CHECK(script.find("1000 10 8.58579 11.4142\n") != std::string::npos);      // two runs reach 1000 steps
+  CHECK(script.find("$g1 << EOD\n100 -5 -5 -5\n") != std::string::npos);     // one run: no band
+  CHECK(script.find("title 'a (3 runs)'") != std::string::npos);
+
+  c.column = "missing";
+  st = PlotCurveBands(c, dir + "/bad.png");
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message == "curves: " + dir + "/a1/log.csv has no column 'missing'");
+  c.column = "train_return_100";
+  c.groups[1].runs.push_back(dir + "/nowhere");
+  st = PlotCurveBands(c, dir + "/bad.png");
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message == "curves: cannot read " + dir + "/nowhere/log.csv");
+}
+
 }  // namespace
 }  // namespace pbppo::report
