@@ -4,6 +4,8 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "report/gnuplot.hpp"
 #include "report/plots.hpp"
@@ -12,11 +14,15 @@ namespace pbppo::report {
 namespace {
 
 std::vector<std::string> SplitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) out.push_back(cell);
-  return out;
+  std::vector<std::string> cells(1);
+  for (char ch : line) {
+    if (ch == ',') {
+      cells.emplace_back();
+    } else {
+      cells.back().push_back(ch);
+    }
+  }
+  return cells;
 }
 
 // (env_steps, value) of every row of RUN/log.csv where the column holds a finite number.

@@ -117,24 +117,25 @@ void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, doubl
 }  // namespace
 
 int Eval(const EvalOptions& o_in) {
-  if (o_in.env.name == "quadruped-walk") return EvalWalk(o_in);
-  if (o_in.env.randomize) {
+  const bool walk = o_in.env.name == "quadruped-walk";
+  if (o_in.env.randomize && !walk) {
     std::fprintf(stderr, "pbppo eval: --randomize: only quadruped-walk has randomised robots, not '%s'\n",
                  o_in.env.name.c_str());
     return 2;
   }
-  EvalOptions o = o_in;
-  if (o.episodes == 0) o.episodes = 100;
-  auto model = policy::PolicyModel::FromFile(o.blob);
+  auto model = policy::PolicyModel::FromFile(o_in.blob);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());
     return 1;
   }
-  auto env = envs::MakeEnv(o.env);
+  auto env = envs::MakeEnv(o_in.env);
   if (!env) {
     std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
     return 2;
   }
+  if (walk) return EvalWalk(o_in, *model, dynamic_cast<envs::QuadrupedWalk&>(**env));
+  EvalOptions o = o_in;
+  if (o.episodes == 0) o.episodes = 100;
   if (auto st = robot::CheckPolicyMatchesLayout(model->description(), (*env)->layout()); !st) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), st.error().message.c_str());
     return 1;

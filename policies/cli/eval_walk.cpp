@@ -41,23 +41,12 @@ Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::st
 
 }  // namespace
 
-int EvalWalk(const EvalOptions& o) {
-  auto model = policy::PolicyModel::FromFile(o.blob);
-  if (!model) {
-    std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());
-    return 1;
-  }
-  auto made = envs::MakeEnv(o.env);
-  if (!made) {
-    std::fprintf(stderr, "pbppo eval: %s\n", made.error().message.c_str());
-    return 2;
-  }
-  auto& env = dynamic_cast<envs::QuadrupedWalk&>(**made);
+int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
   envs::WalkEvalOptions eo;
   eo.robots = o.episodes > 0 ? o.episodes : 50;
   eo.seed = o.seed;
   eo.trace_robots = o.plot.empty() && o.trajectories.empty() ? 0 : 3;
-  auto r = envs::EvaluateWalk(*model, env, eo);
+  auto r = envs::EvaluateWalk(model, env, eo);
   if (!r) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
     return 1;

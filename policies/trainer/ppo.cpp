@@ -25,6 +25,22 @@ double SquaredNorm(const Vec<float>& v) {
   return SquaredNorm(v.data(), v.size());
 }
 
+// The update's statistics are summed over minibatches, then averaged.
+void AddPolicyStats(UpdateStats& sum, const PolicyLossStats& ps, bool with_entropy = true) {
+  sum.policy_loss += ps.policy_loss;
+  if (with_entropy) sum.entropy += ps.entropy;
+  sum.approx_kl += ps.approx_kl;
+  sum.clip_fraction += ps.clip_fraction;
+}
+
+UpdateStats MeanOver(UpdateStats sum, long minibatches) {
+  const double m = static_cast<double>(minibatches);
+  for (double* x :
+       {&sum.policy_loss, &sum.entropy, &sum.approx_kl, &sum.clip_fraction, &sum.value_loss, &sum.grad_norm, &sum.kl})
+    *x /= m;
+  return sum;
+}
+
 std::vector<int> Widths(int in, const std::vector<int>& hidden, int out) {
   std::vector<int> w{in};
   w.insert(w.end(), hidden.begin(), hidden.end());
@@ -125,7 +141,7 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
                 p[static_cast<std::size_t>(rng_.Below(static_cast<std::uint64_t>(i + 1)))]);
   }
   UpdateStats st = m.size >= o_.chunked_minibatch ? UpdateChunked(r, m, eps, critic_only, pool)
-                                               : UpdateSplit(r, m, eps, critic_only, pool);
+                                                  : UpdateSplit(r, m, eps, critic_only, pool);
   double ls = 0;
   for (int j = 0; j < r.action_size; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
   st.log_std_mean = ls / r.action_size;
@@ -140,7 +156,7 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
   const Mat<float>& value_in = r.value_inputs();
   // Squared gradient norms per minibatch, [policy, value] in two slots alternating by parity.
   double sq[2][2] = {{0, 0}, {0, 0}};
-  double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0, gauss_kl = 0;
+  UpdateStats sum;
   const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
   // With two threads or more the policy's and the value network's halves of each minibatch run side
   // by side, meeting before the shared gradient clip.
@@ -166,8 +182,8 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
   };
   auto value_step = [&](long k, Mat<float>& v_in, std::vector<float>& rt, std::vector<float>& ov,
                         ValueWorkspace<float>& wsv) {
-    vloss += ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf, o_.vf_coef, wsv,
-                              critic_grad_.data());
+    sum.value_loss += ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf,
+                                       o_.vf_coef, wsv, critic_grad_.data());
     sq[k & 1][1] = SquaredNorm(critic_grad_);
   };
   auto policy_loop = [&](bool sequential_value, PolicyWorkspace<float>& wsp, ValueWorkspace<float>& wsv) {
@@ -190,15 +206,12 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
       }
       const PolicyLossStats ps = PolicyLossAndGrad(actor_, actor_params_.data(), o, act, lp.data(), ad.data(), eps,
                                                    o_.ent_coef, o_.normalize_advantages, wsp, actor_grad_.data());
-      pol_loss += ps.policy_loss;
-      ent += ps.entropy;
-      kl += ps.approx_kl;
-      clipfrac += ps.clip_fraction;
+      AddPolicyStats(sum, ps);
       // The KL divergence from the rollout's policy, before this minibatch's step; the adaptive
       // schedule sets the step's rate from it (the value thread reads it after the barrier).
       const double mb_kl =
           SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data()) / static_cast<double>(n);
-      gauss_kl += mb_kl;
+      sum.kl += mb_kl;
       if (adaptive) lr_ = o_.lr_schedule.Adapt(lr_, mb_kl);
       sq[k & 1][0] = critic_only ? 0.0 : SquaredNorm(actor_grad_);  // a held actor takes no part in the clip
       if (sequential_value) {
@@ -208,7 +221,7 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
         sync.ArriveAndWait();
       }
       const auto [norm, scale] = clip_scale(k);
-      gnorm += norm;
+      sum.grad_norm += norm;
       if (!critic_only) actor_adam_.Step(actor_params_.data(), actor_grad_.data(), lr_, scale);
       if (sequential_value) critic_adam_.Step(critic_params_.data(), critic_grad_.data(), lr_, scale);
     }
@@ -233,16 +246,7 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
   } else {
     policy_loop(true, wsp, wsv);
   }
-  UpdateStats st;
-  const double m = static_cast<double>(total);
-  st.policy_loss = pol_loss / m;
-  st.entropy = ent / m;
-  st.approx_kl = kl / m;
-  st.clip_fraction = clipfrac / m;
-  st.value_loss = vloss / m;
-  st.grad_norm = gnorm / m;
-  st.kl = gauss_kl / m;
-  return st;
+  return MeanOver(sum, total);
 }
 
 UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, double eps, bool critic_only,
@@ -261,7 +265,8 @@ UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, 
   };
   std::vector<ChunkStats> chunk(static_cast<std::size_t>(K));
   std::vector<double> seg_sq(static_cast<std::size_t>(2 * S), 0.0);  // actor segments, then critic's
-  double pol_loss = 0, ent = 0, kl = 0, clipfrac = 0, vloss = 0, gnorm = 0, gauss_kl = 0, lr_end = lr_;
+  UpdateStats sum;
+  double lr_end = lr_;
   SpinBarrier sync(W);
   auto segment = [](Eigen::Index n, int s, int count) {
     return std::pair<Eigen::Index, Eigen::Index>(n * s / count, n * (s + 1) / count);
@@ -343,14 +348,11 @@ UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, 
           o_.max_grad_norm > 0 && norm > 0 ? static_cast<float>(std::min(1.0, o_.max_grad_norm / (norm + 1e-6))) : 1.f;
       if (w == 0) {
         for (const ChunkStats& cs : chunk) {
-          pol_loss += cs.policy.policy_loss;
-          kl += cs.policy.approx_kl;
-          clipfrac += cs.policy.clip_fraction;
-          vloss += cs.value_loss;
+          AddPolicyStats(sum, cs.policy, &cs == &chunk[0]);  // the entropy: the actor's, once
+          sum.value_loss += cs.value_loss;
         }
-        ent += chunk[0].policy.entropy;
-        gnorm += norm;
-        gauss_kl += mb_kl;
+        sum.grad_norm += norm;
+        sum.kl += mb_kl;
         lr_end = lr;
       }
       for (int sg = w; sg < 2 * S; sg += W) {
@@ -367,16 +369,7 @@ UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, 
     }
   });
   lr_ = lr_end;
-  UpdateStats st;
-  const double m = static_cast<double>(mbs.total);
-  st.policy_loss = pol_loss / m;
-  st.entropy = ent / m;
-  st.approx_kl = kl / m;
-  st.clip_fraction = clipfrac / m;
-  st.value_loss = vloss / m;
-  st.grad_norm = gnorm / m;
-  st.kl = gauss_kl / m;
-  return st;
+  return MeanOver(sum, mbs.total);
 }
 
 }  // namespace pbppo::trainer

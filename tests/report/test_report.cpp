@@ -34,6 +34,19 @@ PngSize ReadPngSize(const std::string& path) {
   return {be32(16), be32(20)};
 }
 
+// The plot succeeded and wrote a PNG of this size.
+void CheckPng(const Status& st, const std::string& png, std::uint32_t width, std::uint32_t height) {
+  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
+  const PngSize size = ReadPngSize(png);
+  CHECK_MESSAGE(size.width == width, png);
+  CHECK_MESSAGE(size.height == height, png);
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream f(path);
+  return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
 TEST_CASE("gnuplot is installed (the CI machine has it: tools/setup.sh)") {
   REQUIRE(GnuplotAvailable());
 }
@@ -46,13 +59,8 @@ TEST_CASE("latency histograms: a PNG of every recorded stage, its script beside 
     p.Record(rt::Stage::kTick, 12000 + (i % 100) * 10);
   }
   const std::string dir = test::ScratchDir("report_latency");
-  const auto st = PlotLatency(rt::TakeReport(p), dir + "/latency.png", "test's tick");
-  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
-  const PngSize size = ReadPngSize(dir + "/latency.png");
-  CHECK(size.width == 1000);
-  CHECK(size.height == 560);
-  std::ifstream gp(dir + "/latency.png.gp");
-  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  CheckPng(PlotLatency(rt::TakeReport(p), dir + "/latency.png", "test's tick"), dir + "/latency.png", 1000, 560);
+  const std::string script = ReadText(dir + "/latency.png.gp");
   CHECK(script.find("$infer << EOD") != std::string::npos);
   CHECK(script.find("$observe") == std::string::npos);  // nothing recorded there
   CHECK(script.find("'test''s tick'") != std::string::npos);
@@ -80,13 +88,8 @@ TEST_CASE("training curves: return, clip bound, arm pulls and task success from 
   REQUIRE_MESSAGE(pngs.ok(), (pngs.ok() ? "" : pngs.error().message));
   CHECK(*pngs ==
         std::vector<std::string>{dir + "/return.png", dir + "/epsilon.png", dir + "/arms.png", dir + "/success.png"});
-  for (const auto& png : *pngs) {
-    const PngSize size = ReadPngSize(png);
-    CHECK_MESSAGE(size.width == 900, png);
-    CHECK_MESSAGE(size.height == 500, png);
-  }
-  std::ifstream gp(dir + "/plots.gp");
-  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  for (const auto& png : *pngs) CheckPng({}, png, 900, 500);
+  const std::string script = ReadText(dir + "/plots.gp");
   CHECK(script.find("$arms << EOD\nepsilon,pulls\n0.1,7\n0.2,0\n0.3,13\nEOD\n") == 0);  // a header: no arm is lost
 
   // No task success: three figures.
@@ -122,18 +125,11 @@ TEST_CASE("map: arena, obstacles, targets and paths of every kind") {
              {{{2, 3}, {9, 10}}, MapPlot::PathKind::kFailure},
              {{{1, 1}, {5, 5}}, MapPlot::PathKind::kTrajectory}};
   const std::string dir = test::ScratchDir("report_map");
-  auto st = PlotMap(m, dir + "/map.png");
-  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
-  PngSize size = ReadPngSize(dir + "/map.png");
-  CHECK(size.width == 900);
-  CHECK(size.height == 900);
+  CheckPng(PlotMap(m, dir + "/map.png"), dir + "/map.png", 900, 900);
   // The arena alone (no series at all) is still a figure.
   MapPlot empty;
   empty.arena = {0, 10, 0, 10};
-  st = PlotMap(empty, dir + "/empty.png");
-  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
-  size = ReadPngSize(dir + "/empty.png");
-  CHECK(size.width == 900);
+  CheckPng(PlotMap(empty, dir + "/empty.png"), dir + "/empty.png", 900, 900);
 }
 
 TEST_CASE("time series: stacked panels of commanded (dashed) and measured series, one colour per group") {
@@ -157,13 +153,9 @@ TEST_CASE("time series: stacked panels of commanded (dashed) and measured series
     p.panels.push_back(panel);
   }
   const std::string dir = test::ScratchDir("report_time_series");
-  auto st = PlotTimeSeries(p, dir + "/ts.png");
-  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
-  const PngSize size = ReadPngSize(dir + "/ts.png");
-  CHECK(size.width == 1100);
-  CHECK(size.height == 600);  // 300 per panel
+  CheckPng(PlotTimeSeries(p, dir + "/ts.png"), dir + "/ts.png", 1100, 600);  // 300 per panel
   p.panels[0].series[1].y.pop_back();
-  st = PlotTimeSeries(p, dir + "/bad.png");
+  auto st = PlotTimeSeries(p, dir + "/bad.png");
   REQUIRE_FALSE(st.ok());
   CHECK(st.error().message == "plot " + dir + "/bad.png: series 'robot 0 measured' has 50 x and 49 y values");
   st = PlotTimeSeries(TimeSeriesPlot{}, dir + "/none.png");
@@ -185,20 +177,15 @@ TEST_CASE("curve bands: each group's mean over its runs with a one-sd band, NaN 
   CurveBands c;
   c.title = "two groups";
   c.groups = {{"a", {run("a1", 0, 10), run("a2", 2, 10), run("a3", 4, 9)}}, {"b", {run("b1", -5, 10)}}};
-  auto st = PlotCurveBands(c, dir + "/bands.png");
-  REQUIRE_MESSAGE(st.ok(), (st.ok() ? "" : st.error().message));
-  const PngSize size = ReadPngSize(dir + "/bands.png");
-  CHECK(size.width == 900);
-  CHECK(size.height == 500);
-  std::ifstream gp(dir + "/bands.png.gp");
-  const std::string script((std::istreambuf_iterator<char>(gp)), {});
+  CheckPng(PlotCurveBands(c, dir + "/bands.png"), dir + "/bands.png", 900, 500);
+  const std::string script = ReadText(dir + "/bands.png.gp");
   CHECK(script.find("$g0 << EOD\n100 2 0 4\n200 3 1 5\n400 5 3 7\n") == 0);  // the NaN row (300) is left out
   CHECK(script.find("1000 10 8.58579 11.4142\n") != std::string::npos);      // two runs reach 1000 steps
   CHECK(script.find("$g1 << EOD\n100 -5 -5 -5\n") != std::string::npos);     // one run: no band
   CHECK(script.find("title 'a (3 runs)'") != std::string::npos);
 
   c.column = "missing";
-  st = PlotCurveBands(c, dir + "/bad.png");
+  auto st = PlotCurveBands(c, dir + "/bad.png");
   REQUIRE_FALSE(st.ok());
   CHECK(st.error().message == "curves: " + dir + "/a1/log.csv has no column 'missing'");
   c.column = "train_return_100";

@@ -70,19 +70,36 @@ TEST_CASE("mlp gradients match finite differences for every activation") {
   }
 }
 
+// A Gaussian policy (log-std -0.3, 0.2, 0.7, ...) and a value network, orthogonal weights from `rng`.
+struct Nets {
+  GaussianPolicy<double> pol;
+  Mlp<double> value;
+  std::vector<double> pp, pv;
+};
+Nets MakeNets(const std::vector<int>& policy_widths, const std::vector<int>& value_widths, Activation act, Rng& rng) {
+  Nets n{{Mlp<double>(MlpShape{policy_widths, act, Activation::kIdentity}), policy_widths.back()},
+         Mlp<double>(MlpShape{value_widths, act, Activation::kIdentity}),
+         {},
+         {}};
+  n.pp.resize(n.pol.size());
+  n.pv.resize(n.value.size());
+  n.pol.mean.InitOrthogonal(n.pp.data(), rng, std::sqrt(2.0), 1.0);
+  n.value.InitOrthogonal(n.pv.data(), rng, std::sqrt(2.0), 1.0);
+  for (int j = 0; j < n.pol.action_size; ++j)
+    n.pp[n.pol.log_std_offset() + static_cast<std::size_t>(j)] = -0.3 + 0.5 * j;
+  return n;
+}
+
 TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, value, entropy)") {
   for (bool clip_values : {false, true}) {
     for (bool normalize : {false, true}) {
       CAPTURE(clip_values);
       CAPTURE(normalize);
-      GaussianPolicy<double> pol{Mlp<double>(MlpShape{{3, 8, 8, 2}, Activation::kTanh, Activation::kIdentity}), 2};
-      Mlp<double> value(MlpShape{{3, 8, 8, 1}, Activation::kTanh, Activation::kIdentity});
       Rng rng(5);
-      std::vector<double> pp(pol.size()), pv(value.size());
-      pol.mean.InitOrthogonal(pp.data(), rng, std::sqrt(2.0), 1.0);
-      value.InitOrthogonal(pv.data(), rng, std::sqrt(2.0), 1.0);
-      pp[pol.log_std_offset()] = -0.3;
-      pp[pol.log_std_offset() + 1] = 0.2;
+      Nets nets = MakeNets({3, 8, 8, 2}, {3, 8, 8, 1}, Activation::kTanh, rng);
+      const GaussianPolicy<double>& pol = nets.pol;
+      const Mlp<double>& value = nets.value;
+      std::vector<double>&pp = nets.pp, &pv = nets.pv;
       const int B = 24;
       const Md obs = RandomMatrix(3, B, rng);
       const Md actions = RandomMatrix(2, B, rng);
@@ -129,12 +146,11 @@ TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, v
 TEST_CASE("chunks of a minibatch: their gradients and statistics add up to the whole minibatch's") {
   // The chunked update's arithmetic: each chunk's loss averaged over the whole minibatch (mean_over),
   // advantages normalised over the minibatch beforehand, the entropy term in one chunk only.
-  GaussianPolicy<double> pol{Mlp<double>(MlpShape{{5, 16, 8, 3}, Activation::kElu, Activation::kIdentity}), 3};
-  Mlp<double> value(MlpShape{{7, 16, 8, 1}, Activation::kElu, Activation::kIdentity});
   Rng rng(17);
-  std::vector<double> pp(pol.size()), pv(value.size());
-  pol.mean.InitOrthogonal(pp.data(), rng, std::sqrt(2.0), 1.0);
-  value.InitOrthogonal(pv.data(), rng, std::sqrt(2.0), 1.0);
+  const Nets nets = MakeNets({5, 16, 8, 3}, {7, 16, 8, 1}, Activation::kElu, rng);
+  const GaussianPolicy<double>& pol = nets.pol;
+  const Mlp<double>& value = nets.value;
+  const std::vector<double>&pp = nets.pp, &pv = nets.pv;
   const int n = 37;  // not a multiple of the 4 chunks
   const Md obs = RandomMatrix(5, n, rng), critic_obs = RandomMatrix(7, n, rng), actions = RandomMatrix(3, n, rng);
   std::vector<double> old_logp(n), adv(n), ret(n), old_v(n);
