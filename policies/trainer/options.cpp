@@ -16,8 +16,7 @@ Status TrainOptions::Validate() const {
   if (threads < 1 || threads > 256) return Invalid("--threads", std::to_string(threads) + " is not in [1, 256]");
   if (minibatch < 2) return Invalid("--minibatch", std::to_string(minibatch) + " is below 2");
   if (epochs < 1) return Invalid("--epochs", std::to_string(epochs) + " is not positive");
-  if (chunked_minibatch < 2)
-    return Invalid("--chunked-minibatch", std::to_string(chunked_minibatch) + " is below 2");
+  if (chunked_minibatch < 2) return Invalid("--chunked-minibatch", std::to_string(chunked_minibatch) + " is below 2");
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
   if (critic_warmup > 0 && init_blob.empty())
     return Invalid("--critic-warmup", "needs --init (it holds a trained policy while the fresh value network learns)");

@@ -271,6 +271,9 @@ TEST_CASE("trainer errors name the field and value") {
   c.num_envs = 0;
   CHECK(Train(c).error().message.find("--envs: 0") != std::string::npos);
   c = Small();
+  c.chunked_minibatch = 1;
+  CHECK(Train(c).error().message.find("--chunked-minibatch: 1 is below 2") != std::string::npos);
+  c = Small();
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);
   c = Small();
