@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "firmware/auv/auv_controller.hpp"
+#include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/rt/tick_clock.hpp"
@@ -84,7 +85,7 @@ int main(int argc, char** argv) {
               static_cast<unsigned long long>(allocs), rt::FormatText(r).c_str());
   if (!json.empty()) std::ofstream(json) << rt::FormatJson(r);
   if (!plot.empty()) {
-    if (auto st = rt::WritePlot(r, plot, "AUV controller tick"); !st)
+    if (auto st = report::PlotLatency(r, plot, "AUV controller tick"); !st)
       std::fprintf(stderr, "%s\n", st.error().message.c_str());
   }
   return allocs == 0 ? 0 : 1;

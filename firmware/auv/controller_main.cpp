@@ -27,6 +27,7 @@
 
 #include "firmware/auv/auv_controller.hpp"
 #include "firmware/auv/controller_loop.hpp"
+#include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/rt/tick_clock.hpp"
@@ -256,7 +257,7 @@ int main(int argc, char** argv) {
     if (!f) return Fail("--profile: cannot write '" + profile_json + "'", 1);
   }
   if (!profile_png.empty()) {
-    if (auto s = rt::WritePlot(report, profile_png, "pbppo-controller tick latency"); !s)
+    if (auto s = pbppo::report::PlotLatency(report, profile_png, "pbppo-controller tick latency"); !s)
       std::fprintf(stderr, "pbppo-controller: --profile-plot: %s\n", s.error().message.c_str());
   }
   return 0;

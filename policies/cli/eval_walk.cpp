@@ -1,88 +1,66 @@
 #include "policies/cli/eval_walk.hpp"
 
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "policies/envs/walk_eval.hpp"
+#include "report/plots.hpp"
 
 namespace pbppo::cli {
 namespace {
 
 // Commanded (dashed) against measured (solid) vx, vy and yaw rate of the traced robots over time.
-std::string Plot(const std::string& png, const envs::WalkEvalResult& r, const std::string& title) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return "gnuplot not found (tools/setup.sh installs it)";
-  const std::string dat = png + ".dat";
-  std::ofstream d(dat);
-  for (std::size_t k = 0; k < r.traces.size(); ++k) {
-    for (const auto& t : r.traces[k])
-      d << t.time_s << ' ' << t.command[0] << ' ' << t.measured[0] << ' ' << t.command[1] << ' ' << t.measured[1] << ' '
-        << t.command[2] << ' ' << t.measured[2] << '\n';
-    d << "\n\n";
-  }
-  d.close();
-  if (!d) return "cannot write " + dat;
-  const std::string gp = png + ".gp";
-  std::ofstream g(gp);
-  const char* colours[] = {"#1f77b4", "#d62728", "#2a9d3a", "#9467bd", "#ff7f0e"};
-  g << "set terminal pngcairo size 1100,900\nset output '" << png << "'\nset multiplot layout 3,1 title '" << title
-    << "'\nset grid\nset xlabel 'time [s]'\nset key outside right\n";
+Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::string& title) {
+  report::TimeSeriesPlot p;
+  p.title = title;
   const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
   for (int axis = 0; axis < 3; ++axis) {
-    g << "set ylabel '" << labels[axis] << "'\nplot ";
+    report::TimeSeriesPlot::Panel panel;
+    panel.ylabel = labels[axis];
     for (std::size_t k = 0; k < r.traces.size(); ++k) {
-      const char* c = colours[k % 5];
-      g << (k ? ", " : "") << "'" << dat << "' index " << k << " using 1:" << 2 + 2 * axis
-        << " with lines dt 2 lw 1.5 lc rgb '" << c << "' title 'robot " << k << " command', '' index " << k
-        << " using 1:" << 3 + 2 * axis << " with lines lw 1 lc rgb '" << c << "' title 'robot " << k << " measured'";
+      report::TimeSeriesPlot::Series command, measured;
+      command.title = "robot " + std::to_string(k) + " command";
+      measured.title = "robot " + std::to_string(k) + " measured";
+      command.group = measured.group = static_cast<int>(k);
+      command.dashed = true;
+      for (const auto& t : r.traces[k]) {
+        command.x.push_back(t.time_s);
+        command.y.push_back(t.command[static_cast<std::size_t>(axis)]);
+        measured.x.push_back(t.time_s);
+        measured.y.push_back(t.measured[static_cast<std::size_t>(axis)]);
+      }
+      panel.series.push_back(std::move(command));
+      panel.series.push_back(std::move(measured));
     }
-    g << "\n";
+    p.panels.push_back(std::move(panel));
   }
-  g << "unset multiplot\n";
-  g.close();
-  const std::string cmd = "gnuplot '" + gp + "' 2>'" + png + ".log'";
-  if (std::system(cmd.c_str()) != 0) return "gnuplot failed: see " + png + ".log";
-  return "";
+  return report::PlotTimeSeries(p, png);
 }
 
 }  // namespace
 
-int EvalWalk(const EvalOptions& o) {
-  auto model = policy::PolicyModel::FromFile(o.blob);
-  if (!model) {
-    std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());
-    return 1;
-  }
-  envs::QuadrupedWalkOptions wo;
-  wo.models_dir = o.models;
-  wo.terrain = o.terrain;
-  wo.commands = o.commands;
-  wo.randomize = o.randomize;
-  wo.resample_s = envs::kWalkEvalResampleS;
-  auto env = envs::QuadrupedWalk::Make(wo);
-  if (!env) {
-    std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
-    return 2;
-  }
+int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
   envs::WalkEvalOptions eo;
   eo.robots = o.episodes > 0 ? o.episodes : 50;
   eo.seed = o.seed;
   eo.trace_robots = o.plot.empty() && o.trajectories.empty() ? 0 : 3;
-  auto r = envs::EvaluateWalk(*model, **env, eo);
+  auto r = envs::EvaluateWalk(model, env, eo);
   if (!r) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
     return 1;
   }
-  const double dur = (*env)->params().episode_s;
+  const double dur = env.params().episode_s;
   std::string plot_note;
   if (!o.plot.empty()) {
     char title[200];
     std::snprintf(title, sizeof title, "%s, %s terrain: commanded (dashed) and measured body velocity",
-                  std::filesystem::path(o.blob).filename().c_str(), o.terrain.c_str());
-    plot_note = Plot(o.plot, *r, title);
-    if (!plot_note.empty()) std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+                  std::filesystem::path(o.blob).filename().c_str(), o.env.terrain.c_str());
+    if (auto st = Plot(o.plot, *r, title); !st) {
+      plot_note = st.error().message;
+      std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+    }
   }
   if (!o.trajectories.empty()) {
     std::ofstream f(o.trajectories);
@@ -102,8 +80,8 @@ int EvalWalk(const EvalOptions& o) {
     nlohmann::json j;
     j["blob"] = o.blob;
     j["env"] = "quadruped-walk";
-    j["terrain"] = o.terrain;
-    j["randomize"] = o.randomize;
+    j["terrain"] = o.env.terrain;
+    j["randomize"] = o.env.randomize;
     j["robots"] = r->robots;
     j["episode_s"] = dur;
     j["seed"] = o.seed;
@@ -131,7 +109,7 @@ int EvalWalk(const EvalOptions& o) {
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("%s on quadruped-walk, %s terrain%s: %d robots x %.0f s, seed %llu\n", o.blob.c_str(),
-                o.terrain.c_str(), o.randomize ? " (randomised robots)" : "", r->robots, dur,
+                o.env.terrain.c_str(), o.env.randomize ? " (randomised robots)" : "", r->robots, dur,
                 static_cast<unsigned long long>(o.seed));
     std::printf("mean |error|  vx %.3f m/s  vy %.3f m/s  yaw rate %.3f rad/s   (every step)\n", r->mean_abs_error[0],
                 r->mean_abs_error[1], r->mean_abs_error[2]);

@@ -2,10 +2,13 @@
 // command: tracking errors per axis, falls, a plot of commanded against measured velocities.
 #pragma once
 
-#include "policies/cli/train.hpp"
+#include "policies/cli/eval.hpp"
+#include "policies/envs/quadruped_walk.hpp"
+#include "runtime/policy/policy_model.hpp"
 
 namespace pbppo::cli {
 
-int EvalWalk(const EvalOptions& o);
+// `model` and `env` as pbppo eval loaded and built them from `o`.
+int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env);
 
 }  // namespace pbppo::cli

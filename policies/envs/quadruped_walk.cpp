@@ -70,7 +70,7 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   auto sh = std::make_shared<Shared>();
   sh->options = options;
   if (options.terrain != "flat" && options.terrain != "mixed")
-    return MakeError(ErrorCode::kInvalidValue, "terrain: '" + options.terrain + "' unknown (flat, mixed)");
+    return MakeError(ErrorCode::kInvalidValue, "--terrain: '" + options.terrain + "' unknown (flat, mixed)");
   if (!(options.blocks_fraction >= 0 && options.blocks_fraction <= 1))
     return MakeError(ErrorCode::kInvalidValue,
                      "blocks fraction: " + std::to_string(options.blocks_fraction) + " is not in [0, 1]");
@@ -85,7 +85,7 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   if (!params) return std::move(params).error();
   sh->params = *params;
   if (auto st = ApplyCommandSpec(options.commands, sh->params); !st)
-    return MakeError(ErrorCode::kInvalidValue, "commands: " + st.error().message);
+    return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
   if (options.resample_s < 0 || options.resample_s > 3600)
     return MakeError(ErrorCode::kInvalidValue,
                      "command resampling: " + std::to_string(options.resample_s) + " s is not in [0, 3600]");

@@ -236,12 +236,12 @@ TEST_CASE("quadruped-walk: blocks carry the robot - large blocks under the start
 TEST_CASE("quadruped-walk: bad inputs are refused at start naming the value") {
   QuadrupedWalkOptions o = Nominal();
   o.terrain = "stairs";
-  CHECK(ErrorOf(o) == "terrain: 'stairs' unknown (flat, mixed)");
+  CHECK(ErrorOf(o) == "--terrain: 'stairs' unknown (flat, mixed)");
   o = Nominal();
   o.commands = "1:x:1";
-  CHECK(ErrorOf(o) == "commands: '1:x:1': vy 'x' is not a number in [0, 5]");
+  CHECK(ErrorOf(o) == "--commands: '1:x:1': vy 'x' is not a number in [0, 5]");
   o.commands = "1:1";
-  CHECK(ErrorOf(o) == "commands: '1:1' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
+  CHECK(ErrorOf(o) == "--commands: '1:1' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
   o = Nominal();
   o.models_dir = test::ScratchDir("walk_no_robot");
   CHECK(ErrorOf(o).find("quadruped/quadruped.yaml: cannot open") != std::string::npos);
