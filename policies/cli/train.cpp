@@ -255,9 +255,13 @@ int Train(trainer::TrainOptions o, bool quiet) {
     printed = true;
     char success[32] = "";
     if (std::isfinite(p.task_success)) std::snprintf(success, sizeof success, "  success %.0f%%", 100 * p.task_success);
-    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f%s  eps %.3f   ",
+    char tracking[64] = "";
+    if (std::isfinite(p.tracking_error[0]))
+      std::snprintf(tracking, sizeof tracking, "  |error| vx %.2f vy %.2f yaw %.2f", p.tracking_error[0],
+                    p.tracking_error[1], p.tracking_error[2]);
+    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f%s%s  eps %.3f   ",
                  Human(static_cast<double>(p.env_steps)).c_str(), Human(static_cast<double>(p.total_steps)).c_str(),
-                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, p.epsilon);
+                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, tracking, p.epsilon);
     std::fflush(stderr);
   };
   std::fprintf(stderr, "pbppo train: %s, %s, seed %llu -> %s\n", o.env.name.c_str(), o.schedule.Describe().c_str(),

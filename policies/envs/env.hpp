@@ -13,7 +13,9 @@
 // default, pendulum and auv-nav): the critic sees the actor's observation.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -38,6 +40,10 @@ struct EpisodeInfo {
   bool failure = false;    // it ended in a failure (e.g. a collision)
   int goals = 0;           // sub-goals reached (e.g. targets)
   double time_s = 0.0;     // simulated time of the episode
+  // Velocity-tracking tasks: the episode's mean absolute error of vx, vy (m/s) and the yaw rate
+  // (rad/s) against the command; NaN where the task has none.
+  std::array<double, 3> tracking_error{kNoValue, kNoValue, kNoValue};
+  static constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Env {

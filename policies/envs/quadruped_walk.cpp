@@ -254,6 +254,7 @@ EpisodeInfo QuadrupedWalk::episode_info() const noexcept {
   e.failure = fell_;
   e.success = !fell_;
   e.time_s = static_cast<double>(step_) * shared_->params.policy_dt_s();
+  for (std::size_t k = 0; k < 3; ++k) e.tracking_error[k] = step_ > 0 ? error_sum_[k] / step_ : EpisodeInfo::kNoValue;
   return e;
 }
 
@@ -381,6 +382,7 @@ void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
   done_ = false;
   tel_ = WalkTelemetry{};
   command_ = {0, 0, 0, 0};
+  error_sum_ = {0, 0, 0};
   ResampleCommand();
   Contacts();
   Observe(observation, true);
@@ -517,6 +519,7 @@ double QuadrupedWalk::Reward() noexcept {
              w.feet_air_time * air + w.dof_pos_limits * limits;
   r *= dt;
   if (p.only_positive) r = std::max(r, 0.0);
+  if (fell_) r += w.termination * dt;  // after the clip, as legged_gym adds it
   return r;
 }
 
@@ -568,6 +571,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   tel_.time_s = step_ * dt;
   tel_.command = {command_[0], command_[1], command_[2]};
   tel_.measured = {v[0], v[1], d_->qvel[5]};
+  for (std::size_t k = 0; k < 3; ++k) error_sum_[k] += std::fabs(tel_.command[k] - tel_.measured[k]);
   tel_.position = {d_->qpos[0], d_->qpos[1], d_->qpos[2]};
   tel_.yaw_rad = yaw;
   tel_.on_blocks = on_blocks_;

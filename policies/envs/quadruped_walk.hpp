@@ -126,7 +126,8 @@ class QuadrupedWalk final : public Env {
   bool base_contact_ = false;
   double friction_ = 1, added_mass_ = 0;
   int latency_substeps_ = 0;
-  std::array<double, 4> command_{};  // vx, vy, yaw rate, heading
+  std::array<double, 4> command_{};    // vx, vy, yaw rate, heading
+  std::array<double, 3> error_sum_{};  // sum over the episode's steps of |command - measured|
   int step_ = 0;
   bool on_blocks_ = false, fell_ = false, done_ = true;
   std::vector<Block> blocks_;    // this episode's blocks

@@ -15,7 +15,7 @@ using Range = std::array<double, 2>;  // [low, high]
 
 struct WalkRewardScales {
   double tracking_lin_vel = 0, tracking_ang_vel = 0, lin_vel_z = 0, ang_vel_xy = 0, orientation = 0, torques = 0,
-         dof_acc = 0, action_rate = 0, collision = 0, feet_air_time = 0, dof_pos_limits = 0;
+         dof_acc = 0, action_rate = 0, collision = 0, feet_air_time = 0, dof_pos_limits = 0, termination = 0;
 };
 
 struct QuadrupedWalkParams {

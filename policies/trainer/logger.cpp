@@ -21,7 +21,8 @@ std::string Logger::CsvHeader(std::size_t arms) {
   std::ostringstream h;
   h << "iteration,env_steps,eval_steps,total_steps,arm,epsilon,feedback,feedback_before,improved,success_rate,"
        "train_return,train_return_100,episodes,approx_kl,clip_fraction,explained_variance,entropy,policy_loss,"
-       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100,learning_rate,kl";
+       "value_loss,grad_norm,log_std_mean,steps_per_second,task_success_100,learning_rate,kl,tracking_vx_100,"
+       "tracking_vy_100,tracking_yaw_rate_100";
   for (std::size_t i = 0; i < arms; ++i)
     h << ",arm" << i << "_epsilon,arm" << i << "_value,arm" << i << "_bonus,arm" << i << "_count";
   h << "\n";
@@ -36,7 +37,8 @@ std::string Logger::CsvRow(const IterationStats& s) {
     << s.success_rate << ',' << s.train_return << ',' << s.train_return_100 << ',' << s.episodes << ',' << s.approx_kl
     << ',' << s.clip_fraction << ',' << s.explained_variance << ',' << s.entropy << ',' << s.policy_loss << ','
     << s.value_loss << ',' << s.grad_norm << ',' << s.log_std_mean << ',' << s.steps_per_second << ','
-    << s.task_success_100 << ',' << s.learning_rate << ',' << s.kl;
+    << s.task_success_100 << ',' << s.learning_rate << ',' << s.kl << ',' << s.tracking_error_100[0] << ','
+    << s.tracking_error_100[1] << ',' << s.tracking_error_100[2];
   for (const auto& a : s.arms) r << ',' << a.epsilon << ',' << a.value << ',' << a.bonus << ',' << a.count;
   r << "\n";
   return r.str();
@@ -99,6 +101,10 @@ Status Logger::Finish(const std::string& env_name, TrainResult& res) {
   for (const auto& s : res.iterations) pulls[static_cast<std::size_t>(s.arm)]++;
   if (!res.iterations.empty() && std::isfinite(res.iterations.back().task_success_100))
     j["task_success_100"] = res.iterations.back().task_success_100;
+  if (!res.iterations.empty() && std::isfinite(res.iterations.back().tracking_error_100[0])) {
+    const auto& t = res.iterations.back().tracking_error_100;
+    j["tracking_error_100"] = {{"vx_mps", t[0]}, {"vy_mps", t[1]}, {"yaw_rate_radps", t[2]}};
+  }
   j["arm_pulls"] = pulls;
   j["blob"] = o_.out_dir + "/policy.blob";
   j["git_revision"] = res.spec.provenance.git_revision;

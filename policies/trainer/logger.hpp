@@ -3,6 +3,7 @@
 // results) and the curves drawn from log.csv (report/).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <limits>
@@ -27,6 +28,10 @@ struct Progress {
   double eta_seconds = 0;
   double mean_return = 0;                                          // last 100 training episodes
   double task_success = std::numeric_limits<double>::quiet_NaN();  // fraction of them that completed the task
+  // Their mean tracking errors (vx, vy m/s, yaw rate rad/s) where the task tracks a velocity, NaN otherwise.
+  std::array<double, 3> tracking_error{std::numeric_limits<double>::quiet_NaN(),
+                                       std::numeric_limits<double>::quiet_NaN(),
+                                       std::numeric_limits<double>::quiet_NaN()};
   double epsilon = 0;
 };
 
@@ -42,6 +47,7 @@ struct IterationStats : UpdateStats {
   double train_return = 0;      // mean of episodes completed in this iteration's rollout
   double train_return_100 = 0;  // mean of the last 100 training episodes
   double task_success_100 = 0;  // fraction of the last 100 training episodes that completed the task (NaN: n/a)
+  std::array<double, 3> tracking_error_100{};  // their mean tracking errors (NaN: n/a)
   int episodes = 0;
   double steps_per_second = 0;
   double learning_rate = 0;  // the rate of this iteration's update (adaptive: after its last minibatch)

@@ -114,8 +114,8 @@ void Runner::RolloutWorker(Worker& w) {
       if (s.terminated || s.truncated) {
         if (!s.terminated) ValueInput(e, r.truncation_value_inputs.col(i).data());
         const envs::EpisodeInfo info = env.episode_info();
-        w.episodes.emplace_back(i, ep_return_[static_cast<std::size_t>(e)],
-                                info.available ? (info.success ? 1 : 0) : -1);
+        w.episodes.push_back({i, ep_return_[static_cast<std::size_t>(e)], info.available ? (info.success ? 1 : 0) : -1,
+                              info.tracking_error});
         ep_return_[static_cast<std::size_t>(e)] = 0;
         env.Reset(rng, raw);
         if (cd_ > 0) env.CriticObservation(raw_c);
@@ -132,17 +132,21 @@ void Runner::CollectRollout() {
   pool_.Run([&](int w) {
     if (w < static_cast<int>(workers_.size())) RolloutWorker(workers_[static_cast<std::size_t>(w)]);
   });
-  std::vector<std::tuple<long, double, int>> eps;
+  std::vector<Episode> eps;
   for (auto& w : workers_) eps.insert(eps.end(), w.episodes.begin(), w.episodes.end());
-  std::sort(eps.begin(), eps.end());
+  std::sort(eps.begin(), eps.end(), [](const Episode& a, const Episode& b) { return a.index < b.index; });
   rollout_returns_.clear();
-  for (const auto& [i, r, ok] : eps) {
-    rollout_returns_.push_back(r);
-    last100_.push_back(r);
+  for (const Episode& ep : eps) {
+    rollout_returns_.push_back(ep.ret);
+    last100_.push_back(ep.ret);
     if (last100_.size() > 100) last100_.pop_front();
-    if (ok >= 0) {
-      success100_.push_back(ok);
+    if (ep.success >= 0) {
+      success100_.push_back(ep.success);
       if (success100_.size() > 100) success100_.pop_front();
+    }
+    if (std::isfinite(ep.tracking[0])) {
+      tracking100_.push_back(ep.tracking);
+      if (tracking100_.size() > 100) tracking100_.pop_front();
     }
   }
   RolloutStorage& r = rollout_;
@@ -208,6 +212,15 @@ double Runner::Mean100() const {
   double s = 0;
   for (double x : last100_) s += x;
   return s / static_cast<double>(last100_.size());
+}
+
+std::array<double, 3> Runner::Tracking100() const {
+  if (tracking100_.empty()) return {kNaN, kNaN, kNaN};
+  std::array<double, 3> m{};
+  for (const auto& t : tracking100_)
+    for (std::size_t k = 0; k < 3; ++k) m[k] += t[k];
+  for (double& x : m) x /= static_cast<double>(tracking100_.size());
+  return m;
 }
 
 double Runner::TaskSuccess100() const {
@@ -307,6 +320,7 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     st.eval_steps = eval_steps;
     st.train_return_100 = Mean100();
     st.task_success_100 = TaskSuccess100();
+    st.tracking_error_100 = Tracking100();
     const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
     st.steps_per_second = elapsed > 0 ? static_cast<double>(env_steps) / elapsed : 0;
     log.Log(st);
@@ -324,6 +338,7 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
               : 0;
       p.mean_return = st.train_return_100;
       p.task_success = st.task_success_100;
+      p.tracking_error = st.tracking_error_100;
       p.epsilon = st.epsilon;
       progress(p);
     }

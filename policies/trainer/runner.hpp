@@ -4,6 +4,7 @@
 // in the frozen blob (exporter.hpp). Same seed and same thread count give a bit-identical run.
 #pragma once
 
+#include <array>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -29,12 +30,19 @@ class Runner {
   Result<TrainResult> Learn(const std::function<void(const Progress&)>& progress);
 
  private:
+  // A finished training episode.
+  struct Episode {
+    long index = 0;  // t*N+e of its last step
+    double ret = 0;
+    int success = -1;                  // 1, 0, or -1: the environment has no notion of success
+    std::array<double, 3> tracking{};  // EpisodeInfo::tracking_error
+  };
   // A worker thread's share of the environments, [e0, e1), and its scratch.
   struct Worker {
     int e0 = 0, e1 = 0;
     Mat<float> x;
     typename Mlp<float>::Workspace ws;
-    std::vector<std::tuple<long, double, int>> episodes;  // (index t*N+e, return, success: 1, 0, -1 n/a)
+    std::vector<Episode> episodes;
   };
 
   void CollectRollout();
@@ -44,7 +52,8 @@ class Runner {
   // Mean return of the schedule's k deterministic evaluation episodes; their steps are added to *steps.
   double Evaluate(int iteration, std::uint64_t* steps);
   double Mean100() const;
-  double TaskSuccess100() const;  // NaN: no episode reported success
+  double TaskSuccess100() const;              // NaN: no episode reported success
+  std::array<double, 3> Tracking100() const;  // NaN: no episode reported tracking errors
   policy::PolicySpec Freeze(double final_return, std::uint64_t env_steps) const;
   Status WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name = "policy.blob");
 
@@ -63,7 +72,8 @@ class Runner {
   std::vector<Worker> workers_;
   std::vector<double> rollout_returns_;
   std::deque<double> last100_;
-  std::deque<int> success100_;  // task success of the last 100 training episodes (where known)
+  std::deque<int> success100_;                     // task success of the last 100 training episodes (where known)
+  std::deque<std::array<double, 3>> tracking100_;  // tracking errors of the last 100 (where known)
   double best_return_ = -std::numeric_limits<double>::infinity();
   double best_success_ = -1.0;  // -1: no task success known
 };
