@@ -85,10 +85,17 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-double CpuSeconds() {
+double CpuSeconds(clockid_t clock = CLOCK_PROCESS_CPUTIME_ID) {
   timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  clock_gettime(clock, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Each pool thread's CPU seconds so far.
+std::vector<double> ThreadCpu(WorkerPool& pool) {
+  std::vector<double> t(static_cast<std::size_t>(pool.size()));
+  pool.Run([&](int w) { t[static_cast<std::size_t>(w)] = CpuSeconds(CLOCK_THREAD_CPUTIME_ID); });
+  return t;
 }
 
 struct Shape {
@@ -103,10 +110,11 @@ int Update(int repeats) {
       "split: the actor's and the critic's halves of each minibatch side by side (below --chunked-minibatch);\n"
       "chunked: each minibatch in %d column chunks on every thread. Samples per second of wall time and per core\n"
       "(per CPU second of the process: spinning at a barrier counts), median of %d updates, the two modes taking\n"
-      "turns; values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
+      "turns; busiest: per CPU second of the busiest thread (what the wall rate would be with a core per\n"
+      "thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
       obs, actions, critic, Ppo::kChunks, repeats);
-  std::printf("%-12s %-8s %6s %3s  %10s %10s  %10s %10s  %10s\n", "networks", "rollout", "mb", "thr", "split/s",
-              "per core", "chunked/s", "per core", "values/s");
+  std::printf("%-12s %-8s %5s %3s  %9s %9s %9s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "thr", "split/s",
+              "per core", "busiest", "chunked/s", "per core", "busiest", "values/s");
   const std::vector<Shape> shapes = {{{128, 64, 32}, 512, 24},  {{256, 128, 64}, 64, 24},  {{256, 128, 64}, 128, 32},
                                      {{256, 128, 64}, 256, 48}, {{512, 256, 128}, 64, 24}, {{512, 256, 128}, 128, 32}};
   for (const Shape& shape : shapes) {
@@ -126,27 +134,33 @@ int Update(int repeats) {
       Rng rng(7);
       RolloutStorage r = SyntheticRollout(split_ppo, shape.steps, shape.envs, obs, critic, actions, rng);
       WorkerPool pool(threads);
-      std::vector<double> wall[2], cpu[2], values_s;
+      std::vector<double> wall[2], cpu[2], busiest[2], values_s;
       for (int k = 0; k < repeats; ++k) {
-        const auto t0 = Clock::now();
+        const auto v0 = Clock::now();
         split_ppo.ComputeReturns(r, pool);
-        values_s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+        values_s.push_back(std::chrono::duration<double>(Clock::now() - v0).count());
         for (int mode = 0; mode < 2; ++mode) {
           Ppo& ppo = mode == 0 ? split_ppo : chunked_ppo;
+          const std::vector<double> t0 = ThreadCpu(pool);
           const double c0 = CpuSeconds();
           const auto w0 = Clock::now();
           (void)ppo.Update(r, 0.2, false, pool);
           wall[mode].push_back(std::chrono::duration<double>(Clock::now() - w0).count());
           cpu[mode].push_back(CpuSeconds() - c0);
+          const std::vector<double> t1 = ThreadCpu(pool);
+          double most = 0;
+          for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
+          busiest[mode].push_back(most);
         }
       }
       const double samples = static_cast<double>(r.size()) * o.epochs;
       char net[32], roll[32];
       std::snprintf(net, sizeof net, "%d-%d-%d", shape.hidden[0], shape.hidden[1], shape.hidden[2]);
       std::snprintf(roll, sizeof roll, "%dx%d", shape.envs, shape.steps);
-      std::printf("%-12s %-8s %6d %3d  %10.0f %10.0f  %10.0f %10.0f  %10.0f\n", net, roll, o.minibatch, threads,
-                  samples / Median(wall[0]), samples / Median(cpu[0]), samples / Median(wall[1]),
-                  samples / Median(cpu[1]), static_cast<double>(r.size()) / Median(values_s));
+      std::printf("%-12s %-8s %5d %3d  %9.0f %9.0f %9.0f  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch, threads,
+                  samples / Median(wall[0]), samples / Median(cpu[0]), samples / Median(busiest[0]),
+                  samples / Median(wall[1]), samples / Median(cpu[1]), samples / Median(busiest[1]),
+                  static_cast<double>(r.size()) / Median(values_s));
       std::fflush(stdout);
     }
   }

@@ -31,7 +31,7 @@ struct TrainOptions {
   // --chunked-minibatch: minibatches of at least this many samples are computed in column chunks on
   // every thread and summed in a fixed order (the result does not depend on the thread count);
   // smaller ones run the actor and the critic side by side on two threads.
-  long chunked_minibatch = 1024;
+  long chunked_minibatch = 2048;
 
   // PPO.
   int minibatch = 64;

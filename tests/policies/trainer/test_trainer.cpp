@@ -121,6 +121,7 @@ TEST_CASE("chunked update: the same parameters for 1, 2 and 3 threads (the split
   o.policy_hidden = {64, 32};
   o.activation = policy::Activation::kElu;
   o.minibatch = 1500;
+  o.chunked_minibatch = 1000;
   o.epochs = 3;
   o.clip_vf = 0.2;
   o.ent_coef = 0.01;
