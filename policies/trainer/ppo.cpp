@@ -156,6 +156,10 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
   const Mat<float>& value_in = r.value_inputs();
   // Squared gradient norms per minibatch, [policy, value] in two slots alternating by parity.
   double sq[2][2] = {{0, 0}, {0, 0}};
+  // Each minibatch's learning rate, in the same alternating slots: the policy thread adapts it
+  // before the barrier and the value thread reads its minibatch's slot after it, so neither reads
+  // a rate the other is writing.
+  double step_lr[2] = {lr_, lr_};
   UpdateStats sum;
   const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
   // With two threads or more the policy's and the value network's halves of each minibatch run side
@@ -213,6 +217,7 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
           SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data()) / static_cast<double>(n);
       sum.kl += mb_kl;
       if (adaptive) lr_ = o_.lr_schedule.Adapt(lr_, mb_kl);
+      step_lr[k & 1] = lr_;
       sq[k & 1][0] = critic_only ? 0.0 : SquaredNorm(actor_grad_);  // a held actor takes no part in the clip
       if (sequential_value) {
         gather_value(k, v_in, rt, ov);
@@ -233,7 +238,7 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
       gather_value(k, v_in, rt, ov);
       value_step(k, v_in, rt, ov, wsv);
       sync.ArriveAndWait();
-      critic_adam_.Step(critic_params_.data(), critic_grad_.data(), lr_, clip_scale(k).second);
+      critic_adam_.Step(critic_params_.data(), critic_grad_.data(), step_lr[k & 1], clip_scale(k).second);
     }
   };
   PolicyWorkspace<float> wsp;
