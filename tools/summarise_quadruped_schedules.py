@@ -4,25 +4,11 @@
 yaw rate over 50 robots, falls) and the wall time; the training curves (return, vx tracking error)
 with one-sd bands (pbppo curves). Usage: summarise_quadruped_schedules.py RUNS_DIR OUT.md SCHEDULE..."""
 import json
-import math
 import os
 import subprocess
 import sys
 
-T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262}
-
-
-def mean_ci(xs):
-    n = len(xs)
-    m = sum(xs) / n
-    if n < 2:
-        return m, float("nan")
-    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1))
-    return m, T95.get(n - 1, 1.96) * sd / math.sqrt(n)
-
-
-def fmt(mc, p=3):
-    return ("%.*f ± %.*f" % (p, mc[0], p, mc[1])) if not math.isnan(mc[1]) else "%.*f" % (p, mc[0])
+from seed_stats import fmt, mean_ci
 
 
 def main():

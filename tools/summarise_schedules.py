@@ -5,22 +5,12 @@ return, and the total environment steps; writes a Markdown table and a plot of t
 (mean over seeds with a one-sd band, drawn by `pbppo curves`: PBPPO names the binary, default
 build/default/policies/pbppo). Usage: summarise_schedules.py RUNS_DIR OUT.md SCHEDULE..."""
 import json
-import math
 import os
 import subprocess
 import sys
 
 # Two-sided 95% quantiles of Student's t by degrees of freedom.
-T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228}
-
-
-def mean_ci(xs):
-    n = len(xs)
-    m = sum(xs) / n
-    if n < 2:
-        return m, float("nan")
-    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1))
-    return m, T95.get(n - 1, 1.96) * sd / math.sqrt(n)
+from seed_stats import fmt, mean_ci
 
 
 def main():
@@ -60,7 +50,6 @@ def main():
         plot_note = "![training curves](%s.png)\n" % os.path.basename(base)
     except (OSError, subprocess.CalledProcessError) as e:
         plot_note = "(plot failed: %s)\n" % e
-    fmt = lambda mc, p=1: ("%.*f ± %.*f" % (p, mc[0], p, mc[1])) if not math.isnan(mc[1]) else "%.*f" % (p, mc[0])
     with open(out_md, "w") as f:
         f.write("# Clip schedules on auv-nav, hard layout\n\n")
         f.write("Produced by `tools/compare_auv_schedules.sh` (do not edit by hand). Same PPO settings for every run "
@@ -75,7 +64,7 @@ def main():
         for (s, n, seeds, fin, ts, su, er, lo, hi, per) in rows:
             st = "%d" % lo if lo == hi else "%d-%d" % (lo, hi)
             f.write("| `%s` | %d (%s) | %s | %s | %s | %s | %s | %s |\n" % (
-                s, n, seeds, st, fmt(fin), fmt(ts), fmt(su), fmt(er), ", ".join("%.0f" % x for x in per)))
+                s, n, seeds, st, fmt(fin, 1), fmt(ts, 1), fmt(su, 1), fmt(er, 1), ", ".join("%.0f" % x for x in per)))
         f.write("\n" + plot_note)
     print(open(out_md).read())
 
