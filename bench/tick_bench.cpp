@@ -3,6 +3,7 @@
 // widths when the robot has an IO layout, else its stand trajectory (or the default pose).
 //
 //   pbppo_bench_tick [--robot models/auv/robot.yaml] [--ticks N] [--hidden 64,64] [--json FILE]
+//                    [--plot FILE.png]
 //
 // Every tick delivers a sample on every stream: motors answer with the commanded position (the
 // default pose before), other fields vary inside their sample-check bounds (orientations
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/core/clock.hpp"
 #include "runtime/loop/loop.hpp"
@@ -53,13 +55,14 @@ int Fail(const std::string& msg) {
 
 int main(int argc, char** argv) {
   CLI::App app{"pbppo_bench_tick: one robot's loop tick over an in-memory transport"};
-  std::string robot_path = std::string(PBPPO_SOURCE_DIR) + "/models/auv/robot.yaml", json;
+  std::string robot_path = std::string(PBPPO_SOURCE_DIR) + "/models/auv/robot.yaml", json, plot;
   std::vector<std::uint32_t> hidden{64, 64};
   std::uint64_t ticks = 100000;
   app.add_option("--robot", robot_path, "The robot (models/<robot>/robot.yaml)");
   app.add_option("--ticks", ticks, "Timed ticks")->check(CLI::Range(1, 100000000));
   app.add_option("--hidden", hidden, "Hidden widths of the random policy")->delimiter(',');
   app.add_option("--json", json, "Write the profile as JSON");
+  app.add_option("--plot", plot, "Draw the latency histograms as PNG");
   CLI11_PARSE(app, argc, argv);
 
   auto loaded = robot::LoadRobotModel(robot_path);
@@ -121,5 +124,9 @@ int main(int argc, char** argv) {
                         .c_str(),
               static_cast<unsigned long long>(allocs), rt::FormatText(r).c_str());
   if (!json.empty()) std::ofstream(json) << rt::FormatJson(r);
+  if (!plot.empty()) {
+    if (auto st = report::PlotLatency(r, plot, m.name + " loop tick"); !st)
+      std::fprintf(stderr, "%s\n", st.error().message.c_str());
+  }
   return allocs == 0 ? 0 : 1;
 }

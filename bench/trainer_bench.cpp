@@ -1,19 +1,42 @@
-// Trainer throughput on Pendulum with stable-baselines3's PPO defaults (1 env x 2048 steps,
-// minibatch 64, 10 epochs, 64-64 tanh, fixed clip 0.2): environment steps per second, updates
-// included. Usage: pbppo_bench_trainer [steps=204800] [threads=2] [envs=1]
+// Trainer throughput.
+//
+//   pbppo_bench_trainer [pendulum] [steps=204800] [threads=2] [envs=1]
+//     Pendulum with stable-baselines3's PPO defaults (1 env x 2048 steps, minibatch 64, 10 epochs,
+//     64-64 tanh, fixed clip 0.2): environment steps per second, updates included.
+//   pbppo_bench_trainer update [repeats=5]
+//     The PPO update alone (ppo.hpp) at locomotion shapes: 48 actor inputs, 12 actions, a 65-input
+//     critic, ELU networks 128-64-32, 256-128-64 and 512-256-128, rollouts of 64 x 24 to 512 x 24
+//     steps in 4 minibatches, 5 epochs, on 1 and 2 threads, in both update modes (split and
+//     chunked, see ppo.hpp) taking turns: samples per second (rollout samples x epochs / update
+//     time) of wall time and per CPU second, the median of `repeats` updates; and the critic's values
+//     and GAE (ComputeReturns).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
+#include <limits>
+#include <string>
+#include <vector>
 
+#include "policies/trainer/ppo.hpp"
 #include "policies/trainer/trainer.hpp"
 
-int main(int argc, char** argv) {
-  pbppo::trainer::TrainConfig c;
+namespace {
+
+using namespace pbppo;
+using namespace pbppo::trainer;
+using Clock = std::chrono::steady_clock;
+
+int Pendulum(int argc, char** argv) {
+  TrainOptions c;
   c.total_steps = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 204800;
   c.threads = argc > 2 ? std::atoi(argv[2]) : 2;
   c.num_envs = argc > 3 ? std::atoi(argv[3]) : 1;
   c.rollout_steps = 2048 / c.num_envs;
   c.seed = 1;
-  auto r = pbppo::trainer::Train(c);
+  auto r = Train(c);
   if (!r) {
     std::fprintf(stderr, "trainer_bench: %s\n", r.error().message.c_str());
     return 1;
@@ -23,4 +46,131 @@ int main(int argc, char** argv) {
   std::printf("steps %llu  wall %.3f s  steps/s %.0f  (updates included)  final return %.1f\n",
               static_cast<unsigned long long>(r->env_steps), r->wall_seconds, r->steps_per_second, r->final_return);
   return 0;
+}
+
+// A rollout of random observations whose actions the actor sampled, with random advantages and
+// returns: what the update reads, at the given shape.
+RolloutStorage SyntheticRollout(const Ppo& ppo, int steps, int envs, int obs, int critic, int actions, Rng& rng) {
+  RolloutStorage r(steps, envs, obs, critic, actions);
+  const long B = r.size();
+  for (long i = 0; i < B; ++i) {
+    for (int j = 0; j < obs; ++j) r.obs(j, i) = static_cast<float>(rng.Normal());
+    for (int j = 0; j < critic; ++j) r.critic_obs(j, i) = static_cast<float>(rng.Normal());
+  }
+  typename Mlp<float>::Workspace ws;
+  const Mat<float>& mu = ppo.actor().mean.Forward(ppo.actor_params(), r.obs, ws);
+  const float* log_std = ppo.log_std();
+  std::copy(log_std, log_std + actions, r.log_std.begin());
+  for (long i = 0; i < B; ++i) {
+    float lp = 0;
+    for (int j = 0; j < actions; ++j) {
+      const float z = static_cast<float>(rng.Normal());
+      r.action_mean(j, i) = mu(j, i);
+      r.actions(j, i) = mu(j, i) + std::exp(log_std[j]) * z;
+      lp += -0.5f * z * z - log_std[j] - 0.9189385f;
+    }
+    const auto u = static_cast<std::size_t>(i);
+    r.log_prob[u] = lp;
+    r.advantages[u] = static_cast<float>(rng.Normal());
+    r.returns[u] = static_cast<float>(rng.Normal());
+    r.values[u] = static_cast<float>(rng.Normal());
+  }
+  for (int e = 0; e < envs; ++e)
+    for (int j = 0; j < r.value_input_size(); ++j) r.last_value_inputs(j, e) = static_cast<float>(rng.Normal());
+  return r;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+double CpuSeconds(clockid_t clock = CLOCK_PROCESS_CPUTIME_ID) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Each pool thread's CPU seconds so far.
+std::vector<double> ThreadCpu(WorkerPool& pool) {
+  std::vector<double> t(static_cast<std::size_t>(pool.size()));
+  pool.Run([&](int w) { t[static_cast<std::size_t>(w)] = CpuSeconds(CLOCK_THREAD_CPUTIME_ID); });
+  return t;
+}
+
+struct Shape {
+  std::vector<int> hidden;
+  int envs, steps;
+};
+
+int Update(int repeats) {
+  const int obs = 48, critic = 65, actions = 12;
+  std::printf(
+      "PPO update at locomotion shapes: %d actor inputs, %d actions, %d critic inputs, ELU, 4 minibatches, 5 epochs.\n"
+      "split: the actor's and the critic's halves of each minibatch side by side (below --chunked-minibatch);\n"
+      "chunked: each minibatch in %d column chunks on every thread. Samples per second of wall time and per core\n"
+      "(per CPU second of the process: spinning at a barrier counts), median of %d updates, the two modes taking\n"
+      "turns; busiest: per CPU second of the busiest thread (what the wall rate would be with a core per\n"
+      "thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
+      obs, actions, critic, Ppo::kChunks, repeats);
+  std::printf("%-12s %-8s %5s %3s  %9s %9s %9s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "thr", "split/s",
+              "per core", "busiest", "chunked/s", "per core", "busiest", "values/s");
+  const std::vector<Shape> shapes = {{{128, 64, 32}, 512, 24},  {{256, 128, 64}, 64, 24},  {{256, 128, 64}, 128, 32},
+                                     {{256, 128, 64}, 256, 48}, {{512, 256, 128}, 64, 24}, {{512, 256, 128}, 128, 32}};
+  for (const Shape& shape : shapes) {
+    for (int threads : {1, 2}) {
+      TrainOptions o;
+      o.policy_hidden = shape.hidden;
+      o.activation = policy::Activation::kElu;
+      o.epochs = 5;
+      o.minibatch = shape.envs * shape.steps / 4;
+      o.threads = threads;
+      o.max_grad_norm = 1.0;
+      o.clip_vf = 0.2;
+      TrainOptions chunked = o;
+      o.chunked_minibatch = std::numeric_limits<long>::max();  // split
+      chunked.chunked_minibatch = 2;
+      Ppo split_ppo(o, obs, critic, actions), chunked_ppo(chunked, obs, critic, actions);
+      Rng rng(7);
+      RolloutStorage r = SyntheticRollout(split_ppo, shape.steps, shape.envs, obs, critic, actions, rng);
+      WorkerPool pool(threads);
+      std::vector<double> wall[2], cpu[2], busiest[2], values_s;
+      for (int k = 0; k < repeats; ++k) {
+        const auto v0 = Clock::now();
+        split_ppo.ComputeReturns(r, pool);
+        values_s.push_back(std::chrono::duration<double>(Clock::now() - v0).count());
+        for (int mode = 0; mode < 2; ++mode) {
+          Ppo& ppo = mode == 0 ? split_ppo : chunked_ppo;
+          const std::vector<double> t0 = ThreadCpu(pool);
+          const double c0 = CpuSeconds();
+          const auto w0 = Clock::now();
+          (void)ppo.Update(r, 0.2, false, pool);
+          wall[mode].push_back(std::chrono::duration<double>(Clock::now() - w0).count());
+          cpu[mode].push_back(CpuSeconds() - c0);
+          const std::vector<double> t1 = ThreadCpu(pool);
+          double most = 0;
+          for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
+          busiest[mode].push_back(most);
+        }
+      }
+      const double samples = static_cast<double>(r.size()) * o.epochs;
+      char net[32], roll[32];
+      std::snprintf(net, sizeof net, "%d-%d-%d", shape.hidden[0], shape.hidden[1], shape.hidden[2]);
+      std::snprintf(roll, sizeof roll, "%dx%d", shape.envs, shape.steps);
+      std::printf("%-12s %-8s %5d %3d  %9.0f %9.0f %9.0f  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch, threads,
+                  samples / Median(wall[0]), samples / Median(cpu[0]), samples / Median(busiest[0]),
+                  samples / Median(wall[1]), samples / Median(cpu[1]), samples / Median(busiest[1]),
+                  static_cast<double>(r.size()) / Median(values_s));
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "update") return Update(argc > 2 ? std::max(1, std::atoi(argv[2])) : 5);
+  if (argc > 1 && std::string(argv[1]) == "pendulum") return Pendulum(argc - 1, argv + 1);
+  return Pendulum(argc, argv);
 }

@@ -16,11 +16,14 @@
 // or a joint trajectory (--trajectory, the robot's stand_trajectory.yaml or another), or none
 // (hold the default pose). Ticks come from absolute deadlines at the robot's tick period, or in
 // lock-step with a simulator: over DDS one tick per sample (--lockstep), over CAN each tick waits
-// for the replies it is owed (--lockstep-wait-ms). SIGINT/SIGTERM, --ticks or --duration stop:
-// motors are damped and switched off; a robot without motors sends its stop command.
+// for the replies it is owed (--lockstep-wait-ms). SIGINT/SIGTERM, --ticks or --duration (seconds
+// of ticks: in lock-step, simulated time) stop: motors are damped and switched off; a robot without
+// motors sends its stop command.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +34,7 @@
 #include <vector>
 
 #include "firmware/auv/auv_transport.hpp"
+#include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/runner.hpp"
@@ -74,7 +78,9 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--candump", o.candump, "Log every CAN frame (candump -L)");
   app.add_flag("--receive-all", o.receive_all, "CAN: no kernel filter (count strays)");
   app.add_option("--ticks", o.max_ticks, "Stop after this many ticks (0: no limit)");
-  app.add_option("--duration", o.duration_s, "Stop after this many seconds (0: no limit)")->check(CLI::Range(0.0, 1e7));
+  app.add_option("--duration", o.duration_s,
+                 "Stop after this many seconds of ticks (duration / tick period ticks; lock-step: simulated time)")
+      ->check(CLI::Range(0.0, 1e7));
   app.add_option("--peer-timeout-s", o.peer_timeout_s, "DDS: how long to wait for the vehicle at start-up")
       ->check(CLI::Range(0.1, 3600.0));
   app.add_option("--lost-after-s", o.lost_after_s, "DDS: the vehicle is lost after this long without a sample")
@@ -239,7 +245,7 @@ int main(int argc, char** argv) {
                                                               : "holding the default pose");
   std::fflush(stdout);
 
-  // Status publication, the phase as it changes, progress line and --duration: another thread.
+  // Status publication, the phase as it changes, progress line: another thread.
   std::thread status([&] {
     const auto t0 = std::chrono::steady_clock::now();
     auto next = t0;
@@ -253,8 +259,6 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         phase = st.phase;
       }
-      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (o.duration_s > 0 && elapsed >= o.duration_s) loop::RequestStop();
       if (std::chrono::steady_clock::now() < next) continue;
       next += std::chrono::milliseconds(static_cast<long>(o.status_every_s * 1000));
       if (link) (void)link->PublishStatus(auv::StatusOf(*loop));
@@ -268,12 +272,18 @@ int main(int argc, char** argv) {
     }
   });
 
+  // --ticks and --duration: whichever comes first (control time: in lock-step the simulator's).
+  std::uint64_t max_ticks = o.max_ticks;
+  if (o.duration_s > 0) {
+    const auto d = static_cast<std::uint64_t>(std::max(1.0, std::round(o.duration_s / robot.tick_period_s)));
+    max_ticks = max_ticks == 0 ? d : std::min(max_ticks, d);
+  }
   // Every heap allocation of this (the control) thread while the loop runs is counted.
   std::uint64_t allocations = 0;
   loop::RunResult r;
   {
     AllocationScope scope;
-    r = loop::Run(robot, data, *loop, transports, *clock, {o.max_ticks, true});
+    r = loop::Run(robot, data, *loop, transports, *clock, {max_ticks, true});
     allocations = scope.count();
   }
   done.store(true);
@@ -291,7 +301,7 @@ int main(int argc, char** argv) {
   std::printf("control thread heap allocations during the loop: %llu\n", static_cast<unsigned long long>(allocations));
   if (auv)
     std::printf("link: send failures %llu, stopped by %s\n", static_cast<unsigned long long>(auv->send_failures()),
-                episode_end.load() ? "the vehicle's episode end" : (r.stopped ? "a signal or --duration" : "--ticks"));
+                episode_end.load() ? "the vehicle's episode end" : (r.stopped ? "a signal" : "--ticks or --duration"));
   if (source->trajectory != nullptr && source->trajectory->ticks() > 0)
     std::printf("trajectory tracking RMS %.4f rad over %llu ticks\n", source->trajectory->rms_tracking_error_rad(),
                 static_cast<unsigned long long>(source->trajectory->ticks()));
@@ -307,7 +317,7 @@ int main(int argc, char** argv) {
     if (!f) return Fail("--profile: cannot write '" + o.profile_json + "'", 1);
   }
   if (!o.profile_png.empty()) {
-    if (auto s = rt::WritePlot(report, o.profile_png, "pbppo-controller tick latency"); !s)
+    if (auto s = pbppo::report::PlotLatency(report, o.profile_png, "pbppo-controller tick latency"); !s)
       std::fprintf(stderr, "pbppo-controller: --profile-plot: %s\n", s.error().message.c_str());
   }
   return r.status == loop::TickStatus::kFailed ? 1 : 0;

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "report/plots.hpp"
 #include "runtime/robot/auv_messages.hpp"
 #include "runtime/transport/dds/auv_dds_link.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
@@ -130,50 +131,24 @@ Status WriteEvents(const std::string& path, const AuvHilOptions& o, const AuvNav
   return {};
 }
 
-// The trajectory over the layout with gnuplot: walls, boxes and circles (fixed and this episode's
-// random ones), targets numbered with their acceptance circles, the start point.
-Status WritePlot(const AuvHilOptions& o, const AuvTaskConfig& cfg, const AuvNavTask& task, AuvHilOutcome outcome) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
-    return MakeError(ErrorCode::kUnsupported, "--plot '" + o.plot_png + "': gnuplot not found (tools/setup.sh)");
+// The trajectory over the layout: walls, boxes and circles (fixed and this episode's random ones),
+// targets numbered with their acceptance circles, the start point.
+Status WritePlot(const AuvHilOptions& o, const AuvTaskConfig& cfg, const AuvNavTask& task, AuvHilOutcome outcome,
+                 const std::vector<Row>& rows) {
   const World2d& w = task.world();
-  const Arena& a = w.arena;
-  std::ostringstream gp;
-  gp << "set terminal png size 800,800\nset output '" << o.plot_png << "'\n"
-     << "set datafile separator ','\nset size ratio -1\nset grid\nset termoption noenhanced\nset key below\n"
-     << "set title 'AUV HIL: layout " << o.layout << ", seed " << o.seed << ", " << ToString(outcome) << "'\n"
-     << "set xlabel 'x (m)'\nset ylabel 'y (m)'\n"
-     << "set xrange [" << a.x_min_m - 1 << ":" << a.x_max_m + 1 << "]\nset yrange [" << a.y_min_m - 1 << ":"
-     << a.y_max_m + 1 << "]\n";
-  int obj = 1;
-  gp << "set object " << obj++ << " rect from " << a.x_min_m << "," << a.y_min_m << " to " << a.x_max_m << ","
-     << a.y_max_m << " fs empty border lc rgb 'black' lw 3 front\n";
-  for (const Box& b : w.boxes)
-    gp << "set object " << obj++ << " rect from " << b.x_min_m << "," << b.y_min_m << " to " << b.x_max_m << ","
-       << b.y_max_m << " fc rgb 'gray40' fs solid 0.6 border lc rgb 'black'\n";
+  report::MapPlot m;
+  m.title = "AUV HIL: layout " + o.layout + ", seed " + std::to_string(o.seed) + ", " + ToString(outcome);
+  m.arena = {w.arena.x_min_m, w.arena.x_max_m, w.arena.y_min_m, w.arena.y_max_m};
+  for (const Box& b : w.boxes) m.boxes.push_back({b.x_min_m, b.x_max_m, b.y_min_m, b.y_max_m});
   const std::size_t fixed = cfg.layout.world.circles.size();
-  for (std::size_t i = 0; i < w.circles.size(); ++i) {
-    const Circle& c = w.circles[i];
-    gp << "set object " << obj++ << " circle at " << c.x_m << "," << c.y_m << " size " << c.radius_m << " fc rgb '"
-       << (i < fixed ? "gray40" : "brown") << "' fs solid 0.6 border lc rgb 'black'\n";
-  }
-  for (std::size_t i = 0; i < cfg.layout.targets.size(); ++i) {
-    const auto& t = cfg.layout.targets[i];
-    gp << "set object " << obj++ << " circle at " << t[0] << "," << t[1] << " size " << cfg.task.target_radius_m
-       << " fs empty border lc rgb 'forest-green' lw 2\n"
-       << "set label " << i + 1 << " '" << i + 1 << "' at " << t[0] << "," << t[1]
-       << " center font ',14' tc rgb 'forest-green' front\n";
-  }
-  gp << "plot '" << o.trajectory_csv << "' using 2:3 skip 1 with lines lw 2 lc rgb 'blue' title 'trajectory', "
-     << "'' using 2:3 skip 1 every ::0::0 with points pt 7 ps 1.5 lc rgb 'blue' title 'start'\n";
-  const std::string script = o.plot_png + ".gp";
-  {
-    std::ofstream f(script);
-    f << gp.str();
-    if (!f.good()) return MakeError(ErrorCode::kIo, "--plot '" + o.plot_png + "': cannot write " + script);
-  }
-  const std::string cmd = "gnuplot '" + script + "' 2>'" + o.plot_png + ".log'";
-  if (std::system(cmd.c_str()) != 0)
-    return MakeError(ErrorCode::kIo, "--plot '" + o.plot_png + "': gnuplot failed, see " + o.plot_png + ".log");
+  for (std::size_t i = 0; i < w.circles.size(); ++i)
+    (i < fixed ? m.obstacles : m.random_obstacles)
+        .push_back({w.circles[i].x_m, w.circles[i].y_m, w.circles[i].radius_m});
+  for (const auto& t : cfg.layout.targets) m.targets.push_back({t[0], t[1]});
+  m.target_radius_m = cfg.task.target_radius_m;
+  m.paths.emplace_back();
+  for (const Row& r : rows) m.paths.back().xy.push_back({r.x_m, r.y_m});
+  if (auto s = report::PlotMap(m, o.plot_png); !s) return MakeError(s.error().code, "--plot: " + s.error().message);
   return {};
 }
 
@@ -428,7 +403,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   if (!opt.events_json.empty())
     if (auto s = WriteEvents(opt.events_json, opt, task, rec, sum); !s) rc = fail(s.error().message);
   if (!opt.plot_png.empty()) {
-    if (auto s = WritePlot(opt, *cfg, task, sum.outcome); !s)
+    if (auto s = WritePlot(opt, *cfg, task, sum.outcome, rec.rows); !s)
       rc = fail(s.error().message);
     else
       std::printf("  plot: %s\n", opt.plot_png.c_str());

@@ -6,7 +6,8 @@
 # policy is evaluated deterministically on 100 hard episodes from seed 900001 (not a training seed).
 # The reward is the shipped policy's training reward (PROGRESS=geodesic, MARGIN=2:4: the geodesic
 # progress term with its margin; PROGRESS=euclidean MARGIN= for the paper's).
-# Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot.
+# Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot of
+# the training curves (pbppo curves: mean over seeds with a one-sd band).
 # Usage: tools/compare_auv_schedules.sh [OUT_DIR=runs/compare_auv]
 #   (PBPPO=path/to/pbppo, STEPS=1e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100, PROGRESS, MARGIN may be set)
 set -euo pipefail
@@ -45,4 +46,5 @@ print("  last-100 return %.1f, eval success %.0f%%, eval return %.1f, steps %d" 
  100*e["success_rate"], e["mean_return"], s["env_steps"] + s["eval_steps"]))' "$run/eval.json" "$run/summary.json"
   done
 done
-python3 "$root/tools/summarise_schedules.py" "$out" "$root/docs/results/auv_hard_schedules.md" "${schedules[@]}"
+PBPPO="$pbppo" python3 "$root/tools/summarise_schedules.py" "$out" "$root/docs/results/auv_hard_schedules.md" \
+  "${schedules[@]}"

@@ -11,6 +11,8 @@ PACKAGES=(
   # libraries
   libeigen3-dev doctest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
   libsimbody-dev
+  # MuJoCo 2.2.2 (the quadruped's training physics); its CMake package needs qhull
+  libmujoco-dev libqhull-dev
   # plots
   gnuplot-nox
   # DDS: Fast DDS 2.9 with its CDR library, and the IDL code generator (a Java program)

@@ -1,31 +1,21 @@
 #!/usr/bin/env python3
 """Summarises tools/compare_auv_schedules.sh runs: per schedule the mean over seeds with a 95%
 Student-t interval of the final training return, the deterministic evaluation's success rate and
-return, and the total environment steps; writes a Markdown table and a plot of the mean training
-curves (gnuplot). Usage: summarise_schedules.py RUNS_DIR OUT.md SCHEDULE..."""
-import csv
+return, and the total environment steps; writes a Markdown table and a plot of the training curves
+(mean over seeds with a one-sd band, drawn by `pbppo curves`: PBPPO names the binary, default
+build/default/policies/pbppo). Usage: summarise_schedules.py RUNS_DIR OUT.md SCHEDULE..."""
 import json
-import math
 import os
 import subprocess
 import sys
 
 # Two-sided 95% quantiles of Student's t by degrees of freedom.
-T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228}
-
-
-def mean_ci(xs):
-    n = len(xs)
-    m = sum(xs) / n
-    if n < 2:
-        return m, float("nan")
-    sd = math.sqrt(sum((x - m) ** 2 for x in xs) / (n - 1))
-    return m, T95.get(n - 1, 1.96) * sd / math.sqrt(n)
+from seed_stats import fmt, mean_ci
 
 
 def main():
     runs, out_md, schedules = sys.argv[1], sys.argv[2], sys.argv[3:]
-    rows, curves = [], {}
+    rows, groups = [], []
     reward = "the paper's reward"  # from the runs' summaries
     for s in schedules:
         tag = s.replace(":", "_")
@@ -46,35 +36,20 @@ def main():
             evret.append(ev["mean_return"])
             steps.append(summ["env_steps"] + summ["eval_steps"])
             seeds.append(str(summ["seed"]))
-            with open(os.path.join(runs, d, "log.csv")) as f:
-                for r in csv.DictReader(f):
-                    k = int(r["env_steps"])
-                    curves.setdefault(s, {}).setdefault(k, []).append(float(r["train_return_100"]))
+        groups.append("%s=%s" % (s, ",".join(os.path.join(runs, d) for d in dirs)))
         rows.append((s, len(dirs), ",".join(seeds), mean_ci(fin), mean_ci(tsucc), mean_ci(succ), mean_ci(evret),
                      min(steps), max(steps), succ))
     os.makedirs(os.path.dirname(out_md), exist_ok=True)
     base = os.path.splitext(out_md)[0]
-    dat = base + ".dat"
-    with open(dat, "w") as f:
-        for i, s in enumerate(schedules):
-            if s not in curves:
-                continue
-            f.write('"%s"\n' % s)
-            for k in sorted(curves[s]):
-                v = curves[s][k]
-                f.write("%d %.3f %d\n" % (k, sum(v) / len(v), len(v)))
-            f.write("\n\n")
-    plot_note = ""
-    gp = ("set terminal pngcairo size 900,500\nset output '%s.png'\nset grid\nset key left top\n"
-          "set xlabel 'environment steps'\nset ylabel 'training return (last 100 episodes), mean over seeds'\n"
-          "plot for [i=0:%d] '%s' index i using 1:2 with lines lw 2 title columnheader(1)\n"
-          % (base, len(curves) - 1, dat))
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    pbppo = os.environ.get("PBPPO", os.path.join(root, "build", "default", "policies", "pbppo"))
     try:
-        subprocess.run(["gnuplot"], input=gp.encode(), check=True, capture_output=True)
-        plot_note = "![mean training curves](%s.png)\n" % os.path.basename(base)
+        subprocess.run([pbppo, "curves", "--out", base + ".png", "--title", "auv-nav hard: training return by clip "
+                        "schedule (mean over seeds, one-sd band)", "--ylabel", "training return (last 100 episodes)"]
+                       + groups, check=True, capture_output=True)
+        plot_note = "![training curves](%s.png)\n" % os.path.basename(base)
     except (OSError, subprocess.CalledProcessError) as e:
         plot_note = "(plot failed: %s)\n" % e
-    fmt = lambda mc, p=1: ("%.*f ± %.*f" % (p, mc[0], p, mc[1])) if not math.isnan(mc[1]) else "%.*f" % (p, mc[0])
     with open(out_md, "w") as f:
         f.write("# Clip schedules on auv-nav, hard layout\n\n")
         f.write("Produced by `tools/compare_auv_schedules.sh` (do not edit by hand). Same PPO settings for every run "
@@ -89,7 +64,7 @@ def main():
         for (s, n, seeds, fin, ts, su, er, lo, hi, per) in rows:
             st = "%d" % lo if lo == hi else "%d-%d" % (lo, hi)
             f.write("| `%s` | %d (%s) | %s | %s | %s | %s | %s | %s |\n" % (
-                s, n, seeds, st, fmt(fin), fmt(ts), fmt(su), fmt(er), ", ".join("%.0f" % x for x in per)))
+                s, n, seeds, st, fmt(fin, 1), fmt(ts, 1), fmt(su, 1), fmt(er, 1), ", ".join("%.0f" % x for x in per)))
         f.write("\n" + plot_note)
     print(open(out_md).read())
 

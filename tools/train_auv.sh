@@ -44,7 +44,7 @@ import json, sys
 s = json.load(open(sys.argv[1]))
 want = {"env": sys.argv[2], "seed": int(sys.argv[3]), "learning_rate": float(sys.argv[4]), "progress": sys.argv[5],
         "geodesic_margin": sys.argv[6] or None, "clearance_penalty": sys.argv[7] or None}
-got = {k: s.get(k) for k in want}
+got = {k: s.get(k) or None if isinstance(s.get(k), str) else s.get(k) for k in want}  # "" (not set) as None
 if got != want:
     print("train_auv: %s holds another run (%s, this script wants %s); delete it or choose another OUT_DIR"
           % (sys.argv[1], got, want), file=sys.stderr)

@@ -1,6 +1,8 @@
 // pbppo: the project's command-line tool.
 #include <CLI/CLI.hpp>
 
+#include "policies/cli/curves.hpp"
+#include "policies/cli/eval.hpp"
 #include "policies/cli/inspect.hpp"
 #include "policies/cli/replay.hpp"
 #include "policies/cli/train.hpp"
@@ -23,13 +25,19 @@ int main(int argc, char** argv) {
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
 
-  pbppo::cli::TrainOptions train_opts;
+  pbppo::trainer::TrainOptions train_opts;
+  bool train_quiet = false;
   auto* train = app.add_subcommand("train", "Train a policy with PPO and a clip schedule (Pb-PPO)");
-  pbppo::cli::AddTrainOptions(*train, train_opts);
+  pbppo::cli::AddTrainOptions(*train, train_opts, train_quiet);
 
   pbppo::cli::EvalOptions eval_opts;
   auto* eval = app.add_subcommand("eval", "Run a policy blob on an environment with the runtime forward");
   pbppo::cli::AddEvalOptions(*eval, eval_opts);
+
+  pbppo::cli::CurvesOptions curves_opts;
+  auto* curves = app.add_subcommand(
+      "curves", "Draw groups of training runs against each other: per group the mean of a log.csv column and a band");
+  pbppo::cli::AddCurvesOptions(*curves, curves_opts);
 
   pbppo::cli::ReplayOptions replay_opts;
   auto* replay = pbppo::cli::AddReplay(app, replay_opts);
@@ -41,8 +49,9 @@ int main(int argc, char** argv) {
   }
   if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json);
   if (*synth) return pbppo::cli::Synth(synth_opts);
-  if (*train) return pbppo::cli::Train(train_opts);
+  if (*train) return pbppo::cli::Train(train_opts, train_quiet);
   if (*eval) return pbppo::cli::Eval(eval_opts);
+  if (*curves) return pbppo::cli::Curves(curves_opts);
   if (*replay) return pbppo::cli::Replay(replay_opts);
   return 2;
 }

@@ -1,26 +1,19 @@
 #include "policies/cli/train.hpp"
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
-#include <filesystem>
-#include <fstream>
-#include <nlohmann/json.hpp>
+#include <memory>
+#include <string>
 #include <vector>
 
-#include "policies/envs/auv_nav.hpp"
-#include "policies/envs/env.hpp"
 #include "policies/trainer/trainer.hpp"
-#include "runtime/policy/policy_model.hpp"
-#include "runtime/robot/io_layout.hpp"
-#include "sim_hil/scenarios/auv_sonar.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -56,23 +49,28 @@ int Fail(const std::string& msg, int rc = 2) {
   return rc;
 }
 
-bool ParseWidths(const std::string& field, const std::string& s, std::vector<int>* out) {
-  out->clear();
+// "64-64" -> {64, 64}, each width in [1, 2048]; an error names the flag and the bad part.
+std::vector<int> ParseWidths(const std::string& flag, const std::string& s) {
+  std::vector<int> out;
   std::size_t pos = 0;
   while (pos <= s.size()) {
     const auto dash = s.find('-', pos);
     const std::string part = s.substr(pos, dash == std::string::npos ? std::string::npos : dash - pos);
     char* end = nullptr;
     const long v = std::strtol(part.c_str(), &end, 10);
-    if (part.empty() || *end != '\0' || v < 1 || v > 2048) {
-      std::fprintf(stderr, "pbppo train: %s: '%s' is not a width in [1, 2048]\n", field.c_str(), part.c_str());
-      return false;
-    }
-    out->push_back(static_cast<int>(v));
+    if (part.empty() || *end != '\0' || v < 1 || v > 2048)
+      throw CLI::ValidationError(flag, "'" + part + "' is not a width in [1, 2048]");
+    out.push_back(static_cast<int>(v));
     if (dash == std::string::npos) break;
     pos = dash + 1;
   }
-  return true;
+  return out;
+}
+
+std::string Number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
 }
 
 std::string Human(double v) {
@@ -89,44 +87,112 @@ std::string Human(double v) {
 
 }  // namespace
 
-void AddTrainOptions(CLI::App& s, TrainOptions& o) {
-  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
-  s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
-  s.add_option("--exploring-starts", o.exploring_starts,
+void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
+  envs::EnvOptions& env = o.env;
+  s.add_option("--env", env.name, "Environment: pendulum, auv-nav, quadruped-walk");
+  s.add_option("--layout", env.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
+  s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
                "target (success is counted only from the layout's start)");
   s.add_option(
-      "--progress", o.progress,
+      "--progress", env.progress,
       "auv-nav: the reward's progress term: euclidean (the paper: straight-line distance and bearing to "
       "the target) or geodesic (shortest path around obstacles), for every layout or per layout as "
       "LAYOUT=MODE,... (e.g. hard=geodesic; the others keep it); default: models/auv/auv.yaml's task.progress");
-  s.add_option("--geodesic-margin", o.geodesic_margin,
+  s.add_option("--geodesic-margin", env.geodesic_margin,
                "auv-nav: DISTANCE_M:COST, the geodesic path pays up to COST extra per metre within DISTANCE_M beyond "
                "l_safe of obstacles (keeps the progress term off the collision boundary); default: auv.yaml's "
                "task.geodesic_margin (none)");
-  s.add_option("--clearance-penalty", o.clearance_penalty,
+  s.add_option("--clearance-penalty", env.clearance_penalty,
                "auv-nav: DISTANCE_M:PER_STEP, each step within DISTANCE_M beyond l_safe of an obstacle costs up to "
                "PER_STEP (linear, the full cost at l_safe); default: auv.yaml's task.clearance_penalty (none)");
-  s.add_option("--extra-obstacles", o.extra_obstacles,
+  s.add_option("--extra-obstacles", env.extra_obstacles,
                "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
                "so that the policy has to steer by its sonar rather than learn a route");
-  s.add_option("--schedule", o.schedule,
-               "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo");
-  s.add_option("--arms", o.arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]");
-  s.add_option("--feedback", o.feedback, "Bandit feedback: eval (k deterministic episodes) or rollout");
-  s.add_option("--eval-episodes", o.eval_episodes, "k, evaluation episodes per iteration (eval feedback)");
-  s.add_option("--bandit-lambda", o.bandit_lambda, "Exploration weight (default: 5 paper/reference, 1 pbppo)");
-  s.add_option("--bandit-gamma", o.bandit_gamma, "Bandit discount (default: 0.99 paper/reference, 0.95 pbppo)");
-  s.add_option("--steps", o.steps, "Training environment steps (e.g. 2e5)");
+  s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
+  s.add_option("--commands", env.commands,
+               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
+  s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
+
+  // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default
+  // bandit weights), the bandit flags adjust it; resolved once every flag is read.
+  struct ScheduleFlags {
+    std::string schedule = "pbppo", arms = "0.02:0.5:6";
+    double lambda = -1, gamma = -1;  // < 0: the schedule's default
+  };
+  auto flags = std::make_shared<ScheduleFlags>();
+  s.add_option("--schedule", flags->schedule,
+               "Clip schedule: fixed:EPS, pbppo-paper[:wi-ad|:wo-ad], pbppo-reference[:wi-ad|:wo-ad], pbppo")
+      ->default_str(flags->schedule);
+  s.add_option("--arms", flags->arms, "Candidate clip bounds: MIN:MAX:N (linspace) or a,b,c; each in [0, 1]")
+      ->default_str(flags->arms);
+  s.add_option_function<std::string>(
+      "--feedback",
+      [&o](const std::string& v) {
+        if (v == "eval") {
+          o.schedule.feedback = trainer::FeedbackSource::kEval;
+        } else if (v == "rollout") {
+          o.schedule.feedback = trainer::FeedbackSource::kRollout;
+        } else {
+          throw CLI::ValidationError("--feedback", "'" + v + "' unknown (eval or rollout)");
+        }
+      },
+      "Bandit feedback: eval (k deterministic episodes, the default) or rollout");
+  o.schedule.feedback = trainer::FeedbackSource::kEval;
+  s.add_option("--eval-episodes", o.schedule.eval_episodes, "k, evaluation episodes per iteration (eval feedback)");
+  s.add_option("--bandit-lambda", flags->lambda, "Exploration weight (default: 5 paper/reference, 1 pbppo)");
+  s.add_option("--bandit-gamma", flags->gamma, "Bandit discount (default: 0.99 paper/reference, 0.95 pbppo)");
+  s.final_callback([&o, flags] {
+    std::vector<double> arms;
+    if (flags->schedule.rfind("fixed", 0) != 0) {
+      auto a = trainer::ParseArms(flags->arms);
+      if (!a) throw CLI::ValidationError(a.error().message);
+      arms = a.value();
+    }
+    auto sc = trainer::ParseSchedule(flags->schedule, arms);
+    if (!sc) throw CLI::ValidationError(sc.error().message);
+    sc->feedback = o.schedule.feedback;
+    sc->eval_episodes = o.schedule.eval_episodes;
+    if (flags->lambda >= 0) sc->lambda = flags->lambda;
+    if (flags->gamma >= 0) {
+      if (flags->gamma > 1) throw CLI::ValidationError("--bandit-gamma", Number(flags->gamma) + " is not in [0, 1]");
+      sc->gamma = flags->gamma;
+    }
+    o.schedule = sc.value();
+  });
+
+  s.add_option_function<double>(
+       "--steps",
+       [&o](double v) {
+         if (!(v >= 1 && v <= 1e12)) throw CLI::ValidationError("--steps", Number(v) + " is not in [1, 1e12]");
+         o.total_steps = static_cast<std::uint64_t>(std::llround(v));
+       },
+       "Training environment steps (e.g. 2e5)")
+      ->default_str("2e5");
+  o.total_steps = 200000;
   s.add_option("--seed", o.seed, "Seed");
-  s.add_option("--out", o.out, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
-  s.add_option("--threads", o.threads, "Worker threads (rollout envs; >= 2 also splits policy/value updates)");
-  s.add_option("--envs", o.envs, "Parallel environments");
-  s.add_option("--rollout", o.rollout, "Steps per environment and iteration");
+  s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
+  s.add_option("--threads", o.threads,
+               "Worker threads: the environments' steps and the update (see --chunked-minibatch)");
+  s.add_option("--chunked-minibatch", o.chunked_minibatch,
+               "Minibatches of at least N samples are computed in column chunks on every thread, summed in a fixed "
+               "order (the same result for any --threads); smaller ones run the policy and value network side by "
+               "side");
+  s.add_option("--envs", o.num_envs, "Parallel environments");
+  s.add_option("--rollout", o.rollout_steps, "Steps per environment and iteration");
   s.add_option("--minibatch", o.minibatch, "Minibatch size");
   s.add_option("--epochs", o.epochs, "Epochs per iteration");
-  s.add_option("--lr", o.lr, "Adam learning rate");
-  s.add_flag("--anneal-lr", o.anneal_lr, "Decay the learning rate linearly to 0 over the budget");
+  s.add_option("--lr", o.learning_rate, "Adam learning rate (the first one with --lr-schedule anneal or adaptive)");
+  s.add_option_function<std::string>(
+       "--lr-schedule",
+       [&o](const std::string& v) {
+         auto sched = trainer::ParseLrSchedule(v);
+         if (!sched) throw CLI::ValidationError(sched.error().message);
+         o.lr_schedule = sched.value();
+       },
+       "Learning rate over the run: constant; anneal (linear to 0 over the budget); adaptive[:KL] (rsl_rl's: "
+       "/1.5 when the policy's KL divergence exceeds 2 KL, x1.5 below KL/2, within [1e-5, 1e-2]; KL 0.01)")
+      ->default_str("constant");
   s.add_flag("--keep-best", o.keep_best, "Also write best.blob: the policy of the best last-100-episode return");
   s.add_option("--snapshots", o.snapshots,
                "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by training steps), "
@@ -137,123 +203,70 @@ void AddTrainOptions(CLI::App& s, TrainOptions& o) {
   s.add_option("--vf-coef", o.vf_coef, "Value loss coefficient");
   s.add_option("--max-grad-norm", o.max_grad_norm, "Global gradient-norm clip (<= 0: off)");
   s.add_option("--clip-vf", o.clip_vf, "Value clipping range (<= 0: off)");
-  s.add_option("--hidden", o.hidden, "Policy hidden widths, e.g. 64-64");
-  s.add_option("--value-hidden", o.value_hidden, "Value hidden widths (default: --hidden)");
-  s.add_option("--activation", o.activation, "Hidden activation: tanh, elu, relu, identity");
+  s.add_option_function<std::string>(
+       "--hidden", [&o](const std::string& v) { o.policy_hidden = ParseWidths("--hidden", v); },
+       "Policy hidden widths, e.g. 64-64")
+      ->default_str("64-64");
+  s.add_option_function<std::string>(
+      "--value-hidden", [&o](const std::string& v) { o.value_hidden = ParseWidths("--value-hidden", v); },
+      "Value network hidden widths (default: --hidden)");
+  s.add_option_function<std::string>(
+       "--activation",
+       [&o](const std::string& v) {
+         if (!policy::ParseActivation(v, &o.activation))
+           throw CLI::ValidationError("--activation", "'" + v + "' unknown (tanh, elu, relu, identity)");
+       },
+       "Hidden activation: tanh, elu, relu, identity")
+      ->default_str("tanh");
   s.add_option("--log-std-init", o.log_std_init, "Initial log standard deviation");
-  s.add_flag("--normalize-obs", o.normalize_obs, "Running observation normalisation (frozen into the blob)");
+  s.add_flag("--normalize-obs", o.normalize_observations,
+             "Running observation normalisation (the actor's is frozen into the blob; a privileged critic "
+             "observation gets its own)");
   s.add_flag("--scale-rewards", o.scale_rewards, "Scale rewards by the running std of the discounted return");
-  s.add_flag("--no-adv-norm", o.no_adv_norm, "No per-minibatch advantage normalisation");
-  s.add_flag("--no-plots", o.no_plots, "Do not run gnuplot");
+  s.add_flag_callback(
+      "--no-adv-norm", [&o] { o.normalize_advantages = false; }, "No per-minibatch advantage normalisation");
+  s.add_flag_callback("--no-plots", [&o] { o.plots = false; }, "Do not draw the curves");
   s.add_option("--checkpoint-seconds", o.checkpoint_seconds, "Seconds between checkpoint blobs");
-  s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
   s.add_option("--critic-warmup", o.critic_warmup,
                "With --init: the first N iterations train only the (fresh) value network, the policy is held");
-  s.add_option("--init", o.init,
+  s.add_option("--init", o.init_blob,
                "Start from this blob's policy and observation normaliser (same IO layout, --hidden and "
                "--activation; value network and log-std start fresh), e.g. to continue on a harder layout");
-  s.add_flag("--quiet", o.quiet, "No progress line");
+  s.add_flag("--quiet", quiet, "No progress line");
 }
 
-int Train(const TrainOptions& o) {
-  trainer::TrainConfig c;
-  c.env = o.env;
-  c.models_dir = o.models;
-  c.layout = o.layout;
-  c.exploring_starts = o.exploring_starts;
-  c.progress = o.progress;
-  c.geodesic_margin = o.geodesic_margin;
-  c.clearance_penalty = o.clearance_penalty;
-  c.extra_obstacles = o.extra_obstacles;
-  if (!(o.steps >= 1 && o.steps <= 1e12)) return Fail("--steps: " + std::to_string(o.steps) + " is not in [1, 1e12]");
-  c.total_steps = static_cast<std::uint64_t>(std::llround(o.steps));
-  c.seed = o.seed;
-  c.threads = o.threads;
-  c.num_envs = o.envs;
-  c.rollout_steps = o.rollout;
-  c.minibatch = o.minibatch;
-  c.epochs = o.epochs;
-  c.learning_rate = o.lr;
-  c.anneal_lr = o.anneal_lr;
-  c.keep_best = o.keep_best;
-  c.snapshots = o.snapshots;
-  c.critic_warmup = o.critic_warmup;
-  c.gamma = o.gamma;
-  c.gae_lambda = o.gae_lambda;
-  c.ent_coef = o.ent_coef;
-  c.vf_coef = o.vf_coef;
-  c.max_grad_norm = o.max_grad_norm;
-  c.clip_vf = o.clip_vf;
-  c.log_std_init = o.log_std_init;
-  c.normalize_observations = o.normalize_obs;
-  c.init_blob = o.init;
-  c.scale_rewards = o.scale_rewards;
-  c.normalize_advantages = !o.no_adv_norm;
-  c.plots = !o.no_plots;
-  c.checkpoint_seconds = o.checkpoint_seconds;
-  c.out_dir = o.out;
-  if (!ParseWidths("--hidden", o.hidden, &c.policy_hidden)) return 2;
-  if (!ParseWidths("--value-hidden", o.value_hidden.empty() ? o.hidden : o.value_hidden, &c.value_hidden)) return 2;
-  if (!policy::ParseActivation(o.activation, &c.activation)) {
-    return Fail("--activation '" + o.activation + "' unknown (tanh, elu, relu, identity)");
-  }
-  std::vector<double> arms;
-  if (o.schedule.rfind("fixed", 0) != 0) {
-    auto a = trainer::ParseArms(o.arms);
-    if (!a) return Fail(a.error().message);
-    arms = a.value();
-  }
-  auto sc = trainer::ParseSchedule(o.schedule, arms);
-  if (!sc) return Fail(sc.error().message);
-  c.schedule = sc.value();
-  if (o.feedback == "eval") {
-    c.schedule.feedback = trainer::FeedbackSource::kEval;
-  } else if (o.feedback == "rollout") {
-    c.schedule.feedback = trainer::FeedbackSource::kRollout;
-  } else {
-    return Fail("--feedback '" + o.feedback + "' unknown (eval or rollout)");
-  }
-  c.schedule.eval_episodes = o.eval_episodes;
-  if (o.bandit_lambda >= 0) c.schedule.lambda = o.bandit_lambda;
-  if (o.bandit_gamma >= 0) {
-    if (o.bandit_gamma > 1) return Fail("--bandit-gamma: " + std::to_string(o.bandit_gamma) + " is not in [0, 1]");
-    c.schedule.gamma = o.bandit_gamma;
-  }
-  if (auto st = c.Validate(); !st) return Fail(st.error().message);
-  {
-    envs::EnvOptions eo;
-    eo.models_dir = c.models_dir;
-    eo.layout = c.layout;
-    eo.exploring_starts = c.exploring_starts;
-    eo.progress = c.progress;
-    eo.geodesic_margin = c.geodesic_margin;
-    eo.clearance_penalty = c.clearance_penalty;
-    eo.extra_obstacles = c.extra_obstacles;
-    if (auto env = envs::MakeEnv(c.env, eo); !env) return Fail(env.error().message);
-  }
+int Train(trainer::TrainOptions o, bool quiet) {
+  // Every option checked before the run starts (bad input: exit 2).
+  if (auto st = o.Validate(); !st) return Fail(st.error().message);
+  auto env = envs::MakeEnv(o.env);
+  if (!env) return Fail(env.error().message);
 
   g_stop.store(false);
   g_first_sigint_ns.store(0);
-  c.stop = &g_stop;
+  o.stop = &g_stop;
   auto previous = std::signal(SIGINT, OnSigint);
   auto last_print = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   bool printed = false;
   auto progress = [&](const trainer::Progress& p) {
-    if (o.quiet) return;
+    if (quiet) return;
     const auto now = std::chrono::steady_clock::now();
     if (now - last_print < std::chrono::milliseconds(250) && p.env_steps < p.total_steps) return;
     last_print = now;
     printed = true;
     char success[32] = "";
     if (std::isfinite(p.task_success)) std::snprintf(success, sizeof success, "  success %.0f%%", 100 * p.task_success);
-    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f%s  eps %.3f   ",
+    char tracking[64] = "";
+    if (std::isfinite(p.tracking_error[0]))
+      std::snprintf(tracking, sizeof tracking, "  |error| vx %.2f vy %.2f yaw %.2f", p.tracking_error[0],
+                    p.tracking_error[1], p.tracking_error[2]);
+    std::fprintf(stderr, "\r%s/%s steps  %s steps/s  ETA %.0fs  return %.1f%s%s  eps %.3f   ",
                  Human(static_cast<double>(p.env_steps)).c_str(), Human(static_cast<double>(p.total_steps)).c_str(),
-                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, p.epsilon);
+                 Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, tracking, p.epsilon);
     std::fflush(stderr);
   };
-  std::fprintf(stderr, "pbppo train: %s, %s, seed %llu -> %s\n", c.env.c_str(), c.schedule.Describe().c_str(),
-               static_cast<unsigned long long>(c.seed), c.out_dir.c_str());
-  auto r = trainer::Train(c, progress);
+  std::fprintf(stderr, "pbppo train: %s, %s, seed %llu -> %s\n", o.env.name.c_str(), o.schedule.Describe().c_str(),
+               static_cast<unsigned long long>(o.seed), o.out_dir.c_str());
+  auto r = trainer::Train(o, std::move(env).value(), progress);
   std::signal(SIGINT, previous);
   if (printed) std::fprintf(stderr, "\n");
   if (!r) return Fail(r.error().message, 1);
@@ -261,286 +274,10 @@ int Train(const TrainOptions& o) {
               static_cast<unsigned long long>(r->env_steps), static_cast<unsigned long long>(r->eval_steps),
               static_cast<unsigned long long>(r->env_steps + r->eval_steps), r->wall_seconds, r->steps_per_second);
   std::printf("final return (last 100 training episodes) %.2f\n", r->final_return);
-  std::printf("blob %s/policy.blob\n%s\n", c.out_dir.c_str(), r->plots_note.c_str());
+  std::printf("blob %s/policy.blob\n%s\n", o.out_dir.c_str(), r->plots_note.c_str());
   if (r->interrupted) {
-    std::fprintf(stderr, "pbppo train: interrupted; log and last checkpoint are in %s\n", c.out_dir.c_str());
+    std::fprintf(stderr, "pbppo train: interrupted; log and last checkpoint are in %s\n", o.out_dir.c_str());
     return 130;
-  }
-  return 0;
-}
-
-void AddEvalOptions(CLI::App& s, EvalOptions& o) {
-  s.add_option("blob", o.blob, "Policy blob file")->required();
-  s.add_option("--env", o.env, "Environment: pendulum, auv-nav");
-  s.add_option("--layout", o.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
-  s.add_option("--episodes", o.episodes, "Episodes")->check(CLI::Range(1, 1000000));
-  s.add_option("--seed", o.seed, "Seed for the initial states");
-  s.add_option("--models", o.models, "Models folder (default: the source tree's models/)");
-  s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
-  s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");
-  s.add_option("--outcomes", o.outcomes,
-               "auv-nav: write one row per episode to this CSV (outcome, targets, time, return, end pose, clearance, "
-               "the nearest obstacle and the random obstacles)");
-  s.add_flag("--json", o.json, "Print JSON");
-}
-
-namespace {
-
-struct EpisodeTrace {
-  std::vector<std::array<double, 2>> xy;
-  std::vector<sim::Circle> circles;  // this episode's obstacles (fixed and random)
-  bool success = false, collided = false;
-};
-
-// Wilson score interval for a binomial proportion at 95 %.
-std::pair<double, double> Wilson95(double k, double n) {
-  const double z = 1.959963985, p = k / n, d = 1 + z * z / n;
-  const double c = (p + z * z / (2 * n)) / d, h = z * std::sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d;
-  return {std::max(0.0, c - h), std::min(1.0, c + h)};
-}
-
-std::string PlotTrajectories(const std::string& png, const sim::AuvTaskConfig& cfg,
-                             const std::vector<EpisodeTrace>& traces, const std::string& title) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) return "gnuplot not found (tools/setup.sh installs it)";
-  const std::string base = png + ".d";
-  std::error_code ec;
-  std::filesystem::create_directories(base, ec);
-  if (ec) return "cannot create " + base + ": " + ec.message();
-  std::ofstream ob(base + "/obstacles.dat"), rnd(base + "/random.dat"), bx(base + "/boxes.dat"),
-      ok(base + "/success.dat"), bad(base + "/failure.dat"), tg(base + "/targets.dat"), st(base + "/starts.dat");
-  // The layout's obstacles come first in every episode's world; the rest are the episode's own.
-  const std::size_t fixed = cfg.layout.world.circles.size();
-  for (const auto& c : cfg.layout.world.circles) ob << c.x_m << ' ' << c.y_m << ' ' << c.radius_m << '\n';
-  for (const auto& t : traces)
-    for (std::size_t i = fixed; i < t.circles.size(); ++i)
-      rnd << t.circles[i].x_m << ' ' << t.circles[i].y_m << ' ' << t.circles[i].radius_m << '\n';
-  for (const auto& b : cfg.layout.world.boxes)
-    bx << b.x_min_m << ' ' << b.x_max_m << ' ' << b.y_min_m << ' ' << b.y_max_m << '\n';
-  for (std::size_t i = 0; i < cfg.layout.targets.size(); ++i)
-    tg << cfg.layout.targets[i][0] << ' ' << cfg.layout.targets[i][1] << ' ' << i + 1 << '\n';
-  for (const auto& t : traces) {
-    std::ofstream& f = t.success ? ok : bad;
-    for (const auto& p : t.xy) f << p[0] << ' ' << p[1] << '\n';
-    f << "\n\n";
-    if (!t.xy.empty()) st << t.xy.front()[0] << ' ' << t.xy.front()[1] << '\n';
-  }
-  ok << "nan nan\n";
-  bad << "nan nan\n";
-  ob << "nan nan nan\n";
-  rnd << "nan nan nan\n";
-  bx << "nan nan nan nan\n";
-  for (auto* f : {&ob, &rnd, &bx, &ok, &bad, &tg, &st}) f->close();
-  const auto& a = cfg.layout.world.arena;
-  std::ofstream gp(base + "/plot.gp");
-  gp << "set terminal pngcairo size 900,900\nset output '" << png << "'\nset size ratio -1\nset title '" << title
-     << "'\n"
-     << "set xrange [" << a.x_min_m - 1 << ':' << a.x_max_m + 1 << "]\nset yrange [" << a.y_min_m - 1 << ':'
-     << a.y_max_m + 1 << "]\nset xlabel 'x [m]'\nset ylabel 'y [m]'\nset key outside bottom center horizontal\n"
-     << "set object 1 rect from " << a.x_min_m << ',' << a.y_min_m << " to " << a.x_max_m << ',' << a.y_max_m
-     << " fs empty border lc rgb 'black' lw 2\n"
-     << "plot '" << base << "/random.dat' using 1:2:3 with circles fs transparent solid 0.12 noborder lc rgb "
-     << "'gray40' title 'random obstacles (all episodes)', '" << base
-     << "/obstacles.dat' using 1:2:3 with circles fs solid 0.6 noborder lc rgb 'gray20' title 'layout obstacles', '"
-     << base
-     << "/boxes.dat' using (($1+$2)/2):(($3+$4)/2):1:2:3:4 with boxxyerror fs solid 0.6 lc rgb 'gray20' notitle, '"
-     << base << "/success.dat' with lines lw 1 lc rgb '#2a9d3a' title 'success', '" << base
-     << "/failure.dat' with lines lw 1.5 lc rgb '#d62728' title 'failure', '" << base
-     << "/starts.dat' with points pt 7 ps 0.5 lc rgb 'blue' title 'start', '" << base
-     << "/targets.dat' using 1:2 with points pt 6 ps 3 lw 2 lc rgb 'orange' title 'targets', '' using 1:2:3 with "
-        "labels offset 1.5,1.5 notitle\n";
-  gp.close();
-  const std::string cmd = "gnuplot '" + base + "/plot.gp' 2>'" + base + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0) return "gnuplot failed: see " + base + "/gnuplot.log";
-  return "";
-}
-
-// Opens an eval CSV output and writes its header; an empty path writes nothing (true).
-bool OpenCsv(std::ofstream& out, const std::string& path, const char* option, const char* header) {
-  if (path.empty()) return true;
-  out.open(path);
-  if (!out) {
-    std::fprintf(stderr, "pbppo eval: %s: cannot write '%s'\n", option, path.c_str());
-    return false;
-  }
-  out << header << '\n';
-  return true;
-}
-
-// One --outcomes row: how the episode ended, where, and what was nearest there ("wall", "layout" obstacle
-// or "random" obstacle); the random obstacles (those beyond the layout's) as x:y:radius separated by spaces.
-void WriteOutcome(std::ostream& out, int episode, const envs::AuvNav& auv, double ret) {
-  const auto& task = auv.task();
-  const auto& st = task.stats();
-  const auto& v = task.vehicle();
-  const auto& world = task.world();
-  const auto& fixed = auv.config().layout.world;  // arena and layout obstacles, without the random ones
-  const char* outcome = st.success ? "success" : st.collided ? "collision" : "timeout";
-  const double nearest = sim::Clearance(world, v.x_m, v.y_m);
-  const double fixed_nearest = sim::Clearance(fixed, v.x_m, v.y_m);
-  const double wall = sim::Clearance(sim::World2d{world.arena, {}, {}}, v.x_m, v.y_m);
-  const char* what = nearest < fixed_nearest ? "random" : wall <= fixed_nearest ? "wall" : "layout";
-  const std::size_t first_random = fixed.circles.size();
-  out << episode << ',' << auv.config().layout.name << ',' << outcome << ',' << st.targets_reached << ',' << st.time_s
-      << ',' << ret << ',' << v.x_m << ',' << v.y_m << ',' << v.yaw_rad << ',' << nearest << ',' << what << ',';
-  for (std::size_t i = first_random; i < world.circles.size(); ++i) {
-    const auto& c = world.circles[i];
-    out << (i > first_random ? " " : "") << c.x_m << ':' << c.y_m << ':' << c.radius_m;
-  }
-  out << '\n';
-}
-
-}  // namespace
-
-int Eval(const EvalOptions& o) {
-  auto model = policy::PolicyModel::FromFile(o.blob);
-  if (!model) {
-    std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());
-    return 1;
-  }
-  envs::EnvOptions eo;
-  eo.models_dir = o.models;
-  eo.layout = o.layout;
-  auto env = envs::MakeEnv(o.env, eo);
-  if (!env) {
-    std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
-    return 2;
-  }
-  if (auto st = robot::CheckPolicyMatchesLayout(model->description(), (*env)->layout()); !st) {
-    std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), st.error().message.c_str());
-    return 1;
-  }
-  auto* auv = dynamic_cast<envs::AuvNav*>(env->get());
-  if ((!o.plot.empty() || !o.trajectories.empty() || !o.outcomes.empty()) && auv == nullptr) {
-    std::fprintf(stderr, "pbppo eval: --plot, --trajectories and --outcomes need --env auv-nav (not '%s')\n",
-                 o.env.c_str());
-    return 2;
-  }
-  if (!o.plot.empty() && o.layout == "mixed") {
-    std::fprintf(stderr, "pbppo eval: --plot needs one layout (easy, medium or hard), not 'mixed'\n");
-    return 2;
-  }
-  auto data = policy::MakePolicyData(model.value());
-  if (!data) {
-    std::fprintf(stderr, "pbppo eval: %s\n", data.error().message.c_str());
-    return 1;
-  }
-  envs::Env& e = **env;
-  // The blob outputs commands (the layout's map applied); the environment takes policy units.
-  const auto& spec = model->description();
-  Rng rng(o.seed);
-  std::vector<float> obs(e.observation_size()), act(e.action_size());
-  std::vector<double> returns;
-  std::vector<EpisodeTrace> traces;
-  std::ofstream traj, outcomes;
-  if (!OpenCsv(traj, o.trajectories, "--trajectories",
-               "episode,step,t_s,x_m,y_m,yaw_rad,v_cmd_mps,w_cmd_radps,target") ||
-      !OpenCsv(outcomes, o.outcomes, "--outcomes",
-               "episode,layout,outcome,targets,time_s,return,x_m,y_m,yaw_rad,clearance_m,nearest,random_obstacles")) {
-    return 2;
-  }
-  std::uint64_t steps = 0, bad = 0;
-  int successes = 0, failures = 0, timeouts = 0, goals = 0;
-  double success_time = 0;
-  for (int ep = 0; ep < o.episodes; ++ep) {
-    e.Reset(rng, obs);
-    double ret = 0;
-    EpisodeTrace tr;
-    long k = 0;
-    auto record = [&] {
-      if (auv == nullptr) return;
-      const auto& v = auv->task().vehicle();
-      tr.xy.push_back({v.x_m, v.y_m});
-      if (traj.is_open()) {
-        traj << ep << ',' << k << ',' << v.time_s << ',' << v.x_m << ',' << v.y_m << ',' << v.yaw_rad << ','
-             << auv->task().commanded_speed_mps() << ',' << auv->task().commanded_yaw_rate_radps() << ','
-             << auv->task().target_index() << '\n';
-      }
-    };
-    if (auv != nullptr) tr.circles = auv->task().world().circles;
-    record();
-    for (;;) {
-      std::copy(obs.begin(), obs.end(), data->observation().begin());
-      if (policy::Forward(model.value(), data.value()) != policy::ForwardStatus::kOk) ++bad;
-      for (std::size_t j = 0; j < act.size(); ++j) {
-        const float scale = spec.action_scale[j];
-        act[j] = scale != 0.f ? (data->action()[j] - spec.action_offset[j]) / scale : 0.f;
-      }
-      const envs::StepResult r = e.Step(act, obs);
-      ret += r.reward;
-      ++steps;
-      ++k;
-      record();
-      if (r.terminated || r.truncated) break;
-    }
-    returns.push_back(ret);
-    const envs::EpisodeInfo info = e.episode_info();
-    if (info.available) {
-      successes += info.success;
-      failures += info.failure;
-      timeouts += !info.success && !info.failure;
-      goals += info.goals;
-      if (info.success) success_time += info.time_s;
-      tr.success = info.success;
-      tr.collided = info.failure;
-    }
-    if (outcomes.is_open()) WriteOutcome(outcomes, ep, *auv, ret);
-    if (auv != nullptr && !o.plot.empty()) traces.push_back(std::move(tr));
-  }
-  const double n = static_cast<double>(returns.size());
-  double mean = 0, var = 0;
-  for (double r : returns) mean += r;
-  mean /= n;
-  for (double r : returns) var += (r - mean) * (r - mean);
-  const double sd = std::sqrt(var / n);
-  const double lo = *std::min_element(returns.begin(), returns.end());
-  const double hi = *std::max_element(returns.begin(), returns.end());
-  const bool task = e.episode_info().available;
-  const auto [ci_lo, ci_hi] = Wilson95(successes, n);
-  const double mean_time = successes > 0 ? success_time / successes : std::nan("");
-  std::string plot_note;
-  if (!o.plot.empty()) {
-    char title[200];
-    std::snprintf(title, sizeof title, "%s, %d episodes from seed %llu: %d successes, %d collisions, %d timeouts",
-                  e.name().c_str(), o.episodes, static_cast<unsigned long long>(o.seed), successes, failures, timeouts);
-    plot_note = PlotTrajectories(o.plot, auv->config(), traces, title);
-    if (!plot_note.empty()) std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
-  }
-  if (o.json) {
-    nlohmann::json j;
-    j["blob"] = o.blob;
-    j["env"] = e.name();
-    j["episodes"] = o.episodes;
-    j["seed"] = o.seed;
-    j["mean_return"] = mean;
-    j["std_return"] = sd;
-    j["min_return"] = lo;
-    j["max_return"] = hi;
-    j["steps"] = steps;
-    j["forward_problems"] = bad;
-    if (task) {
-      j["successes"] = successes;
-      j["success_rate"] = successes / n;
-      j["success_rate_ci95"] = {ci_lo, ci_hi};
-      j["collisions"] = failures;
-      j["timeouts"] = timeouts;
-      j["mean_goals"] = goals / n;
-      j["mean_success_time_s"] = successes > 0 ? nlohmann::json(mean_time) : nlohmann::json();
-    }
-    if (!o.plot.empty()) j["plot"] = plot_note.empty() ? o.plot : "";
-    std::printf("%s\n", j.dump(2).c_str());
-  } else {
-    std::printf("%s on %s: %d episodes, seed %llu\n", o.blob.c_str(), e.name().c_str(), o.episodes,
-                static_cast<unsigned long long>(o.seed));
-    if (task) {
-      std::printf(
-          "success %d/%d = %.1f%% (95%% CI %.1f-%.1f%%)  collisions %d  timeouts %d  targets/episode %.2f  "
-          "mean time (successes) %.1f s\n",
-          successes, o.episodes, 100 * successes / n, 100 * ci_lo, 100 * ci_hi, failures, timeouts, goals / n,
-          mean_time);
-    }
-    std::printf("mean return %.2f  std %.2f  min %.2f  max %.2f  steps %llu  forward problems %llu\n", mean, sd, lo, hi,
-                static_cast<unsigned long long>(steps), static_cast<unsigned long long>(bad));
-    if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
   }
   return 0;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <tuple>
 
@@ -74,18 +75,23 @@ Result<std::optional<std::pair<double, double>>> AuvNav::ParseNumberPair(const s
   return result;
 }
 
-Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, const std::string& layout_name,
-                                             const std::string& progress, const std::string& geodesic_margin,
-                                             const std::string& clearance_penalty, int extra_obstacles) {
-  if (auto check = ProgressFor(progress, ""); !check)
-    return MakeError(ErrorCode::kInvalidValue, "auv-nav: progress " + check.error().message);
-  auto margin = ParseGeodesicMargin(geodesic_margin);
-  if (!margin) return MakeError(ErrorCode::kInvalidValue, "auv-nav: geodesic margin " + margin.error().message);
-  auto clearance = ParseClearancePenalty(clearance_penalty);
-  if (!clearance) return MakeError(ErrorCode::kInvalidValue, "auv-nav: clearance penalty " + clearance.error().message);
-  if (extra_obstacles < 0 || extra_obstacles > 16)
-    return MakeError(ErrorCode::kInvalidValue,
-                     "auv-nav: extra obstacles " + std::to_string(extra_obstacles) + " is not in [0, 16]");
+Result<std::unique_ptr<AuvNav>> AuvNav::Make(const EnvOptions& o) {
+  auto bad = [](const char* flag, const std::string& why) {
+    return MakeError(ErrorCode::kInvalidValue, std::string(flag) + ": " + why);
+  };
+  if (auto check = ProgressFor(o.progress, ""); !check) return bad("--progress", check.error().message);
+  auto margin = ParseGeodesicMargin(o.geodesic_margin);
+  if (!margin) return bad("--geodesic-margin", margin.error().message);
+  auto clearance = ParseClearancePenalty(o.clearance_penalty);
+  if (!clearance) return bad("--clearance-penalty", clearance.error().message);
+  if (o.extra_obstacles < 0 || o.extra_obstacles > 16)
+    return bad("--extra-obstacles", std::to_string(o.extra_obstacles) + " is not in [0, 16]");
+  if (!(o.exploring_starts >= 0 && o.exploring_starts <= 1)) {
+    char v[32];
+    std::snprintf(v, sizeof v, "%g", o.exploring_starts);
+    return bad("--exploring-starts", std::string(v) + " is not in [0, 1]");
+  }
+  const std::string& layout_name = o.layout;
   std::vector<std::string> names;
   if (layout_name == "mixed") {
     // Hard twice: it needs the most experience (a serpentine of three corridors).
@@ -93,23 +99,24 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const std::string& models_dir, cons
   } else if (IsLayoutName(layout_name)) {
     names = {layout_name};
   } else {
-    return MakeError(ErrorCode::kInvalidValue,
-                     "auv-nav: layout '" + layout_name + "' unknown (easy, medium, hard, mixed)");
+    return bad("--layout", "'" + layout_name + "' unknown (easy, medium, hard, mixed)");
   }
   // The robot is read once; every layout's configuration comes from that one model.
-  auto model = robot::LoadRobotModel(models_dir + "/auv/robot.yaml");
+  auto model = robot::LoadRobotModel((o.models_dir.empty() ? DefaultModelsDir() : o.models_dir) + "/auv/robot.yaml");
   if (!model) return std::move(model).error();
   std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs;
   for (const auto& n : names) {
     auto cfg = sim::MakeAuvTaskConfig(*model, n);
     if (!cfg) return std::move(cfg).error();
-    if (const auto mode = ProgressFor(progress, n).value()) cfg->task.progress = *mode;
+    if (const auto mode = ProgressFor(o.progress, n).value()) cfg->task.progress = *mode;
     if (*margin) std::tie(cfg->task.geodesic_margin_m, cfg->task.geodesic_margin_cost) = **margin;
     if (*clearance) std::tie(cfg->task.clearance_penalty_m, cfg->task.clearance_penalty_per_step) = **clearance;
-    for (int& count : cfg->layout.random_obstacles.count) count += extra_obstacles;
+    for (int& count : cfg->layout.random_obstacles.count) count += o.extra_obstacles;
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
-  return Make(std::move(configs), "auv-nav:" + layout_name);
+  auto env = Make(std::move(configs), "auv-nav:" + layout_name);
+  if (env) (*env)->set_exploring_starts(o.exploring_starts);
+  return env;
 }
 
 Result<std::unique_ptr<AuvNav>> AuvNav::Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,

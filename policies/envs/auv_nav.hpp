@@ -21,17 +21,10 @@ namespace pbppo::envs {
 
 class AuvNav final : public Env {
  public:
-  // `layout_name`: easy, medium or hard (the layouts of models/<dir>/auv/robot.yaml), or mixed.
-  // progress: a progress spec (ProgressFor) that replaces auv.yaml's task.progress; empty keeps it.
-  // geodesic_margin: "D:C" sets auv.yaml's task.geodesic_margin (distance_m D, cost C) in every
-  // layout (it acts where the progress term is geodesic); empty keeps auv.yaml's.
-  // clearance_penalty: "D:W" sets auv.yaml's task.clearance_penalty (distance_m D, per_step W) in
-  // every layout; empty keeps auv.yaml's.
-  // extra_obstacles (training only, 0-16): every layout draws this many more random obstacles
-  // per episode than its file says (placed by the same rules, as many as fit).
-  static Result<std::unique_ptr<AuvNav>> Make(const std::string& models_dir, const std::string& layout_name,
-                                              const std::string& progress = "", const std::string& geodesic_margin = "",
-                                              const std::string& clearance_penalty = "", int extra_obstacles = 0);
+  // From the options (env.hpp's EnvOptions: layout easy, medium, hard or mixed: the
+  // layouts of models/<dir>/auv/robot.yaml, and the task's
+  // overrides), each checked; errors name the flag and the value.
+  static Result<std::unique_ptr<AuvNav>> Make(const EnvOptions& options);
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);

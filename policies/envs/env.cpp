@@ -4,11 +4,12 @@
 
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/pendulum.hpp"
+#include "policies/envs/quadruped_walk.hpp"
 
 namespace pbppo::envs {
 
 std::vector<std::string> EnvNames() {
-  return {"pendulum", "auv-nav"};
+  return {"pendulum", "auv-nav", "quadruped-walk"};
 }
 
 std::string DefaultModelsDir() {
@@ -16,18 +17,26 @@ std::string DefaultModelsDir() {
   return PBPPO_DEFAULT_MODELS_DIR;
 }
 
-Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options) {
+Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
+  const std::string& name = options.name;
+  // An environment's flags given to another one are refused naming the flag.
+  auto only = [&](const char* flag, const char* env, const std::string& what) {
+    return MakeError(ErrorCode::kInvalidValue,
+                     std::string(flag) + ": only " + env + " has " + what + ", not '" + name + "'");
+  };
+  if (name != "auv-nav") {
+    if (!options.progress.empty()) return only("--progress", "auv-nav", "a progress term to choose");
+    if (!options.geodesic_margin.empty()) return only("--geodesic-margin", "auv-nav", "one");
+    if (!options.clearance_penalty.empty()) return only("--clearance-penalty", "auv-nav", "one");
+    if (options.extra_obstacles != 0) return only("--extra-obstacles", "auv-nav", "obstacles");
+    if (options.exploring_starts != 0) return only("--exploring-starts", "auv-nav", "exploring starts");
+  }
+  if (name != "quadruped-walk") {
+    if (options.terrain != "flat") return only("--terrain", "quadruped-walk", "terrains to choose");
+    if (!options.commands.empty()) return only("--commands", "quadruped-walk", "velocity commands");
+  }
   const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
   if (name == "pendulum") {
-    if (!options.progress.empty())
-      return MakeError(ErrorCode::kInvalidValue,
-                       "progress: only auv-nav has a progress term to choose, not 'pendulum'");
-    if (!options.geodesic_margin.empty())
-      return MakeError(ErrorCode::kInvalidValue, "geodesic margin: only auv-nav has one, not 'pendulum'");
-    if (!options.clearance_penalty.empty())
-      return MakeError(ErrorCode::kInvalidValue, "clearance penalty: only auv-nav has one, not 'pendulum'");
-    if (options.extra_obstacles != 0)
-      return MakeError(ErrorCode::kInvalidValue, "extra obstacles: only auv-nav has obstacles, not 'pendulum'");
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
     if (!layout) return std::move(layout).error();
     auto env = Pendulum::Make(std::move(layout).value());
@@ -35,15 +44,24 @@ Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& 
     return std::unique_ptr<Env>(std::move(env).value());
   }
   if (name == "auv-nav") {
-    auto env = AuvNav::Make(dir, options.layout, options.progress, options.geodesic_margin, options.clearance_penalty,
-                            options.extra_obstacles);
+    auto env = AuvNav::Make(options);
     if (!env) return std::move(env).error();
-    (*env)->set_exploring_starts(options.exploring_starts);
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
+  if (name == "quadruped-walk") {
+    QuadrupedWalkOptions o;
+    o.models_dir = dir;
+    o.terrain = options.terrain;
+    o.commands = options.commands;
+    o.randomize = options.randomize;
+    o.resample_s = options.resample_s;
+    auto env = QuadrupedWalk::Make(o);
+    if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }
   std::string known;
   for (const auto& n : EnvNames()) known += (known.empty() ? "" : ", ") + n;
-  return MakeError(ErrorCode::kInvalidValue, "env: '" + name + "' unknown (known: " + known + ")");
+  return MakeError(ErrorCode::kInvalidValue, "--env: '" + name + "' unknown (known: " + known + ")");
 }
 
 }  // namespace pbppo::envs

@@ -4,9 +4,18 @@
 // built for, so blob names, layout hash and action map come from the same file the controller
 // reads. The policy's action (before the layout's action map) is what Step() receives; the
 // environment clips it to its bounds.
+//
+// Asymmetric actor-critic: an environment may give the critic a privileged observation (state the
+// robot cannot measure: true base velocity, height, friction) beside the actor's deployable one:
+// critic_observation_size() > 0, and CriticObservation() after every Reset() and Step(). The
+// trainer's value network takes it (with its own normaliser under --normalize-obs); the blob
+// carries only the actor, which sees only Reset()'s and Step()'s `observation`. Size 0 (the
+// default, pendulum and auv-nav): the critic sees the actor's observation.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
@@ -31,6 +40,10 @@ struct EpisodeInfo {
   bool failure = false;    // it ended in a failure (e.g. a collision)
   int goals = 0;           // sub-goals reached (e.g. targets)
   double time_s = 0.0;     // simulated time of the episode
+  // Velocity-tracking tasks: the episode's mean absolute error of vx, vy (m/s) and the yaw rate
+  // (rad/s) against the command; NaN where the task has none.
+  std::array<double, 3> tracking_error{kNoValue, kNoValue, kNoValue};
+  static constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Env {
@@ -58,31 +71,55 @@ class Env {
   virtual std::unique_ptr<Env> Clone() const = 0;
 
   virtual EpisodeInfo episode_info() const noexcept { return {}; }
+
+  // Asymmetric actor-critic (see the top): the size of the critic's privileged observation, 0 when
+  // the critic sees the actor's observation; CriticObservation writes it (critic_observation_size()
+  // elements) for the state the last Reset() or Step() left, before any next Reset() (so after a
+  // truncated step it describes the episode's final state).
+  virtual std::uint32_t critic_observation_size() const noexcept { return 0; }
+  virtual void CriticObservation(std::span<float> out) const noexcept { (void)out; }
 };
 
+// What an environment is built from: the `pbppo train` / `pbppo eval` flags that choose and shape
+// it, passed as they are to MakeEnv(), which checks them (errors name the flag and the value).
 struct EnvOptions {
-  // Folder holding models/<robot>/io_layout.yaml; empty: the source tree's models/ folder.
+  std::string name = "pendulum";  // --env: one of EnvNames()
+  // --models: folder holding models/<robot>/...; empty: DefaultModelsDir().
   std::string models_dir;
-  // Obstacle layout of tasks that have several (auv-nav: easy, medium, hard).
+  // --layout: obstacle layout of tasks that have several (auv-nav: easy, medium, hard, mixed).
   std::string layout = "hard";
-  // auv-nav, training only: probability of an exploring start (sim::AuvNavTask::set_exploring_starts).
+  // --exploring-starts, auv-nav, training only: probability of an exploring start
+  // (sim::AuvNavTask::set_exploring_starts).
   double exploring_starts = 0.0;
-  // auv-nav: the reward's progress term, "euclidean" or "geodesic" (sim::AuvTaskParams::progress);
-  // empty: as models/auv/auv.yaml says.
+  // --progress, auv-nav: the reward's progress term, "euclidean" or "geodesic", for every layout or
+  // per layout (AuvNav::ProgressFor); empty: as models/auv/auv.yaml says.
   std::string progress;
-  // auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin (AuvNav::Make); empty keeps it.
+  // --geodesic-margin, auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin; empty keeps it.
   std::string geodesic_margin;
-  // auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty (AuvNav::Make); empty keeps it.
+  // --clearance-penalty, auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty; empty keeps it.
   std::string clearance_penalty;
-  // auv-nav, training only: random obstacles per episode beyond each layout's count (AuvNav::Make).
+  // --extra-obstacles, auv-nav, training only: random obstacles per episode beyond each layout's
+  // count, 0-16.
   int extra_obstacles = 0;
+  // --terrain, quadruped-walk: "flat" or "mixed" (flat and block episodes 1:1).
+  std::string terrain = "flat";
+  // --commands, quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's ranges.
+  std::string commands;
+  // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes): always in training,
+  // in pbppo eval with --randomize.
+  bool randomize = true;
+  // quadruped-walk: resample commands this often (s); 0: walk.yaml's period. pbppo eval sets
+  // the test's 10 s (kWalkEvalResampleS).
+  double resample_s = 0;
 };
 
 // The names MakeEnv() knows.
 std::vector<std::string> EnvNames();
 
-// Builds an environment by name; unknown names and bad layout files are errors that say so.
-Result<std::unique_ptr<Env>> MakeEnv(const std::string& name, const EnvOptions& options = {});
+// Builds the environment `options.name` and checks every option it was given: an unknown name, a
+// bad value, an option the environment does not have and a bad layout file are errors that name
+// the flag and the value ("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'").
+Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options);
 
 // The default models folder (the source tree's, overridable with PBPPO_MODELS_DIR).
 std::string DefaultModelsDir();

@@ -20,21 +20,31 @@ class Adam {
         b1_(beta1),
         b2_(beta2) {}
 
-  // p -= lr * scale-corrected update for gradient `g` multiplied by `grad_scale` (the clip factor).
-  void Step(S* p, const S* g, double lr, S grad_scale = S(1)) {
-    ++t_;
-    const auto n = m_.size();
-    Eigen::Map<Vec<S>> pv(p, n);
-    Eigen::Map<const Vec<S>> gv(g, n);
+  // The same step in parts: Advance() once, then Apply() over ranges of the parameters that
+  // together cover them all (element by element the same arithmetic as Step(), in any split).
+  void Advance() noexcept { ++t_; }
+  void Apply(S* p, const S* g, double lr, S grad_scale, Eigen::Index begin, Eigen::Index end) {
+    const Eigen::Index n = end - begin;
+    auto m = m_.segment(begin, n);
+    auto v = v_.segment(begin, n);
+    Eigen::Map<Vec<S>> pv(p + begin, n);
+    Eigen::Map<const Vec<S>> gv(g + begin, n);
     const S b1 = static_cast<S>(b1_), b2 = static_cast<S>(b2_);
-    m_ = b1 * m_ + (S(1) - b1) * (gv * grad_scale);
-    v_ = b2 * v_ + ((S(1) - b2) * grad_scale * grad_scale) * gv.cwiseAbs2();
+    m = b1 * m + (S(1) - b1) * (gv * grad_scale);
+    v = b2 * v + ((S(1) - b2) * grad_scale * grad_scale) * gv.cwiseAbs2();
     const double bc1 = 1.0 - std::pow(b1_, static_cast<double>(t_));
     const double bc2 = 1.0 - std::pow(b2_, static_cast<double>(t_));
     const S step = static_cast<S>(lr / bc1);
     const S inv_sqrt_bc2 = static_cast<S>(1.0 / std::sqrt(bc2));
     const S eps = static_cast<S>(eps_);
-    pv.array() -= step * m_.array() / (v_.array().sqrt() * inv_sqrt_bc2 + eps);
+    pv.array() -= step * m.array() / (v.array().sqrt() * inv_sqrt_bc2 + eps);
+  }
+  Eigen::Index size() const noexcept { return m_.size(); }
+
+  // p -= lr * scale-corrected update for gradient `g` multiplied by `grad_scale` (the clip factor).
+  void Step(S* p, const S* g, double lr, S grad_scale = S(1)) {
+    Advance();
+    Apply(p, g, lr, grad_scale, 0, m_.size());
   }
 
   long steps() const noexcept { return t_; }

@@ -61,13 +61,17 @@ S GaussianEntropy(const S* log_std, int n) {
 }
 
 // Policy part of the loss, L_clip + ent_coef * (-entropy), and its gradient into `grad`
-// (policy.size() elements, overwritten).
+// (policy.size() elements, overwritten). mean_over: the number of samples the means are taken over,
+// 0 for these columns; a chunk of a larger minibatch passes the minibatch's size (its advantages
+// normalised over the minibatch beforehand), so that the chunks' gradients and statistics add up
+// to the minibatch's, and only one chunk passes the entropy coefficient.
 template <typename S, typename DO, typename DA>
 PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, const Eigen::MatrixBase<DO>& obs,
                                   const Eigen::MatrixBase<DA>& actions, const S* old_logp, const S* advantages,
                                   double clip_eps, double ent_coef, bool normalize_advantages, PolicyWorkspace<S>& ws,
-                                  S* grad) {
+                                  S* grad, int mean_over = 0) {
   const int B = static_cast<int>(obs.cols());
+  const int M = mean_over > 0 ? mean_over : B;
   const int A = pol.action_size;
   const S* log_std = p + pol.log_std_offset();
   const Mat<S>& mu = pol.mean.Forward(p, obs, ws.net);
@@ -80,7 +84,7 @@ PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, cons
   }
 
   const S eps = static_cast<S>(clip_eps);
-  const S inv_b = S(1) / static_cast<S>(B);
+  const S inv_b = S(1) / static_cast<S>(M);
   S* g_log_std = grad + pol.log_std_offset();
   for (int j = 0; j < A; ++j) g_log_std[j] = 0;
   ws.dmean.resize(A, B);
@@ -113,11 +117,32 @@ PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, cons
   pol.mean.Backward(p, obs, ws.net, ws.dmean, grad);
 
   PolicyLossStats st;
-  st.policy_loss = loss / B;
+  st.policy_loss = loss / M;
   st.entropy = static_cast<double>(GaussianEntropy(log_std, A));
-  st.approx_kl = kl / B;
-  st.clip_fraction = clipped / B;
+  st.approx_kl = kl / M;
+  st.clip_fraction = clipped / M;
   return st;
+}
+
+// The KL divergence of the current policy (means `mu`, log-std `log_std`) from the one that
+// collected the rollout (`old_mu`, `old_log_std`), as rsl_rl computes it for its adaptive learning
+// rate: per column, sum over the actions of log(std / old_std + 1e-5) + (old_std^2 + (old_mu -
+// mu)^2) / (2 std^2) - 1/2; returned summed over the columns (in double, in column order).
+template <typename S, typename DM, typename DO>
+double SumGaussianKl(const Eigen::MatrixBase<DM>& mu, const S* log_std, const Eigen::MatrixBase<DO>& old_mu,
+                     const S* old_log_std) {
+  double sum = 0;
+  for (Eigen::Index i = 0; i < mu.cols(); ++i) {
+    S kl = 0;
+    for (Eigen::Index j = 0; j < mu.rows(); ++j) {
+      const S std = std::exp(log_std[j]), old_std = std::exp(old_log_std[j]);
+      const S d = old_mu(j, i) - mu(j, i);
+      kl += std::log(std / old_std + static_cast<S>(1e-5)) + (old_std * old_std + d * d) / (S(2) * std * std) -
+            static_cast<S>(0.5);
+    }
+    sum += static_cast<double>(kl);
+  }
+  return sum;
 }
 
 template <typename S>
@@ -127,15 +152,17 @@ struct ValueWorkspace {
 };
 
 // vf_coef * L_value and its gradient into `grad` (value.size() elements, overwritten). Returns
-// L_value (without the coefficient).
+// L_value (without the coefficient). mean_over: as PolicyLossAndGrad's.
 template <typename S, typename DO>
 double ValueLossAndGrad(const Mlp<S>& value, const S* p, const Eigen::MatrixBase<DO>& obs, const S* returns,
-                        const S* old_values, double clip_vf, double vf_coef, ValueWorkspace<S>& ws, S* grad) {
+                        const S* old_values, double clip_vf, double vf_coef, ValueWorkspace<S>& ws, S* grad,
+                        int mean_over = 0) {
   const int B = static_cast<int>(obs.cols());
+  const int M = mean_over > 0 ? mean_over : B;
   const Mat<S>& v = value.Forward(p, obs, ws.net);
   ws.dv.resize(1, B);
   const S c = static_cast<S>(clip_vf);
-  const S k = static_cast<S>(2.0 * vf_coef / B);
+  const S k = static_cast<S>(2.0 * vf_coef / M);
   double loss = 0;
   for (int i = 0; i < B; ++i) {
     S pred = v(0, i);
@@ -150,7 +177,7 @@ double ValueLossAndGrad(const Mlp<S>& value, const S* p, const Eigen::MatrixBase
     ws.dv(0, i) = k * e * pass;
   }
   value.Backward(p, obs, ws.net, ws.dv, grad);
-  return loss / B;
+  return loss / M;
 }
 
 }  // namespace pbppo::trainer

@@ -12,13 +12,6 @@ namespace {
 
 using Rule = YamlFields::TextRule;
 
-#define PBPPO_TRY(expr)            \
-  do {                             \
-    if (auto st_ = (expr); !st_) { \
-      return st_.error();          \
-    }                              \
-  } while (false)
-
 Status ParseRange(const YamlFields& p, const YAML::Node& n, const std::string& where, MitRange* r) {
   struct Pair {
     const char* lo;
@@ -177,8 +170,6 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
   }
   return m;
 }
-
-#undef PBPPO_TRY
 
 Result<CanMap> LoadCanMap(const std::string& path) {
   auto text = ReadTextFile(path);

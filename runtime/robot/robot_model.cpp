@@ -445,6 +445,4 @@ Result<RobotModel> WithTickPeriod(const RobotModel& model, double tick_period_s)
   return m;
 }
 
-#undef PBPPO_TRY
-
 }  // namespace pbppo::robot

@@ -7,13 +7,6 @@
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/robot/yaml_fields.hpp"
 
-#define PBPPO_TRY(expr)            \
-  do {                             \
-    if (auto st_ = (expr); !st_) { \
-      return st_.error();          \
-    }                              \
-  } while (false)
-
 namespace pbppo::robot::detail {
 
 struct Builder {

@@ -273,11 +273,29 @@ class UrdfParser {
       if (c->name != "collision") continue;
       const XmlElement* geom = c->Child("geometry");
       if (geom == nullptr) return Fail(where + ".collision", "missing element <geometry>");
+      UrdfCollision col;
+      if (auto s = Pose(c->Child("origin"), where + ".collision.origin", &col.origin); !s) return s;
+      const std::string w = where + ".collision.geometry";
       if (const XmlElement* sphere = geom->Child("sphere"); sphere != nullptr) {
-        if (auto s = Numbers(sphere, where + ".collision.geometry.sphere", "radius", &link->sphere_radius_m, 1); !s)
-          return s;
-        if (auto s = Positive(link->sphere_radius_m, where + ".collision.geometry.sphere.radius"); !s) return s;
+        col.shape = UrdfShape::kSphere;
+        if (auto s = Numbers(sphere, w + ".sphere", "radius", &col.size[0], 1); !s) return s;
+        if (auto s = Positive(col.size[0], w + ".sphere.radius"); !s) return s;
+        if (link->sphere_radius_m == 0) link->sphere_radius_m = col.size[0];
+      } else if (const XmlElement* box = geom->Child("box"); box != nullptr) {
+        col.shape = UrdfShape::kBox;
+        if (auto s = Numbers(box, w + ".box", "size", col.size.data(), 3); !s) return s;
+        for (double v : col.size)
+          if (auto s = Positive(v, w + ".box.size"); !s) return s;
+      } else if (const XmlElement* cyl = geom->Child("cylinder"); cyl != nullptr) {
+        col.shape = UrdfShape::kCylinder;
+        if (auto s = Numbers(cyl, w + ".cylinder", "radius", &col.size[0], 1); !s) return s;
+        if (auto s = Numbers(cyl, w + ".cylinder", "length", &col.size[1], 1); !s) return s;
+        if (auto s = Positive(col.size[0], w + ".cylinder.radius"); !s) return s;
+        if (auto s = Positive(col.size[1], w + ".cylinder.length"); !s) return s;
+      } else {
+        return Fail(w, "has no sphere, box or cylinder (the shapes supported)");
       }
+      link->collisions.push_back(col);
     }
     return {};
   }

@@ -1,5 +1,5 @@
 // A URDF loader for the subset our robots use (set-up time only): links with inertials and
-// sphere/box collision shapes, revolute and fixed joints with origin, axis, limits and dynamics.
+// sphere/box/cylinder collision shapes, revolute and fixed joints with origin, axis, limits and dynamics.
 // Our own small XML reader (elements, attributes, comments; no DTD), so runtime/robot needs no
 // XML library. Errors name the file, the element and the field:
 //
@@ -31,11 +31,21 @@ struct UrdfInertial {
   double ixx = 0, ixy = 0, ixz = 0, iyy = 0, iyz = 0, izz = 0;  // kg m^2, about the centre of mass
 };
 
+enum class UrdfShape : std::uint8_t { kSphere, kBox, kCylinder };
+
+// One collision shape of a link, in the link frame. A cylinder's axis is the z axis of its origin.
+struct UrdfCollision {
+  UrdfShape shape = UrdfShape::kSphere;
+  UrdfPose origin;
+  Vec3d size{0, 0, 0};  // sphere: radius; box: x, y, z lengths; cylinder: radius, length
+};
+
 struct UrdfLink {
   std::string name;
   bool has_inertial = false;
   UrdfInertial inertial;
-  double sphere_radius_m = 0;  // collision sphere (feet); 0: none
+  double sphere_radius_m = 0;  // the first collision sphere (feet); 0: none
+  std::vector<UrdfCollision> collisions;
 };
 
 enum class UrdfJointType : std::uint8_t { kRevolute, kFixed };

@@ -19,6 +19,15 @@
 
 #include "runtime/core/result.hpp"
 
+// Returns the error of a Status (or Result) expression from the function it is in (the readers'
+// long lists of fields).
+#define PBPPO_TRY(expr)            \
+  do {                             \
+    if (auto st_ = (expr); !st_) { \
+      return st_.error();          \
+    }                              \
+  } while (false)
+
 namespace pbppo::robot {
 
 // Parses YAML text; syntax errors name the origin and the line.

@@ -1,10 +1,7 @@
 #include "runtime/rt/tick_profiler.hpp"
 
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 namespace pbppo::rt {
 
@@ -71,40 +68,6 @@ std::string FormatJson(const ProfileReport& r) {
   }
   j["stages"] = stages;
   return j.dump(2) + "\n";
-}
-
-Status WritePlot(const ProfileReport& r, const std::string& png_path, const std::string& title) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
-    return MakeError(ErrorCode::kUnsupported, "plot " + png_path + ": gnuplot not found (install gnuplot-nox)");
-  const std::string data = png_path + ".dat", script = png_path + ".gp";
-  std::ofstream d(data);
-  if (!d) return MakeError(ErrorCode::kIo, "plot " + png_path + ": cannot write " + data);
-  std::ostringstream plot;
-  int blocks = 0;
-  for (std::size_t i = 0; i < kStageCount; ++i) {
-    const auto buckets = r.snapshots[i].NonEmptyBuckets();
-    if (buckets.empty()) continue;
-    d << "# " << ToString(static_cast<Stage>(i)) << "\n";
-    for (const auto& b : buckets)
-      d << static_cast<double>(b.lower_ns) / 1000.0 << ' ' << static_cast<double>(b.lower_ns + b.width_ns) / 1000.0
-        << ' ' << b.count << "\n";
-    d << "\n\n";
-    plot << (blocks == 0 ? "plot " : ", ") << "'" << data << "' index " << blocks
-         << " using 1:3 with steps lw 1.5 title '" << ToString(static_cast<Stage>(i)) << "'";
-    ++blocks;
-  }
-  d.close();
-  if (blocks == 0) return MakeError(ErrorCode::kInvalidValue, "plot " + png_path + ": nothing recorded");
-  std::ofstream g(script);
-  if (!g) return MakeError(ErrorCode::kIo, "plot " + png_path + ": cannot write " + script);
-  g << "set terminal png size 1000,560\nset output '" << png_path << "'\nset title '" << title
-    << "'\nset logscale x\nset logscale y\nset xlabel 'latency (us)'\nset ylabel 'count'\nset grid\nset key top right\n"
-    << plot.str() << "\n";
-  g.close();
-  const std::string cmd = "gnuplot '" + script + "' 2>'" + png_path + ".log'";
-  if (std::system(cmd.c_str()) != 0)
-    return MakeError(ErrorCode::kIo, "plot " + png_path + ": gnuplot failed, see " + png_path + ".log");
-  return {};
 }
 
 }  // namespace pbppo::rt

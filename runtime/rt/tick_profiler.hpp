@@ -1,7 +1,7 @@
 // Per-stage latency of the control tick: receive, observe, infer, supervise, send, the whole
 // tick, and the wake-up jitter, each in a LatencyHistogram, plus the deadline-miss count.
 // The tick records (noexcept, no allocation, no lock); a non-real-time thread takes a report and
-// writes it as a cyclictest-style text table, JSON, or a PNG plot (gnuplot).
+// formats it as a cyclictest-style text table or JSON (report/ draws it as a PNG).
 #pragma once
 
 #include <array>
@@ -9,7 +9,6 @@
 #include <cstdint>
 #include <string>
 
-#include "runtime/core/result.hpp"
 #include "runtime/rt/latency_histogram.hpp"
 
 namespace pbppo::rt {
@@ -45,8 +44,5 @@ ProfileReport TakeReport(const TickProfiler& p);
 std::string FormatText(const ProfileReport& r);
 // {"unit": "ns", "deadline_misses": n, "stages": {"receive": {"count", "min", "mean", "p50", ...}}}
 std::string FormatJson(const ProfileReport& r);
-// Histogram of every recorded stage (log-scale counts over log-scale microseconds) into png_path,
-// with its data and gnuplot script beside it. An error says why (gnuplot missing, unwritable).
-Status WritePlot(const ProfileReport& r, const std::string& png_path, const std::string& title);
 
 }  // namespace pbppo::rt

@@ -16,10 +16,16 @@
 namespace pbppo::envs {
 namespace {
 
+// MakeEnv with `o` for the environment `name`.
+Result<std::unique_ptr<Env>> MakeNamed(const std::string& name, EnvOptions o) {
+  o.name = name;
+  return MakeEnv(o);
+}
+
 std::unique_ptr<Env> Make(const std::string& layout) {
   EnvOptions o;
   o.layout = layout;
-  auto env = MakeEnv("auv-nav", o);
+  auto env = MakeNamed("auv-nav", o);
   REQUIRE_MESSAGE(env.ok(), env.error().message);
   return std::move(env).value();
 }
@@ -36,7 +42,7 @@ std::size_t Input(const Env& env, const std::string& name) {
 // configuration to `check`; the layouts the episodes drew.
 std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t seed,
                                           const std::function<void(const sim::AuvTaskConfig&)>& check) {
-  auto made = MakeEnv("auv-nav", o);
+  auto made = MakeNamed("auv-nav", o);
   REQUIRE_MESSAGE(made.ok(), made.error().message);
   auto* auv = dynamic_cast<AuvNav*>(made->get());
   REQUIRE(auv != nullptr);
@@ -57,8 +63,8 @@ std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t see
 // reward only); returns the two returns, each step's reward pair handed to `step_check`.
 std::pair<double, double> SameEpisodeReturns(const EnvOptions& with, const EnvOptions& without, int steps,
                                              const std::function<void(double, double)>& step_check = {}) {
-  auto a = MakeEnv("auv-nav", with);
-  auto b = MakeEnv("auv-nav", without);
+  auto a = MakeNamed("auv-nav", with);
+  auto b = MakeNamed("auv-nav", without);
   REQUIRE(a.ok());
   REQUIRE(b.ok());
   Rng r1(9), r2(9);
@@ -170,9 +176,9 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
   CHECK(seen.size() == 3);
   EnvOptions o;
   o.layout = "labyrinth";
-  auto bad = MakeEnv("auv-nav", o);
+  auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message.find("layout 'labyrinth' unknown") != std::string::npos);
+  CHECK(bad.error().message.find("--layout: 'labyrinth' unknown") != std::string::npos);
 }
 
 TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad values are refused naming the part") {
@@ -200,12 +206,12 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
            {"nan:4", "'nan:4': distance 'nan' is not a number in [0, 100]"}}) {
     CAPTURE(spec);
     o.geodesic_margin = spec;
-    auto bad = MakeEnv("auv-nav", o);
+    auto bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "auv-nav: geodesic margin " + message);
+    CHECK(bad.error().message == "--geodesic-margin: " + message);
   }
   o.geodesic_margin = "2:4";
-  auto pendulum = MakeEnv("pendulum", o);
+  auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
 }
 
@@ -226,9 +232,9 @@ TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout,
       SameEpisodeReturns(o, without, 200, [](double with, double plain) { CHECK(with <= plain); });
   CHECK(sum_with < sum_without);
   o.clearance_penalty = "1.5:1";
-  auto pendulum = MakeEnv("pendulum", o);
+  auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
-  CHECK(pendulum.error().message == "clearance penalty: only auv-nav has one, not 'pendulum'");
+  CHECK(pendulum.error().message == "--clearance-penalty: only auv-nav has one, not 'pendulum'");
   for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
            {"1.5", "'1.5' is not DISTANCE_M:PER_STEP (e.g. 1.5:1)"},
            {"1.5:", "'1.5:': per-step cost '' is not a number in [0, 100]"},
@@ -236,9 +242,9 @@ TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout,
            {"1.5:inf", "'1.5:inf': per-step cost 'inf' is not a number in [0, 100]"}}) {
     CAPTURE(spec);
     o.clearance_penalty = spec;
-    auto bad = MakeEnv("auv-nav", o);
+    auto bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "auv-nav: clearance penalty " + message);
+    CHECK(bad.error().message == "--clearance-penalty: " + message);
   }
 }
 
@@ -248,7 +254,7 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
     EnvOptions o;
     o.layout = "mixed";
     o.extra_obstacles = extra;
-    auto made = MakeEnv("auv-nav", o);
+    auto made = MakeNamed("auv-nav", o);
     REQUIRE_MESSAGE(made.ok(), made.error().message);
     auto* auv = dynamic_cast<AuvNav*>(made->get());
     REQUIRE(auv != nullptr);
@@ -277,13 +283,13 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
   }
   EnvOptions o;
   o.extra_obstacles = 17;
-  auto bad = MakeEnv("auv-nav", o);
+  auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message == "auv-nav: extra obstacles 17 is not in [0, 16]");
+  CHECK(bad.error().message == "--extra-obstacles: 17 is not in [0, 16]");
   o.extra_obstacles = 1;
-  auto pendulum = MakeEnv("pendulum", o);
+  auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
-  CHECK(pendulum.error().message == "extra obstacles: only auv-nav has obstacles, not 'pendulum'");
+  CHECK(pendulum.error().message == "--extra-obstacles: only auv-nav has obstacles, not 'pendulum'");
 }
 
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
@@ -294,13 +300,13 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
           CHECK(cfg.task.progress == sim::AuvTaskParams::Progress::kGeodesic);
         }).size() == 3);
   o.progress = "";
-  auto plain = MakeEnv("auv-nav", o);
+  auto plain = MakeNamed("auv-nav", o);
   REQUIRE(plain.ok());
   CHECK(dynamic_cast<AuvNav*>(plain->get())->config().task.progress == sim::AuvTaskParams::Progress::kEuclidean);
   o.progress = "manhattan";
-  auto bad = MakeEnv("auv-nav", o);
+  auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message == "auv-nav: progress 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
+  CHECK(bad.error().message == "--progress: 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
   // Per layout: the named layouts take the mode, the others keep auv.yaml's.
   o.progress = "hard=geodesic";
   CHECK(CheckEpisodeConfigs(o, 4, [](const sim::AuvTaskConfig& cfg) {
@@ -315,9 +321,9 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
            {"medium=euclidean,geodesic", "'medium=euclidean,geodesic': 'geodesic' is not LAYOUT=MODE"}}) {
     CAPTURE(spec);
     o.progress = spec;
-    bad = MakeEnv("auv-nav", o);
+    bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "auv-nav: progress " + message);
+    CHECK(bad.error().message == "--progress: " + message);
     CHECK(AuvNav::ProgressFor(spec, "hard").error().message == message);
   }
   CHECK(*AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "easy").value() ==
@@ -326,7 +332,7 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
         sim::AuvTaskParams::Progress::kEuclidean);
   CHECK_FALSE(AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "hard").value().has_value());
   o.progress = "geodesic";
-  bad = MakeEnv("pendulum", o);
+  bad = MakeNamed("pendulum", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("only auv-nav has a progress term") != std::string::npos);
 }
@@ -335,7 +341,7 @@ TEST_CASE("exploring starts: anywhere free, any current target - success counted
   EnvOptions o;
   o.layout = "hard";
   o.exploring_starts = 1.0;
-  auto made = MakeEnv("auv-nav", o);
+  auto made = MakeNamed("auv-nav", o);
   REQUIRE(made.ok());
   auto env = std::move(made).value();
   auto clone = env->Clone();  // clones keep the setting

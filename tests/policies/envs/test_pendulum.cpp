@@ -39,7 +39,7 @@ bool FloatClose(float got, float want) {
 }
 
 std::unique_ptr<Pendulum> MakePendulum() {
-  auto env = MakeEnv("pendulum");
+  auto env = MakeEnv(EnvOptions{});
   REQUIRE_MESSAGE(env.ok(), (env.ok() ? "" : env.error().message));
   return std::unique_ptr<Pendulum>(static_cast<Pendulum*>(env.value().release()));
 }
@@ -147,7 +147,9 @@ TEST_CASE("angle normalisation follows Python's floored modulo") {
 }
 
 TEST_CASE("unknown environments and mismatched layouts are refused with the name") {
-  auto bad = MakeEnv("cartpole");
+  EnvOptions cartpole;
+  cartpole.name = "cartpole";
+  auto bad = MakeEnv(cartpole);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("'cartpole' unknown") != std::string::npos);
   auto layout = robot::ParseIoLayout(

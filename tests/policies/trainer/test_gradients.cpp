@@ -70,19 +70,36 @@ TEST_CASE("mlp gradients match finite differences for every activation") {
   }
 }
 
+// A Gaussian policy (log-std -0.3, 0.2, 0.7, ...) and a value network, orthogonal weights from `rng`.
+struct Nets {
+  GaussianPolicy<double> pol;
+  Mlp<double> value;
+  std::vector<double> pp, pv;
+};
+Nets MakeNets(const std::vector<int>& policy_widths, const std::vector<int>& value_widths, Activation act, Rng& rng) {
+  Nets n{{Mlp<double>(MlpShape{policy_widths, act, Activation::kIdentity}), policy_widths.back()},
+         Mlp<double>(MlpShape{value_widths, act, Activation::kIdentity}),
+         {},
+         {}};
+  n.pp.resize(n.pol.size());
+  n.pv.resize(n.value.size());
+  n.pol.mean.InitOrthogonal(n.pp.data(), rng, std::sqrt(2.0), 1.0);
+  n.value.InitOrthogonal(n.pv.data(), rng, std::sqrt(2.0), 1.0);
+  for (int j = 0; j < n.pol.action_size; ++j)
+    n.pp[n.pol.log_std_offset() + static_cast<std::size_t>(j)] = -0.3 + 0.5 * j;
+  return n;
+}
+
 TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, value, entropy)") {
   for (bool clip_values : {false, true}) {
     for (bool normalize : {false, true}) {
       CAPTURE(clip_values);
       CAPTURE(normalize);
-      GaussianPolicy<double> pol{Mlp<double>(MlpShape{{3, 8, 8, 2}, Activation::kTanh, Activation::kIdentity}), 2};
-      Mlp<double> value(MlpShape{{3, 8, 8, 1}, Activation::kTanh, Activation::kIdentity});
       Rng rng(5);
-      std::vector<double> pp(pol.size()), pv(value.size());
-      pol.mean.InitOrthogonal(pp.data(), rng, std::sqrt(2.0), 1.0);
-      value.InitOrthogonal(pv.data(), rng, std::sqrt(2.0), 1.0);
-      pp[pol.log_std_offset()] = -0.3;
-      pp[pol.log_std_offset() + 1] = 0.2;
+      Nets nets = MakeNets({3, 8, 8, 2}, {3, 8, 8, 1}, Activation::kTanh, rng);
+      const GaussianPolicy<double>& pol = nets.pol;
+      const Mlp<double>& value = nets.value;
+      std::vector<double>&pp = nets.pp, &pv = nets.pv;
       const int B = 24;
       const Md obs = RandomMatrix(3, B, rng);
       const Md actions = RandomMatrix(2, B, rng);
@@ -124,6 +141,62 @@ TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, v
       CHECK(CompareToFiniteDifferences(pv, gv, total) < 1e-6);
     }
   }
+}
+
+TEST_CASE("chunks of a minibatch: their gradients and statistics add up to the whole minibatch's") {
+  // The chunked update's arithmetic: each chunk's loss averaged over the whole minibatch (mean_over),
+  // advantages normalised over the minibatch beforehand, the entropy term in one chunk only.
+  Rng rng(17);
+  const Nets nets = MakeNets({5, 16, 8, 3}, {7, 16, 8, 1}, Activation::kElu, rng);
+  const GaussianPolicy<double>& pol = nets.pol;
+  const Mlp<double>& value = nets.value;
+  const std::vector<double>&pp = nets.pp, &pv = nets.pv;
+  const int n = 37;  // not a multiple of the 4 chunks
+  const Md obs = RandomMatrix(5, n, rng), critic_obs = RandomMatrix(7, n, rng), actions = RandomMatrix(3, n, rng);
+  std::vector<double> old_logp(n), adv(n), ret(n), old_v(n);
+  for (int i = 0; i < n; ++i) {
+    old_logp[i] = -3.0 + 0.5 * rng.Normal();
+    adv[i] = 2.0 + rng.Normal();
+    ret[i] = rng.Normal();
+    old_v[i] = ret[i] + 0.3 * rng.Normal();
+  }
+  const double eps = 0.2, ent = 0.01, vf = 0.5, cvf = 0.2;
+  PolicyWorkspace<double> wsp;
+  ValueWorkspace<double> wsv;
+  std::vector<double> gp(pol.size()), gv(value.size());
+  const PolicyLossStats whole =
+      PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), adv.data(), eps, ent, true, wsp, gp.data());
+  const double whole_v =
+      ValueLossAndGrad(value, pv.data(), critic_obs, ret.data(), old_v.data(), cvf, vf, wsv, gv.data());
+
+  Eigen::Map<Vec<double>> a(adv.data(), n);
+  const double m = a.mean();
+  const double sd = std::sqrt((a.array() - m).square().sum() / (n - 1));
+  std::vector<double> norm(n);
+  for (int i = 0; i < n; ++i) norm[i] = (adv[i] - m) / (sd + 1e-8);
+  std::vector<double> sum_p(pol.size(), 0.0), sum_v(value.size(), 0.0), cp(pol.size()), cv(value.size());
+  double loss = 0, kl = 0, clip = 0, vloss = 0;
+  for (int c = 0; c < 4; ++c) {
+    const int c0 = n * c / 4, nc = n * (c + 1) / 4 - c0;
+    const PolicyLossStats st =
+        PolicyLossAndGrad(pol, pp.data(), obs.middleCols(c0, nc), actions.middleCols(c0, nc), old_logp.data() + c0,
+                          norm.data() + c0, eps, c == 0 ? ent : 0.0, false, wsp, cp.data(), n);
+    vloss += ValueLossAndGrad(value, pv.data(), critic_obs.middleCols(c0, nc), ret.data() + c0, old_v.data() + c0, cvf,
+                              vf, wsv, cv.data(), n);
+    loss += st.policy_loss;
+    kl += st.approx_kl;
+    clip += st.clip_fraction;
+    for (std::size_t k = 0; k < cp.size(); ++k) sum_p[k] += cp[k];
+    for (std::size_t k = 0; k < cv.size(); ++k) sum_v[k] += cv[k];
+  }
+  CHECK(loss == doctest::Approx(whole.policy_loss).epsilon(1e-12));
+  CHECK(kl == doctest::Approx(whole.approx_kl).epsilon(1e-12));
+  CHECK(clip == doctest::Approx(whole.clip_fraction).epsilon(1e-12));
+  CHECK(vloss == doctest::Approx(whole_v).epsilon(1e-12));
+  double worst = 0;
+  for (std::size_t k = 0; k < gp.size(); ++k) worst = std::max(worst, std::fabs(sum_p[k] - gp[k]));
+  for (std::size_t k = 0; k < gv.size(); ++k) worst = std::max(worst, std::fabs(sum_v[k] - gv[k]));
+  CHECK(worst < 1e-12);
 }
 
 TEST_CASE("orthogonal init gives orthonormal rows or columns times the gain") {

@@ -16,9 +16,9 @@ namespace pbppo::trainer {
 namespace {
 
 TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches targets") {
-  TrainConfig c;
-  c.env = "auv-nav";
-  c.layout = "easy";
+  TrainOptions c;
+  c.env.name = "auv-nav";
+  c.env.layout = "easy";
   c.num_envs = 16;
   c.rollout_steps = 256;
   c.minibatch = 512;
@@ -44,9 +44,7 @@ TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches t
   REQUIRE(model.ok());
   auto data = policy::MakePolicyData(model.value());
   REQUIRE(data.ok());
-  envs::EnvOptions eo;
-  eo.layout = "easy";
-  auto env = envs::MakeEnv("auv-nav", eo);
+  auto env = envs::MakeEnv(c.env);
   REQUIRE(env.ok());
   REQUIRE(robot::CheckPolicyMatchesLayout(model->description(), (*env)->layout()).ok());
   const auto& spec = model->description();

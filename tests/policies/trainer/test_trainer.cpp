@@ -10,6 +10,7 @@
 #include <string>
 
 #include "policies/envs/env.hpp"
+#include "policies/trainer/ppo.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
@@ -19,8 +20,8 @@
 namespace pbppo::trainer {
 namespace {
 
-TrainConfig Small() {
-  TrainConfig c;
+TrainOptions Small() {
+  TrainOptions c;
   c.num_envs = 4;
   c.rollout_steps = 256;
   c.total_steps = 4096;
@@ -32,7 +33,7 @@ TrainConfig Small() {
 
 TEST_CASE("same seed and thread count give a bit-identical run") {
   for (int threads : {1, 2}) {
-    TrainConfig c = Small();
+    TrainOptions c = Small();
     c.threads = threads;
     c.normalize_observations = true;
     c.scale_rewards = true;
@@ -59,8 +60,8 @@ TEST_CASE("same seed and thread count give a bit-identical run") {
 }
 
 // rl-zoo's Pendulum settings on a small budget.
-TrainConfig RlZoo() {
-  TrainConfig c;
+TrainOptions RlZoo() {
+  TrainOptions c;
   c.num_envs = 4;
   c.rollout_steps = 1024;
   c.gamma = 0.9;
@@ -71,7 +72,7 @@ TrainConfig RlZoo() {
 }
 
 TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)") {
-  TrainConfig c = RlZoo();
+  TrainOptions c = RlZoo();
   auto r = Train(c);
   REQUIRE(r.ok());
   const double first = r->iterations.front().train_return;
@@ -80,9 +81,105 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   CHECK(r->final_return > -600);  // real progress, far above random
 }
 
+TEST_CASE("chunked minibatches: PPO still learns Pendulum, deterministically") {
+  // Every minibatch in column chunks (--chunked-minibatch 2; rl-zoo's minibatch of 64 in chunks of 16).
+  TrainOptions c = RlZoo();
+  c.chunked_minibatch = 2;
+  c.threads = 2;
+  auto a = Train(c), b = Train(c);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  MESSAGE("chunked updates: last-100 return " << a->final_return);
+  CHECK(a->final_return > -600);  // as the split update above
+  for (std::size_t l = 0; l < a->spec.layers.size(); ++l) CHECK(a->spec.layers[l].weight == b->spec.layers[l].weight);
+}
+
+// A rollout of random observations and actions the actor sampled, with random advantages and
+// returns, for the update alone.
+RolloutStorage RandomRollout(const Ppo& ppo, int steps, int envs, int obs, int critic, int actions) {
+  RolloutStorage r(steps, envs, obs, critic, actions);
+  Rng rng(3);
+  for (long i = 0; i < r.size(); ++i) {
+    for (int j = 0; j < obs; ++j) r.obs(j, i) = static_cast<float>(rng.Normal());
+    for (int j = 0; j < critic; ++j) r.critic_obs(j, i) = static_cast<float>(rng.Normal());
+    for (int j = 0; j < actions; ++j) {
+      r.action_mean(j, i) = static_cast<float>(0.1 * rng.Normal());
+      r.actions(j, i) = r.action_mean(j, i) + static_cast<float>(rng.Normal());
+    }
+    const auto u = static_cast<std::size_t>(i);
+    r.log_prob[u] = static_cast<float>(-actions * 1.4 + 0.3 * rng.Normal());
+    r.advantages[u] = static_cast<float>(rng.Normal());
+    r.returns[u] = static_cast<float>(rng.Normal());
+    r.values[u] = static_cast<float>(rng.Normal());
+  }
+  std::copy(ppo.log_std(), ppo.log_std() + actions, r.log_std.begin());
+  return r;
+}
+
+TEST_CASE("chunked update: the same parameters for 1, 2 and 3 threads (the split update: per thread count)") {
+  TrainOptions o;
+  o.policy_hidden = {64, 32};
+  o.activation = policy::Activation::kElu;
+  o.minibatch = 1500;
+  o.chunked_minibatch = 1000;
+  o.epochs = 3;
+  o.clip_vf = 0.2;
+  o.ent_coef = 0.01;
+  o.lr_schedule = ParseLrSchedule("adaptive").value();
+  std::vector<std::vector<float>> actor, critic_out;
+  std::vector<double> lr;
+  for (int threads : {1, 2, 3}) {
+    Ppo ppo(o, 10, 14, 4);
+    RolloutStorage r = RandomRollout(ppo, 25, 240, 10, 14, 4);  // 6000 samples: 4 minibatches of 1500
+    WorkerPool pool(threads);
+    const UpdateStats st = ppo.Update(r, 0.2, false, pool);
+    CHECK(std::isfinite(st.value_loss));
+    CHECK(st.kl > 0);
+    actor.emplace_back(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
+    ppo.ComputeReturns(r, pool);
+    critic_out.emplace_back(r.values.begin(), r.values.end());
+    lr.push_back(ppo.learning_rate());
+  }
+  for (int k = 1; k < 3; ++k) {
+    CAPTURE(k + 1);
+    CHECK(actor[static_cast<std::size_t>(k)] == actor[0]);
+    CHECK(critic_out[static_cast<std::size_t>(k)] == critic_out[0]);
+    CHECK(lr[static_cast<std::size_t>(k)] == lr[0]);
+  }
+}
+
+TEST_CASE("--lr-schedule adaptive: the KL divergence steers the learning rate within [1e-5, 1e-2], logged") {
+  auto run = [](double desired_kl) {
+    TrainOptions c = RlZoo();
+    c.total_steps = 16384;
+    c.lr_schedule = ParseLrSchedule("adaptive:" + std::to_string(desired_kl)).value();
+    auto r = Train(c);
+    REQUIRE(r.ok());
+    return std::move(r).value();
+  };
+  // Tiny KL target: the rate falls from 1e-3; generous target: it rises to the ceiling.
+  const TrainResult small = run(1e-5), large = run(0.5);
+  for (const auto* r : {&small, &large})
+    for (const auto& it : r->iterations) {
+      CHECK(it.learning_rate >= 1e-5);
+      CHECK(it.learning_rate <= 1e-2);
+      CHECK(it.kl >= 0);
+    }
+  CHECK(small.iterations.back().learning_rate < 1e-4);
+  CHECK(large.iterations.back().learning_rate == doctest::Approx(1e-2));
+  MESSAGE("late KL: target 1e-5 -> " << small.iterations.back().kl << ", target 0.5 -> " << large.iterations.back().kl);
+  CHECK(small.iterations.back().kl < large.iterations.back().kl);
+  // A constant schedule logs its rate unchanged.
+  TrainOptions c = RlZoo();
+  c.total_steps = 8192;
+  auto constant = Train(c);
+  REQUIRE(constant.ok());
+  for (const auto& it : constant->iterations) CHECK(it.learning_rate == 1e-3);
+}
+
 TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the runtime loads the blob") {
   const std::string out = test::ScratchDir("trainer_files") + "/run";
-  TrainConfig c = Small();
+  TrainOptions c = Small();
   c.schedule = ParseSchedule("pbppo", {0.1, 0.2, 0.3}).value();
   c.schedule.eval_episodes = 2;
   c.normalize_observations = true;
@@ -119,7 +216,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the r
   CHECK(spec->action_low == std::vector<float>{-2.f});
   CHECK(spec->obs_clip == 10.f);
   CHECK(spec->obs_mean != std::vector<float>(3, 0.f));
-  auto env = envs::MakeEnv("pendulum");
+  auto env = envs::MakeEnv(envs::EnvOptions{});
   REQUIRE(env.ok());
   CHECK(robot::CheckPolicyMatchesLayout(spec.value(), (*env)->layout()).ok());
   CHECK(std::filesystem::exists(out + "/policy.golden"));
@@ -138,7 +235,7 @@ TEST_CASE("a bandit run writes the log, summary, blob and golden vectors - the r
 
 TEST_CASE("--snapshots N writes N blobs spread over the run, the last one the final policy") {
   const std::string out = test::ScratchDir("trainer_snapshots") + "/run";
-  TrainConfig c = Small();  // 4 iterations of 1024 steps
+  TrainOptions c = Small();  // 4 iterations of 1024 steps
   c.snapshots = 2;
   c.out_dir = out;
   c.plots = false;
@@ -168,44 +265,47 @@ TEST_CASE("--snapshots N writes N blobs spread over the run, the last one the fi
 }
 
 TEST_CASE("trainer errors name the field and value") {
-  TrainConfig c = Small();
-  c.env = "cartpole";
+  TrainOptions c = Small();
+  c.env.name = "cartpole";
   CHECK(Train(c).error().message.find("'cartpole' unknown") != std::string::npos);
   c = Small();
   c.num_envs = 0;
   CHECK(Train(c).error().message.find("--envs: 0") != std::string::npos);
   c = Small();
+  c.chunked_minibatch = 1;
+  CHECK(Train(c).error().message.find("--chunked-minibatch: 1 is below 2") != std::string::npos);
+  c = Small();
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);
   c = Small();
-  c.progress = "geodesic";  // Small() is pendulum
+  c.env.progress = "geodesic";  // Small() is pendulum
   CHECK(Train(c).error().message.find("--progress: only auv-nav has a progress term to choose, not 'pendulum'") !=
         std::string::npos);
-  c.env = "auv-nav";
-  c.progress = "crow-flies";
+  c.env.name = "auv-nav";
+  c.env.progress = "crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'crow-flies': unknown (euclidean, geodesic, or LAYOUT=MODE,...)") !=
         std::string::npos);
-  c.progress = "hard=crow-flies";
+  c.env.progress = "hard=crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'hard=crow-flies': 'crow-flies' for hard is not euclidean or "
                                       "geodesic") != std::string::npos);
-  c.progress = "";
-  c.geodesic_margin = "2:four";
+  c.env.progress = "";
+  c.env.geodesic_margin = "2:four";
   CHECK(Train(c).error().message.find("--geodesic-margin: '2:four': cost 'four' is not a number in [0, 100]") !=
         std::string::npos);
   c = Small();
-  c.geodesic_margin = "2:4";  // pendulum
+  c.env.geodesic_margin = "2:4";  // pendulum
   CHECK(Train(c).error().message.find("--geodesic-margin: only auv-nav has one, not 'pendulum'") != std::string::npos);
-  c.geodesic_margin = "";
-  c.clearance_penalty = "1.5:1";  // pendulum
+  c.env.geodesic_margin = "";
+  c.env.clearance_penalty = "1.5:1";  // pendulum
   CHECK(Train(c).error().message.find("--clearance-penalty: only auv-nav has one, not 'pendulum'") !=
         std::string::npos);
-  c.clearance_penalty = "";
-  c.extra_obstacles = 2;  // pendulum
+  c.env.clearance_penalty = "";
+  c.env.extra_obstacles = 2;  // pendulum
   CHECK(Train(c).error().message.find("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'") !=
         std::string::npos);
-  c.extra_obstacles = 0;
-  c.env = "auv-nav";
-  c.clearance_penalty = "1.5:1:2";
+  c.env.extra_obstacles = 0;
+  c.env.name = "auv-nav";
+  c.env.clearance_penalty = "1.5:1:2";
   CHECK(Train(c).error().message.find("--clearance-penalty: '1.5:1:2': per-step cost '1:2' is not a number in "
                                       "[0, 100]") != std::string::npos);
   c = Small();
@@ -220,7 +320,7 @@ TEST_CASE("trainer errors name the field and value") {
 TEST_CASE("a stop request ends the run cleanly with a blob") {
   const std::string out = test::ScratchDir("trainer_stop") + "/run";
   std::atomic<bool> stop{true};
-  TrainConfig c = Small();
+  TrainOptions c = Small();
   c.out_dir = out;
   c.plots = false;
   c.stop = &stop;
@@ -234,7 +334,7 @@ TEST_CASE("a stop request ends the run cleanly with a blob") {
 TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches are refused") {
   const std::string dir = test::ScratchDir("trainer_init");
   // A learned Pendulum policy (rl-zoo settings as above), with a running normaliser.
-  TrainConfig a = RlZoo();
+  TrainOptions a = RlZoo();
   a.normalize_observations = true;
   auto ra = Train(a);
   REQUIRE(ra.ok());
@@ -245,7 +345,7 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
 
   // Warm start with a learning rate too small to move anything: the first rollout is already
   // the learned policy's (a random one scores below -900), and the frozen result is the blob.
-  TrainConfig b = Small();
+  TrainOptions b = Small();
   b.seed = 9;
   b.learning_rate = 1e-12;
   b.total_steps = 1024;
@@ -276,7 +376,7 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
         d = std::max(d, std::abs(spec.layers[l].weight[i] - ra->spec.layers[l].weight[i]));
     return d;
   };
-  TrainConfig w = Small();  // 1024 steps per iteration
+  TrainOptions w = Small();  // 1024 steps per iteration
   w.total_steps = 2048;
   w.init_blob = blob;
   w.critic_warmup = 2;
@@ -293,12 +393,12 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
   REQUIRE_FALSE(no_init.ok());
   CHECK(no_init.error().message.find("--critic-warmup: needs --init") != std::string::npos);
 
-  auto error_of = [&](TrainConfig c) {
+  auto error_of = [&](TrainOptions c) {
     auto r = Train(c);
     REQUIRE_FALSE(r.ok());
     return r.error().message;
   };
-  TrainConfig c = b;
+  TrainOptions c = b;
   c.policy_hidden = {32};
   CHECK(error_of(c).find("--init: '" + blob + "' has 3 layers, --hidden gives 2") != std::string::npos);
   c = b;

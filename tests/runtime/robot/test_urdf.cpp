@@ -67,6 +67,34 @@ TEST_CASE("urdf: a small arm parses - joints in topological order - axis normali
   CHECK(r->TotalMassKg() == doctest::Approx(1.5));
 }
 
+TEST_CASE("urdf: collision shapes - sphere, box and cylinder with their origins") {
+  const std::string xml = Replace(kGood, "<link name=\"base\"/>", R"(<link name="base">
+    <collision><origin xyz="0 0 0.1" rpy="0 0 0"/><geometry><box size="0.4 0.2 0.1"/></geometry></collision>
+    <collision><origin xyz="0 0 -0.1" rpy="1.5707963 0 0"/><geometry><cylinder radius="0.02" length="0.3"/></geometry></collision>
+  </link>)");
+  auto r = ParseUrdf(xml, "arm.urdf");
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const UrdfLink& base = r->links[static_cast<std::size_t>(r->FindLink("base"))];
+  REQUIRE(base.collisions.size() == 2);
+  CHECK(base.collisions[0].shape == UrdfShape::kBox);
+  CHECK(base.collisions[0].size[1] == doctest::Approx(0.2));
+  CHECK(base.collisions[0].origin.xyz[2] == doctest::Approx(0.1));
+  CHECK(base.collisions[1].shape == UrdfShape::kCylinder);
+  CHECK(base.collisions[1].size[0] == doctest::Approx(0.02));
+  CHECK(base.collisions[1].size[1] == doctest::Approx(0.3));
+  CHECK(base.collisions[1].origin.rpy[0] == doctest::Approx(1.5707963));
+  CHECK(base.sphere_radius_m == 0.0);
+  const UrdfLink& tip = r->links[static_cast<std::size_t>(r->FindLink("tip"))];
+  REQUIRE(tip.collisions.size() == 1);
+  CHECK(tip.collisions[0].shape == UrdfShape::kSphere);
+  CHECK(ErrorOf(Replace(xml, "length=\"0.3\"", "length=\"-0.3\"")) ==
+        "arm.urdf: link 'base'.collision.geometry.cylinder.length: '-0.3' is not a positive number");
+  CHECK(ErrorOf(Replace(xml, "<box size=\"0.4 0.2 0.1\"/>", "<mesh filename=\"a.stl\"/>")) ==
+        "arm.urdf: link 'base'.collision.geometry: has no sphere, box or cylinder (the shapes supported)");
+  CHECK(ErrorOf(Replace(xml, "size=\"0.4 0.2 0.1\"", "size=\"0.4 0.2\"")) ==
+        "arm.urdf: link 'base'.collision.geometry.box.size: '0.4 0.2' has fewer than 3 numbers");
+}
+
 TEST_CASE("urdf: bad files are refused naming the element and field") {
   CHECK(ErrorOf(Replace(kGood, "effort=\"10\"", "effort=\"-1\"")) ==
         "arm.urdf: joint 'shoulder'.limit.effort: '-1' is not a positive number");
@@ -110,10 +138,10 @@ TEST_CASE("urdf: malformed XML is refused with the line") {
   CHECK(ErrorOf("<robt name=\"a\"/>") == "arm.urdf: root element: <robt> is not <robot>");
 }
 
-TEST_CASE("quadruped: URDF and description load - 12 actuated joints - 46.4 kg - default pose") {
+TEST_CASE("quadruped: URDF and description load - 12 actuated joints - 13 kg - default pose") {
   auto d = LoadRobotDescription(pbppo::test::SourcePath("models/quadruped/quadruped.yaml"));
   REQUIRE_MESSAGE(d.ok(), d.error().message);
-  CHECK(d->urdf.TotalMassKg() == doctest::Approx(46.4));
+  CHECK(d->urdf.TotalMassKg() == doctest::Approx(13.0));
   REQUIRE(d->joint_count() == 12);
   CHECK(d->joint_names[0] == "LF_HAA");
   CHECK(d->joint_names[11] == "RH_KFE");

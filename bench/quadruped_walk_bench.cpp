@@ -1,0 +1,106 @@
+// Throughput of the quadruped walking environment on one core: environment steps per CPU second
+// with the policy in the loop (the runtime's Forward on a blob, then Step: 4 physics steps with
+// the joint PD, observation, reward, resets included), beside MuJoCo's bare physics rate for the
+// same model (physics steps per CPU second with only the joint PD) divided by the 4 physics steps
+// of a policy step: the ceiling the environment could reach. Their ratio is the figure to improve.
+// Per-thread CPU time, so other load on the machine does not count; medians of 5 rounds.
+//
+//   quadruped_walk_bench [BLOB] [policy_steps]   (default: the shipped walking policy, 5000)
+#include <time.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "policies/envs/quadruped_walk.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/policy/policy_model.hpp"
+#include "runtime/policy/reference.hpp"
+
+namespace {
+
+double CpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace pbppo;
+  std::string blob =
+      argc > 1 ? argv[1] : std::string(PBPPO_SOURCE_DIR) + "/policies/frozen/quadruped_walk/quadruped_walk.blob";
+  const int steps = argc > 2 ? std::atoi(argv[2]) : 5000;
+  if (steps < 100) {
+    std::fprintf(stderr, "quadruped_walk_bench: policy_steps %d is below 100\n", steps);
+    return 2;
+  }
+  // flat; mixed (flat and blocks 1:1, as trained and tested); blocks alone.
+  for (const char* terrain : {"flat", "mixed", "blocks"}) {
+    envs::QuadrupedWalkOptions o;
+    o.models_dir = std::string(PBPPO_SOURCE_DIR) + "/models";
+    o.terrain = std::string(terrain) == "flat" ? "flat" : "mixed";
+    o.blocks_fraction = std::string(terrain) == "blocks" ? 1.0 : 0.5;
+    auto env = envs::QuadrupedWalk::Make(o);
+    if (!env) {
+      std::fprintf(stderr, "quadruped_walk_bench: %s\n", env.error().message.c_str());
+      return 1;
+    }
+    envs::QuadrupedWalk& e = **env;
+    // The shipped policy, or (before one is shipped) random weights of the same shape.
+    policy::PolicySpec spec;
+    std::string what = blob;
+    if (std::filesystem::exists(blob)) {
+      auto s = policy::ReadBlobFile(blob);
+      if (!s) {
+        std::fprintf(stderr, "quadruped_walk_bench: %s\n", s.error().message.c_str());
+        return 1;
+      }
+      spec = *s;
+    } else {
+      spec = policy::MakeRandomSpec({e.observation_size(), 128, 64, 32, e.action_size()}, policy::Activation::kElu, 1);
+      what = "random 45-128-64-32-12 ELU weights (no blob at " + blob + ")";
+    }
+    auto model = policy::PolicyModel::FromSpec(spec);
+    if (!model) {
+      std::fprintf(stderr, "quadruped_walk_bench: %s\n", model.error().message.c_str());
+      return 1;
+    }
+    auto data = policy::MakePolicyData(*model);
+    std::vector<float> obs(e.observation_size()), act(e.action_size());
+    Rng rng(1);
+    e.Reset(rng, obs);
+    std::vector<double> env_rate, physics_rate;
+    for (int round = 0; round < 5; ++round) {
+      const double t0 = CpuSeconds();
+      for (int k = 0; k < steps; ++k) {
+        std::copy(obs.begin(), obs.end(), data->observation().begin());
+        (void)policy::Forward(*model, *data);
+        for (std::size_t j = 0; j < act.size(); ++j)
+          act[j] = (data->action()[j] - spec.action_offset[j]) / spec.action_scale[j];
+        const envs::StepResult r = e.Step(act, obs);
+        if (r.terminated || r.truncated) e.Reset(rng, obs);
+      }
+      env_rate.push_back(steps / (CpuSeconds() - t0));
+      physics_rate.push_back(e.BarePhysicsRate(4 * steps));
+    }
+    const double env_sps = Median(env_rate), physics = Median(physics_rate);
+    const double ceiling = physics / e.params().decimation;
+    std::printf("quadruped-walk %-6s policy %s\n", terrain, what.c_str());
+    std::printf("  environment steps/s per core, policy in the loop: %8.0f\n", env_sps);
+    std::printf(
+        "  bare MuJoCo physics steps/s (joint PD only):      %8.0f  = %.0f policy steps/s at %d physics steps each\n",
+        physics, ceiling, e.params().decimation);
+    std::printf("  ratio environment / bare physics ceiling:         %8.2f\n", env_sps / ceiling);
+  }
+  return 0;
+}

@@ -1,0 +1,132 @@
+#include "policies/cli/eval_walk.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "policies/envs/walk_eval.hpp"
+#include "report/plots.hpp"
+
+namespace pbppo::cli {
+namespace {
+
+// Commanded (dashed) against measured (solid) vx, vy and yaw rate of the traced robots over time.
+Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::string& title) {
+  report::TimeSeriesPlot p;
+  p.title = title;
+  const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
+  for (int axis = 0; axis < 3; ++axis) {
+    report::TimeSeriesPlot::Panel panel;
+    panel.ylabel = labels[axis];
+    for (std::size_t k = 0; k < r.traces.size(); ++k) {
+      report::TimeSeriesPlot::Series command, measured;
+      command.title = "robot " + std::to_string(k) + " command";
+      measured.title = "robot " + std::to_string(k) + " measured";
+      command.group = measured.group = static_cast<int>(k);
+      command.dashed = true;
+      for (const auto& t : r.traces[k]) {
+        command.x.push_back(t.time_s);
+        command.y.push_back(t.command[static_cast<std::size_t>(axis)]);
+        measured.x.push_back(t.time_s);
+        measured.y.push_back(t.measured[static_cast<std::size_t>(axis)]);
+      }
+      panel.series.push_back(std::move(command));
+      panel.series.push_back(std::move(measured));
+    }
+    p.panels.push_back(std::move(panel));
+  }
+  return report::PlotTimeSeries(p, png);
+}
+
+}  // namespace
+
+int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
+  envs::WalkEvalOptions eo;
+  eo.robots = o.episodes > 0 ? o.episodes : 50;
+  eo.seed = o.seed;
+  eo.trace_robots = o.plot.empty() && o.trajectories.empty() ? 0 : 3;
+  auto r = envs::EvaluateWalk(model, env, eo);
+  if (!r) {
+    std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
+    return 1;
+  }
+  const double dur = env.params().episode_s;
+  std::string plot_note;
+  if (!o.plot.empty()) {
+    char title[200];
+    std::snprintf(title, sizeof title, "%s, %s terrain: commanded (dashed) and measured body velocity",
+                  std::filesystem::path(o.blob).filename().c_str(), o.env.terrain.c_str());
+    if (auto st = Plot(o.plot, *r, title); !st) {
+      plot_note = st.error().message;
+      std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
+    }
+  }
+  if (!o.trajectories.empty()) {
+    std::ofstream f(o.trajectories);
+    f << "robot,t_s,vx_cmd_mps,vx_mps,vy_cmd_mps,vy_mps,yaw_rate_cmd_radps,yaw_rate_radps,x_m,y_m,z_m,yaw_rad,"
+         "on_blocks,fell\n";
+    for (std::size_t k = 0; k < r->traces.size(); ++k)
+      for (const auto& t : r->traces[k])
+        f << k << ',' << t.time_s << ',' << t.command[0] << ',' << t.measured[0] << ',' << t.command[1] << ','
+          << t.measured[1] << ',' << t.command[2] << ',' << t.measured[2] << ',' << t.position[0] << ','
+          << t.position[1] << ',' << t.position[2] << ',' << t.yaw_rad << ',' << t.on_blocks << ',' << t.fell << '\n';
+    if (!f) {
+      std::fprintf(stderr, "pbppo eval: --trajectories: cannot write '%s'\n", o.trajectories.c_str());
+      return 1;
+    }
+  }
+  if (o.json) {
+    nlohmann::json j;
+    j["blob"] = o.blob;
+    j["env"] = "quadruped-walk";
+    j["terrain"] = o.env.terrain;
+    j["randomize"] = o.env.randomize;
+    j["robots"] = r->robots;
+    j["episode_s"] = dur;
+    j["seed"] = o.seed;
+    j["mean_abs_error"] = {
+        {"vx_mps", r->mean_abs_error[0]}, {"vy_mps", r->mean_abs_error[1]}, {"yaw_rate_radps", r->mean_abs_error[2]}};
+    j["mean_abs_error_settled"] = {{"vx_mps", r->mean_abs_error_settled[0]},
+                                   {"vy_mps", r->mean_abs_error_settled[1]},
+                                   {"yaw_rate_radps", r->mean_abs_error_settled[2]},
+                                   {"settle_s", eo.settle_s}};
+    j["falls"] = r->falls;
+    nlohmann::json falls = nlohmann::json::array();
+    for (const auto& f : r->fall_list)
+      falls.push_back({{"robot", f.robot},
+                       {"time_s", f.time_s},
+                       {"command", {f.command[0], f.command[1], f.command[2]}},
+                       {"on_blocks", f.on_blocks},
+                       {"cause", f.base_contact ? "base contact" : "tilt"}});
+    j["fall_list"] = falls;
+    j["robots_on_blocks"] = r->robots_on_blocks;
+    j["falls_on_blocks"] = r->falls_on_blocks;
+    j["steps"] = r->steps;
+    j["mean_return"] = r->mean_return;
+    j["forward_problems"] = r->forward_problems;
+    if (!o.plot.empty()) j["plot"] = plot_note.empty() ? o.plot : "";
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s on quadruped-walk, %s terrain%s: %d robots x %.0f s, seed %llu\n", o.blob.c_str(),
+                o.env.terrain.c_str(), o.env.randomize ? " (randomised robots)" : "", r->robots, dur,
+                static_cast<unsigned long long>(o.seed));
+    std::printf("mean |error|  vx %.3f m/s  vy %.3f m/s  yaw rate %.3f rad/s   (every step)\n", r->mean_abs_error[0],
+                r->mean_abs_error[1], r->mean_abs_error[2]);
+    std::printf(
+        "mean |error|  vx %.3f m/s  vy %.3f m/s  yaw rate %.3f rad/s   (%.0f s or more after a command change)\n",
+        r->mean_abs_error_settled[0], r->mean_abs_error_settled[1], r->mean_abs_error_settled[2], eo.settle_s);
+    std::printf("falls %d/%d", r->falls, r->robots);
+    if (r->robots_on_blocks > 0) std::printf("  (on blocks %d/%d)", r->falls_on_blocks, r->robots_on_blocks);
+    std::printf("  mean return %.2f  steps %llu  forward problems %llu\n", r->mean_return,
+                static_cast<unsigned long long>(r->steps), static_cast<unsigned long long>(r->forward_problems));
+    for (const auto& f : r->fall_list)
+      std::printf("  fall: robot %d at %.2f s%s (%s), command vx %.2f vy %.2f yaw rate %.2f\n", f.robot, f.time_s,
+                  f.on_blocks ? " on blocks" : "", f.base_contact ? "base contact" : "tilt", f.command[0], f.command[1],
+                  f.command[2]);
+    if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
+  }
+  return 0;
+}
+
+}  // namespace pbppo::cli

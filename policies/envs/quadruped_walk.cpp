@@ -1,0 +1,605 @@
+#include "policies/envs/quadruped_walk.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+#include <numbers>
+
+#include "policies/envs/mjcf.hpp"
+#include "runtime/robot/can_map.hpp"
+#include "runtime/transport/can/imu_codec.hpp"
+#include "runtime/transport/can/mit_codec.hpp"
+#include "runtime/transport/can/quantize.hpp"
+
+namespace pbppo::envs {
+namespace {
+
+constexpr float kActionClip = 100.0f;  // legged_gym's clip_actions
+constexpr int kFeet = 4;
+
+double Wrap(double a) noexcept {
+  a = std::fmod(a + std::numbers::pi, 2 * std::numbers::pi);
+  if (a < 0) a += 2 * std::numbers::pi;
+  return a - std::numbers::pi;
+}
+
+// What a MIT reply carries for value x of range [lo, hi] with `bits` bits.
+double AsReported(double x, double lo, double hi, unsigned bits) noexcept {
+  return can::CodeToValue(can::ValueToCode(x, lo, hi, bits).code, lo, hi, bits);
+}
+
+enum class GeomKind : std::uint8_t { kGround, kBase, kFoot, kLeg };
+
+}  // namespace
+
+struct QuadrupedWalk::Shared {
+  std::string name = "quadruped-walk";
+  QuadrupedWalkOptions options;
+  robot::RobotDescription robot;
+  robot::IoLayout layout;
+  QuadrupedWalkParams params;
+  robot::ActionMapper mapper;
+  std::vector<std::string> signal_names;
+  mjModel* model = nullptr;
+  std::vector<int> qpos_adr, dof_adr;  // per actuated joint
+  std::vector<GeomKind> geom_kind;     // per geom
+  std::vector<int> geom_foot;          // per geom: foot index or -1
+  std::vector<can::MitRange> range;    // per actuated joint: the reply ranges
+  std::vector<double> soft_lower, soft_upper, effort;
+  std::vector<float> low, high;
+  int base_body = 0, floor_geom = -1;
+  std::vector<int> block_geom;  // the pool of box geoms for blocks
+  double base_mass = 0;
+  ~Shared() {
+    if (model != nullptr) mj_deleteModel(model);
+  }
+};
+
+std::vector<std::string> QuadrupedWalk::SignalNames(const std::vector<std::string>& joints) {
+  std::vector<std::string> n = {"base_ang_vel_x",      "base_ang_vel_y",      "base_ang_vel_z",
+                                "projected_gravity_x", "projected_gravity_y", "projected_gravity_z",
+                                "command_vx",          "command_vy",          "command_yaw_rate"};
+  for (const char* prefix : {"q_", "dq_", "last_action_"})
+    for (const auto& j : joints) n.push_back(prefix + j);
+  return n;
+}
+
+Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOptions& options) {
+  auto sh = std::make_shared<Shared>();
+  sh->options = options;
+  if (options.terrain != "flat" && options.terrain != "mixed")
+    return MakeError(ErrorCode::kInvalidValue, "--terrain: '" + options.terrain + "' unknown (flat, mixed)");
+  if (!(options.blocks_fraction >= 0 && options.blocks_fraction <= 1))
+    return MakeError(ErrorCode::kInvalidValue,
+                     "blocks fraction: " + std::to_string(options.blocks_fraction) + " is not in [0, 1]");
+  const std::string dir = (options.models_dir.empty() ? DefaultModelsDir() : options.models_dir) + "/quadruped/";
+  auto robot = robot::LoadRobotDescription(dir + "quadruped.yaml");
+  if (!robot) return std::move(robot).error();
+  sh->robot = std::move(*robot);
+  auto layout = robot::LoadIoLayout(dir + "io_layout.yaml");
+  if (!layout) return std::move(layout).error();
+  sh->layout = std::move(*layout);
+  auto params = LoadQuadrupedWalkParams(dir + "walk.yaml");
+  if (!params) return std::move(params).error();
+  sh->params = *params;
+  if (auto st = ApplyCommandSpec(options.commands, sh->params); !st)
+    return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
+  if (options.resample_s < 0 || options.resample_s > 3600)
+    return MakeError(ErrorCode::kInvalidValue,
+                     "command resampling: " + std::to_string(options.resample_s) + " s is not in [0, 3600]");
+  if (options.resample_s > 0) sh->params.resample_s = options.resample_s;
+  auto map = robot::LoadCanMap(dir + "can_map.yaml");
+  if (!map) return std::move(map).error();
+
+  const robot::RobotDescription& r = sh->robot;
+  const robot::IoLayout& l = sh->layout;
+  const std::size_t n = r.joint_count();
+  if (l.robot != "quadruped")
+    return MakeError(ErrorCode::kMismatch, "io_layout.yaml: robot is '" + l.robot + "', expected 'quadruped'");
+  if (l.actions.size() != n)
+    return MakeError(ErrorCode::kMismatch, "io_layout.yaml: " + std::to_string(l.actions.size()) +
+                                               " actions, the robot has " + std::to_string(n) + " joints");
+  for (std::size_t i = 0; i < n; ++i) {
+    const robot::ActionElement& a = l.actions[i];
+    const robot::UrdfJoint& j = r.joint_at(i);
+    const std::string where = "io_layout.yaml: actions[" + std::to_string(i) + "] '" + a.name + "'";
+    if (a.command != "q_des_" + r.joint_names[i])
+      return MakeError(ErrorCode::kMismatch, where + ": command '" + a.command + "' is not q_des_" + r.joint_names[i] +
+                                                 " (joint " + std::to_string(i) + " of quadruped.yaml's joint order)");
+    if (!(std::fabs(a.scale) > 0))
+      return MakeError(ErrorCode::kInvalidValue, where + ": scale 0 leaves the joint at its default pose");
+    if (std::fabs(a.offset - r.default_q_rad[i]) > 1e-9)
+      return MakeError(ErrorCode::kMismatch, where + ": offset " + std::to_string(a.offset) +
+                                                 " is not the default pose " + std::to_string(r.default_q_rad[i]) +
+                                                 " of quadruped.yaml");
+    if (a.low < j.lower_rad - 1e-9 || a.high > j.upper_rad + 1e-9)
+      return MakeError(ErrorCode::kMismatch, where + ": [" + std::to_string(a.low) + ", " + std::to_string(a.high) +
+                                                 "] leaves the URDF limits [" + std::to_string(j.lower_rad) + ", " +
+                                                 std::to_string(j.upper_rad) + "]");
+  }
+  sh->signal_names = SignalNames(r.joint_names);
+  auto probe = robot::ObservationBuilder::Create(l, sh->signal_names);
+  if (!probe) return std::move(probe).error();
+  sh->mapper = robot::ActionMapper::Create(l);
+  // The reply ranges of each joint's motor.
+  sh->range.resize(n);
+  std::vector<bool> have(n, false);
+  for (const auto& m : map->motors) {
+    const auto it = std::find(r.joint_names.begin(), r.joint_names.end(), m.joint);
+    if (it == r.joint_names.end())
+      return MakeError(ErrorCode::kMismatch, "can_map.yaml: motor '" + m.joint + "' is not a joint of quadruped.yaml");
+    const auto j = static_cast<std::size_t>(it - r.joint_names.begin());
+    sh->range[j] = map->range_of(m);
+    have[j] = true;
+  }
+  for (std::size_t j = 0; j < n; ++j)
+    if (!have[j]) return MakeError(ErrorCode::kMismatch, "can_map.yaml: no motor for joint '" + r.joint_names[j] + "'");
+
+  const QuadrupedWalkParams& p = sh->params;
+  MjcfOptions mo;
+  mo.timestep_s = p.timestep_s;
+  mo.base_height_m = p.init_base_height_m;
+  if (options.terrain == "mixed") mo.block_geoms = p.pool;
+  auto xml = GenerateMjcf(r, mo);
+  if (!xml) return std::move(xml).error();
+  auto model = CompileMjcf(*xml, "quadruped");
+  if (!model) return std::move(model).error();
+  sh->model = *model;
+  mjModel* m = sh->model;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int id = mj_name2id(m, mjOBJ_JOINT, r.joint_names[i].c_str());
+    sh->qpos_adr.push_back(m->jnt_qposadr[id]);
+    sh->dof_adr.push_back(m->jnt_dofadr[id]);
+    const robot::UrdfJoint& j = r.joint_at(i);
+    const double mid = 0.5 * (j.lower_rad + j.upper_rad), half = 0.5 * (j.upper_rad - j.lower_rad);
+    sh->soft_lower.push_back(mid - half * p.soft_dof_pos_limit);
+    sh->soft_upper.push_back(mid + half * p.soft_dof_pos_limit);
+    sh->effort.push_back(j.effort_nm);
+  }
+  sh->base_body = mj_name2id(m, mjOBJ_BODY, r.urdf.links[r.urdf.root].name.c_str());
+  sh->base_mass = m->body_mass[sh->base_body];
+  sh->floor_geom = mj_name2id(m, mjOBJ_GEOM, "floor");
+  for (int k = 0; k < mo.block_geoms; ++k)
+    sh->block_geom.push_back(mj_name2id(m, mjOBJ_GEOM, ("block_" + std::to_string(k)).c_str()));
+  int feet = 0;
+  for (int g = 0; g < m->ngeom; ++g) {
+    GeomKind kind = GeomKind::kGround;
+    int foot = -1;
+    if (m->geom_contype[g] != 0) {
+      const int b = m->geom_bodyid[g];
+      if (b == sh->base_body) {
+        kind = GeomKind::kBase;
+      } else if (m->geom_type[g] == mjGEOM_SPHERE) {
+        kind = GeomKind::kFoot;
+        foot = feet++;
+      } else {
+        kind = GeomKind::kLeg;
+      }
+    }
+    sh->geom_kind.push_back(kind);
+    sh->geom_foot.push_back(foot);
+  }
+  if (feet != kFeet)
+    return MakeError(ErrorCode::kMismatch, "quadruped.urdf: " + std::to_string(feet) +
+                                               " foot spheres, the task needs " + std::to_string(kFeet));
+  sh->low.assign(n, -kActionClip);
+  sh->high.assign(n, kActionClip);
+  return std::unique_ptr<QuadrupedWalk>(new QuadrupedWalk(std::move(sh)));
+}
+
+QuadrupedWalk::QuadrupedWalk(std::shared_ptr<const Shared> shared) : shared_(std::move(shared)) {
+  const Shared& s = *shared_;
+  m_ = mj_copyModel(nullptr, s.model);
+  d_ = mj_makeData(m_);
+  builder_ = *robot::ObservationBuilder::Create(s.layout, s.signal_names);
+  clean_builder_ = *robot::ObservationBuilder::Create(s.layout, s.signal_names);
+  signals_.assign(s.signal_names.size(), 0.0);
+  clean_signals_.assign(s.signal_names.size(), 0.0);
+  clean_obs_.assign(builder_.observation_size(), 0.0f);
+  const std::size_t n = s.robot.joint_count();
+  for (auto* v : {&kp_, &kd_, &target_, &prev_target_, &action_, &last_action_, &last_dq_, &torque_}) v->assign(n, 0.0);
+  air_time_.assign(kFeet, 0.0);
+  blocks_.reserve(static_cast<std::size_t>(s.params.blocks));
+  block_slot_.reserve(static_cast<std::size_t>(s.params.blocks));
+  slot_block_.assign(s.block_geom.size(), -1);
+}
+
+QuadrupedWalk::~QuadrupedWalk() {
+  mj_deleteData(d_);
+  mj_deleteModel(m_);
+}
+
+const std::string& QuadrupedWalk::name() const noexcept {
+  return shared_->name;
+}
+std::uint32_t QuadrupedWalk::observation_size() const noexcept {
+  return builder_.observation_size();
+}
+std::uint32_t QuadrupedWalk::action_size() const noexcept {
+  return static_cast<std::uint32_t>(shared_->robot.joint_count());
+}
+std::span<const float> QuadrupedWalk::action_low() const noexcept {
+  return shared_->low;
+}
+std::span<const float> QuadrupedWalk::action_high() const noexcept {
+  return shared_->high;
+}
+std::uint32_t QuadrupedWalk::max_episode_steps() const noexcept {
+  return static_cast<std::uint32_t>(shared_->params.episode_steps());
+}
+const robot::IoLayout& QuadrupedWalk::layout() const noexcept {
+  return shared_->layout;
+}
+const QuadrupedWalkParams& QuadrupedWalk::params() const noexcept {
+  return shared_->params;
+}
+const robot::RobotDescription& QuadrupedWalk::robot() const noexcept {
+  return shared_->robot;
+}
+// The policy's observation without noise, then: base linear velocity (base frame) x 2, base height
+// over the ground, foot contacts, friction, added base mass, actuation latency in policy periods.
+std::uint32_t QuadrupedWalk::critic_observation_size() const noexcept {
+  return observation_size() + 3 + 1 + kFeet + 3;
+}
+
+std::unique_ptr<Env> QuadrupedWalk::Clone() const {
+  return std::unique_ptr<Env>(new QuadrupedWalk(shared_));
+}
+
+EpisodeInfo QuadrupedWalk::episode_info() const noexcept {
+  EpisodeInfo e;
+  e.available = true;
+  e.failure = fell_;
+  e.success = !fell_;
+  e.time_s = static_cast<double>(step_) * shared_->params.policy_dt_s();
+  for (std::size_t k = 0; k < 3; ++k) e.tracking_error[k] = step_ > 0 ? error_sum_[k] / step_ : EpisodeInfo::kNoValue;
+  return e;
+}
+
+void QuadrupedWalk::BuildTerrain(bool blocks) noexcept {
+  const Shared& s = *shared_;
+  const QuadrupedWalkParams& p = s.params;
+  on_blocks_ = blocks && !s.block_geom.empty();
+  blocks_.clear();
+  block_slot_.clear();
+  for (std::size_t k = 0; k < s.block_geom.size(); ++k) {
+    const int g = s.block_geom[k];
+    m_->geom_conaffinity[g] = 0;
+    m_->geom_pos[3 * g + 2] = -10.0;
+    slot_block_[k] = -1;
+  }
+  if (!on_blocks_) return;
+  const double half = p.field_half_size_m, r2 = p.clear_radius_m * p.clear_radius_m;
+  for (int b = 0; b < p.blocks; ++b) {
+    const double cx = rng_.Uniform(-half, half), cy = rng_.Uniform(-half, half);
+    const double sx = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
+    const double sy = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
+    const double h = rng_.Uniform(p.block_height_m[0], p.block_height_m[1]);
+    const Block k{cx - sx / 2, cx + sx / 2, cy - sy / 2, cy + sy / 2, h};
+    // The start area stays flat: a block reaching into it is left out.
+    const double dx = std::max({k.x0, -k.x1, 0.0}), dy = std::max({k.y0, -k.y1, 0.0});
+    if (dx * dx + dy * dy < r2) continue;
+    blocks_.push_back(k);
+    block_slot_.push_back(-1);
+  }
+}
+
+// The blocks within near_m of the base (in x and y) go into the pool's geoms and stay in the same
+// geom while they are near; blocks that are no longer near leave it. Where more blocks are near
+// than the pool holds, the later ones wait (the pool is sized so that this does not happen).
+void QuadrupedWalk::UpdateBlockPool() noexcept {
+  if (!on_blocks_) return;
+  const Shared& s = *shared_;
+  const double r = s.params.near_m, x = d_->qpos[0], y = d_->qpos[1];
+  auto near = [&](const Block& b) { return b.x1 > x - r && b.x0 < x + r && b.y1 > y - r && b.y0 < y + r; };
+  for (std::size_t k = 0; k < slot_block_.size(); ++k) {
+    const int b = slot_block_[k];
+    if (b < 0 || near(blocks_[static_cast<std::size_t>(b)])) continue;
+    const int g = s.block_geom[k];
+    m_->geom_conaffinity[g] = 0;
+    m_->geom_pos[3 * g + 2] = -10.0;
+    block_slot_[static_cast<std::size_t>(b)] = -1;
+    slot_block_[k] = -1;
+  }
+  std::size_t free_slot = 0;
+  for (std::size_t b = 0; b < blocks_.size(); ++b) {
+    if (block_slot_[b] >= 0 || !near(blocks_[b])) continue;
+    while (free_slot < slot_block_.size() && slot_block_[free_slot] >= 0) ++free_slot;
+    if (free_slot == slot_block_.size()) break;
+    const Block& k = blocks_[b];
+    const int g = s.block_geom[free_slot];
+    const double hx = (k.x1 - k.x0) / 2, hy = (k.y1 - k.y0) / 2, hz = k.height / 2;
+    m_->geom_pos[3 * g] = k.x0 + hx;
+    m_->geom_pos[3 * g + 1] = k.y0 + hy;
+    m_->geom_pos[3 * g + 2] = hz;
+    m_->geom_size[3 * g] = hx;
+    m_->geom_size[3 * g + 1] = hy;
+    m_->geom_size[3 * g + 2] = hz;
+    m_->geom_rbound[g] = std::sqrt(hx * hx + hy * hy + hz * hz);
+    m_->geom_conaffinity[g] = 1;
+    slot_block_[free_slot] = static_cast<int>(b);
+    block_slot_[b] = static_cast<int>(free_slot);
+  }
+}
+
+double QuadrupedWalk::GroundHeight(double x, double y) const noexcept {
+  double h = 0.0;
+  for (const Block& b : blocks_)
+    if (x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1) h = std::max(h, b.height);
+  return h;
+}
+
+void QuadrupedWalk::ResampleCommand() noexcept {
+  const QuadrupedWalkParams& p = shared_->params;
+  command_[0] = rng_.Uniform(p.vx_mps[0], p.vx_mps[1]);
+  command_[1] = rng_.Uniform(p.vy_mps[0], p.vy_mps[1]);
+  if (p.heading_command) {
+    command_[3] = rng_.Uniform(p.heading_rad[0], p.heading_rad[1]);
+  } else {
+    command_[2] = rng_.Uniform(p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
+  }
+  if (std::hypot(command_[0], command_[1]) < p.zero_below_mps) command_[0] = command_[1] = 0.0;
+  ++tel_.command_index;
+}
+
+void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
+  const Shared& s = *shared_;
+  const QuadrupedWalkParams& p = s.params;
+  rng_.Seed(rng.Next());
+  const bool dr = s.options.randomize;
+  friction_ = dr ? rng_.Uniform(p.friction[0], p.friction[1]) : 1.0;
+  added_mass_ = dr ? rng_.Uniform(p.added_mass_kg[0], p.added_mass_kg[1]) : 0.0;
+  const double lat = dr ? rng_.Uniform(p.latency_periods[0], p.latency_periods[1]) : 0.0;
+  latency_substeps_ = static_cast<int>(std::lround(lat * p.decimation));
+  for (std::size_t j = 0; j < kp_.size(); ++j) {
+    kp_[j] = p.kp_nm_rad * (dr ? rng_.Uniform(p.gain_scale[0], p.gain_scale[1]) : 1.0);
+    kd_[j] = p.kd_nm_s_rad * (dr ? rng_.Uniform(p.gain_scale[0], p.gain_scale[1]) : 1.0);
+  }
+  for (int g = 0; g < m_->ngeom; ++g) m_->geom_friction[3 * g] = friction_;
+  m_->body_mass[s.base_body] = s.base_mass + added_mass_;
+  BuildTerrain(s.options.terrain == "mixed" && rng_.Uniform() < s.options.blocks_fraction);
+
+  mj_resetData(m_, d_);
+  d_->qpos[2] = p.init_base_height_m + GroundHeight(0, 0);
+  for (std::size_t j = 0; j < kp_.size(); ++j) {
+    const double q = s.robot.default_q_rad[j] * rng_.Uniform(p.init_joint_scale[0], p.init_joint_scale[1]);
+    const robot::UrdfJoint& uj = s.robot.joint_at(j);
+    d_->qpos[s.qpos_adr[j]] = std::clamp(q, uj.lower_rad, uj.upper_rad);
+    target_[j] = prev_target_[j] = s.robot.default_q_rad[j];
+    action_[j] = last_action_[j] = 0.0;
+    last_dq_[j] = torque_[j] = 0.0;
+  }
+  for (int k = 0; k < 6; ++k) d_->qvel[k] = rng_.Uniform(-p.init_base_velocity, p.init_base_velocity);
+  UpdateBlockPool();
+  mj_forward(m_, d_);
+  std::fill(air_time_.begin(), air_time_.end(), 0.0);
+  foot_contact_.fill(false);
+  last_foot_contact_.fill(false);
+  step_ = 0;
+  fell_ = false;
+  done_ = false;
+  tel_ = WalkTelemetry{};
+  command_ = {0, 0, 0, 0};
+  error_sum_ = {0, 0, 0};
+  ResampleCommand();
+  Contacts();
+  Observe(observation, true);
+}
+
+void QuadrupedWalk::ApplyTargets(const double* target, int substeps) noexcept {
+  const Shared& s = *shared_;
+  const std::size_t n = kp_.size();
+  for (int k = 0; k < substeps; ++k) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const double q = d_->qpos[s.qpos_adr[j]], dq = d_->qvel[s.dof_adr[j]];
+      const double tau = kp_[j] * (target[j] - q) - kd_[j] * dq;
+      torque_[j] = std::clamp(tau, -s.effort[j], s.effort[j]);
+      d_->ctrl[j] = torque_[j];
+    }
+    mj_step(m_, d_);
+  }
+}
+
+void QuadrupedWalk::Contacts() noexcept {
+  const Shared& s = *shared_;
+  last_foot_contact_ = foot_contact_;
+  foot_contact_.fill(false);
+  collisions_ = 0;
+  base_contact_ = false;
+  for (int i = 0; i < d_->ncon; ++i) {
+    const mjContact& c = d_->contact[i];
+    const int g = s.geom_kind[c.geom1] != GeomKind::kGround ? c.geom1 : c.geom2;
+    const GeomKind kind = s.geom_kind[g];
+    if (kind == GeomKind::kGround) continue;
+    if (kind == GeomKind::kBase) {
+      base_contact_ = true;
+      continue;
+    }
+    mjtNum f[6];
+    mj_contactForce(m_, d_, i, f);
+    if (kind == GeomKind::kFoot) {
+      if (f[0] > shared_->params.contact_force_n) foot_contact_[static_cast<std::size_t>(s.geom_foot[g])] = true;
+    } else if (f[0] > 0.1) {
+      ++collisions_;
+    }
+  }
+}
+
+void QuadrupedWalk::FillSignals(bool with_noise, double* sig) noexcept {
+  const Shared& s = *shared_;
+  const QuadrupedWalkParams& p = s.params;
+  const double level = with_noise && s.options.noise ? p.noise_level : 0.0;
+  auto noise = [&](double n) { return level > 0 ? (2 * rng_.Uniform() - 1) * n * level : 0.0; };
+  const mjtNum* q = d_->qpos + 3;  // w x y z
+  const double gx = -2 * (q[1] * q[3] - q[0] * q[2]), gy = -2 * (q[2] * q[3] + q[0] * q[1]),
+               gz = -(1 - 2 * (q[1] * q[1] + q[2] * q[2]));
+  for (int k = 0; k < 3; ++k) {
+    // The IMU reports its gyro in steps of its LSB.
+    const double w = std::round(d_->qvel[3 + k] / can::kImuGyroScale) * can::kImuGyroScale;
+    sig[k] = w + noise(p.noise_ang_vel_radps);
+  }
+  sig[3] = gx + noise(p.noise_gravity);
+  sig[4] = gy + noise(p.noise_gravity);
+  sig[5] = gz + noise(p.noise_gravity);
+  sig[6] = command_[0];
+  sig[7] = command_[1];
+  sig[8] = command_[2];
+  const std::size_t n = kp_.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    const can::MitRange& r = s.range[j];
+    const double qj = AsReported(d_->qpos[s.qpos_adr[j]], r.p_min, r.p_max, can::kMitPositionBits);
+    const double dqj = AsReported(d_->qvel[s.dof_adr[j]], r.v_min, r.v_max, can::kMitVelocityBits);
+    sig[9 + j] = qj + noise(p.noise_dof_pos_rad);
+    sig[9 + n + j] = dqj + noise(p.noise_dof_vel_radps);
+    sig[9 + 2 * n + j] = action_[j];
+  }
+}
+
+void QuadrupedWalk::Observe(std::span<float> observation, bool first) noexcept {
+  FillSignals(true, signals_.data());
+  builder_.Build(signals_.data(), first, observation.data());
+  FillSignals(false, clean_signals_.data());
+  clean_builder_.Build(clean_signals_.data(), first, clean_obs_.data());
+}
+
+void QuadrupedWalk::CriticObservation(std::span<float> out) const noexcept {
+  const Shared& s = *shared_;
+  std::copy(clean_obs_.begin(), clean_obs_.end(), out.begin());
+  std::size_t k = clean_obs_.size();
+  const mjtNum* q = d_->qpos + 3;
+  mjtNum rot[9], v_body[3];
+  mju_quat2Mat(rot, q);
+  mju_mulMatTVec(v_body, rot, d_->qvel, 3, 3);
+  for (int a = 0; a < 3; ++a) out[k++] = static_cast<float>(2.0 * v_body[a]);
+  out[k++] = static_cast<float>(d_->qpos[2] - GroundHeight(d_->qpos[0], d_->qpos[1]));
+  for (int f = 0; f < kFeet; ++f) out[k++] = foot_contact_[static_cast<std::size_t>(f)] ? 1.0f : 0.0f;
+  out[k++] = static_cast<float>(friction_);
+  out[k++] = static_cast<float>(added_mass_);
+  out[k++] = static_cast<float>(static_cast<double>(latency_substeps_) / s.params.decimation);
+}
+
+double QuadrupedWalk::Reward() noexcept {
+  const Shared& s = *shared_;
+  const QuadrupedWalkParams& p = s.params;
+  const WalkRewardScales& w = p.scales;
+  const double dt = p.policy_dt_s();
+  mjtNum rot[9], v[3];
+  mju_quat2Mat(rot, d_->qpos + 3);
+  mju_mulMatTVec(v, rot, d_->qvel, 3, 3);
+  const mjtNum* om = d_->qvel + 3;          // base frame
+  const double g0 = -rot[6], g1 = -rot[7];  // gravity in the base frame, x and y
+  const std::size_t n = kp_.size();
+  double torques = 0, acc = 0, rate = 0, limits = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const double dq = d_->qvel[s.dof_adr[j]], qj = d_->qpos[s.qpos_adr[j]];
+    torques += torque_[j] * torque_[j];
+    const double a = (dq - last_dq_[j]) / dt;
+    acc += a * a;
+    rate += (last_action_[j] - action_[j]) * (last_action_[j] - action_[j]);
+    limits += std::max(0.0, s.soft_lower[j] - qj) + std::max(0.0, qj - s.soft_upper[j]);
+  }
+  const double ev = (command_[0] - v[0]) * (command_[0] - v[0]) + (command_[1] - v[1]) * (command_[1] - v[1]);
+  const double ew = (command_[2] - om[2]) * (command_[2] - om[2]);
+  double air = 0;
+  for (int f = 0; f < kFeet; ++f) {
+    const auto k = static_cast<std::size_t>(f);
+    const bool contact = foot_contact_[k] || last_foot_contact_[k];
+    const bool first = air_time_[k] > 0 && contact;
+    air_time_[k] += dt;
+    if (first) air += air_time_[k] - p.feet_air_time_target_s;
+    if (contact) air_time_[k] = 0;
+  }
+  if (std::hypot(command_[0], command_[1]) <= 0.1) air = 0;
+  double r = w.tracking_lin_vel * std::exp(-ev / p.tracking_sigma) +
+             w.tracking_ang_vel * std::exp(-ew / p.tracking_sigma) + w.lin_vel_z * v[2] * v[2] +
+             w.ang_vel_xy * (om[0] * om[0] + om[1] * om[1]) + w.orientation * (g0 * g0 + g1 * g1) +
+             w.torques * torques + w.dof_acc * acc + w.action_rate * rate + w.collision * collisions_ +
+             w.feet_air_time * air + w.dof_pos_limits * limits;
+  r *= dt;
+  if (p.only_positive) r = std::max(r, 0.0);
+  if (fell_) r += w.termination * dt;  // after the clip, as legged_gym adds it
+  return r;
+}
+
+StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> observation) {
+  const Shared& s = *shared_;
+  const QuadrupedWalkParams& p = s.params;
+  const std::size_t n = kp_.size();
+  float a[64];
+  for (std::size_t j = 0; j < n; ++j)
+    a[j] = std::clamp(std::isfinite(action[j]) ? action[j] : 0.0f, -kActionClip, kActionClip);
+  (void)s.mapper.Map(a, target_.data());
+  // The action as the controller knows it: from the blob's output, the joint target after the
+  // layout's clamp (the same as the policy's output unless the target hit a joint limit).
+  for (std::size_t j = 0; j < n; ++j) {
+    const robot::ActionElement& e = s.layout.actions[j];
+    last_action_[j] = action_[j];
+    action_[j] = (target_[j] - e.offset) / e.scale;
+    last_dq_[j] = d_->qvel[s.dof_adr[j]];
+  }
+  UpdateBlockPool();
+  ApplyTargets(prev_target_.data(), std::min(latency_substeps_, p.decimation));
+  ApplyTargets(target_.data(), p.decimation - std::min(latency_substeps_, p.decimation));
+  prev_target_ = target_;
+  ++step_;
+  const double dt = p.policy_dt_s();
+  // Pushes: the base's horizontal velocity set at random.
+  const int push_steps = static_cast<int>(std::lround(p.push_interval_s / dt));
+  if (s.options.randomize && push_steps > 0 && step_ % push_steps == 0) {
+    d_->qvel[0] = rng_.Uniform(-p.push_velocity_mps, p.push_velocity_mps);
+    d_->qvel[1] = rng_.Uniform(-p.push_velocity_mps, p.push_velocity_mps);
+  }
+  const int resample_steps = std::max(1, static_cast<int>(std::lround(p.resample_s / dt)));
+  if (step_ % resample_steps == 0) ResampleCommand();
+  mjtNum rot[9];
+  mju_quat2Mat(rot, d_->qpos + 3);
+  const double yaw = std::atan2(rot[3], rot[0]);
+  if (p.heading_command)
+    command_[2] = std::clamp(p.heading_gain * Wrap(command_[3] - yaw), p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
+  Contacts();
+  const double tilt = std::acos(std::clamp(rot[8], -1.0, 1.0));
+  fell_ = (p.terminate_on_base_contact && base_contact_) || tilt > p.max_tilt_rad;
+  StepResult res;
+  res.reward = Reward();
+  res.terminated = fell_;
+  res.truncated = step_ >= p.episode_steps();
+  Observe(observation, false);
+  mjtNum v[3];
+  mju_mulMatTVec(v, rot, d_->qvel, 3, 3);
+  tel_.time_s = step_ * dt;
+  tel_.command = {command_[0], command_[1], command_[2]};
+  tel_.measured = {v[0], v[1], d_->qvel[5]};
+  for (std::size_t k = 0; k < 3; ++k) error_sum_[k] += std::fabs(tel_.command[k] - tel_.measured[k]);
+  tel_.position = {d_->qpos[0], d_->qpos[1], d_->qpos[2]};
+  tel_.yaw_rad = yaw;
+  tel_.on_blocks = on_blocks_;
+  tel_.fell = fell_;
+  tel_.base_contact = p.terminate_on_base_contact && base_contact_;
+  return res;
+}
+
+double QuadrupedWalk::BarePhysicsRate(int steps) const {
+  const Shared& s = *shared_;
+  mjModel* m = mj_copyModel(nullptr, m_);
+  mjData* d = mj_makeData(m);
+  mj_copyData(d, m, d_);
+  auto cpu = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  };
+  const double t0 = cpu();
+  for (int k = 0; k < steps; ++k) {
+    for (std::size_t j = 0; j < kp_.size(); ++j)
+      d->ctrl[j] = kp_[j] * (s.robot.default_q_rad[j] - d->qpos[s.qpos_adr[j]]) - kd_[j] * d->qvel[s.dof_adr[j]];
+    mj_step(m, d);
+  }
+  const double seconds = cpu() - t0;
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  return steps / seconds;
+}
+
+}  // namespace pbppo::envs

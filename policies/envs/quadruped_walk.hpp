@@ -1,0 +1,139 @@
+// The quadruped velocity-tracking task (Pb-PPO paper's legged_gym ANYmal-C task, on our robot) in
+// MuJoCo 2.2.2: the robot (models/quadruped: URDF, joint order, default pose, CAN map), the task
+// (walk.yaml) and the policy's IO layout (io_layout.yaml). docs/quadruped_walk.md lists every
+// value beside legged_gym's.
+//
+//   physics     MJCF generated from the URDF (policies/envs/mjcf.hpp), 200 Hz; the joint PD runs
+//               every physics step, the policy every `decimation` steps (50 Hz)
+//   action      policy units; the IO layout's action map gives the joint targets
+//               (default + 0.25 a, clamped to the URDF limits), exactly as the controller does
+//   observation what the robot's devices give, through the IO layout: IMU gyro and gravity
+//               direction, the command, joint positions and velocities quantised like the MIT
+//               replies, the previous action; uniform noise
+//   critic      the same without noise, plus privileged state: base linear velocity, base height
+//               over the ground, foot contacts, friction, added mass, actuation latency
+//   commands    vx, vy, heading (-> yaw rate) resampled every resample_s
+//   reward      legged_gym's flat-terrain terms
+//   randomised  friction, added base mass, PD gains, actuation latency, pushes
+//   terrain     flat, or mixed: each episode flat or on random blocks, 1:1 (the blocks near the
+//               robot are moved into a small pool of box geoms every policy step)
+//
+// One compiled template model is shared read-only by every copy of the environment; each copy owns
+// a model copy (friction, base mass and the terrain are randomised per episode, and MuJoCo reads
+// them from the model) and its mjData. Deterministic for a seed: every random draw comes from the
+// environment's own generator, seeded at Reset.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "policies/envs/env.hpp"
+#include "policies/envs/quadruped_walk_config.hpp"
+#include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/urdf.hpp"
+
+struct mjModel_;
+struct mjData_;
+
+namespace pbppo::envs {
+
+struct QuadrupedWalkOptions {
+  std::string models_dir;        // holding quadruped/; empty: DefaultModelsDir()
+  std::string terrain = "flat";  // flat | mixed
+  std::string commands;          // "VX:VY:YAW" maxima; empty: walk.yaml's ranges
+  bool noise = true;             // observation noise
+  bool randomize = true;         // friction, mass, gains, latency, pushes (false: the nominal robot)
+  double blocks_fraction = 0.5;  // mixed: the fraction of episodes on blocks
+  double resample_s = 0;         // > 0: resample commands this often instead of walk.yaml's period
+};
+
+// What happened in the last policy step, for evaluation and tests.
+struct WalkTelemetry {
+  double time_s = 0;
+  std::array<double, 3> command{};   // vx, vy (m/s), yaw rate (rad/s), base frame
+  std::array<double, 3> measured{};  // the same, measured (true base velocity)
+  std::array<double, 3> position{};  // base, world frame
+  double yaw_rad = 0;
+  bool on_blocks = false;
+  bool fell = false;                // the episode ended by base contact or tilt
+  bool base_contact = false;        // ... by base contact (else by tilt)
+  std::uint32_t command_index = 0;  // incremented at each resample
+};
+
+class QuadrupedWalk final : public Env {
+ public:
+  static Result<std::unique_ptr<QuadrupedWalk>> Make(const QuadrupedWalkOptions& options);
+  ~QuadrupedWalk() override;
+  QuadrupedWalk(const QuadrupedWalk&) = delete;
+  QuadrupedWalk& operator=(const QuadrupedWalk&) = delete;
+
+  const std::string& name() const noexcept override;
+  std::uint32_t observation_size() const noexcept override;
+  std::uint32_t action_size() const noexcept override;
+  std::span<const float> action_low() const noexcept override;
+  std::span<const float> action_high() const noexcept override;
+  std::uint32_t max_episode_steps() const noexcept override;
+  const robot::IoLayout& layout() const noexcept override;
+  std::uint32_t critic_observation_size() const noexcept override;
+  void CriticObservation(std::span<float> out) const noexcept override;
+
+  void Reset(Rng& rng, std::span<float> observation) override;
+  StepResult Step(std::span<const float> action, std::span<float> observation) override;
+  std::unique_ptr<Env> Clone() const override;
+  EpisodeInfo episode_info() const noexcept override;
+
+  const WalkTelemetry& telemetry() const noexcept { return tel_; }
+  const QuadrupedWalkParams& params() const noexcept;
+  const robot::RobotDescription& robot() const noexcept;
+  // Benchmarks: `steps` MuJoCo steps of a copy of the current state with only the joint PD
+  // holding the default pose (no policy, observation or reward); the physics steps per second of
+  // this thread's CPU time.
+  double BarePhysicsRate(int steps) const;
+  // The signal names the environment provides, in table order (set-up; allocates).
+  static std::vector<std::string> SignalNames(const std::vector<std::string>& joint_names);
+
+  struct Shared;
+
+ private:
+  explicit QuadrupedWalk(std::shared_ptr<const Shared> shared);
+  struct Block {
+    double x0, x1, y0, y1, height;
+  };
+  void BuildTerrain(bool blocks) noexcept;
+  void UpdateBlockPool() noexcept;
+  double GroundHeight(double x, double y) const noexcept;
+  void ResampleCommand() noexcept;
+  void ApplyTargets(const double* target_rad, int substeps) noexcept;
+  void Contacts() noexcept;
+  void FillSignals(bool with_noise, double* signals) noexcept;
+  void Observe(std::span<float> observation, bool first) noexcept;
+  double Reward() noexcept;
+
+  std::shared_ptr<const Shared> shared_;
+  mjModel_* m_ = nullptr;
+  mjData_* d_ = nullptr;
+  Rng rng_;
+  robot::ObservationBuilder builder_, clean_builder_;
+  std::vector<double> signals_, clean_signals_;
+  std::vector<float> clean_obs_;
+  // Per joint (robot order).
+  std::vector<double> kp_, kd_, target_, prev_target_, action_, last_action_, last_dq_, torque_, air_time_;
+  std::array<bool, 4> foot_contact_{}, last_foot_contact_{};
+  int collisions_ = 0;
+  bool base_contact_ = false;
+  double friction_ = 1, added_mass_ = 0;
+  int latency_substeps_ = 0;
+  std::array<double, 4> command_{};    // vx, vy, yaw rate, heading
+  std::array<double, 3> error_sum_{};  // sum over the episode's steps of |command - measured|
+  int step_ = 0;
+  bool on_blocks_ = false, fell_ = false, done_ = true;
+  std::vector<Block> blocks_;    // this episode's blocks
+  std::vector<int> block_slot_;  // per block: its pool geom, or -1
+  std::vector<int> slot_block_;  // per pool geom: its block, or -1
+  WalkTelemetry tel_;
+};
+
+}  // namespace pbppo::envs

@@ -1,0 +1,153 @@
+#include "policies/envs/quadruped_walk_config.hpp"
+
+#include <cmath>
+#include <cstdlib>
+
+#include "runtime/robot/yaml_fields.hpp"
+
+namespace pbppo::envs {
+
+int QuadrupedWalkParams::episode_steps() const noexcept {
+  return static_cast<int>(std::lround(episode_s / policy_dt_s()));
+}
+
+Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path) {
+  auto root = robot::LoadYamlFile(path);
+  if (!root) return std::move(root).error();
+  const robot::YamlFields f(path);
+  QuadrupedWalkParams p;
+  if (auto st =
+          f.Keys(*root, "",
+                 {"simulation", "control", "commands", "rewards", "termination", "noise", "randomization", "terrain"});
+      !st)
+    return st.error();
+  YAML::Node sim, ctl, cmd, rew, sc, term, noise, rnd, ter;
+  for (auto [key, node] : {std::pair{"simulation", &sim}, std::pair{"control", &ctl}, std::pair{"commands", &cmd},
+                           std::pair{"rewards", &rew}, std::pair{"termination", &term}, std::pair{"noise", &noise},
+                           std::pair{"randomization", &rnd}, std::pair{"terrain", &ter}})
+    if (auto st = f.Map(*root, key, "", node); !st) return st.error();
+  if (auto st = f.Map(rew, "scales", "rewards", &sc); !st) return st.error();
+  long decimation = 0, blocks = 0, pool = 0;
+  double heading_command = 1, only_positive = 1, base_contact = 1;
+  auto flag = [&](const YAML::Node& n, const char* key, const std::string& where, double* out) -> Status {
+    const YAML::Node v = n[key];
+    if (!v) return f.Fail(where, std::string("missing field '") + key + "'");
+    const std::string s = v.IsScalar() ? v.as<std::string>() : "";
+    if (s != "true" && s != "false") return f.Fail(where + "." + key, "'" + s + "' is not true or false");
+    *out = s == "true" ? 1 : 0;
+    return {};
+  };
+  WalkRewardScales& s = p.scales;
+  const double kBig = 1e6;
+  for (const Status& st : {
+           f.Keys(sim, "simulation",
+                  {"timestep_s", "decimation", "episode_s", "init_base_height_m", "init_joint_scale",
+                   "init_base_velocity"}),
+           f.Number(sim, "timestep_s", "simulation", 1e-4, 0.02, &p.timestep_s),
+           f.Integer(sim, "decimation", "simulation", 1, 100, &decimation),
+           f.Number(sim, "episode_s", "simulation", 0.1, 3600, &p.episode_s),
+           f.Number(sim, "init_base_height_m", "simulation", 0.05, 5, &p.init_base_height_m),
+           f.Range(sim, "init_joint_scale", "simulation", 0, 3, &p.init_joint_scale),
+           f.Number(sim, "init_base_velocity", "simulation", 0, 10, &p.init_base_velocity),
+           f.Keys(ctl, "control", {"kp_nm_rad", "kd_nm_s_rad"}),
+           f.Number(ctl, "kp_nm_rad", "control", 0, 1000, &p.kp_nm_rad),
+           f.Number(ctl, "kd_nm_s_rad", "control", 0, 100, &p.kd_nm_s_rad),
+           f.Keys(cmd, "commands",
+                  {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_command", "heading_gain",
+                   "zero_below_mps"}),
+           f.Number(cmd, "resample_s", "commands", 0.02, 3600, &p.resample_s),
+           f.Range(cmd, "vx_mps", "commands", -10, 10, &p.vx_mps),
+           f.Range(cmd, "vy_mps", "commands", -10, 10, &p.vy_mps),
+           f.Range(cmd, "yaw_rate_radps", "commands", -10, 10, &p.yaw_rate_radps),
+           f.Range(cmd, "heading_rad", "commands", -3.1416, 3.1416, &p.heading_rad),
+           flag(cmd, "heading_command", "commands", &heading_command),
+           f.Number(cmd, "heading_gain", "commands", 0, 100, &p.heading_gain),
+           f.Number(cmd, "zero_below_mps", "commands", 0, 10, &p.zero_below_mps),
+           f.Keys(rew, "rewards",
+                  {"tracking_sigma", "only_positive", "feet_air_time_target_s", "soft_dof_pos_limit", "contact_force_n",
+                   "scales"}),
+           f.Number(rew, "tracking_sigma", "rewards", 1e-6, 100, &p.tracking_sigma),
+           flag(rew, "only_positive", "rewards", &only_positive),
+           f.Number(rew, "feet_air_time_target_s", "rewards", 0, 10, &p.feet_air_time_target_s),
+           f.Number(rew, "soft_dof_pos_limit", "rewards", 0.1, 1, &p.soft_dof_pos_limit),
+           f.Number(rew, "contact_force_n", "rewards", 0, 1000, &p.contact_force_n),
+           f.Keys(sc, "rewards.scales",
+                  {"tracking_lin_vel", "tracking_ang_vel", "lin_vel_z", "ang_vel_xy", "orientation", "torques",
+                   "dof_acc", "action_rate", "collision", "feet_air_time", "dof_pos_limits", "termination"}),
+           f.Number(sc, "tracking_lin_vel", "rewards.scales", -kBig, kBig, &s.tracking_lin_vel),
+           f.Number(sc, "tracking_ang_vel", "rewards.scales", -kBig, kBig, &s.tracking_ang_vel),
+           f.Number(sc, "lin_vel_z", "rewards.scales", -kBig, kBig, &s.lin_vel_z),
+           f.Number(sc, "ang_vel_xy", "rewards.scales", -kBig, kBig, &s.ang_vel_xy),
+           f.Number(sc, "orientation", "rewards.scales", -kBig, kBig, &s.orientation),
+           f.Number(sc, "torques", "rewards.scales", -kBig, kBig, &s.torques),
+           f.Number(sc, "dof_acc", "rewards.scales", -kBig, kBig, &s.dof_acc),
+           f.Number(sc, "action_rate", "rewards.scales", -kBig, kBig, &s.action_rate),
+           f.Number(sc, "collision", "rewards.scales", -kBig, kBig, &s.collision),
+           f.Number(sc, "feet_air_time", "rewards.scales", -kBig, kBig, &s.feet_air_time),
+           f.Number(sc, "dof_pos_limits", "rewards.scales", -kBig, kBig, &s.dof_pos_limits),
+           f.OptionalNumber(sc, "termination", "rewards.scales", -kBig, kBig, &s.termination),
+           f.Keys(term, "termination", {"base_contact", "max_tilt_rad"}),
+           flag(term, "base_contact", "termination", &base_contact),
+           f.Number(term, "max_tilt_rad", "termination", 0.05, 3.2, &p.max_tilt_rad),
+           f.Keys(noise, "noise", {"level", "ang_vel_radps", "gravity", "dof_pos_rad", "dof_vel_radps"}),
+           f.Number(noise, "level", "noise", 0, 10, &p.noise_level),
+           f.Number(noise, "ang_vel_radps", "noise", 0, 100, &p.noise_ang_vel_radps),
+           f.Number(noise, "gravity", "noise", 0, 1, &p.noise_gravity),
+           f.Number(noise, "dof_pos_rad", "noise", 0, 1, &p.noise_dof_pos_rad),
+           f.Number(noise, "dof_vel_radps", "noise", 0, 100, &p.noise_dof_vel_radps),
+           f.Keys(
+               rnd, "randomization",
+               {"friction", "added_mass_kg", "gain_scale", "latency_periods", "push_interval_s", "push_velocity_mps"}),
+           f.Range(rnd, "friction", "randomization", 0.01, 5, &p.friction),
+           f.Range(rnd, "added_mass_kg", "randomization", -100, 100, &p.added_mass_kg),
+           f.Range(rnd, "gain_scale", "randomization", 0.1, 10, &p.gain_scale),
+           f.Range(rnd, "latency_periods", "randomization", 0, 1, &p.latency_periods),
+           f.Number(rnd, "push_interval_s", "randomization", 0, 3600, &p.push_interval_s),
+           f.Number(rnd, "push_velocity_mps", "randomization", 0, 10, &p.push_velocity_mps),
+           f.Keys(
+               ter, "terrain",
+               {"field_half_size_m", "blocks", "block_size_m", "block_height_m", "clear_radius_m", "near_m", "pool"}),
+           f.Number(ter, "field_half_size_m", "terrain", 1, 100, &p.field_half_size_m),
+           f.Integer(ter, "blocks", "terrain", 0, 100000, &blocks),
+           f.Range(ter, "block_size_m", "terrain", 0.05, 20, &p.block_size_m),
+           f.Range(ter, "block_height_m", "terrain", 0, 1, &p.block_height_m),
+           f.Number(ter, "clear_radius_m", "terrain", 0, 100, &p.clear_radius_m),
+           f.Number(ter, "near_m", "terrain", 0.1, 10, &p.near_m),
+           f.Integer(ter, "pool", "terrain", 1, 256, &pool),
+       }) {
+    if (!st) return st.error();
+  }
+  p.decimation = static_cast<int>(decimation);
+  p.blocks = static_cast<int>(blocks);
+  p.pool = static_cast<int>(pool);
+  p.heading_command = heading_command != 0;
+  p.only_positive = only_positive != 0;
+  p.terminate_on_base_contact = base_contact != 0;
+  if (p.episode_steps() < 1) return f.Fail("simulation.episode_s", "is shorter than one policy period");
+  return p;
+}
+
+Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p) {
+  if (spec.empty()) return {};
+  double v[3] = {0, 0, 0};
+  std::size_t start = 0;
+  const char* names[3] = {"vx", "vy", "yaw rate"};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t end = k < 2 ? spec.find(':', start) : spec.size();
+    if (end == std::string::npos)
+      return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
+    const std::string part = spec.substr(start, end - start);
+    char* stop = nullptr;
+    v[k] = std::strtod(part.c_str(), &stop);
+    if (part.empty() || stop != part.c_str() + part.size() || !(v[k] >= 0 && v[k] <= 5))
+      return MakeError(ErrorCode::kInvalidValue,
+                       "'" + spec + "': " + names[k] + " '" + part + "' is not a number in [0, 5]");
+    start = end + 1;
+  }
+  p.vx_mps = {-v[0], v[0]};
+  p.vy_mps = {-v[1], v[1]};
+  p.yaw_rate_radps = {-v[2], v[2]};
+  return {};
+}
+
+}  // namespace pbppo::envs

@@ -1,0 +1,71 @@
+// The quadruped velocity-tracking task as data (models/quadruped/walk.yaml): simulation rates,
+// the joint PD, command ranges, reward scales, termination, observation noise, domain
+// randomisation and the block terrain. Set-up time only; errors name the file, the field and the
+// value.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "runtime/core/result.hpp"
+
+namespace pbppo::envs {
+
+using Range = std::array<double, 2>;  // [low, high]
+
+struct WalkRewardScales {
+  double tracking_lin_vel = 0, tracking_ang_vel = 0, lin_vel_z = 0, ang_vel_xy = 0, orientation = 0, torques = 0,
+         dof_acc = 0, action_rate = 0, collision = 0, feet_air_time = 0, dof_pos_limits = 0, termination = 0;
+};
+
+struct QuadrupedWalkParams {
+  // simulation
+  double timestep_s = 0.005;
+  int decimation = 4;
+  double episode_s = 20.0;
+  double init_base_height_m = 0.48;
+  Range init_joint_scale{0.5, 1.5};
+  double init_base_velocity = 0.5;
+  // control
+  double kp_nm_rad = 20.0, kd_nm_s_rad = 0.5;
+  // commands
+  double resample_s = 10.0;
+  Range vx_mps{-1, 1}, vy_mps{-1, 1}, yaw_rate_radps{-1, 1}, heading_rad{-3.14159, 3.14159};
+  bool heading_command = true;
+  double heading_gain = 0.5;
+  double zero_below_mps = 0.2;
+  // rewards
+  double tracking_sigma = 0.25;
+  bool only_positive = true;
+  double feet_air_time_target_s = 0.5;
+  double soft_dof_pos_limit = 0.9;
+  double contact_force_n = 1.0;
+  WalkRewardScales scales;
+  // termination
+  bool terminate_on_base_contact = true;
+  double max_tilt_rad = 1.0;
+  // noise
+  double noise_level = 1.0;
+  double noise_ang_vel_radps = 0.2, noise_gravity = 0.05, noise_dof_pos_rad = 0.01, noise_dof_vel_radps = 1.5;
+  // randomisation
+  Range friction{0.5, 1.25}, added_mass_kg{-1, 1}, gain_scale{0.9, 1.1}, latency_periods{0, 1};
+  double push_interval_s = 15.0, push_velocity_mps = 1.0;
+  // terrain
+  double field_half_size_m = 10.0;
+  int blocks = 300;
+  Range block_size_m{0.3, 1.0}, block_height_m{0.05, 0.15};
+  double clear_radius_m = 0.8;
+  double near_m = 1.0;
+  int pool = 16;
+
+  double policy_dt_s() const noexcept { return timestep_s * decimation; }
+  int episode_steps() const noexcept;
+};
+
+Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path);
+
+// The command ranges of a --commands spec "VX_MAX:VY_MAX:YAW_RATE_MAX" (each range [-max, max]);
+// an empty spec keeps walk.yaml's. Errors name the part of the spec.
+Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p);
+
+}  // namespace pbppo::envs

@@ -1,0 +1,96 @@
+// Everything a training run is made of, in one struct: the `pbppo train` command line fills it,
+// Train() takes it, and its parts go down as they are (the environment's to envs::MakeEnv, which
+// checks them; the rest to the algorithm, the runner, the logger and the exporter). summary.json
+// records it with OptionsJson().
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "policies/envs/env.hpp"
+#include "policies/trainer/clip_schedule.hpp"
+#include "policies/trainer/lr_schedule.hpp"
+#include "runtime/core/result.hpp"
+#include "runtime/policy/policy_spec.hpp"
+
+namespace pbppo::trainer {
+
+struct TrainOptions {
+  // The environment (--env, --models, --layout and the environment's own flags).
+  envs::EnvOptions env;
+
+  // Budget and parallelism.
+  std::uint64_t seed = 1;
+  std::uint64_t total_steps = 200000;  // --steps: training environment steps (evaluation steps are extra)
+  int num_envs = 1;                    // --envs
+  int rollout_steps = 2048;            // --rollout: per environment and iteration
+  int threads = 1;
+  // --chunked-minibatch: minibatches of at least this many samples are computed in column chunks on
+  // every thread and summed in a fixed order (the result does not depend on the thread count);
+  // smaller ones run the actor and the critic side by side on two threads.
+  long chunked_minibatch = 2048;
+
+  // PPO.
+  int minibatch = 64;
+  int epochs = 10;
+  double learning_rate = 3e-4;  // --lr: the rate, or the first one (anneal, adaptive)
+  LrSchedule lr_schedule;
+  double gamma = 0.99;
+  double gae_lambda = 0.95;
+  double ent_coef = 0.0;
+  double vf_coef = 0.5;
+  double max_grad_norm = 0.5;  // <= 0: no clipping
+  double clip_vf = 0.0;        // <= 0: no value clipping
+  bool normalize_advantages = true;
+  bool scale_rewards = false;
+  ScheduleConfig schedule = [] {  // what sets the clip bound (the command line's default is pbppo)
+    ScheduleConfig c;
+    c.mode = ScheduleMode::kFixed;
+    c.arms = {0.2};
+    return c;
+  }();
+
+  // Networks.
+  std::vector<int> policy_hidden = {64, 64};  // --hidden
+  std::vector<int> value_hidden;              // --value-hidden; empty: as policy_hidden
+  policy::Activation activation = policy::Activation::kTanh;
+  double log_std_init = 0.0;
+  // Running observation normalisation (the actor's is frozen into the blob; a privileged critic
+  // observation gets its own).
+  bool normalize_observations = false;
+  // --init: the policy network and observation normaliser of this blob (same IO layout, widths and
+  // activation; the value network and log-std start fresh). Empty: orthogonal initialisation.
+  std::string init_blob;
+  // With init_blob: the first this many iterations update only the value network (which starts
+  // fresh), so the policy is not moved by the untrained critic's advantages. 0: none.
+  int critic_warmup = 0;
+
+  // Outputs.
+  std::string out_dir;  // --out; empty: write nothing
+  bool plots = true;
+  double checkpoint_seconds = 30.0;
+  // Also write best.blob: the policy of the best last-100-episode task success where the
+  // environment reports one (ties: the better return), otherwise of the best return.
+  bool keep_best = false;
+  // Also write this many blobs evenly spaced over the run into snapshots/ (named by the training
+  // steps that produced them), to choose among afterwards on held-out episodes. 0: none.
+  int snapshots = 0;
+  const std::atomic<bool>* stop = nullptr;  // set from a signal handler to stop cleanly
+
+  const std::vector<int>& critic_hidden() const noexcept { return value_hidden.empty() ? policy_hidden : value_hidden; }
+
+  // Checks every option but the environment's (envs::MakeEnv checks those); errors name the flag
+  // and the value.
+  Status Validate() const;
+};
+
+// The options as summary.json records them: one key per flag, named as the flag without its dashes
+// and with '_' for '-' ("extra_obstacles", "no_adv_norm"), except --lr ("learning_rate") and
+// --schedule ("schedule": the whole clip schedule described, e.g. "pbppo arms=0.05..0.4/6 lambda=1
+// gamma_b=0.95 feedback=rollout").
+nlohmann::json OptionsJson(const TrainOptions& options);
+
+}  // namespace pbppo::trainer

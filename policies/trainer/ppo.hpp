@@ -1,0 +1,81 @@
+// The PPO algorithm (rsl_rl's algorithms/ppo): the actor (a Gaussian policy: MLP mean,
+// state-independent log-std) and the critic (an MLP value network on the critic's inputs), their
+// Adam optimisers, the values and GAE returns of a rollout, and the clipped-surrogate update with
+// the clip bound the clip schedule chose (clip_schedule.hpp) and the learning rate the
+// learning-rate schedule sets (lr_schedule.hpp). Losses and gradients: ppo_loss.hpp.
+//
+// Deterministic: the same rollout, bound and thread count give bit-identical parameters.
+#pragma once
+
+#include <vector>
+
+#include "policies/trainer/adam.hpp"
+#include "policies/trainer/mlp.hpp"
+#include "policies/trainer/options.hpp"
+#include "policies/trainer/ppo_loss.hpp"
+#include "policies/trainer/rollout_storage.hpp"
+#include "policies/trainer/worker_pool.hpp"
+#include "runtime/core/random.hpp"
+
+namespace pbppo::trainer {
+
+// Means over the iteration's minibatches.
+struct UpdateStats {
+  double approx_kl = 0, clip_fraction = 0, explained_variance = 0, entropy = 0;
+  double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;
+  double kl = 0;  // the Gaussian KL divergence from the rollout's policy (SumGaussianKl), before each step
+};
+
+class Ppo {
+ public:
+  // Networks from the options' widths and activation, orthogonally initialised from the seed.
+  Ppo(const TrainOptions& options, int obs_size, int value_input_size, int action_size);
+
+  const GaussianPolicy<float>& actor() const noexcept { return actor_; }
+  const float* actor_params() const noexcept { return actor_params_.data(); }
+  float* actor_params() noexcept { return actor_params_.data(); }
+  const float* log_std() const noexcept { return actor_params_.data() + actor_.log_std_offset(); }
+  const Mlp<float>& critic() const noexcept { return critic_; }
+
+  double learning_rate() const noexcept { return lr_; }
+  void set_learning_rate(double lr) noexcept { lr_ = lr; }
+
+  // V of every stored state (in fixed 256-column chunks: the same arithmetic for any thread count),
+  // of the truncation and last inputs; then advantages and returns by GAE.
+  void ComputeReturns(RolloutStorage& rollout, WorkerPool& pool) const;
+  // The fraction of the returns' variance the values explain (NaN when the returns are constant).
+  static double ExplainedVariance(const RolloutStorage& rollout);
+
+  // `epochs` passes over the rollout in minibatches with clip bound `eps`. critic_only: the actor
+  // is held (its loss is still computed for the log). With the adaptive learning-rate schedule
+  // each minibatch's KL divergence sets the rate of its step (and of the steps after it).
+  UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool);
+
+  // Minibatches of at least options.chunked_minibatch samples are cut into kChunks column chunks
+  // whose gradients the threads compute side by side and sum in chunk order (the same arithmetic
+  // for any thread count; the sums, gradient norm and Adam step are split over kSegments parameter
+  // segments). Smaller ones run the actor's and the critic's halves of each minibatch on two threads.
+  static constexpr int kChunks = 4;
+  static constexpr int kSegments = 8;
+
+ private:
+  struct Minibatches {
+    long size = 0, per_epoch = 0, total = 0;  // samples per minibatch, minibatches per epoch and in all
+    std::vector<std::vector<long>> perms;     // per epoch, the rollout's columns in minibatch order
+  };
+  UpdateStats UpdateSplit(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
+                          WorkerPool& pool);
+  UpdateStats UpdateChunked(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
+                            WorkerPool& pool);
+
+  const TrainOptions& o_;
+  GaussianPolicy<float> actor_;
+  Mlp<float> critic_;
+  // Eigen-aligned storage: vectorised code then sees the same alignment on every run.
+  Vec<float> actor_params_, critic_params_, actor_grad_, critic_grad_;
+  Adam<float> actor_adam_, critic_adam_;
+  double lr_ = 0;
+  Rng rng_;  // minibatch order
+};
+
+}  // namespace pbppo::trainer

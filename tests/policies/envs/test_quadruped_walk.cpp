@@ -1,0 +1,268 @@
+// quadruped-walk: the generated MuJoCo model matches the description, the robot stands on its
+// default pose, the observation is what the devices report, runs are deterministic, and bad
+// inputs are refused at start naming the value.
+#include <doctest/doctest.h>
+#include <mujoco/mujoco.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "policies/envs/mjcf.hpp"
+#include "policies/envs/quadruped_walk.hpp"
+#include "runtime/transport/can/mit_codec.hpp"
+#include "runtime/transport/can/quantize.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+using namespace pbppo::envs;
+
+namespace {
+
+QuadrupedWalkOptions Nominal(const std::string& terrain = "flat") {
+  QuadrupedWalkOptions o;
+  o.models_dir = test::SourcePath("models");
+  o.terrain = terrain;
+  o.noise = false;
+  o.randomize = false;
+  return o;
+}
+
+std::unique_ptr<QuadrupedWalk> MakeWalk(const QuadrupedWalkOptions& o) {
+  auto e = QuadrupedWalk::Make(o);
+  REQUIRE_MESSAGE(e.ok(), e.error().message);
+  return std::move(e).value();
+}
+
+std::string Read(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// A copy of models/quadruped with texts of one file replaced (from, to, from, to, ...).
+std::string ModelsWith(const std::string& name, const std::string& file, const std::vector<std::string>& edits) {
+  const std::string dir = test::ScratchDir(name);
+  std::filesystem::create_directories(dir + "/quadruped");
+  for (const auto& f : std::filesystem::directory_iterator(test::SourcePath("models/quadruped")))
+    std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
+  std::string text = Read(dir + "/quadruped/" + file);
+  for (std::size_t k = 0; k + 1 < edits.size(); k += 2) {
+    const auto at = text.find(edits[k]);
+    REQUIRE_MESSAGE(at != std::string::npos, edits[k]);
+    text.replace(at, edits[k].size(), edits[k + 1]);
+  }
+  std::ofstream(dir + "/quadruped/" + file) << text;
+  return dir;
+}
+
+std::string ModelsWith(const std::string& name, const std::string& file, const std::string& from,
+                       const std::string& to) {
+  return ModelsWith(name, file, std::vector<std::string>{from, to});
+}
+
+std::string ErrorOf(const QuadrupedWalkOptions& o) {
+  auto e = QuadrupedWalk::Make(o);
+  REQUIRE_FALSE(e.ok());
+  return e.error().message;
+}
+
+}  // namespace
+
+TEST_CASE("quadruped-walk: the generated MJCF is the URDF - free base, 12 hinges with their limits, the mass") {
+  auto robot = robot::LoadRobotDescription(test::SourcePath("models/quadruped/quadruped.yaml"));
+  REQUIRE(robot.ok());
+  MjcfOptions o;
+  auto xml = GenerateMjcf(*robot, o);
+  REQUIRE(xml.ok());
+  auto m = CompileMjcf(*xml, "q");
+  REQUIRE_MESSAGE(m.ok(), m.error().message);
+  mjModel* model = *m;
+  CHECK(model->nq == 19);
+  CHECK(model->nv == 18);
+  CHECK(model->nu == 12);
+  CHECK(model->opt.timestep == doctest::Approx(0.005));
+  double mass = 0;
+  for (int b = 0; b < model->nbody; ++b) mass += model->body_mass[b];
+  CHECK(mass == doctest::Approx(robot->urdf.TotalMassKg()));
+  for (std::size_t i = 0; i < robot->joint_count(); ++i) {
+    const robot::UrdfJoint& j = robot->joint_at(i);
+    const int id = mj_name2id(model, mjOBJ_JOINT, j.name.c_str());
+    REQUIRE(id >= 0);
+    CHECK(model->jnt_range[2 * id] == doctest::Approx(j.lower_rad));
+    CHECK(model->jnt_range[2 * id + 1] == doctest::Approx(j.upper_rad));
+    // Motor i drives actuated joint i, limited to its effort.
+    CHECK(model->actuator_trnid[2 * i] == id);
+    CHECK(model->actuator_ctrlrange[2 * i + 1] == doctest::Approx(j.effort_nm));
+  }
+  int spheres = 0, capsules = 0;
+  for (int g = 0; g < model->ngeom; ++g) {
+    spheres += model->geom_type[g] == mjGEOM_SPHERE;
+    capsules += model->geom_type[g] == mjGEOM_CAPSULE;
+  }
+  CHECK(spheres == 4);
+  CHECK(capsules == 8);  // thighs and shanks
+  const int geoms = model->ngeom;
+  mj_deleteModel(model);
+  o.block_geoms = 16;
+  auto with_blocks = CompileMjcf(*GenerateMjcf(*robot, o), "q");
+  REQUIRE(with_blocks.ok());
+  CHECK((*with_blocks)->ngeom == geoms + 16);
+  mj_deleteModel(*with_blocks);
+  o.timestep_s = 0;
+  CHECK(GenerateMjcf(*robot, o).error().message == "mjcf: timestep 0 s is not in (0, 0.05]");
+}
+
+TEST_CASE("quadruped-walk: sizes - 45 inputs from the devices, 12 joint targets, a 56-input critic") {
+  auto e = MakeWalk(Nominal());
+  CHECK(e->observation_size() == 45);
+  CHECK(e->action_size() == 12);
+  CHECK(e->critic_observation_size() == 56);
+  CHECK(e->max_episode_steps() == 1000);
+  CHECK(e->layout().Hash() != 0);
+  for (const auto& o : e->layout().observations) CHECK(o.signal.find("lin_vel") == std::string::npos);
+}
+
+TEST_CASE("quadruped-walk: with zero actions the robot stands on its default pose - no fall, feet down") {
+  auto e = MakeWalk(Nominal());
+  Rng rng(3);
+  std::vector<float> obs(e->observation_size()), act(12, 0.f), critic(e->critic_observation_size());
+  e->Reset(rng, obs);
+  for (int t = 0; t < 150; ++t) {
+    const StepResult r = e->Step(act, obs);
+    REQUIRE_FALSE(r.terminated);
+    CHECK(r.reward >= 0.0);  // only positive rewards
+  }
+  e->CriticObservation(critic);
+  const double height = critic[45 + 3];
+  CHECK(height > 0.38);
+  CHECK(height < 0.48);
+  for (int f = 0; f < 4; ++f) CHECK(critic[45 + 4 + f] == 1.0f);  // every foot in contact
+  CHECK(obs[5] == doctest::Approx(-1.0).epsilon(0.01));           // gravity straight down the base z axis
+}
+
+TEST_CASE("quadruped-walk: joint signals are what a MIT reply carries - quantised to the CAN map's ranges") {
+  auto e = MakeWalk(Nominal());
+  Rng rng(5);
+  std::vector<float> obs(e->observation_size()), act(12, 0.3f);
+  e->Reset(rng, obs);
+  for (int t = 0; t < 20; ++t) (void)e->Step(act, obs);
+  // Knee position (observation 9 + 2): (q - default) * 1; the reply's 16-bit code over [-8, 8] rad.
+  const double q = static_cast<double>(obs[11]) + e->robot().default_q_rad[2];
+  const double step = can::QuantizationStep(-8.0, 8.0, can::kMitPositionBits);
+  const double code = (q + 8.0) / step;
+  CHECK(std::fabs(code - std::round(code)) < 1e-3);  // on the 16-bit grid
+  // The previous action is the one applied, after the layout's clamp to the joint limits.
+  std::vector<float> big(12, 1e6f);
+  (void)e->Step(big, obs);
+  const auto& a = e->layout().actions[2];
+  CHECK(obs[33 + 2] == doctest::Approx((a.high - a.offset) / a.scale));
+}
+
+TEST_CASE("quadruped-walk: same seed, same run - bit for bit, with noise, randomisation and blocks") {
+  QuadrupedWalkOptions o = Nominal("mixed");
+  o.noise = true;
+  o.randomize = true;
+  auto a = MakeWalk(o);
+  auto b_env = a->Clone();
+  Rng ra(11), rb(11), act_rng(2);
+  std::vector<float> oa(45), ob(45), ca(56), cb(56), act(12);
+  a->Reset(ra, oa);
+  b_env->Reset(rb, ob);
+  CHECK(oa == ob);
+  for (int t = 0; t < 300; ++t) {
+    for (auto& x : act) x = static_cast<float>(act_rng.Normal() * 0.5);
+    const StepResult r1 = a->Step(act, oa);
+    const StepResult r2 = b_env->Step(act, ob);
+    REQUIRE(oa == ob);
+    REQUIRE(r1.reward == r2.reward);
+    a->CriticObservation(ca);
+    b_env->CriticObservation(cb);
+    REQUIRE(ca == cb);
+    if (r1.terminated || r1.truncated) {
+      a->Reset(ra, oa);
+      b_env->Reset(rb, ob);
+    }
+  }
+}
+
+TEST_CASE("quadruped-walk: mixed terrain - half the episodes on blocks 5-15 cm high, the start kept flat") {
+  auto e = MakeWalk(Nominal("mixed"));
+  Rng rng(17);
+  std::vector<float> obs(45), critic(56), act(12, 0.f);
+  int blocks = 0;
+  const int episodes = 40;
+  for (int k = 0; k < episodes; ++k) {
+    e->Reset(rng, obs);
+    (void)e->Step(act, obs);
+    blocks += e->telemetry().on_blocks;
+    e->CriticObservation(critic);
+    CHECK(critic[45 + 3] > 0.3);  // over the flat start area, not a block
+  }
+  CHECK(blocks > episodes / 4);
+  CHECK(blocks < 3 * episodes / 4);
+  auto flat = MakeWalk(Nominal("flat"));
+  for (int k = 0; k < 5; ++k) {
+    flat->Reset(rng, obs);
+    CHECK_FALSE(flat->telemetry().on_blocks);
+  }
+}
+
+TEST_CASE("quadruped-walk: blocks carry the robot - large blocks under the start, it stands on them") {
+  QuadrupedWalkOptions o = Nominal("mixed");
+  // 300 blocks 4 m a side over 20 m x 20 m, none kept out of the start: the robot starts on one.
+  o.models_dir = ModelsWith(
+      "walk_dense", "walk.yaml",
+      {"clear_radius_m: 0.8", "clear_radius_m: 0.0", "block_size_m: [0.3, 1.0]", "block_size_m: [4.0, 4.0]"});
+  o.blocks_fraction = 1.0;
+  auto e = MakeWalk(o);
+  Rng rng(23);
+  std::vector<float> obs(45), critic(56), act(12, 0.f);
+  for (int k = 0; k < 4; ++k) {
+    e->Reset(rng, obs);
+    for (int t = 0; t < 100; ++t) REQUIRE_FALSE(e->Step(act, obs).terminated);
+    e->CriticObservation(critic);
+    const double over_ground = critic[45 + 3], world_z = e->telemetry().position[2];
+    CHECK(over_ground > 0.38);
+    CHECK(over_ground < 0.48);
+    CHECK(world_z > over_ground + 0.049);  // on top of a block 5-15 cm high
+  }
+}
+
+TEST_CASE("quadruped-walk: bad inputs are refused at start naming the value") {
+  QuadrupedWalkOptions o = Nominal();
+  o.terrain = "stairs";
+  CHECK(ErrorOf(o) == "--terrain: 'stairs' unknown (flat, mixed)");
+  o = Nominal();
+  o.commands = "1:x:1";
+  CHECK(ErrorOf(o) == "--commands: '1:x:1': vy 'x' is not a number in [0, 5]");
+  o.commands = "1:1";
+  CHECK(ErrorOf(o) == "--commands: '1:1' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
+  o = Nominal();
+  o.models_dir = test::ScratchDir("walk_no_robot");
+  CHECK(ErrorOf(o).find("quadruped/quadruped.yaml: cannot open") != std::string::npos);
+  // A URDF whose joints are not the robot's joint order.
+  o.models_dir = ModelsWith("walk_urdf", "quadruped.urdf", "<joint name=\"LF_KFE\"", "<joint name=\"LF_KNEE\"");
+  CHECK(ErrorOf(o) == "quadruped.yaml: joints[2]: 'LF_KFE' is not a joint of quadruped.urdf");
+  // An IO layout whose actions are not the joints in order, or not around the default pose.
+  o.models_dir = ModelsWith("walk_order", "io_layout.yaml", "command: q_des_LF_HFE", "command: q_des_LF_KFE");
+  CHECK(ErrorOf(o) ==
+        "io_layout.yaml: actions[1] 'LF_HFE': command 'q_des_LF_KFE' is not q_des_LF_HFE (joint 1 of quadruped.yaml's "
+        "joint order)");
+  o.models_dir =
+      ModelsWith("walk_offset", "io_layout.yaml", "command: q_des_LF_HFE, unit: rad, scale: 0.25, offset: 0.4",
+                 "command: q_des_LF_HFE, unit: rad, scale: 0.25, offset: 0.5");
+  CHECK(ErrorOf(o) ==
+        "io_layout.yaml: actions[1] 'LF_HFE': offset 0.500000 is not the default pose 0.400000 of "
+        "quadruped.yaml");
+  o.models_dir = ModelsWith("walk_signal", "io_layout.yaml", "signal: base_ang_vel_x", "signal: base_lin_vel_x");
+  CHECK(ErrorOf(o).find("signal 'base_lin_vel_x' is not provided") != std::string::npos);
+  o.models_dir = ModelsWith("walk_yaml", "walk.yaml", "decimation: 4", "decimation: four");
+  CHECK(ErrorOf(o).find("walk.yaml: simulation.decimation: 'four' is not a number") != std::string::npos);
+  o.models_dir = ModelsWith("walk_range", "walk.yaml", "vx_mps: [-1.0, 1.0]", "vx_mps: [1.0, -1.0]");
+  CHECK(ErrorOf(o).find("walk.yaml: commands.vx_mps: low 1 is above high -1") != std::string::npos);
+}
