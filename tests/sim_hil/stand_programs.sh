@@ -24,7 +24,7 @@ stop_hil() {
 echo "== 1: --duration 1.3"
 run_hil 1
 rc=0
-"$ctl" --robot models/quadruped/robot.yaml --can "$can" --duration 1.3 --lockstep-wait-ms 200 >"$work/ctl.1.log" 2>&1 || rc=$?
+"$ctl" --robot models/quadruped/robot.yaml --can "$can" --duration 1.3 --lockstep-wait-ms 2000 >"$work/ctl.1.log" 2>&1 || rc=$?
 cat "$work/ctl.1.log"
 stop_hil 1
 [ "$rc" -eq 0 ] || { echo "controller exited with $rc"; exit 1; }
@@ -36,9 +36,9 @@ grep -Eq "LF_HAA .* motor_mode 0" "$work/hil.1.log"
 echo "== 2: SIGINT during the trajectory"
 run_hil 2
 "$ctl" --robot models/quadruped/robot.yaml --can "$can" --trajectory models/quadruped/stand_trajectory.yaml \
-  --lockstep-wait-ms 200 >"$work/ctl.2.log" 2>&1 &
+  --lockstep-wait-ms 2000 >"$work/ctl.2.log" 2>&1 &
 ctl_pid=$!
-for _ in $(seq 1 600); do
+for _ in $(seq 1 3000); do
   grep -q -- "now run" "$work/ctl.2.log" 2>/dev/null && break
   sleep 0.1
 done
