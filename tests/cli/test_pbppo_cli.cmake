@@ -269,6 +269,10 @@ expect_in("${header}" "tracking_vx_100,tracking_vy_100,tracking_yaw_rate_100")
 run(0 ${PBPPO} inspect ${WORK}/walk/policy.blob)
 expect_in("${OUT}" "quadruped-walk")
 expect_in("${OUT}" "45 -> 16 elu -> 16 elu -> 12 identity")
+# The provenance records the terrain, the noise and the randomisation of the training.
+expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every")
+expect_in("${OUT}" "; noise x1 (ang vel ")
+expect_in("${OUT}" "; friction ")
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --episodes 2 --seed 3 --json
     --plot ${WORK}/walk/eval.png)
 string(JSON robots GET "${OUT}" robots)
