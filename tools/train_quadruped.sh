@@ -3,7 +3,8 @@
 #   flat   from scratch on flat ground (FLAT_STEPS, Pb-PPO: our `pbppo` schedule with rollout
 #          feedback), the policy the 30-minute target is about; the recipe prints its wall time;
 #   mixed  from the flat policy (--init) on the paper's 1:1 mix of flat ground and blocks
-#          (MIXED_STEPS; the fresh value network learns alone for CRITIC_WARMUP iterations).
+#          (MIXED_STEPS; the fresh value network learns alone for CRITIC_WARMUP iterations, the
+#          exploration noise starts at the flat run's last).
 # Then the paper's test for each (50 robots x 20 s, commands vx, vy in [-1, 1] m/s and a heading
 # in [-pi, pi]; `pbppo eval --env quadruped-walk`) on flat and mixed terrain, on two seeds, with
 # the velocity plots, and copies the blobs, their golden vectors and the report to
@@ -11,7 +12,7 @@
 # A stage whose folder holds a finished run (summary.json, not interrupted) is kept, so a stopped
 # recipe resumes; delete OUT_DIR to train afresh.
 # Usage: tools/train_quadruped.sh [OUT_DIR=runs/train_quadruped]
-#   PBPPO=path/to/pbppo  THREADS=2  SEED=1  FLAT_STEPS=2.5e7  MIXED_STEPS=1e7  CRITIC_WARMUP=20
+#   PBPPO=path/to/pbppo  THREADS=2  SEED=1  FLAT_STEPS=2.5e7  MIXED_STEPS=2e7  CRITIC_WARMUP=20
 #   SCHEDULE=pbppo  SHIP=1 (0: train and evaluate, do not copy into policies/frozen)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -20,7 +21,7 @@ pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
 threads="${THREADS:-2}"
 seed="${SEED:-1}"
 flat_steps="${FLAT_STEPS:-2.5e7}"
-mixed_steps="${MIXED_STEPS:-1e7}"
+mixed_steps="${MIXED_STEPS:-2e7}"
 warmup="${CRITIC_WARMUP:-20}"
 schedule="${SCHEDULE:-pbppo}"
 ship="${SHIP:-1}"
@@ -50,14 +51,26 @@ if finished "$out/mixed"; then
   echo "mixed: finished before, kept ($out/mixed)"
 else
   echo "mixed: training from the flat policy on flat ground and blocks, $mixed_steps steps"
+  # The blob holds the actor's mean only: the exploration noise starts where the flat run ended
+  # (its last mean log-std), not at the default 1.0, which makes the walking policy fall.
+  log_std=$(python3 -c 'import csv, sys; print(list(csv.DictReader(open(sys.argv[1])))[-1]["log_std_mean"])' \
+    "$out/flat/log.csv")
+  echo "mixed: exploration log-std $log_std (the flat run's last)"
   start=$(date +%s)
   "$pbppo" train "${common[@]}" --terrain mixed --steps "$mixed_steps" --init "$out/flat/policy.blob" \
-    --critic-warmup "$warmup" --out "$out/mixed"
+    --log-std-init "$log_std" --critic-warmup "$warmup" --out "$out/mixed"
   echo "mixed: wall time $(( $(date +%s) - start )) s" | tee "$out/mixed/wall_time.txt"
 fi
 
 report="$out/report"
 mkdir -p "$report"
+# The tracking errors of the last 100 training episodes over the run, per stage.
+for stage in flat mixed; do
+  for axis in vx vy yaw_rate; do
+    "$pbppo" curves --out "$out/$stage/tracking_$axis.png" --column "tracking_${axis}_100" \
+      --title "quadruped-walk, $stage: mean |error| of $axis, last 100 training episodes" "$stage=$out/$stage" > /dev/null
+  done
+done
 for policy in flat mixed; do
   for terrain in flat mixed; do
     for s in 7 8; do

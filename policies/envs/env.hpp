@@ -72,6 +72,10 @@ class Env {
 
   virtual EpisodeInfo episode_info() const noexcept { return {}; }
 
+  // What the blob's provenance records of the environment (at most 256 bytes): its name, and for
+  // environments with noise and randomisation, their settings.
+  virtual std::string provenance() const { return name(); }
+
   // Asymmetric actor-critic (see the top): the size of the critic's privileged observation, 0 when
   // the critic sees the actor's observation; CriticObservation writes it (critic_observation_size()
   // elements) for the state the last Reset() or Step() left, before any next Reset() (so after a

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <numbers>
 
@@ -213,6 +214,22 @@ QuadrupedWalk::~QuadrupedWalk() {
 
 const std::string& QuadrupedWalk::name() const noexcept {
   return shared_->name;
+}
+std::string QuadrupedWalk::provenance() const {
+  const QuadrupedWalkParams& p = shared_->params;
+  char text[256];
+  const int n = std::snprintf(text, sizeof text,
+                              "%s, terrain %s, commands every %g s; noise x%g (ang vel %g, gravity %g, q %g, dq %g)",
+                              name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.noise_level,
+                              p.noise_ang_vel_radps, p.noise_gravity, p.noise_dof_pos_rad, p.noise_dof_vel_radps);
+  std::string out(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
+  if (!shared_->options.randomize) return out + "; nominal robot";
+  std::snprintf(text, sizeof text,
+                "; friction %g..%g, added mass %g..%g kg, gains x%g..%g, latency %g..%g periods, pushes %g m/s "
+                "every %g s",
+                p.friction[0], p.friction[1], p.added_mass_kg[0], p.added_mass_kg[1], p.gain_scale[0], p.gain_scale[1],
+                p.latency_periods[0], p.latency_periods[1], p.push_velocity_mps, p.push_interval_s);
+  return out + text;
 }
 std::uint32_t QuadrupedWalk::observation_size() const noexcept {
   return builder_.observation_size();

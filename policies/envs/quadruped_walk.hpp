@@ -71,6 +71,8 @@ class QuadrupedWalk final : public Env {
   QuadrupedWalk& operator=(const QuadrupedWalk&) = delete;
 
   const std::string& name() const noexcept override;
+  // The terrain, the observation noise and the randomisation the robot trains with.
+  std::string provenance() const override;
   std::uint32_t observation_size() const noexcept override;
   std::uint32_t action_size() const noexcept override;
   std::span<const float> action_low() const noexcept override;

@@ -43,7 +43,7 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
   robot::ApplyLayoutToSpec(env.layout(), s);
   s.provenance.trainer_version = std::string("pbppo-rt ") + PBPPO_VERSION;
   s.provenance.git_revision = BuildGitRevision();
-  s.provenance.environment = env.name();
+  s.provenance.environment = env.provenance().substr(0, 256);
   s.provenance.clip_schedule = info.clip_schedule.substr(0, 200);
   s.provenance.seed = info.seed;
   s.provenance.env_steps = info.env_steps;

@@ -269,6 +269,10 @@ expect_in("${header}" "tracking_vx_100,tracking_vy_100,tracking_yaw_rate_100")
 run(0 ${PBPPO} inspect ${WORK}/walk/policy.blob)
 expect_in("${OUT}" "quadruped-walk")
 expect_in("${OUT}" "45 -> 16 elu -> 16 elu -> 12 identity")
+# The provenance records the terrain, the noise and the randomisation of the training.
+expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every")
+expect_in("${OUT}" "; noise x1 (ang vel ")
+expect_in("${OUT}" "; friction ")
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --episodes 2 --seed 3 --json
     --plot ${WORK}/walk/eval.png)
 string(JSON robots GET "${OUT}" robots)
@@ -282,6 +286,18 @@ endif()
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --terrain mixed --episodes 2)
 expect_in("${OUT}" "mean |error|  vx")
 expect_in("${OUT}" "falls ")
+# Same seed and thread count: byte-identical quadruped blobs (Pb-PPO, the adaptive rate, minibatches
+# in column chunks over both threads, as the shipped recipe trains).
+foreach(k a b)
+  run(0 ${PBPPO} train --env quadruped-walk --schedule pbppo --arms 0.1:0.3:3 --feedback rollout --steps 960
+      --envs 8 --rollout 24 --minibatch 96 --chunked-minibatch 64 --epochs 2 --hidden 16-16 --activation elu
+      --lr-schedule adaptive:0.01 --seed 2 --threads 2 --no-plots --quiet --out ${WORK}/walk_det_${k})
+endforeach()
+file(SHA256 ${WORK}/walk_det_a/policy.blob ha)
+file(SHA256 ${WORK}/walk_det_b/policy.blob hb)
+if(NOT ha STREQUAL hb)
+  message(FATAL_ERROR "two quadruped-walk runs with the same seed and threads wrote different blobs")
+endif()
 run(2 ${PBPPO} train --env quadruped-walk --terrain stairs --steps 384 --envs 8 --rollout 24 --quiet
     --out ${WORK}/walk_bad)
 expect_in("${ERR}" "stairs")

@@ -1,0 +1,89 @@
+// The shipped quadruped walking policies still meet their figures: the paper's test (50 robots x
+// 20 s, commands vx, vy in [-1, 1] m/s and a heading in [-pi, pi], nominal robots with
+// observation noise) through the runtime's Forward, and their golden vectors reproduce.
+//   flat.blob   on flat ground: mean |error| <= 0.15 m/s in vx and vy, <= 0.15 rad/s in yaw rate,
+//               at most the one fall it had when shipped (the target is none)
+//   mixed.blob  on the 1:1 mix of flat ground and blocks: at most 2 falls of 50; on flat ground
+//               the same tracking figures as the flat policy
+// Label `shipped` (not `unit`): it runs 200 robot-episodes, too long for the sanitizer builds.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+
+#include "policies/envs/walk_eval.hpp"
+#include "runtime/policy/reference.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+
+namespace {
+
+const std::string kDir = "policies/frozen/quadruped_walk/";
+
+envs::WalkEvalResult Test(const std::string& blob, const std::string& terrain, std::uint64_t seed) {
+  auto model = policy::PolicyModel::FromFile(test::SourcePath(kDir + blob));
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  envs::QuadrupedWalkOptions o;
+  o.models_dir = test::SourcePath("models");
+  o.terrain = terrain;
+  o.randomize = false;
+  o.resample_s = envs::kWalkEvalResampleS;
+  auto env = envs::QuadrupedWalk::Make(o);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  envs::WalkEvalOptions eo;
+  eo.seed = seed;
+  auto r = envs::EvaluateWalk(*model, **env, eo);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  MESSAGE(blob << " on " << terrain << ", seed " << seed << ": |error| vx " << r->mean_abs_error[0] << " vy "
+               << r->mean_abs_error[1] << " yaw rate " << r->mean_abs_error[2] << ", falls " << r->falls
+               << " (on blocks " << r->falls_on_blocks << " of " << r->robots_on_blocks << ")");
+  CHECK(r->robots == 50);
+  CHECK(r->forward_problems == 0);
+  return *r;
+}
+
+void CheckTracking(const envs::WalkEvalResult& r) {
+  CHECK(r.mean_abs_error[0] <= 0.15);
+  CHECK(r.mean_abs_error[1] <= 0.15);
+  CHECK(r.mean_abs_error[2] <= 0.15);
+}
+
+}  // namespace
+
+TEST_CASE("shipped walking policies: golden vectors reproduce through the runtime's Forward") {
+  for (const char* name : {"flat", "mixed"}) {
+    const std::string blob = test::SourcePath(kDir + name + ".blob");
+    auto model = policy::PolicyModel::FromFile(blob);
+    REQUIRE_MESSAGE(model.ok(), model.error().message);
+    auto g = policy::ReadGoldenFile(policy::GoldenPathFor(blob));
+    REQUIRE_MESSAGE(g.ok(), g.error().message);
+    auto data = policy::MakePolicyData(*model);
+    REQUIRE(data.ok());
+    REQUIRE(g->observations.size() >= 16);
+    for (std::size_t row = 0; row < g->observations.size(); ++row) {
+      std::copy(g->observations[row].begin(), g->observations[row].end(), data->observation().begin());
+      REQUIRE(policy::Forward(*model, *data) == policy::ForwardStatus::kOk);
+      for (std::size_t j = 0; j < g->expected[row].action.size(); ++j)
+        CHECK(std::fabs(data->action()[j] - g->expected[row].action[j]) <= g->expected[row].error_bound[j]);
+    }
+  }
+}
+
+TEST_CASE("shipped flat policy: the paper's test on flat ground - tracking within 0.15, its one fall") {
+  const auto r = Test("flat.blob", "flat", 7);
+  CheckTracking(r);
+  // The target is no fall; the shipped flat policy falls once on this seed (robot 38 at 1.1 s,
+  // tilting while it starts a fast backward turn; twice on seed 8), the mixed one below not at all
+  // (policies/frozen/quadruped_walk/README.md). The test holds the figure the blob reaches.
+  CHECK(r.falls <= 1);
+}
+
+TEST_CASE("shipped mixed policy: the paper's test on flat ground and blocks - at most 2 falls of 50") {
+  const auto mixed = Test("mixed.blob", "mixed", 7);
+  CHECK(mixed.robots_on_blocks > 15);
+  CHECK(mixed.falls <= 2);
+  const auto flat = Test("mixed.blob", "flat", 7);
+  CheckTracking(flat);
+  CHECK(flat.falls == 0);
+}
