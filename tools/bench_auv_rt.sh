@@ -8,12 +8,12 @@
 # Usage: tools/bench_auv_rt.sh [OUT_DIR]   (DURATION=60, POLL_US=200 (0: the tick wakes the DDS writer),
 #   BLOB=policies/frozen/auv_nav/auv_nav.blob)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/build/results/rt}"
 duration="${DURATION:-60}"
 blob="${BLOB:-$root/policies/frozen/auv_nav/auv_nav.blob}"
-hil="$root/build/default/sim_hil/pbppo-hil"
-ctl="$root/build/default/firmware/pbppo-controller"
+hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
+ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
 cd "$root"
 mkdir -p "$out"
 domain=$((20 + $$ % 200))

@@ -11,40 +11,30 @@
 # Usage: tools/compare_auv_schedules.sh [OUT_DIR=runs/compare_auv]
 #   (PBPPO=path/to/pbppo, STEPS=1e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100, PROGRESS, MARGIN may be set)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/compare_auv}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 steps="${STEPS:-1e6}"
 progress="${PROGRESS:-geodesic}"
 margin="${MARGIN-2:4}"
 seeds="${SEEDS:-1 2 3 4 5}"
 threads="${THREADS:-2}"
 episodes="${EPISODES:-100}"
-if [ ! -x "$pbppo" ]; then
-  echo "compare_auv_schedules: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
-  exit 2
-fi
 schedules=("fixed:0.2" "pbppo-paper:wi-ad" "pbppo-reference" "pbppo")
 common=(--env auv-nav --layout hard --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10
   --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --arms 0.05:0.4:6 --feedback rollout --steps "$steps"
   --progress "$progress" ${margin:+--geodesic-margin "$margin"})
-mkdir -p "$out"
-for seed in $seeds; do
-  for s in "${schedules[@]}"; do
-    name="${s//:/_}_seed$seed"
-    run="$out/$name"
-    if [ -f "$run/eval.json" ]; then
-      echo "$name: done before, kept"
-      continue
-    fi
-    echo "$name: training ($steps steps)"
-    "$pbppo" train "${common[@]}" --schedule "$s" --seed "$seed" --quiet --out "$run" > "$run.txt" 2>&1
-    "$pbppo" eval "$run/policy.blob" --env auv-nav --layout hard --episodes "$episodes" --seed 900001 --json \
-      > "$run/eval.json"
-    python3 -c 'import json,sys; e=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2]));
+train_and_eval() {
+  local run="$1" schedule="$2" seed="$3"
+  "$pbppo" train "${common[@]}" --schedule "$schedule" --seed "$seed" --quiet --out "$run" > "$run.txt" 2>&1
+  # eval.json marks a finished run: written whole or not at all.
+  "$pbppo" eval "$run/policy.blob" --env auv-nav --layout hard --episodes "$episodes" --seed 900001 --json \
+    > "$run/eval.json.part"
+  mv "$run/eval.json.part" "$run/eval.json"
+  python3 -c 'import json,sys; e=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2]));
 print("  last-100 return %.1f, eval success %.0f%%, eval return %.1f, steps %d" % (s["final_return_last100"],
  100*e["success_rate"], e["mean_return"], s["env_steps"] + s["eval_steps"]))' "$run/eval.json" "$run/summary.json"
-  done
-done
+}
+schedule_runs "$out" "$steps" "$seeds" "${schedules[@]}"
 PBPPO="$pbppo" python3 "$root/tools/summarise_schedules.py" "$out" "$root/docs/results/auv_hard_schedules.md" \
   "${schedules[@]}"

@@ -9,38 +9,28 @@
 # Usage: tools/compare_quadruped_schedules.sh [OUT_DIR=runs/compare_quadruped]
 #   (PBPPO=path/to/pbppo, STEPS=2e7, SEEDS="1 2 3", THREADS=2 may be set)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/compare_quadruped}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 steps="${STEPS:-2e7}"
 seeds="${SEEDS:-1 2 3}"
 threads="${THREADS:-2}"
-if [ ! -x "$pbppo" ]; then
-  echo "compare_quadruped_schedules: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
-  exit 2
-fi
 schedules=("fixed:0.2" "pbppo")
 # The shipped recipe's settings (tools/train_quadruped.sh).
 common=(--env quadruped-walk --terrain flat --arms 0.1:0.3:5 --feedback rollout --threads "$threads" --envs 512
   --rollout 24 --minibatch 3072 --epochs 5 --lr 1e-3 --lr-schedule adaptive:0.01 --ent-coef 0.01 --vf-coef 1.0
   --clip-vf 0.2 --max-grad-norm 1.0 --hidden 128-64-32 --activation elu --steps "$steps" --no-plots)
-mkdir -p "$out"
-for seed in $seeds; do
-  for s in "${schedules[@]}"; do
-    name="${s//:/_}_seed$seed"
-    run="$out/$name"
-    if [ -f "$run/eval.json" ]; then
-      echo "$name: done before, kept"
-      continue
-    fi
-    echo "$name: training ($steps steps)"
-    "$pbppo" train "${common[@]}" --schedule "$s" --seed "$seed" --quiet --out "$run" > "$run.txt" 2>&1
-    "$pbppo" eval "$run/policy.blob" --env quadruped-walk --terrain flat --seed 900001 --json > "$run/eval.json"
-    python3 -c 'import json,sys; e=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2])); m=e["mean_abs_error"]
+train_and_eval() {
+  local run="$1" schedule="$2" seed="$3"
+  "$pbppo" train "${common[@]}" --schedule "$schedule" --seed "$seed" --quiet --out "$run" > "$run.txt" 2>&1
+  # eval.json marks a finished run: written whole or not at all.
+  "$pbppo" eval "$run/policy.blob" --env quadruped-walk --terrain flat --seed 900001 --json > "$run/eval.json.part"
+  mv "$run/eval.json.part" "$run/eval.json"
+  python3 -c 'import json,sys; e=json.load(open(sys.argv[1])); s=json.load(open(sys.argv[2])); m=e["mean_abs_error"]
 print("  last-100 return %.1f; test: |error| vx %.3f vy %.3f yaw %.3f, falls %d/%d; %d steps in %.0f s" % (
  s["final_return_last100"], m["vx_mps"], m["vy_mps"], m["yaw_rate_radps"], e["falls"], e["robots"],
  s["env_steps"] + s["eval_steps"], s["wall_seconds"]))' "$run/eval.json" "$run/summary.json"
-  done
-done
+}
+schedule_runs "$out" "$steps" "$seeds" "${schedules[@]}"
 python3 "$root/tools/summarise_quadruped_schedules.py" "$out" "$root/docs/results/quadruped_schedules.md" \
   "${schedules[@]}"

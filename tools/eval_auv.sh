@@ -7,10 +7,10 @@
 # shipped-policy targets (>= 95% easy and medium, >= 90% hard).
 # Usage: tools/eval_auv.sh BLOB [OUT_DIR=.]   (PBPPO=path/to/pbppo, EPISODES=200, SEED=424242)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 blob="$1"
 out="${2:-.}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 episodes="${EPISODES:-200}"
 seed="${SEED:-424242}"
 mkdir -p "$out"

@@ -6,18 +6,15 @@
 # Usage: tools/hil_missions.sh [OUT_DIR=build/results/hil_missions]
 #   BLOB=policies/frozen/auv_nav/auv_nav.blob  LAYOUTS="easy medium hard"  SEEDS="1 2 ... 30"
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 cd "$root"
 out="${1:-build/results/hil_missions}"
 blob="${BLOB:-policies/frozen/auv_nav/auv_nav.blob}"
 layouts="${LAYOUTS:-easy medium hard}"
 seeds="${SEEDS:-$(seq -s ' ' 1 30)}"
-hil=build/default/sim_hil/pbppo-hil
-ctl=build/default/firmware/pbppo-controller
-for b in "$hil" "$ctl"; do
-  [ -x "$b" ] || { echo "hil_missions: $b not found; build first (cmake --build build/default -j2)" >&2; exit 2; }
-done
-[ -r "$blob" ] || { echo "hil_missions: BLOB '$blob' not readable" >&2; exit 2; }
+hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
+ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
+[ -r "$blob" ] || fail "BLOB '$blob' not readable"
 mkdir -p "$out"
 echo "layout,seed,result,targets,time_s" >"$out/missions.csv"
 domain=$((120 + $$ % 100))

@@ -6,16 +6,12 @@
 # Usage: tools/learn_pendulum.sh [OUT_DIR=runs/learn_pendulum]   (PBPPO=path/to/pbppo, THREADS=n,
 # SCHEDULE=fixed:0.2 and SEEDS="1 2 3 4 5" may be set in the environment)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/learn_pendulum}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 threads="${THREADS:-1}"
 schedule="${SCHEDULE:-fixed:0.2}"
 seeds="${SEEDS:-1 2 3 4 5}"
-if [ ! -x "$pbppo" ]; then
-  echo "learn_pendulum: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
-  exit 2
-fi
 mkdir -p "$out"
 results=()
 for seed in $seeds; do

@@ -11,27 +11,23 @@
 # Usage: tools/select_auv.sh RUN_DIR
 #   (PBPPO=path/to/pbppo, EPISODES=100, DEV_SEED=777, CONFIRM_SEED=888, JOBS=2)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 if [ $# -ne 1 ] || [ ! -d "$1" ]; then
   echo "select_auv: usage: tools/select_auv.sh RUN_DIR (a pbppo train --out folder)" >&2
   exit 2
 fi
 run="$1"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 episodes="${EPISODES:-100}"
 seed="${DEV_SEED:-777}"
 confirm="${CONFIRM_SEED-888}"
 jobs="${JOBS:-2}"
-case "$episodes" in '' | *[!0-9]* | 0) echo "select_auv: EPISODES: '$episodes' is not a positive integer" >&2; exit 2 ;; esac
-case "$seed" in '' | *[!0-9]*) echo "select_auv: DEV_SEED: '$seed' is not a non-negative integer" >&2; exit 2 ;; esac
-case "$jobs" in '' | *[!0-9]* | 0) echo "select_auv: JOBS: '$jobs' is not a positive integer" >&2; exit 2 ;; esac
-case "$confirm" in *[!0-9]*) echo "select_auv: CONFIRM_SEED: '$confirm' is not a non-negative integer (or empty: skip)" >&2; exit 2 ;; esac
+case "$episodes" in '' | *[!0-9]* | 0) fail "EPISODES: '$episodes' is not a positive integer" ;; esac
+case "$seed" in '' | *[!0-9]*) fail "DEV_SEED: '$seed' is not a non-negative integer" ;; esac
+case "$jobs" in '' | *[!0-9]* | 0) fail "JOBS: '$jobs' is not a positive integer" ;; esac
+case "$confirm" in *[!0-9]*) fail "CONFIRM_SEED: '$confirm' is not a non-negative integer (or empty: skip)" ;; esac
 if [ -n "$confirm" ] && [ "$confirm" = "$seed" ]; then
   echo "select_auv: CONFIRM_SEED must differ from DEV_SEED ($seed)" >&2
-  exit 2
-fi
-if [ ! -x "$pbppo" ]; then
-  echo "select_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
   exit 2
 fi
 candidates=()

@@ -6,15 +6,24 @@ cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
 stage() { printf '\n==== %s ====\n' "$*"; }
+# preset NAME TITLE [CTEST_ARGS...]: configures and builds the preset, then runs its tests
+# (none when no CTEST_ARGS are given).
+preset() {
+  local name="$1" title="$2"
+  shift 2
+  stage "$title (preset $name)"
+  cmake --preset "$name" >/dev/null
+  cmake --build --preset "$name" -j "$jobs"
+  if [ $# -gt 0 ]; then
+    stage "tests: $title"
+    ctest --preset "$name" -j "$jobs" "$@"
+  fi
+}
 
 stage "packages"
 bash tools/setup.sh
 
-stage "optimised build (preset default)"
-cmake --preset default >/dev/null
-cmake --build --preset default -j "$jobs"
-stage "tests: optimised build"
-ctest --preset default -j "$jobs" -LE vcan
+preset default "optimised build" -LE vcan
 
 stage "SocketCAN tests (label vcan)"
 if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)' 2>/dev/null &&
@@ -26,17 +35,14 @@ else
   tests/vm/vcan-vm --vcan 2 -- ctest --test-dir build/default -L vcan --output-on-failure
 fi
 
-stage "ASan+UBSan build of the unit tests (preset asan)"
-cmake --preset asan >/dev/null
-cmake --build --preset asan -j "$jobs"
-stage "tests: ASan+UBSan"
-ctest --preset asan -j "$jobs" -L unit
+# The DDS tests run under ASan too (Fast DDS over loopback, within one process and across two).
+preset asan "ASan+UBSan build" -L 'unit|dds'
 
-stage "ThreadSanitizer build of the unit tests (preset tsan)"
-cmake --preset tsan >/dev/null
-cmake --build --preset tsan -j "$jobs"
-stage "tests: ThreadSanitizer"
-ctest --preset tsan -j "$jobs" -L unit
+preset tsan "ThreadSanitizer build" -L unit
+
+# What a robot controller is built with: the runtime, the firmware and the report, without
+# Simbody, MuJoCo or the trainer; it must configure and build on its own.
+preset runtime-only "runtime-only configuration"
 
 stage "libFuzzer build (preset fuzz, clang-19), corpus replay and a short fuzzing run"
 cmake --preset fuzz >/dev/null

@@ -17,9 +17,9 @@
 #   FIRST_LAYOUT=mixed  FIRST_STEPS=4e6  FIRST_SEED=1  FIRST_MARGIN=2:4 (empty: none)
 #   MIXED_STEPS=6e6  MIXED_STAGES="" (e.g. "3:1e-4 5:5e-5@2:4")
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/train_auv}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 threads="${THREADS:-2}"
 progress="${PROGRESS:-geodesic}"
 first_layout="${FIRST_LAYOUT:-mixed}"
@@ -29,10 +29,6 @@ first_margin="${FIRST_MARGIN-2:4}"
 mixed_steps="${MIXED_STEPS:-6e6}"
 mixed_stages="${MIXED_STAGES:-}"
 frozen="$root/policies/frozen/auv_nav"
-if [ ! -x "$pbppo" ]; then
-  echo "train_auv: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
-  exit 2
-fi
 common=(--env auv-nav --schedule pbppo --arms 0.05:0.4:6 --feedback rollout --threads "$threads" --envs 16
   --rollout 256 --minibatch 512 --epochs 10 --gamma 0.99 --scale-rewards --hidden 64-64 --keep-best
   --progress "$progress")

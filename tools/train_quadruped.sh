@@ -15,9 +15,9 @@
 #   PBPPO=path/to/pbppo  THREADS=2  SEED=1  FLAT_STEPS=2.5e7  MIXED_STEPS=2e7  CRITIC_WARMUP=20
 #   SCHEDULE=pbppo  SHIP=1 (0: train and evaluate, do not copy into policies/frozen)
 set -euo pipefail
-root="$(cd "$(dirname "$0")/.." && pwd)"
+source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/train_quadruped}"
-pbppo="${PBPPO:-$root/build/default/policies/pbppo}"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 threads="${THREADS:-2}"
 seed="${SEED:-1}"
 flat_steps="${FLAT_STEPS:-2.5e7}"
@@ -26,10 +26,6 @@ warmup="${CRITIC_WARMUP:-20}"
 schedule="${SCHEDULE:-pbppo}"
 ship="${SHIP:-1}"
 frozen="$root/policies/frozen/quadruped_walk"
-if [ ! -x "$pbppo" ]; then
-  echo "train_quadruped: $pbppo not found; build first (cmake --preset default && cmake --build build/default -j2)" >&2
-  exit 2
-fi
 # legged_gym's PPO for flat terrain (rsl_rl: 5 epochs, 4 minibatches, KL-adaptive rate, entropy
 # 0.01, value loss 1.0 clipped at 0.2, gradient norm 1.0, 128-64-32 ELU) on 512 environments x 24
 # steps (docs/quadruped_walk.md).

@@ -1,0 +1,41 @@
+# Sourced by the scripts in tools/: sets `root` (the repository root) and `tool` (the script's
+# name, for messages) and gives `program`, the one place that finds a built program.
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+tool="$(basename "${BASH_SOURCE[1]}" .sh)"
+
+# program VAR PATH: prints PATH (the value of the environment variable VAR when set) or, when that
+# is not an executable, says which and how to build it and exits 2.
+program() {
+  local path="${!1:-$root/$2}"
+  if [ ! -x "$path" ]; then
+    echo "$tool: $path not found (set $1 or build first: cmake --preset default && cmake --build build/default -j2)" >&2
+    exit 2
+  fi
+  printf '%s\n' "$path"
+}
+
+# fail MESSAGE: prints "<script>: MESSAGE" to stderr and exits 2.
+fail() {
+  echo "$tool: $*" >&2
+  exit 2
+}
+
+# schedule_runs OUT_DIR STEPS "SEEDS" SCHEDULE...: for every seed and schedule calls the script's
+# own `train_and_eval RUN SCHEDULE SEED`, RUN being OUT_DIR/<schedule>_seed<seed> (':' as '_'),
+# except where RUN already holds eval.json: a finished run is kept, so a stopped script resumes.
+schedule_runs() {
+  local out="$1" steps="$2" seeds="$3" seed s name
+  shift 3
+  mkdir -p "$out"
+  for seed in $seeds; do
+    for s in "$@"; do
+      name="${s//:/_}_seed$seed"
+      if [ -f "$out/$name/eval.json" ]; then
+        echo "$name: done before, kept"
+        continue
+      fi
+      echo "$name: training ($steps steps)"
+      train_and_eval "$out/$name" "$s" "$seed"
+    done
+  done
+}
