@@ -112,20 +112,10 @@ int main(int argc, char** argv) {
         return 1;
       }
       std::vector<float> obs(static_cast<std::size_t>(task->observation_size()));
-      float action[2];
-      long episodes = 0;
       std::uint64_t seed = 0;
       task->Reset(seed++, obs.data());
       t0 = CpuSeconds();
-      for (long k = 0; k < steps; ++k) {
-        action[0] = static_cast<float>(rng.Uniform(-1.0, 1.0));
-        action[1] = static_cast<float>(rng.Uniform(-1.0, 1.0));
-        const auto r = task->Step(action, obs.data());
-        if (r.terminated || r.truncated) {
-          task->Reset(seed++, obs.data());
-          ++episodes;
-        }
-      }
+      const long episodes = pbppo::sim::StepRandomly(*task, rng, steps, obs.data(), &seed);
       dt = CpuSeconds() - t0;
       std::printf("task  %-20s %-6s: %8.0f control steps/s (%ld episodes ended), %.1f us/step\n", Name(integ), layout,
                   static_cast<double>(steps) / dt, episodes, 1e6 * dt / static_cast<double>(steps));

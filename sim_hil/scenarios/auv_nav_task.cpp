@@ -543,4 +543,19 @@ void AuvNavTask::FillSensorSample(robot::AuvSensorSample& out) const {
   out.episode_end = done_;
 }
 
+long StepRandomly(AuvNavTask& task, Rng& rng, long steps, float* obs, std::uint64_t* next_seed) {
+  long episodes = 0;
+  float action[2];
+  for (long k = 0; k < steps; ++k) {
+    action[0] = static_cast<float>(rng.Uniform(-1.0, 1.0));
+    action[1] = static_cast<float>(rng.Uniform(-1.0, 1.0));
+    const AuvStepResult r = task.Step(action, obs);
+    if (r.terminated || r.truncated) {
+      task.Reset((*next_seed)++, obs);
+      ++episodes;
+    }
+  }
+  return episodes;
+}
+
 }  // namespace pbppo::sim

@@ -230,4 +230,9 @@ class AuvNavTask {
   AuvEpisodeStats stats_;
 };
 
+// Drives the task with actions drawn uniformly from [-1, 1] for `steps` control steps; an ended
+// episode is reset with the seed *next_seed (then incremented). Returns the episodes ended. For
+// benchmarks and tests of the task itself.
+long StepRandomly(AuvNavTask& task, Rng& rng, long steps, float* obs, std::uint64_t* next_seed);
+
 }  // namespace pbppo::sim

@@ -3,17 +3,16 @@
 // inside the range whose re-encoding gives the same bytes; other lengths are refused.
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 
 #include "tests/fuzz/can_mit_fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace pbppo;
-  if (size < 1 || size > 1 + can::kFdMaxLen) return 0;
-  const can::MitRange r = fuzz::FuzzRange(data[0]);
-  const auto len = static_cast<std::uint8_t>(size - 1);
-  std::uint8_t payload[can::kFdMaxLen] = {};
-  std::memcpy(payload, data + 1, len);
+  fuzz::MitInput in;
+  if (!fuzz::SplitMitInput(data, size, &in)) return 0;
+  const can::MitRange& r = in.range;
+  const std::uint8_t* payload = in.payload;
+  const std::uint8_t len = in.len;
   can::MitSpecial special{};
   const bool is_special = can::DecodeMitSpecial(payload, len, &special);
   can::MitCommand c;

@@ -1,8 +1,10 @@
 // Ranges shared by the MIT codec fuzz targets: the quadruped's AK70-10 ranges and an asymmetric one.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 
 #include "runtime/transport/can/mit_codec.hpp"
 
@@ -18,6 +20,22 @@ inline can::MitRange FuzzRange(std::uint8_t selector) {
     r.kd_min = 0.1, r.kd_max = 4.2, r.t_min = -18, r.t_max = 30;
   }
   return r;
+}
+
+// One fuzz input: a selector byte (which range), then a CAN payload of up to 64 bytes.
+struct MitInput {
+  can::MitRange range;
+  std::uint8_t payload[can::kFdMaxLen] = {};
+  std::uint8_t len = 0;
+};
+
+// Splits data into range and payload; false for an empty input or a payload longer than a frame's.
+inline bool SplitMitInput(const std::uint8_t* data, std::size_t size, MitInput* in) {
+  if (size < 1 || size > 1 + can::kFdMaxLen) return false;
+  in->range = FuzzRange(data[0]);
+  in->len = static_cast<std::uint8_t>(size - 1);
+  std::memcpy(in->payload, data + 1, in->len);
+  return true;
 }
 
 inline void Require(bool ok) {

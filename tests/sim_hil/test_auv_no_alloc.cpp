@@ -28,18 +28,9 @@ TEST_CASE("auv task: Step and Reset allocate nothing beyond Simbody's own two pe
   task->Reset(0, obs.data());
   for (int k = 0; k < 50; ++k) (void)task->Step(action, obs.data());  // warm-up
   std::uint64_t seed = 1;
-  long episodes = 0;
   const std::uint64_t physics_before = task->physics_steps();
   pbppo::AllocationScope scope;
-  for (int k = 0; k < 5000; ++k) {
-    action[0] = static_cast<float>(rng.Uniform(-1.0, 1.0));
-    action[1] = static_cast<float>(rng.Uniform(-1.0, 1.0));
-    const auto r = task->Step(action, obs.data());
-    if (r.terminated || r.truncated) {
-      task->Reset(seed++, obs.data());
-      ++episodes;
-    }
-  }
+  const long episodes = pbppo::sim::StepRandomly(*task, rng, 5000, obs.data(), &seed);
   const std::uint64_t count = scope.count();
   const std::uint64_t realizations = 2 * (task->physics_steps() - physics_before);
   CHECK(realizations == static_cast<std::uint64_t>(2 * config->plant.substeps() * 5000));
