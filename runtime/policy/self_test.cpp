@@ -21,7 +21,7 @@ Status SelfTest(const PolicyModel& model, const GoldenVectors& g) {
     const ForwardStatus st = Forward(model, *data);
     if (st != ForwardStatus::kOk) return fail("row " + std::to_string(r) + ": Forward returned " + ToString(st));
     for (std::size_t j = 0; j < g.output_size; ++j) {
-      const double got = data->action()[j];
+      const auto got = static_cast<double>(data->action()[j]);
       const double want = g.expected[r].action[j];
       const double bound = g.expected[r].error_bound[j];
       const double err = std::fabs(got - want);
