@@ -13,8 +13,7 @@
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 if [ $# -ne 1 ] || [ ! -d "$1" ]; then
-  echo "select_auv: usage: tools/select_auv.sh RUN_DIR (a pbppo train --out folder)" >&2
-  exit 2
+  fail "usage: tools/select_auv.sh RUN_DIR (a pbppo train --out folder)"
 fi
 run="$1"
 pbppo="$(program PBPPO build/default/policies/pbppo)"
@@ -27,15 +26,13 @@ case "$seed" in '' | *[!0-9]*) fail "DEV_SEED: '$seed' is not a non-negative int
 case "$jobs" in '' | *[!0-9]* | 0) fail "JOBS: '$jobs' is not a positive integer" ;; esac
 case "$confirm" in *[!0-9]*) fail "CONFIRM_SEED: '$confirm' is not a non-negative integer (or empty: skip)" ;; esac
 if [ -n "$confirm" ] && [ "$confirm" = "$seed" ]; then
-  echo "select_auv: CONFIRM_SEED must differ from DEV_SEED ($seed)" >&2
-  exit 2
+  fail "CONFIRM_SEED must differ from DEV_SEED ($seed)"
 fi
 candidates=()
 [ -f "$run/best.blob" ] && candidates+=("$run/best.blob")
 for b in "$run"/snapshots/*.blob; do [ -f "$b" ] && candidates+=("$b"); done
 if [ ${#candidates[@]} -eq 0 ]; then
-  echo "select_auv: $run holds no best.blob and no snapshots/*.blob" >&2
-  exit 2
+  fail "$run holds no best.blob and no snapshots/*.blob"
 fi
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT

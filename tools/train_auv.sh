@@ -65,14 +65,12 @@ parse_stage() {
 }
 for pair in $mixed_stages; do
   if ! parse_stage "$pair"; then
-    echo "train_auv: MIXED_STAGES: '$pair' is not SEED:LR[@DISTANCE:COST][+DISTANCE:PER_STEP] (e.g. 1:3e-4, 7:5e-5@2:4, 11:5e-5@2:4+1.5:1)" >&2
-    exit 2
+    fail "MIXED_STAGES: '$pair' is not SEED:LR[@DISTANCE:COST][+DISTANCE:PER_STEP] (e.g. 1:3e-4, 7:5e-5@2:4, 11:5e-5@2:4+1.5:1)"
   fi
 done
 mkdir -p "$out"
 if [ -n "$first_margin" ] && ! [[ "$first_margin" =~ $pair_re ]]; then
-  echo "train_auv: FIRST_MARGIN: '$first_margin' is not DISTANCE:COST (e.g. 2:4)" >&2
-  exit 2
+  fail "FIRST_MARGIN: '$first_margin' is not DISTANCE:COST (e.g. 2:4)"
 fi
 if finished "$out/stage1" "auv-nav:$first_layout" "$first_seed" 3e-4 "$first_margin"; then
   echo "train_auv: stage 1: kept the finished run in $out/stage1"
