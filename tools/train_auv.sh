@@ -68,10 +68,10 @@ for pair in $mixed_stages; do
     fail "MIXED_STAGES: '$pair' is not SEED:LR[@DISTANCE:COST][+DISTANCE:PER_STEP] (e.g. 1:3e-4, 7:5e-5@2:4, 11:5e-5@2:4+1.5:1)"
   fi
 done
-mkdir -p "$out"
 if [ -n "$first_margin" ] && ! [[ "$first_margin" =~ $pair_re ]]; then
   fail "FIRST_MARGIN: '$first_margin' is not DISTANCE:COST (e.g. 2:4)"
 fi
+mkdir -p "$out"
 if finished "$out/stage1" "auv-nav:$first_layout" "$first_seed" 3e-4 "$first_margin"; then
   echo "train_auv: stage 1: kept the finished run in $out/stage1"
 else
