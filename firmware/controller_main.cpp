@@ -3,7 +3,8 @@
 //   pbppo-controller --robot models/auv/robot.yaml --policy policies/frozen/auv_nav/auv_nav.blob
 //       [--lockstep] [--period-ms MS] [--domain D] [--dds-profile FILE] [--lost-after-s S]
 //       [--peer-timeout-s S] [--writer-poll-us N] [--status-every-s S]
-//   pbppo-controller --robot models/quadruped/robot.yaml [--trajectory FILE] [--can IF0,IF1]
+//   pbppo-controller --robot models/quadruped/robot.yaml [--policy BLOB --commands SCHEDULE |
+//       --trajectory FILE] [--can IF0,IF1]
 //       [--lockstep-wait-ms N] [--candump FILE] [--receive-all]
 //   both: [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
 //       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
@@ -38,6 +39,7 @@
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/runner.hpp"
+#include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/rt/tick_profiler.hpp"
@@ -48,7 +50,7 @@ namespace {
 using namespace pbppo;
 
 struct Options {
-  std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump;
+  std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump, commands;
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
@@ -65,6 +67,8 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)")->required();
   app.add_option("--policy", o.policy, "Frozen policy blob (its golden vectors beside it)");
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
+  app.add_option("--commands", o.commands,
+                 "A schedule file as the operator (its stream's transport), e.g. the quadruped's velocity commands");
   app.add_flag("--lockstep", o.lockstep, "DDS: one tick per sensor sample (a simulator in lock-step)");
   app.add_option("--lockstep-timeout-ms", o.lockstep_timeout_ms, "DDS lock-step: tick anyway after this long")
       ->check(CLI::Range(1, 600000));
@@ -157,8 +161,32 @@ int main(int argc, char** argv) {
   std::unique_ptr<dds::AuvDdsLink> link;
   std::unique_ptr<auv::AuvTransport> auv;
   std::unique_ptr<can::CanTransport> can;
+  std::unique_ptr<loop::ScheduleTransport> schedule;
   std::vector<robot::Transport*> transports;
+  std::string schedule_transport;
+  if (!o.commands.empty()) {
+    auto s = loop::LoadSchedule(o.commands, robot);
+    if (!s) return Fail(s.error().message);
+    schedule_transport = robot.streams[s->stream_index].transport;
+    auto st = loop::ScheduleTransport::Create(robot, std::move(*s));
+    if (!st) return Fail(st.error().message);
+    schedule = std::move(*st);
+  }
   for (const robot::TransportSpec& t : robot.transports) {
+    if (t.name == schedule_transport) {
+      transports.push_back(schedule.get());
+      continue;
+    }
+    // A transport whose streams may stay silent (an operator who has not spoken) can be left unbound.
+    bool optional = true;
+    for (const robot::StreamSpec& st : robot.streams)
+      if (st.transport == t.name && st.required) optional = false;
+    if (optional && t.kind == "dds" && t.options.count("messages") != 0 && t.options.at("messages") != "auv") {
+      if (!o.quiet)
+        std::fprintf(stderr, "pbppo-controller: transport '%s' unbound (no --commands): its streams stay silent\n",
+                     t.name.c_str());
+      continue;
+    }
     if (t.kind == "can") {
       can::CanTransportOptions co;
       co.interfaces = Split(o.can);
@@ -274,8 +302,10 @@ int main(int argc, char** argv) {
 
   // --ticks and --duration: whichever comes first (control time: in lock-step the simulator's).
   std::uint64_t max_ticks = o.max_ticks;
-  if (o.duration_s > 0) {
-    const auto d = static_cast<std::uint64_t>(std::max(1.0, std::round(o.duration_s / robot.tick_period_s)));
+  double duration_s = o.duration_s;
+  if (duration_s <= 0 && schedule) duration_s = schedule->schedule().duration_s();  // the schedule's end stops
+  if (duration_s > 0) {
+    const auto d = static_cast<std::uint64_t>(std::max(1.0, std::round(duration_s / robot.tick_period_s)));
     max_ticks = max_ticks == 0 ? d : std::min(max_ticks, d);
   }
   // Every heap allocation of this (the control) thread while the loop runs is counted.

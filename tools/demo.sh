@@ -4,7 +4,10 @@
 # shipped policy as two processes over Fast DDS on loopback. Prints the mission result (targets,
 # collisions, time), the controller's supervisor counts and its latency table; writes the
 # trajectory plot, the events and the latency profile (JSON + PNG) into build/results/demo/.
-# DEMO_LAYOUT=easy|medium|hard and DEMO_SEED=N choose the scenario.
+# DEMO_LAYOUT=easy|medium|hard and DEMO_SEED=N choose the scenario. Then the quadruped walks its
+# demo schedule (stand, forward, sideways, turn, stop) with the shipped walking policy: pbppo-hil
+# quadruped --in-process runs the controller (runtime/loop over the CAN transport) and the Simbody
+# plant behind the emulated drivers in lock-step; per-phase tracking, plots and the trace.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 layout="${DEMO_LAYOUT:-hard}"
@@ -42,7 +45,19 @@ grep -v '^$' "$out/controller.err" "$out/hil.err" 2>/dev/null | sed 's/^/   /' |
 echo
 echo "files: $out/trajectory.png (trajectory over the map), $out/profile.png (latency histograms),"
 echo "       $out/profile.json, $out/events.json, $out/trajectory.csv"
-if [ "$crc" -ne 0 ] || [ "$hrc" -ne 0 ]; then
-  echo "demo: controller exited $crc, simulator exited $hrc" >&2
+echo
+qblob=policies/frozen/quadruped_walk/flat.blob
+echo "== Quadruped HIL demo: policy $qblob walking models/quadruped/schedules/demo.yaml on flat ground"
+echo "   (controller and Simbody plant in one process, lock-step over the in-process CAN network)"
+set +e
+build/default/sim_hil/pbppo-hil quadruped --in-process --policy "$qblob" \
+  --commands models/quadruped/schedules/demo.yaml --scenario models/quadruped/scenarios/flat.yaml \
+  --trace "$out/quadruped_trace.csv" --report "$out/quadruped.json" --plot "$out/quadruped.png"
+qrc=$?
+set -e
+echo "files: $out/quadruped.png (commanded vs measured velocity), $out/quadruped_path.png (base path),"
+echo "       $out/quadruped.json (per-phase tracking), $out/quadruped_trace.csv"
+if [ "$crc" -ne 0 ] || [ "$hrc" -ne 0 ] || [ "$qrc" -ne 0 ]; then
+  echo "demo: AUV controller exited $crc, AUV simulator exited $hrc, quadruped HIL exited $qrc" >&2
   exit 1
 fi

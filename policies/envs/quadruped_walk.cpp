@@ -52,6 +52,7 @@ struct QuadrupedWalk::Shared {
   std::vector<float> low, high;
   int base_body = 0, floor_geom = -1;
   std::vector<int> block_geom;  // the pool of box geoms for blocks
+  sim::BlockField block_field;  // the terrain's parameters (walk.yaml terrain)
   double base_mass = 0;
   ~Shared() {
     if (model != nullptr) mj_deleteModel(model);
@@ -139,6 +140,11 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     if (!have[j]) return MakeError(ErrorCode::kMismatch, "can_map.yaml: no motor for joint '" + r.joint_names[j] + "'");
 
   const QuadrupedWalkParams& p = sh->params;
+  sh->block_field = {p.field_half_size_m,
+                     p.blocks,
+                     {p.block_size_m[0], p.block_size_m[1]},
+                     {p.block_height_m[0], p.block_height_m[1]},
+                     p.clear_radius_m};
   MjcfOptions mo;
   mo.timestep_s = p.timestep_s;
   mo.base_height_m = p.init_base_height_m;
@@ -288,19 +294,8 @@ void QuadrupedWalk::BuildTerrain(bool blocks) noexcept {
     slot_block_[k] = -1;
   }
   if (!on_blocks_) return;
-  const double half = p.field_half_size_m, r2 = p.clear_radius_m * p.clear_radius_m;
-  for (int b = 0; b < p.blocks; ++b) {
-    const double cx = rng_.Uniform(-half, half), cy = rng_.Uniform(-half, half);
-    const double sx = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
-    const double sy = rng_.Uniform(p.block_size_m[0], p.block_size_m[1]);
-    const double h = rng_.Uniform(p.block_height_m[0], p.block_height_m[1]);
-    const Block k{cx - sx / 2, cx + sx / 2, cy - sy / 2, cy + sy / 2, h};
-    // The start area stays flat: a block reaching into it is left out.
-    const double dx = std::max({k.x0, -k.x1, 0.0}), dy = std::max({k.y0, -k.y1, 0.0});
-    if (dx * dx + dy * dy < r2) continue;
-    blocks_.push_back(k);
-    block_slot_.push_back(-1);
-  }
+  GenerateBlocks(s.block_field, rng_, blocks_);
+  block_slot_.assign(blocks_.size(), -1);
 }
 
 // The blocks within near_m of the base (in x and y) go into the pool's geoms and stay in the same
@@ -310,7 +305,7 @@ void QuadrupedWalk::UpdateBlockPool() noexcept {
   if (!on_blocks_) return;
   const Shared& s = *shared_;
   const double r = s.params.near_m, x = d_->qpos[0], y = d_->qpos[1];
-  auto near = [&](const Block& b) { return b.x1 > x - r && b.x0 < x + r && b.y1 > y - r && b.y0 < y + r; };
+  auto near = [&](const sim::TerrainBlock& b) { return b.x1 > x - r && b.x0 < x + r && b.y1 > y - r && b.y0 < y + r; };
   for (std::size_t k = 0; k < slot_block_.size(); ++k) {
     const int b = slot_block_[k];
     if (b < 0 || near(blocks_[static_cast<std::size_t>(b)])) continue;
@@ -325,7 +320,7 @@ void QuadrupedWalk::UpdateBlockPool() noexcept {
     if (block_slot_[b] >= 0 || !near(blocks_[b])) continue;
     while (free_slot < slot_block_.size() && slot_block_[free_slot] >= 0) ++free_slot;
     if (free_slot == slot_block_.size()) break;
-    const Block& k = blocks_[b];
+    const sim::TerrainBlock& k = blocks_[b];
     const int g = s.block_geom[free_slot];
     const double hx = (k.x1 - k.x0) / 2, hy = (k.y1 - k.y0) / 2, hz = k.height / 2;
     m_->geom_pos[3 * g] = k.x0 + hx;
@@ -342,10 +337,7 @@ void QuadrupedWalk::UpdateBlockPool() noexcept {
 }
 
 double QuadrupedWalk::GroundHeight(double x, double y) const noexcept {
-  double h = 0.0;
-  for (const Block& b : blocks_)
-    if (x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1) h = std::max(h, b.height);
-  return h;
+  return sim::TerrainHeight(blocks_, x, y);
 }
 
 void QuadrupedWalk::ResampleCommand() noexcept {

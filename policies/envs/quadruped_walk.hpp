@@ -34,6 +34,7 @@
 #include "policies/envs/quadruped_walk_config.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/urdf.hpp"
+#include "sim_hil/scenarios/quadruped_terrain.hpp"
 
 struct mjModel_;
 struct mjData_;
@@ -101,9 +102,6 @@ class QuadrupedWalk final : public Env {
 
  private:
   explicit QuadrupedWalk(std::shared_ptr<const Shared> shared);
-  struct Block {
-    double x0, x1, y0, y1, height;
-  };
   void BuildTerrain(bool blocks) noexcept;
   void UpdateBlockPool() noexcept;
   double GroundHeight(double x, double y) const noexcept;
@@ -132,9 +130,9 @@ class QuadrupedWalk final : public Env {
   std::array<double, 3> error_sum_{};  // sum over the episode's steps of |command - measured|
   int step_ = 0;
   bool on_blocks_ = false, fell_ = false, done_ = true;
-  std::vector<Block> blocks_;    // this episode's blocks
-  std::vector<int> block_slot_;  // per block: its pool geom, or -1
-  std::vector<int> slot_block_;  // per pool geom: its block, or -1
+  std::vector<sim::TerrainBlock> blocks_;  // this episode's blocks
+  std::vector<int> block_slot_;            // per block: its pool geom, or -1
+  std::vector<int> slot_block_;            // per pool geom: its block, or -1
   WalkTelemetry tel_;
 };
 

@@ -90,6 +90,10 @@ bool PolicySource::Compute(const robot::RobotModel& m, const robot::RobotData& d
   }
   if (have_action_)
     for (std::size_t i = 0; i < action_.size(); ++i) desired[command_of_action_[i]] = static_cast<double>(action_[i]);
+  for (const robot::MotorSpec& mo : m.motors) {  // the gains the policy was trained with
+    if (mo.policy_kp >= 0) desired[mo.kp] = mo.policy_kp;
+    if (mo.policy_kd >= 0) desired[mo.kd] = mo.policy_kd;
+  }
   return true;
 }
 

@@ -146,13 +146,15 @@ struct Loader : detail::Builder {
     for (std::size_t i = 0; i < list.size(); ++i) {
       const std::string w = "streams[" + std::to_string(i) + "]";
       const YAML::Node n = list[i];
-      PBPPO_TRY(f.Keys(n, w, {"name", "transport", "period_s", "stale_after", "invalid_safe_stop", "fields"}));
+      PBPPO_TRY(
+          f.Keys(n, w, {"name", "transport", "period_s", "stale_after", "invalid_safe_stop", "required", "fields"}));
       StreamSpec s;
       PBPPO_TRY(f.Text(n, "name", w, &s.name, Rule::kToken));
       PBPPO_TRY(f.Text(n, "transport", w, &s.transport, Rule::kToken));
       PBPPO_TRY(f.Number(n, "period_s", w, 1e-6, 100.0, &s.period_s));
       PBPPO_TRY(ReadStale(n, w, &s.stale_after));
       PBPPO_TRY(f.Count(n, "invalid_safe_stop", w, 1, 1000000, &s.invalid_safe_stop));
+      PBPPO_TRY(f.Bool(n, "required", w, &s.required));
       PBPPO_TRY(StartStream(std::move(s), w));
       YAML::Node fields;
       PBPPO_TRY(f.List(n, "fields", w, true, &fields));
@@ -303,7 +305,8 @@ Status Derive(RobotModel& m, double tick_s) {
     sm.commands.push_back({c.name, c.min, c.max, c.degraded_min, c.degraded_max, c.rate, c.stop, c.stop_rate,
                            c.stop_value, c.hold_input});
   for (const StreamSpec& s : m.streams)
-    sm.streams.push_back({s.name, s.stale_degraded_ticks, s.stale_safe_stop_ticks, s.lost_ticks, s.invalid_safe_stop});
+    sm.streams.push_back(
+        {s.name, s.stale_degraded_ticks, s.stale_safe_stop_ticks, s.lost_ticks, s.invalid_safe_stop, s.required});
   for (const FieldSpec& f : m.fields) sm.input_names.push_back(f.name);
   for (TransportSpec& t : m.transports) {
     t.first_link = static_cast<std::uint32_t>(sm.transport_names.size());

@@ -58,6 +58,9 @@ struct StreamSpec {
   double period_s = 0;  // how often a new sample is due
   StaleLimits stale_after;
   std::uint32_t invalid_safe_stop = 1;  // consecutive invalid checks that ask for safe-stop
+  // false: silence before the first sample is no fault (an operator who has not spoken yet);
+  // once a sample came, the stream is stale and lost like any other.
+  bool required = true;
   // Per tick (derived from the tick period): ages in ticks, "older than".
   std::uint32_t stale_degraded_ticks = 0, stale_safe_stop_ticks = 0, lost_ticks = 0;
 };
@@ -86,6 +89,9 @@ struct MotorSpec {
   std::uint32_t q_field = 0, dq_field = 0, tau_field = 0;  // its reply
   std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;    // its commands
   double default_q_rad = 0;
+  // The gains a policy's position targets are tracked with (robot.yaml motors.policy_gains); < 0: the
+  // commands' neutral gains.
+  double policy_kp = -1, policy_kd = -1;
 };
 
 // A signal declared in robot.yaml (runtime/robot/signals.hpp resolves and computes them).

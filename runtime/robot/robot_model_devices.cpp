@@ -61,7 +61,16 @@ Status Builder::CanDevices(const YAML::Node& root) {
                                        " actuated joints");
   YAML::Node motors, imus;
   PBPPO_TRY(f.Map(root, "motors", "", &motors));
-  PBPPO_TRY(f.Keys(motors, "motors", {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor"}));
+  PBPPO_TRY(f.Keys(motors, "motors",
+                   {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor", "policy_gains"}));
+  double policy_kp = -1, policy_kd = -1;
+  if (motors["policy_gains"]) {
+    YAML::Node g;
+    PBPPO_TRY(f.Map(motors, "policy_gains", "motors", &g));
+    PBPPO_TRY(f.Keys(g, "motors.policy_gains", {"kp_nm_rad", "kd_nm_s_rad"}));
+    PBPPO_TRY(f.Number(g, "kp_nm_rad", "motors.policy_gains", 0.0, 1e4, &policy_kp));
+    PBPPO_TRY(f.Number(g, "kd_nm_s_rad", "motors.policy_gains", 0.0, 1e3, &policy_kd));
+  }
   StreamSpec proto;
   proto.transport = transport;
   proto.period_s = m.tick_period_s;
@@ -89,6 +98,8 @@ Status Builder::CanDevices(const YAML::Node& root) {
     mo.joint = cm.joint;
     mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
     mo.default_q_rad = body.default_q_rad[j];
+    mo.policy_kp = policy_kp;
+    mo.policy_kd = policy_kd;
     mo.q_field = static_cast<std::uint32_t>(m.fields.size());
     PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - margin, uj.upper_rad + margin, where));
     mo.dq_field = mo.q_field + 1;

@@ -68,6 +68,7 @@ void CheckStreams(const SupervisorModel& m, const SupervisorInput& in, Superviso
         run = 0;
       }
     }
+    if (!x.seen && !l.required) continue;
     if (x.age_ticks > l.lost_ticks) {
       f.Add(Cause::kLostPeer, Mode::kEStop, I32(s), -1, age, l.lost_ticks);
     } else if (!x.seen) {

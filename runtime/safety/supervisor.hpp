@@ -90,6 +90,7 @@ struct StreamLimit {
   std::string name;
   std::uint32_t stale_degraded_ticks = 1, stale_safe_stop_ticks = 2, lost_ticks = 20;  // "older than"
   std::uint32_t invalid_safe_stop = 1;
+  bool required = true;  // false: no fault before the first sample
 };
 
 struct SignalLimit {

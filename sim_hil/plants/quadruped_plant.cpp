@@ -2,6 +2,7 @@
 
 #include <Simbody.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -47,51 +48,167 @@ class TorqueInput : public SimTK::Force::Custom::Implementation {
   const std::vector<double>* tau_;
 };
 
+// One point of a collision shape that can touch the terrain: a sphere of `radius` around
+// `station` (in the body's frame); a box corner is a sphere of radius 0.
+struct ContactPoint {
+  SimTK::MobilizedBody body;
+  SimTK::Vec3 station;
+  double radius = 0;
+  int foot = -1;  // foot index (URDF sphere order), -1: another shape
+};
+
+// The terrain's contact forces. Which points touched is kept for the plant to read after the
+// tick (OR-ed over the tick's force evaluations).
+class TerrainContact : public SimTK::Force::Custom::Implementation {
+ public:
+  TerrainContact(std::vector<ContactPoint> points, const ContactParams& params, const std::vector<TerrainBlock>* blocks)
+      : points_(std::move(points)), p_(params), blocks_(blocks) {}
+
+  void calcForce(const SimTK::State& s, SimTK::Vector_<SimTK::SpatialVec>& body_forces, SimTK::Vector_<SimTK::Vec3>&,
+                 SimTK::Vector&) const override {
+    for (const ContactPoint& c : points_) {
+      const SimTK::Vec3 x = c.body.findStationLocationInGround(s, c.station);
+      if (x[2] - c.radius > max_height_) continue;  // above every surface
+      const SimTK::Vec3 v = c.body.findStationVelocityInGround(s, c.station);
+      SimTK::Vec3 f(0);
+      // The floor.
+      AddContact(SimTK::Vec3(0, 0, 1), c.radius - x[2], v, f);
+      // The blocks: the closest point of each box to the sphere's centre.
+      for (const TerrainBlock& b : *blocks_) {
+        const SimTK::Vec3 q(std::clamp(x[0], b.x0, b.x1), std::clamp(x[1], b.y0, b.y1),
+                            std::clamp(x[2], 0.0, b.height));
+        const SimTK::Vec3 d = x - q;
+        const double dist = d.norm();
+        if (dist > c.radius) continue;
+        if (dist > 1e-9) {
+          AddContact(d / dist, c.radius - dist, v, f);
+        } else {  // the centre is inside the block: out through the top
+          AddContact(SimTK::Vec3(0, 0, 1), c.radius + b.height - x[2], v, f);
+        }
+      }
+      if (f.normSqr() > 0) {
+        c.body.applyForceToBodyPoint(s, c.station, f, body_forces);
+        if (c.foot >= 0)
+          feet_ |= 1u << c.foot;
+        else
+          body_ = true;
+      }
+    }
+  }
+  SimTK::Real calcPotentialEnergy(const SimTK::State&) const override { return 0; }
+
+  void ClearContacts() const noexcept {
+    feet_ = 0;
+    body_ = false;
+  }
+  std::uint32_t feet() const noexcept { return feet_; }
+  bool body() const noexcept { return body_; }
+  void SetMaxHeight(double h) noexcept { max_height_ = h; }
+
+ private:
+  // Normal n (unit, out of the surface), penetration depth, the point's velocity.
+  void AddContact(const SimTK::Vec3& n, double depth, const SimTK::Vec3& v, SimTK::Vec3& f) const noexcept {
+    if (depth <= 0) return;
+    const double vn = SimTK::dot(v, n);
+    const double fn = p_.stiffness * depth * std::sqrt(depth) * (1.0 - 1.5 * p_.dissipation * vn);
+    if (fn <= 0) return;
+    const SimTK::Vec3 vt = v - vn * n;
+    const double speed = vt.norm();
+    SimTK::Vec3 ft(0);
+    if (speed > 1e-12) ft = -(p_.friction * fn * std::min(speed / p_.transition_mps, 1.0) / speed) * vt;
+    f += fn * n + ft;
+  }
+
+  std::vector<ContactPoint> points_;
+  ContactParams p_;
+  const std::vector<TerrainBlock>* blocks_;
+  double max_height_ = 0;
+  mutable std::uint32_t feet_ = 0;
+  mutable bool body_ = false;
+};
+
 }  // namespace
 
-struct QuadrupedStandPlant::Impl {
+struct QuadrupedPlant::Impl {
   QuadrupedPlantOptions options;
   SimTK::MultibodySystem system;
   SimTK::SimbodyMatterSubsystem matter{system};
   SimTK::GeneralForceSubsystem forces{system};
+  SimTK::MobilizedBody base;
   std::vector<SimTK::MobilizedBody> joint_body;  // per actuated joint: the pin's outboard body
   std::vector<double> tau;
   std::vector<double> q, dq;  // cached after each tick
+  BaseState base_state;
+  double accel_world[3] = {0, 0, 0};
   std::unique_ptr<SimTK::RungeKutta2Integrator> integ;
+  const TerrainContact* contact = nullptr;  // owned by the force subsystem
+  std::uint32_t feet = 0;
+  bool body_contact = false;
+  std::size_t foot_count = 0;
   std::uint64_t tick = 0;
-  double gravity = 9.81;
 
-  void Capture() {
+  void Capture(bool with_accel) {
     const SimTK::State& s = integ->getState();
     for (std::size_t i = 0; i < joint_body.size(); ++i) {
       q[i] = joint_body[i].getOneQ(s, SimTK::QIndex(0));
       dq[i] = joint_body[i].getOneU(s, SimTK::UIndex(0));
     }
+    if (options.mount != Mount::kGround) return;
+    system.realize(s, SimTK::Stage::Velocity);
+    const SimTK::Transform& X = base.getBodyTransform(s);
+    const SimTK::Quaternion quat = X.R().convertRotationToQuaternion();
+    const SimTK::Vec3 v = base.getBodyOriginVelocity(s);
+    const SimTK::Vec3 w = ~X.R() * base.getBodyAngularVelocity(s);
+    BaseState& b = base_state;
+    for (int k = 0; k < 3; ++k) {
+      if (with_accel) accel_world[k] = (v[k] - b.velocity_mps[k]) / options.tick_s;
+      b.position_m[k] = X.p()[k];
+      b.velocity_mps[k] = v[k];
+      b.angular_radps[k] = w[k];
+    }
+    for (int k = 0; k < 4; ++k) b.quat_wxyz[k] = quat[k];
   }
 };
 
-QuadrupedStandPlant::QuadrupedStandPlant() : impl_(std::make_unique<Impl>()) {}
-QuadrupedStandPlant::~QuadrupedStandPlant() = default;
+QuadrupedPlant::QuadrupedPlant() : impl_(std::make_unique<Impl>()) {}
+QuadrupedPlant::~QuadrupedPlant() = default;
 
-Result<std::unique_ptr<QuadrupedStandPlant>> QuadrupedStandPlant::Make(const robot::RobotDescription& robot,
-                                                                       const QuadrupedPlantOptions& options) {
+Result<std::unique_ptr<QuadrupedPlant>> QuadrupedPlant::Make(const robot::RobotDescription& robot,
+                                                             const QuadrupedPlantOptions& options) {
   if (!(options.tick_s > 0) || options.substeps < 1)
     return MakeError(ErrorCode::kInvalidValue, "quadruped plant: tick_s " + std::to_string(options.tick_s) +
                                                    " and substeps " + std::to_string(options.substeps) +
                                                    " must be positive");
-  std::unique_ptr<QuadrupedStandPlant> plant(new QuadrupedStandPlant());
+  const ContactParams& cp = options.contact;
+  if (!(cp.stiffness > 0) || !(cp.dissipation >= 0) || !(cp.friction >= 0) || !(cp.transition_mps > 0))
+    return MakeError(ErrorCode::kInvalidValue, "quadruped plant: contact stiffness " + std::to_string(cp.stiffness) +
+                                                   ", dissipation " + std::to_string(cp.dissipation) + ", friction " +
+                                                   std::to_string(cp.friction) + ", transition " +
+                                                   std::to_string(cp.transition_mps) +
+                                                   " m/s: stiffness and transition must be positive, the rest >= 0");
+  for (std::size_t i = 0; i < options.terrain.size(); ++i) {
+    const TerrainBlock& b = options.terrain[i];
+    if (!(b.x1 > b.x0) || !(b.y1 > b.y0) || !(b.height > 0) || !std::isfinite(b.x0 + b.x1 + b.y0 + b.y1 + b.height))
+      return MakeError(ErrorCode::kInvalidValue,
+                       "quadruped plant: terrain block " + std::to_string(i) + " is empty or not finite");
+  }
+  std::unique_ptr<QuadrupedPlant> plant(new QuadrupedPlant());
   Impl& m = *plant->impl_;
   m.options = options;
-  m.gravity = options.gravity_m_s2;
   const robot::UrdfModel& urdf = robot.urdf;
   SimTK::Force::Gravity(m.forces, m.matter, -SimTK::ZAxis, options.gravity_m_s2);
 
-  // The base welded to the world at the stand height; then every joint in topological order.
+  // The base welded to the stand, or free; then every joint in topological order.
   std::vector<SimTK::MobilizedBody> link_body(urdf.links.size());
-  link_body[urdf.root] =
-      SimTK::MobilizedBody::Weld(m.matter.Ground(), SimTK::Transform(SimTK::Vec3(0, 0, robot.stand_base_height_m)),
-                                 SimTK::Body::Rigid(LinkMass(urdf.links[urdf.root])), SimTK::Transform());
-  std::vector<int> body_of_joint(urdf.joints.size(), -1);
+  const SimTK::Body::Rigid base_body(LinkMass(urdf.links[urdf.root]));
+  if (options.mount == Mount::kStand) {
+    m.base =
+        SimTK::MobilizedBody::Weld(m.matter.Ground(), SimTK::Transform(SimTK::Vec3(0, 0, robot.stand_base_height_m)),
+                                   base_body, SimTK::Transform());
+  } else {
+    m.base = SimTK::MobilizedBody::Free(m.matter.Ground(), SimTK::Transform(), base_body, SimTK::Transform());
+  }
+  link_body[urdf.root] = m.base;
   for (std::size_t j = 0; j < urdf.joints.size(); ++j) {
     const robot::UrdfJoint& joint = urdf.joints[j];
     const SimTK::Body::Rigid body(LinkMass(urdf.links[joint.child]));
@@ -113,17 +230,54 @@ Result<std::unique_ptr<QuadrupedStandPlant>> QuadrupedStandPlant::Make(const rob
   m.q.assign(n, 0.0);
   m.dq.assign(n, 0.0);
   SimTK::Force::Custom(m.forces, new TorqueInput(m.joint_body, &m.tau));
+  if (options.mount == Mount::kGround) {
+    std::vector<ContactPoint> points;
+    int feet = 0;
+    for (std::size_t l = 0; l < urdf.links.size(); ++l) {
+      for (const robot::UrdfCollision& c : urdf.links[l].collisions) {
+        const SimTK::Transform X = FromPose(c.origin);
+        if (c.shape == robot::UrdfShape::kSphere) {
+          points.push_back({link_body[l], X.p(), c.size[0], feet++});
+        } else if (c.shape == robot::UrdfShape::kCylinder) {
+          for (double end : {-0.5, 0.5})
+            points.push_back({link_body[l], X * SimTK::Vec3(0, 0, end * c.size[1]), c.size[0], -1});
+        } else {
+          for (int k = 0; k < 8; ++k)
+            points.push_back({link_body[l],
+                              X * SimTK::Vec3((k & 1 ? 0.5 : -0.5) * c.size[0], (k & 2 ? 0.5 : -0.5) * c.size[1],
+                                              (k & 4 ? 0.5 : -0.5) * c.size[2]),
+                              0.0, -1});
+        }
+      }
+    }
+    if (feet == 0 || feet > 32)
+      return MakeError(ErrorCode::kMismatch, "quadruped plant: " + robot.urdf_path + " has " + std::to_string(feet) +
+                                                 " collision spheres (feet); the ground mount needs 1 to 32");
+    m.foot_count = static_cast<std::size_t>(feet);
+    auto* contact = new TerrainContact(std::move(points), cp, &m.options.terrain);
+    double top = 0;
+    for (const TerrainBlock& b : m.options.terrain) top = std::max(top, b.height);
+    contact->SetMaxHeight(top);
+    m.contact = contact;
+    SimTK::Force::Custom(m.forces, contact);
+  }
   m.system.realizeTopology();
   std::vector<double> zero(n, 0.0);
-  if (auto s = plant->Reset(zero, zero); !s) return s.error();
+  const double xyz[3] = {0, 0, 1.0};
+  if (auto s = plant->Reset(zero, zero, xyz); !s) return s.error();
   return plant;
 }
 
-std::size_t QuadrupedStandPlant::joint_count() const noexcept {
+Mount QuadrupedPlant::mount() const noexcept {
+  return impl_->options.mount;
+}
+
+std::size_t QuadrupedPlant::joint_count() const noexcept {
   return impl_->joint_body.size();
 }
 
-Status QuadrupedStandPlant::Reset(const std::vector<double>& q_rad, const std::vector<double>& dq_rad_s) {
+Status QuadrupedPlant::Reset(const std::vector<double>& q_rad, const std::vector<double>& dq_rad_s,
+                             const double base_xyz[3], double base_yaw_rad) {
   Impl& m = *impl_;
   const std::size_t n = m.joint_body.size();
   if (q_rad.size() != n || dq_rad_s.size() != n)
@@ -135,61 +289,116 @@ Status QuadrupedStandPlant::Reset(const std::vector<double>& q_rad, const std::v
     m.joint_body[i].setOneQ(state, SimTK::QIndex(0), q_rad[i]);
     m.joint_body[i].setOneU(state, SimTK::UIndex(0), dq_rad_s[i]);
   }
+  if (m.options.mount == Mount::kGround) {
+    const SimTK::Vec3 p =
+        base_xyz != nullptr ? SimTK::Vec3(base_xyz[0], base_xyz[1], base_xyz[2]) : SimTK::Vec3(0, 0, 1);
+    m.system.realize(state, SimTK::Stage::Instance);
+    m.base.setQToFitTransform(state, SimTK::Transform(SimTK::Rotation(base_yaw_rad, SimTK::ZAxis), p));
+    m.base.setUToFitVelocity(state, SimTK::SpatialVec(SimTK::Vec3(0), SimTK::Vec3(0)));
+  }
   m.integ = std::make_unique<SimTK::RungeKutta2Integrator>(m.system);
   m.integ->setFixedStepSize(m.options.tick_s / m.options.substeps);
   m.integ->setAllowInterpolation(false);
   m.integ->initialize(state);
   m.tick = 0;
-  m.Capture();
+  m.base_state = BaseState{};
+  m.Capture(false);
+  for (double& a : m.accel_world) a = 0;
   return {};
 }
 
-void QuadrupedStandPlant::SetJointTorques(const double* tau_nm, std::size_t count) noexcept {
+void QuadrupedPlant::SetJointTorques(const double* tau_nm, std::size_t count) noexcept {
   Impl& m = *impl_;
   const std::size_t n = std::min(count, m.tau.size());
   for (std::size_t i = 0; i < n; ++i) m.tau[i] = std::isfinite(tau_nm[i]) ? tau_nm[i] : 0.0;
   m.integ->updAdvancedState().invalidateAllCacheAtOrAbove(SimTK::Stage::Dynamics);
 }
 
-bool QuadrupedStandPlant::Step() noexcept {
+void QuadrupedPlant::Push(double dvx, double dvy, double dvz) {
+  Impl& m = *impl_;
+  if (m.options.mount != Mount::kGround) return;
+  SimTK::State state = m.integ->getState();
+  m.system.realize(state, SimTK::Stage::Velocity);
+  const SimTK::Vec3 v = m.base.getBodyOriginVelocity(state) + SimTK::Vec3(dvx, dvy, dvz);
+  m.base.setUToFitLinearVelocity(state, v);
+  m.integ->initialize(state);
+}
+
+bool QuadrupedPlant::Step() noexcept {
   Impl& m = *impl_;
   const double target = static_cast<double>(m.tick + 1) * m.options.tick_s;
+  if (m.contact != nullptr) m.contact->ClearContacts();
   try {
     // The first stepTo() after initialize() may return without advancing: loop to the target.
     for (int guard = 0; guard < 4 * m.options.substeps + 4 && m.integ->getTime() < target - 1e-12; ++guard)
       m.integ->stepTo(target);
+    m.Capture(true);
   } catch (const std::exception&) {
     return false;
   }
-  m.Capture();
+  if (m.contact != nullptr) {
+    m.feet = m.contact->feet();
+    m.body_contact = m.contact->body();
+  }
   for (std::size_t i = 0; i < m.q.size(); ++i)
     if (!std::isfinite(m.q[i]) || !std::isfinite(m.dq[i])) return false;
+  for (double x : m.base_state.position_m)
+    if (!std::isfinite(x)) return false;
   ++m.tick;
   return true;
 }
 
-std::uint64_t QuadrupedStandPlant::tick() const noexcept {
+std::uint64_t QuadrupedPlant::tick() const noexcept {
   return impl_->tick;
 }
-double QuadrupedStandPlant::time_s() const noexcept {
+double QuadrupedPlant::time_s() const noexcept {
   return impl_->integ->getTime();
 }
-double QuadrupedStandPlant::q_rad(std::size_t j) const noexcept {
+double QuadrupedPlant::q_rad(std::size_t j) const noexcept {
   return impl_->q[j];
 }
-double QuadrupedStandPlant::dq_rad_s(std::size_t j) const noexcept {
+double QuadrupedPlant::dq_rad_s(std::size_t j) const noexcept {
   return impl_->dq[j];
 }
-double QuadrupedStandPlant::tau_nm(std::size_t j) const noexcept {
+double QuadrupedPlant::tau_nm(std::size_t j) const noexcept {
   return impl_->tau[j];
 }
+const BaseState& QuadrupedPlant::base() const noexcept {
+  return impl_->base_state;
+}
+double QuadrupedPlant::TerrainHeightAt(double x, double y) const noexcept {
+  return TerrainHeight(impl_->options.terrain, x, y);
+}
+std::uint32_t QuadrupedPlant::foot_contacts() const noexcept {
+  return impl_->feet;
+}
+bool QuadrupedPlant::body_contact() const noexcept {
+  return impl_->body_contact;
+}
+std::size_t QuadrupedPlant::foot_count() const noexcept {
+  return impl_->foot_count;
+}
 
-void QuadrupedStandPlant::BaseImu(double quat_wxyz[4], double gyro_rad_s[3], double accel_m_s2[3]) const noexcept {
-  quat_wxyz[0] = 1;
-  quat_wxyz[1] = quat_wxyz[2] = quat_wxyz[3] = 0;
-  gyro_rad_s[0] = gyro_rad_s[1] = gyro_rad_s[2] = 0;
-  accel_m_s2[0] = accel_m_s2[1] = 0;
-  accel_m_s2[2] = impl_->gravity;  // at rest on the stand the accelerometer reads +g upwards
+void QuadrupedPlant::BaseImu(double quat_wxyz[4], double gyro_rad_s[3], double accel_m_s2[3]) const noexcept {
+  const Impl& m = *impl_;
+  if (m.options.mount == Mount::kStand) {
+    quat_wxyz[0] = 1;
+    quat_wxyz[1] = quat_wxyz[2] = quat_wxyz[3] = 0;
+    gyro_rad_s[0] = gyro_rad_s[1] = gyro_rad_s[2] = 0;
+    accel_m_s2[0] = accel_m_s2[1] = 0;
+    accel_m_s2[2] = m.options.gravity_m_s2;  // at rest on the stand the accelerometer reads +g upwards
+    return;
+  }
+  const BaseState& b = m.base_state;
+  for (int k = 0; k < 4; ++k) quat_wxyz[k] = b.quat_wxyz[k];
+  for (int k = 0; k < 3; ++k) gyro_rad_s[k] = b.angular_radps[k];
+  // Specific force a - g in the base frame: R^T (a + g e_z).
+  const double w = b.quat_wxyz[0], x = b.quat_wxyz[1], y = b.quat_wxyz[2], z = b.quat_wxyz[3];
+  const double R[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                          {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                          {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+  const double f[3] = {m.accel_world[0], m.accel_world[1], m.accel_world[2] + m.options.gravity_m_s2};
+  for (int r = 0; r < 3; ++r) accel_m_s2[r] = R[0][r] * f[0] + R[1][r] * f[1] + R[2][r] * f[2];
 }
 
 }  // namespace pbppo::sim

@@ -11,7 +11,7 @@
 #include "sim_hil/plants/quadruped_plant.hpp"
 #include "tests/support/test_paths.hpp"
 
-using pbppo::sim::QuadrupedStandPlant;
+using pbppo::sim::QuadrupedPlant;
 
 namespace {
 
@@ -21,14 +21,14 @@ pbppo::robot::RobotDescription Robot() {
   return *d;
 }
 
-std::unique_ptr<QuadrupedStandPlant> Plant(const pbppo::robot::RobotDescription& d) {
-  auto p = QuadrupedStandPlant::Make(d);
+std::unique_ptr<QuadrupedPlant> Plant(const pbppo::robot::RobotDescription& d) {
+  auto p = QuadrupedPlant::Make(d);
   REQUIRE_MESSAGE(p.ok(), p.error().message);
   return std::move(*p);
 }
 
 // Joint PD toward q_des, evaluated once per tick.
-void Pd(QuadrupedStandPlant& p, const std::vector<double>& q_des, double kp, double kd, std::vector<double>& tau) {
+void Pd(QuadrupedPlant& p, const std::vector<double>& q_des, double kp, double kd, std::vector<double>& tau) {
   for (std::size_t i = 0; i < p.joint_count(); ++i) tau[i] = kp * (q_des[i] - p.q_rad(i)) - kd * p.dq_rad_s(i);
   p.SetJointTorques(tau.data(), tau.size());
 }

@@ -22,7 +22,7 @@
 #include "runtime/loop/trajectory_source.hpp"
 #include "runtime/transport/can/can_transport.hpp"
 #include "runtime/transport/can/socketcan.hpp"
-#include "sim_hil/quadruped_stand_hil.hpp"
+#include "sim_hil/quadruped_hil.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -52,7 +52,7 @@ struct ControllerOptions {
 // over the CAN transport, with the stand trajectory as its command source or none.
 struct Rig {
   const robot::RobotModel& model = test::QuadrupedRobot();
-  std::unique_ptr<sim::StandHil> hil;
+  std::unique_ptr<sim::QuadrupedHil> hil;
   std::unique_ptr<loop::TrajectorySource> source;
   std::unique_ptr<can::CanTransport> can;
   robot::RobotData data;
@@ -63,9 +63,9 @@ struct Rig {
   std::uint64_t ctl_allocations = 0;
   bool count_allocations = false;
 
-  Rig(sim::StandHilOptions h, const ControllerOptions& c) : data(robot::MakeRobotData(model)) {
+  Rig(sim::QuadrupedHilOptions h, const ControllerOptions& c) : data(robot::MakeRobotData(model)) {
     h.interfaces = {Vcan(0), Vcan(1)};
-    auto hr = sim::StandHil::Make(*model.body, *model.can, h);
+    auto hr = sim::QuadrupedHil::Make(model, h);
     REQUIRE_MESSAGE(hr.ok(), hr.error().message);
     hil = std::move(*hr);
     can::CanTransportOptions co;
@@ -285,9 +285,12 @@ TEST_CASE("stand HIL: a recorded run over vcan replays to bit-identical commands
 TEST_CASE(
     "stand HIL: a motor stops answering - the supervisor damps within 3 ticks and names the motor - e-stop "
     "after 500") {
-  sim::StandHilOptions h;
-  h.silent_motor = 2;  // LF_KFE
-  h.silent_from_tick = 1500;
+  sim::QuadrupedHilOptions h;
+  sim::HilFault silent;
+  silent.kind = sim::HilFaultKind::kSilentMotor;
+  silent.motor = 2;  // LF_KFE
+  silent.tick = 1500;
+  h.faults = {silent};
   ControllerOptions c;
   c.command_record_capacity = 12 * 2000;
   Rig rig(h, c);
@@ -339,9 +342,12 @@ TEST_CASE("stand HIL: 10% of frames dropped by the drivers - tracking degrades b
     rig.RunUntil(Phase::kHold, 3000);
     clean_rms = rig.source->rms_tracking_error_rad();
   }
-  sim::StandHilOptions h;
-  h.drop_probability = 0.10;
-  h.max_drop_burst = 2;  // see below
+  sim::QuadrupedHilOptions h;
+  sim::HilFault drop;
+  drop.kind = sim::HilFaultKind::kDropFrames;
+  drop.probability = 0.10;
+  drop.max_burst = 2;  // see below
+  h.faults = {drop};
   h.seed = 7;
   Rig rig(h, c);
   rig.RunUntil(Phase::kRun, 3000);

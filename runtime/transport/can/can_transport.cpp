@@ -13,6 +13,14 @@ Result<std::unique_ptr<CanTransport>> CanTransport::Open(const robot::RobotModel
   std::unique_ptr<CanTransport> t(new CanTransport());
   t->first_link_ = m.transports[static_cast<std::size_t>(index)].first_link;
   t->interfaces_ = o.interfaces;
+  if (o.network != nullptr) {
+    if (o.network->bus_count() != map.buses.size())
+      return MakeError(ErrorCode::kMismatch, "can: the in-process network has " +
+                                                 std::to_string(o.network->bus_count()) + " buses, the CAN map " +
+                                                 std::to_string(map.buses.size()));
+    t->interfaces_.clear();
+    for (std::size_t b = 0; b < map.buses.size(); ++b) t->interfaces_.push_back("mem:" + map.buses[b].name);
+  }
   if (t->interfaces_.empty())
     for (const auto& b : map.buses) t->interfaces_.push_back(b.interface);
   if (t->interfaces_.size() != map.buses.size())
@@ -30,9 +38,15 @@ Result<std::unique_ptr<CanTransport>> CanTransport::Open(const robot::RobotModel
     so.rx_ids = t->table_.rx_ids[b];
     so.receive_all = o.receive_all;
     so.rcvbuf_bytes = 1 << 20;
-    auto bus = SocketCanBus::Open(so);
-    if (!bus.ok()) return std::move(bus).error();
-    t->buses_.push_back(std::move(*bus));
+    if (o.network != nullptr) {
+      auto bus = o.network->Attach(b, so.rx_ids, so.fd, so.receive_all);
+      if (!bus.ok()) return std::move(bus).error();
+      t->buses_.push_back(std::move(*bus));
+    } else {
+      auto bus = SocketCanBus::Open(so);
+      if (!bus.ok()) return std::move(bus).error();
+      t->buses_.push_back(std::move(*bus));
+    }
     t->rx_buf_.emplace_back(256);
     t->tx_buf_.emplace_back();
     t->tx_buf_.back().reserve(64);

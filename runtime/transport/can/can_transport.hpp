@@ -1,5 +1,5 @@
 // The CAN transport of a robot with MIT motors and IMUs (its CAN map): one SocketCAN bus per map
-// bus, the controller's id -> codec table, and the robot's fields and commands.
+// bus (or an in-process bus: memory_bus.hpp), the controller's id -> codec table, and the robot's fields and commands.
 //
 //   Read   drains every bus (with lock-step, first waits, bounded, for the frames the peer owes
 //          this tick), decodes replies and IMU samples into the motors' and IMUs' fields and marks
@@ -21,6 +21,7 @@
 #include "runtime/robot/robot_data.hpp"
 #include "runtime/transport/can/can_table.hpp"
 #include "runtime/transport/can/candump_log.hpp"
+#include "runtime/transport/can/memory_bus.hpp"
 #include "runtime/transport/can/socketcan.hpp"
 
 namespace pbppo::can {
@@ -30,6 +31,9 @@ struct CanTransportOptions {
   bool receive_all = false;                 // no kernel filter: strays are seen and counted
   std::string candump_path;                 // every frame sent and received ("": none)
   std::size_t command_record_capacity = 0;  // commands kept for RecordedCommands() (0: none)
+  // In-process buses instead of SocketCAN (bus b of the map is the network's bus b; interfaces
+  // are then the network's bus names). The network must outlive the transport.
+  MemoryCanNetwork* network = nullptr;
 };
 
 // A command as the transport encoded it (before quantisation).
@@ -74,7 +78,7 @@ class CanTransport final : public robot::Transport {
   std::vector<std::string> interfaces_;
   CanCodecTable table_;
   CanRxData rx_;
-  std::vector<std::unique_ptr<SocketCanBus>> buses_;
+  std::vector<std::unique_ptr<CanBus>> buses_;
   std::unique_ptr<CandumpLogger> log_;
   std::vector<std::vector<CanFrame>> rx_buf_, tx_buf_;
   std::vector<std::uint32_t> sent_last_, imu_frames_, expect_;

@@ -12,8 +12,7 @@
 #include <vector>
 
 #include "runtime/core/result.hpp"
-#include "runtime/transport/can/bus_stats.hpp"
-#include "runtime/transport/can/can_frame.hpp"
+#include "runtime/transport/can/can_bus.hpp"
 
 namespace pbppo::can {
 
@@ -30,28 +29,26 @@ struct SocketCanOptions {
   int sndbuf_bytes = 0;               // SO_SNDBUF (0: kernel default)
 };
 
-class SocketCanBus {
+class SocketCanBus final : public CanBus {
  public:
   // Opens and configures the socket; errors name the interface and the call that failed.
   static Result<std::unique_ptr<SocketCanBus>> Open(const SocketCanOptions& options);
-  ~SocketCanBus();
+  ~SocketCanBus() override;
   SocketCanBus(const SocketCanBus&) = delete;
   SocketCanBus& operator=(const SocketCanBus&) = delete;
 
   // Drains the socket until EAGAIN or `out` is full. Data frames go to `out` (with the kernel's
   // receive time); error frames are decoded into stats() and also returned when keep_error_frames.
   // Returns the number of frames written to `out`.
-  std::size_t Receive(std::span<CanFrame> out) noexcept;
+  std::size_t Receive(std::span<CanFrame> out) noexcept override;
   // Lock-step helper: drains like Receive, waiting (poll) until at least `want` frames arrived,
   // `out` is full or `timeout_ns` of wall time has passed. Returns the number of frames written.
-  std::size_t ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept;
+  std::size_t ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept override;
   // Sends the frames with one sendmmsg per tx_batch; frames the kernel refuses (ENOBUFS, EAGAIN)
   // are counted as dropped, never retried. Returns the number accepted.
-  std::size_t Send(std::span<const CanFrame> frames) noexcept;
+  std::size_t Send(std::span<const CanFrame> frames) noexcept override;
 
-  const BusStats& stats() const noexcept { return stats_; }
-  BusStats& stats() noexcept { return stats_; }
-  const std::string& interface() const noexcept { return options_.interface; }
+  const std::string& interface() const noexcept override { return options_.interface; }
   int fd() const noexcept { return fd_; }
   bool keep_error_frames = false;
 
@@ -60,7 +57,6 @@ class SocketCanBus {
   struct Buffers;
   SocketCanOptions options_;
   int fd_ = -1;
-  BusStats stats_;
   std::unique_ptr<Buffers> buf_;
 };
 

@@ -49,7 +49,7 @@ std::string ModelsWith(const std::string& name, const std::string& file, const s
   const std::string dir = test::ScratchDir(name);
   std::filesystem::create_directories(dir + "/quadruped");
   for (const auto& f : std::filesystem::directory_iterator(test::SourcePath("models/quadruped")))
-    std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
+    if (f.is_regular_file()) std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
   std::string text = Read(dir + "/quadruped/" + file);
   for (std::size_t k = 0; k + 1 < edits.size(); k += 2) {
     const auto at = text.find(edits[k]);

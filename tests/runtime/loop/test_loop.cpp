@@ -127,13 +127,13 @@ TEST_CASE("loop: a silent motor - degraded, safe-stop naming it within 3 ticks, 
   const safety::SupervisorState& s = b.loop->supervisor();
   REQUIRE(s.mode == Mode::kSafeStop);
   CHECK(s.entered[2].cause == safety::Cause::kStaleSample);
-  CHECK(s.entered[2].subject == 2);
+  CHECK(s.entered[2].subject == static_cast<std::int32_t>(m.motors[2].stream));
   CHECK(s.entered_tick[2] <= from + 4);
   CHECK(safety::Describe(m.supervisor_model, s.entered[2]) == "safe-stop: stale sample: LF_KFE: age 3 ticks > 2");
   for (const auto& mo : m.motors) CHECK(b.t.command[mo.kp] == 0.0);
   while (s.mode != Mode::kEStop && b.tick < from + 600) b.Step();
   CHECK(s.entered[3].cause == safety::Cause::kLostPeer);
-  CHECK(s.entered[3].subject == 2);
+  CHECK(s.entered[3].subject == static_cast<std::int32_t>(m.motors[2].stream));
   for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
 }
 
@@ -161,13 +161,7 @@ std::string WalkingRobot() {
   io.close();
   std::ifstream in(dir + "/robot.yaml");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  text.replace(text.find("files:\n"), 7, "files:\n  io_layout: io_layout.yaml\n");
-  text.replace(text.find("transports:\n"), 12, "transports:\n  - {name: operator, kind: dds, messages: operator}\n");
-  text +=
-      "streams:\n  - name: operator\n    transport: operator\n    period_s: 0.02\n"
-      "    stale_after: {degraded: 5, safe_stop: 10, lost: 50}\n    invalid_safe_stop: 1\n    fields:\n"
-      "      - {name: command_vx, min: -2, max: 2}\n      - {name: command_vy, min: -1, max: 1}\n"
-      "      - {name: command_yaw_rate, min: -2, max: 2}\n";
+  // The copy keeps robot.yaml (its io_layout is this layout; its operator is velocity_command).
   std::ofstream(dir + "/robot.yaml") << text;
   return dir + "/robot.yaml";
 }
@@ -190,7 +184,7 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
   // A body rolled by 0.2 rad about x: gravity in the base frame (0, -sin 0.2, -cos 0.2).
   b.quat[0] = std::cos(0.1);
   b.quat[1] = std::sin(0.1);
-  const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("operator"));
+  const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("velocity_command"));
   const double command[3] = {0.5, -0.25, 0.75};
   b.loop->Arm();
   for (int k = 0; k < 1400 && b.loop->phase() != Phase::kRun; ++k) {

@@ -53,8 +53,8 @@ TEST_CASE("robot model: loading a robot reads each file it names exactly once") 
       ++files;
     }
     // robot.yaml, and for the AUV the IO layout, plant, DDS profile and three layouts; for the
-    // quadruped the description, its URDF, the CAN map and the stand trajectory.
-    CHECK(files == (m.name == "auv" ? 7u : 5u));
+    // quadruped the description, its URDF, the IO layout, the CAN map and the stand trajectory.
+    CHECK(files == (m.name == "auv" ? 7u : 6u));
     CHECK(m.hash != 0);
   }
 }
@@ -95,7 +95,9 @@ TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the 
   const RobotModel m = Load("models/quadruped/robot.yaml");
   CHECK(m.policy_period_ticks == 20);
   REQUIRE(m.motors.size() == 12);
-  CHECK(m.streams.size() == 13);
+  CHECK(m.streams.size() == 14);  // the operator's velocity command, 12 motors, the IMU
+  CHECK(m.StreamIndex("velocity_command") == 0);
+  CHECK_FALSE(m.streams[0].required);
   CHECK(m.commands.size() == 60);
   const MotorSpec& lf = m.motors[2];
   CHECK(lf.joint == "LF_KFE");
@@ -112,9 +114,11 @@ TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the 
   CHECK(motor.stale_degraded_ticks == 1);
   CHECK(motor.stale_safe_stop_ticks == 2);
   CHECK(motor.lost_ticks == 499);
-  CHECK(m.StreamIndex("base_imu") == 12);
+  CHECK(m.StreamIndex("base_imu") == 13);
   CHECK(m.fields[lf.q_field].stream == lf.stream);
-  CHECK(m.fields[static_cast<std::size_t>(m.FieldIndex("base_imu_qw"))].stream == 12);
+  CHECK(m.fields[static_cast<std::size_t>(m.FieldIndex("base_imu_qw"))].stream == 13);
+  CHECK(m.motors[2].policy_kp == 20.0);
+  CHECK(m.motors[2].policy_kd == 0.5);
   CHECK(m.FieldIndex("base_imu_gyro_z") >= 0);
   CHECK(m.phases.enable_motors);
   CHECK(m.phases.arming_timeout_ticks == 1000);

@@ -1,0 +1,251 @@
+#include "sim_hil/quadruped_main.hpp"
+
+#include <time.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "report/plots.hpp"
+#include "runtime/loop/schedule.hpp"
+#include "sim_hil/quadruped_rig.hpp"
+#include "sim_hil/quadruped_scenario.hpp"
+
+namespace pbppo::sim {
+namespace {
+
+struct Options {
+  std::string robot = "models/quadruped/robot.yaml", scenario, can, policy, commands, trace, report, plot;
+  bool stand = false, lockstep = false, in_process = false, skip_self_test = false;
+  double duration_s = 0, settle_s = 1.0;
+  std::uint64_t seed = 1;
+};
+
+std::vector<std::string> Split(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
+  return out;
+}
+
+int Fail(const std::string& msg, int rc) {
+  std::fprintf(stderr, "pbppo-hil quadruped: %s\n", msg.c_str());
+  return rc;
+}
+
+const char* kNames[3] = {"vx", "vy", "yaw rate"};
+
+void PrintReport(const RigReport& r) {
+  std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
+              "|e| vx", "|e| vy", "|e| wz");
+  for (const PhaseTracking& p : r.phases)
+    std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %8.3f %8.3f %8.3f\n", p.name.c_str(), p.start_s, p.end_s,
+                p.command[0], p.command[1], p.command[2], p.mean_abs_error[0], p.mean_abs_error[1],
+                p.mean_abs_error[2]);
+  std::printf("walked %.2f m; %s\n", r.distance_m,
+              r.fell ? ("FELL at " + std::to_string(r.fell_at_s) + " s").c_str() : "no fall");
+}
+
+Status WriteReportJson(const RigReport& r, double rtf, const std::string& path) {
+  const std::string part = path + ".part";
+  {
+    std::ofstream f(part);
+    f << "{\n  \"fell\": " << (r.fell ? "true" : "false") << ",\n  \"fell_at_s\": " << r.fell_at_s
+      << ",\n  \"distance_m\": " << r.distance_m << ",\n  \"real_time_factor\": " << rtf << ",\n  \"phases\": [\n";
+    for (std::size_t i = 0; i < r.phases.size(); ++i) {
+      const PhaseTracking& p = r.phases[i];
+      f << "    {\"name\": \"" << p.name << "\", \"start_s\": " << p.start_s << ", \"end_s\": " << p.end_s
+        << ", \"command\": [" << p.command[0] << ", " << p.command[1] << ", " << p.command[2]
+        << "], \"mean_abs_error\": [" << p.mean_abs_error[0] << ", " << p.mean_abs_error[1] << ", "
+        << p.mean_abs_error[2] << "], \"mean_measured\": [" << p.mean_measured[0] << ", " << p.mean_measured[1] << ", "
+        << p.mean_measured[2] << "]}" << (i + 1 < r.phases.size() ? "," : "") << "\n";
+    }
+    f << "  ]\n}\n";
+    if (!f) return MakeError(ErrorCode::kIo, "--report: cannot write '" + part + "'");
+  }
+  if (std::rename(part.c_str(), path.c_str()) != 0)
+    return MakeError(ErrorCode::kIo, "--report: cannot rename '" + part + "'");
+  return {};
+}
+
+Status Plot(const QuadrupedRig& rig, const std::string& png) {
+  report::TimeSeriesPlot ts;
+  ts.title = "quadruped HIL: commanded (dashed) and measured velocity";
+  const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
+  for (int k = 0; k < 3; ++k) {
+    report::TimeSeriesPlot::Panel p;
+    p.ylabel = labels[k];
+    report::TimeSeriesPlot::Series cmd, meas;
+    cmd.title = std::string("command ") + kNames[k];
+    cmd.dashed = true;
+    meas.title = std::string("measured ") + kNames[k];
+    for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
+      const RigSample& s = rig.trace()[i];
+      const double c[3] = {s.cmd_vx, s.cmd_vy, s.cmd_yaw_rate}, m[3] = {s.vx_mps, s.vy_mps, s.yaw_rate_radps};
+      cmd.x.push_back(s.t_s);
+      cmd.y.push_back(c[k]);
+      meas.x.push_back(s.t_s);
+      meas.y.push_back(m[k]);
+    }
+    p.series = {cmd, meas};
+    ts.panels.push_back(p);
+  }
+  if (auto st = report::PlotTimeSeries(ts, png); !st) return st;
+  report::MapPlot map;
+  map.title = "quadruped HIL: base path (top view)";
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  report::MapPlot::Path path;
+  for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
+    const RigSample& s = rig.trace()[i];
+    path.xy.push_back({s.x_m, s.y_m});
+    x0 = std::min<double>(x0, s.x_m);
+    x1 = std::max<double>(x1, s.x_m);
+    y0 = std::min<double>(y0, s.y_m);
+    y1 = std::max<double>(y1, s.y_m);
+  }
+  map.paths.push_back(path);
+  map.arena = {x0 - 0.5, x1 + 0.5, y0 - 0.5, y1 + 0.5};
+  std::string base = png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
+  return report::PlotMap(map, base + "_path.png");
+}
+
+int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOptions hil) {
+  if (o.commands.empty()) return Fail("--in-process needs --commands SCHEDULE", 2);
+  auto schedule = loop::LoadSchedule(o.commands, model);
+  if (!schedule) return Fail(schedule.error().message, 2);
+  RigOptions ro;
+  ro.policy = o.policy;
+  ro.self_test = !o.skip_self_test;
+  auto rig = QuadrupedRig::Make(model, std::move(hil), std::move(*schedule), ro);
+  if (!rig) return Fail(rig.error().message, 2);
+  std::printf("pbppo-hil quadruped: controller and HIL in one process, lock-step, %s, %s, schedule %s (%.1f s)\n",
+              o.scenario.empty() ? "flat ground" : o.scenario.c_str(),
+              o.policy.empty() ? "no policy" : o.policy.c_str(), o.commands.c_str(),
+              (*rig)->operator_source().schedule().duration_s());
+  std::fflush(stdout);
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool ok = (*rig)->RunSchedule();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
+  const RigReport rep = (*rig)->Report(o.settle_s);
+  PrintReport(rep);
+  const safety::SupervisorState& sup = (*rig)->loop().supervisor();
+  std::printf("controller: phase %s, mode %s; %llu IMU samples, %llu commands per motor\n",
+              loop::ToString((*rig)->loop().phase()), safety::ToString(sup.mode),
+              static_cast<unsigned long long>((*rig)->hil().imu_samples()),
+              static_cast<unsigned long long>((*rig)->can().commands_sent(0)));
+  std::printf("%.2f s simulated in %.2f s wall: real-time factor %.2f (lock-step, Simbody RK2 4 x 0.25 ms per tick)\n",
+              sim_s, wall, sim_s / wall);
+  if (!o.trace.empty())
+    if (auto st = WriteRigTrace((*rig)->trace(), o.trace); !st) return Fail(st.error().message, 1);
+  if (!o.report.empty())
+    if (auto st = WriteReportJson(rep, sim_s / wall, o.report); !st) return Fail(st.error().message, 1);
+  if (!o.plot.empty())
+    if (auto st = Plot(**rig, o.plot); !st)
+      std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
+  return ok && !rep.fell ? 0 : 1;
+}
+
+}  // namespace
+
+int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
+  CLI::App app{"pbppo-hil quadruped: the quadruped's Simbody plant behind its emulated CAN devices"};
+  Options o;
+  app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)");
+  app.add_option("--scenario", o.scenario, "Scenario file (terrain, start, pushes, faults); default: flat ground");
+  app.add_flag("--stand", o.stand, "The base welded to a stand (no contact)");
+  app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
+  app.add_flag("--lockstep", o.lockstep, "Each tick waits for the controller's frames");
+  app.add_option("--duration", o.duration_s, "Stop after this much simulated time (s)")->check(CLI::Range(0.0, 1e7));
+  app.add_option("--seed", o.seed, "Seed of the emulated drivers' frame drops");
+  app.add_flag("--in-process", o.in_process, "Run the controller in this process too (lock-step, no SocketCAN)");
+  app.add_option("--policy", o.policy, "--in-process: the policy blob");
+  app.add_option("--commands", o.commands, "--in-process: the velocity command schedule");
+  app.add_flag("--skip-self-test", o.skip_self_test, "--in-process: arm without the blob's golden vectors");
+  app.add_option("--trace", o.trace, "--in-process: write the trace (CSV, every 10 ms)");
+  app.add_option("--report", o.report, "--in-process: write per-phase tracking (JSON)");
+  app.add_option("--plot", o.plot, "--in-process: velocities PNG (and <name>_path.png, the base path)");
+  app.add_option("--settle-s", o.settle_s, "--in-process: tracking is measured this long after each phase starts")
+      ->check(CLI::Range(0.0, 100.0));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (o.stand && !o.scenario.empty()) return Fail("--stand and --scenario exclude each other", 2);
+  auto model = robot::LoadRobotModel(o.robot);
+  if (!model) return Fail(model.error().message, 2);
+  QuadrupedHilOptions hil;
+  if (!o.scenario.empty()) {
+    auto sc = LoadQuadrupedScenario(o.scenario, *model, model->tick_period_s);
+    if (!sc) return Fail(sc.error().message, 2);
+    hil = sc->hil;
+  } else if (!o.stand) {
+    hil.plant.mount = Mount::kGround;
+  }
+  hil.seed = o.seed;
+  if (o.in_process) return InProcess(o, *model, std::move(hil));
+  hil.interfaces = Split(o.can);
+  auto h = QuadrupedHil::Make(*model, hil);
+  if (!h) return Fail(h.error().message, 2);
+  QuadrupedHil& sim = **h;
+  std::printf("pbppo-hil: quadruped %s, %zu joints, %s on %s, %s\n",
+              hil.plant.mount == Mount::kStand ? "on a stand" : "on the ground", sim.motor_count(), o.robot.c_str(),
+              sim.interface(0).c_str(), o.lockstep ? "lock-step" : "free-running at 1 kHz");
+  std::fflush(stdout);
+  std::uint64_t overruns = 0;
+  timespec next{};
+  clock_gettime(CLOCK_MONOTONIC, &next);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto limit = o.duration_s > 0 ? static_cast<std::uint64_t>(o.duration_s / model->tick_period_s) : UINT64_MAX;
+  const auto period_ns = static_cast<long>(model->tick_period_s * 1e9);
+  bool ok = true;
+  while (!stop.load() && sim.tick() < limit) {
+    if (o.lockstep) {
+      ok = sim.Tick(sim.frames_per_tick().data(), 100'000'000);
+    } else {
+      ok = sim.Tick(nullptr, 0);
+      next.tv_nsec += period_ns;
+      while (next.tv_nsec >= 1'000'000'000) {
+        next.tv_nsec -= 1'000'000'000;
+        ++next.tv_sec;
+      }
+      timespec now{};
+      clock_gettime(CLOCK_MONOTONIC, &now);
+      if (now.tv_sec > next.tv_sec || (now.tv_sec == next.tv_sec && now.tv_nsec > next.tv_nsec)) ++overruns;
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    }
+    if (!ok) break;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double sim_s = static_cast<double>(sim.tick()) * model->tick_period_s;
+  std::printf("pbppo-hil: %.3f s simulated in %.3f s wall (%.3f simulated s per wall s), %llu overruns%s\n", sim_s,
+              wall, sim_s / wall, static_cast<unsigned long long>(overruns), ok ? "" : ", PLANT FAILED");
+  const robot::CanMap& map = *model->can;
+  for (std::size_t m = 0; m < sim.motor_count(); ++m) {
+    const auto& s = sim.motor(m);
+    std::printf("  %-7s frames %llu replies %llu dropped %llu watchdog %llu motor_mode %d q %.4f\n",
+                map.motors[m].joint.c_str(), static_cast<unsigned long long>(s.frames),
+                static_cast<unsigned long long>(s.replies), static_cast<unsigned long long>(s.dropped),
+                static_cast<unsigned long long>(s.timeouts), s.motor_mode ? 1 : 0,
+                sim.plant().q_rad(sim.joint_of_motor(m)));
+  }
+  for (std::size_t b = 0; b < sim.bus_count(); ++b) {
+    const auto& s = sim.bus_stats(b);
+    std::printf("  bus %s: rx %llu tx %llu unknown ids %llu wrong lengths %llu error frames %llu\n",
+                sim.interface(b).c_str(), static_cast<unsigned long long>(s.rx_frames),
+                static_cast<unsigned long long>(s.tx_frames), static_cast<unsigned long long>(s.unknown_ids),
+                static_cast<unsigned long long>(s.wrong_lengths), static_cast<unsigned long long>(s.error_frames));
+  }
+  if (hil.plant.mount == Mount::kGround) {
+    const BaseState& b = sim.plant().base();
+    std::printf("  base at (%.3f, %.3f, %.3f) m\n", b.position_m[0], b.position_m[1], b.position_m[2]);
+  }
+  return ok ? 0 : 1;
+}
+
+}  // namespace pbppo::sim

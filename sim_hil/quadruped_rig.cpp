@@ -1,0 +1,177 @@
+#include "sim_hil/quadruped_rig.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+namespace pbppo::sim {
+
+QuadrupedRig::~QuadrupedRig() = default;
+
+Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel& model, QuadrupedHilOptions hil,
+                                                         loop::Schedule schedule, const RigOptions& o) {
+  if (!model.can) return MakeError(ErrorCode::kMismatch, model.path + ": the rig needs a CAN map");
+  std::unique_ptr<QuadrupedRig> r(new QuadrupedRig(model));
+  r->memory_ = o.interfaces.empty();
+  r->wait_ns_ = r->memory_ ? 0 : o.wait_ns;
+  if (r->memory_) {
+    std::vector<std::string> names;
+    for (const auto& b : model.can->buses) names.push_back(b.name);
+    r->network_ = std::make_unique<can::MemoryCanNetwork>(names);
+    hil.network = r->network_.get();
+    hil.interfaces.clear();
+  } else {
+    hil.interfaces = o.interfaces;
+  }
+  auto h = QuadrupedHil::Make(model, hil);
+  if (!h) return std::move(h).error();
+  r->hil_ = std::move(*h);
+  can::CanTransportOptions co;
+  co.interfaces = o.interfaces;
+  co.network = r->network_.get();
+  co.command_record_capacity = o.command_record_capacity;
+  auto c = can::CanTransport::Open(model, "can", co);
+  if (!c) return std::move(c).error();
+  r->can_ = std::move(*c);
+  r->can_->SetLockStep(r->wait_ns_);
+  const std::string stream = schedule.stream;
+  auto s = loop::ScheduleTransport::Create(model, std::move(schedule));
+  if (!s) return std::move(s).error();
+  r->schedule_ = std::move(*s);
+  auto src = loop::LoadSource(model, {o.policy, "", o.self_test});
+  if (!src) return std::move(src).error();
+  r->source_ = std::move(*src);
+  r->data_ = robot::MakeRobotData(model);
+  r->loop_ = loop::MakeLoopData(model, r->source_.source.get());
+  r->transports_[0] = r->can_.get();
+  r->transports_[1] = r->schedule_.get();
+  const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
+  for (int k = 0; k < 3; ++k) r->cmd_field_[k] = model.FieldIndex(names[k]);
+  (void)stream;
+  return r;
+}
+
+bool QuadrupedRig::Tick() noexcept {
+  std::uint32_t from_hil[8] = {};
+  for (std::size_t b = 0; b < hil_->bus_count() && b < 8; ++b) from_hil[b] = hil_->sent_last_tick(b);
+  can_->Expect({from_hil, hil_->bus_count()});
+  rt::TickTiming timing;
+  timing.tick = tick_;
+  status_ = loop::Tick(model_, data_, *loop_, transports_, timing);
+  std::uint32_t from_ctl[8] = {};
+  for (std::size_t b = 0; b < can_->bus_count() && b < 8; ++b) from_ctl[b] = can_->sent_last_tick(b);
+  const bool ok = hil_->Tick(from_ctl, wait_ns_);
+  // The trace.
+  const QuadrupedPlant& p = hil_->plant();
+  const BaseState& b = p.base();
+  const double w = b.quat_wxyz[0], x = b.quat_wxyz[1], y = b.quat_wxyz[2], z = b.quat_wxyz[3];
+  // Rows of R (base to world): world = R base; base = R^T world.
+  const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - w * z);
+  const double r10 = 2 * (x * y + w * z), r11 = 1 - 2 * (x * x + z * z);
+  const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
+  const double* v = b.velocity_mps;
+  RigSample t;
+  t.t_s = static_cast<float>(static_cast<double>(tick_ + 1) * model_.tick_period_s);
+  t.x_m = static_cast<float>(b.position_m[0]);
+  t.y_m = static_cast<float>(b.position_m[1]);
+  t.z_m = static_cast<float>(b.position_m[2] - p.TerrainHeightAt(b.position_m[0], b.position_m[1]));
+  t.yaw_rad = static_cast<float>(std::atan2(r10, r00));
+  t.vx_mps = static_cast<float>(r00 * v[0] + r10 * v[1] + r20 * v[2]);
+  t.vy_mps = static_cast<float>(r01 * v[0] + r11 * v[1] + r21 * v[2]);
+  t.yaw_rate_radps = static_cast<float>(b.angular_radps[2]);
+  t.tilt_rad = static_cast<float>(std::acos(std::clamp(r22, -1.0, 1.0)));
+  for (int k = 0; k < 3; ++k) {
+    const double c =
+        cmd_field_[k] >= 0 && data_.streams[model_.fields[static_cast<std::size_t>(cmd_field_[k])].stream].seen
+            ? data_.fields[static_cast<std::size_t>(cmd_field_[k])]
+            : 0.0;
+    (k == 0 ? t.cmd_vx : k == 1 ? t.cmd_vy : t.cmd_yaw_rate) = static_cast<float>(c);
+  }
+  t.schedule_phase =
+      static_cast<std::int8_t>(schedule_->schedule().PhaseAt(static_cast<double>(tick_) * model_.tick_period_s));
+  t.loop_phase = static_cast<std::uint8_t>(loop_->phase());
+  t.mode = static_cast<std::uint8_t>(loop_->supervisor().mode);
+  t.feet = static_cast<std::uint8_t>(p.foot_contacts());
+  t.body_contact = p.body_contact();
+  trace_.push_back(t);  // the harness's (RunSchedule reserves it); the controller's tick is above
+  ++tick_;
+  return ok;
+}
+
+bool QuadrupedRig::RunSchedule(double extra_s) {
+  const auto total =
+      static_cast<std::uint64_t>(std::llround((schedule_->schedule().duration_s() + extra_s) / model_.tick_period_s));
+  trace_.reserve(trace_.size() + total);
+  loop_->Arm();
+  while (tick_ < total) {
+    if (!Tick()) return false;
+    if (status_ != loop::TickStatus::kRunning) break;
+  }
+  return true;
+}
+
+RigReport QuadrupedRig::Report(double settle_s) const {
+  RigReport rep;
+  const loop::Schedule& s = schedule_->schedule();
+  for (const loop::SchedulePhase& ph : s.phases) {
+    PhaseTracking t;
+    t.name = ph.name;
+    t.start_s = ph.start_s;
+    t.end_s = ph.start_s + ph.duration_s;
+    rep.phases.push_back(t);
+  }
+  for (const RigSample& x : trace_) {
+    if (!rep.fell && (x.body_contact || x.tilt_rad > 1.047f)) {
+      rep.fell = true;
+      rep.fell_at_s = static_cast<double>(x.t_s);
+    }
+    if (x.schedule_phase < 0) continue;
+    PhaseTracking& t = rep.phases[static_cast<std::size_t>(x.schedule_phase)];
+    if (static_cast<double>(x.t_s) < t.start_s + settle_s) continue;
+    const double cmd[3] = {x.cmd_vx, x.cmd_vy, x.cmd_yaw_rate}, meas[3] = {x.vx_mps, x.vy_mps, x.yaw_rate_radps};
+    for (int k = 0; k < 3; ++k) {
+      t.command[k] = cmd[k];
+      t.mean_abs_error[k] += std::fabs(cmd[k] - meas[k]);
+      t.mean_measured[k] += meas[k];
+    }
+    ++t.samples;
+  }
+  for (PhaseTracking& t : rep.phases) {
+    for (int k = 0; k < 3 && t.samples > 0; ++k) {
+      t.mean_abs_error[k] /= static_cast<double>(t.samples);
+      t.mean_measured[k] /= static_cast<double>(t.samples);
+    }
+    rep.max_planar_error = std::max({rep.max_planar_error, t.mean_abs_error[0], t.mean_abs_error[1]});
+  }
+  for (std::size_t i = 1; i < trace_.size(); ++i)
+    rep.distance_m +=
+        static_cast<double>(std::hypot(trace_[i].x_m - trace_[i - 1].x_m, trace_[i].y_m - trace_[i - 1].y_m));
+  return rep;
+}
+
+Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& path, std::uint32_t every) {
+  const std::string part = path + ".part";
+  {
+    std::ofstream f(part);
+    f << "t_s,x_m,y_m,z_m,yaw_rad,vx_mps,vy_mps,yaw_rate_radps,cmd_vx,cmd_vy,cmd_yaw_rate,tilt_rad,schedule_phase,"
+         "loop_phase,mode,feet,body_contact\n";
+    char line[320];
+    for (std::size_t i = 0; i < trace.size(); i += std::max<std::uint32_t>(every, 1)) {
+      const RigSample& s = trace[i];
+      std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%d,%d,%d,%d,%d\n",
+                    static_cast<double>(s.t_s), static_cast<double>(s.x_m), static_cast<double>(s.y_m),
+                    static_cast<double>(s.z_m), static_cast<double>(s.yaw_rad), static_cast<double>(s.vx_mps),
+                    static_cast<double>(s.vy_mps), static_cast<double>(s.yaw_rate_radps), static_cast<double>(s.cmd_vx),
+                    static_cast<double>(s.cmd_vy), static_cast<double>(s.cmd_yaw_rate), static_cast<double>(s.tilt_rad),
+                    s.schedule_phase, s.loop_phase, s.mode, s.feet, s.body_contact ? 1 : 0);
+      f << line;
+    }
+    if (!f) return MakeError(ErrorCode::kIo, "trace: cannot write '" + part + "'");
+  }
+  if (std::rename(part.c_str(), path.c_str()) != 0)
+    return MakeError(ErrorCode::kIo, "trace: cannot rename '" + part + "' to '" + path + "'");
+  return {};
+}
+
+}  // namespace pbppo::sim

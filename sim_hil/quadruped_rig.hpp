@@ -1,0 +1,112 @@
+// The quadruped's controller and its HIL ticked in one thread, in lock-step: each tick the
+// controller (runtime/loop over the CAN transport, its operator stream from a schedule) reads
+// what the HIL sent last tick, then the HIL reads what the controller just sent and the plant
+// advances 1 ms. The buses are the in-process network (sim-to-sim on every build, no kernel
+// needed) or SocketCAN interfaces (vcan in the VM). The same frames, codecs, quantisation and
+// watchdogs run either way.
+//
+// Every tick is traced (base pose and velocity, the command in force, the loop's phase and mode)
+// so that tracking per schedule phase, falls and the commands on the bus can be judged.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "runtime/core/result.hpp"
+#include "runtime/loop/loop.hpp"
+#include "runtime/loop/schedule.hpp"
+#include "runtime/loop/source_files.hpp"
+#include "runtime/robot/robot_model.hpp"
+#include "runtime/transport/can/can_transport.hpp"
+#include "runtime/transport/can/memory_bus.hpp"
+#include "sim_hil/quadruped_hil.hpp"
+
+namespace pbppo::sim {
+
+struct RigOptions {
+  std::string policy;                       // blob ("" : hold the default pose)
+  bool self_test = true;                    // the blob's golden vectors at arming
+  std::vector<std::string> interfaces;      // SocketCAN interfaces; empty: the in-process network
+  std::int64_t wait_ns = 2'000'000'000;     // SocketCAN lock-step: the longest wait for a tick's frames
+  std::size_t command_record_capacity = 0;  // commands kept by the CAN transport (tests)
+};
+
+// One tick of the trace.
+struct RigSample {
+  float t_s = 0;
+  float x_m = 0, y_m = 0, z_m = 0, yaw_rad = 0;      // base, world
+  float vx_mps = 0, vy_mps = 0, yaw_rate_radps = 0;  // base frame
+  float cmd_vx = 0, cmd_vy = 0, cmd_yaw_rate = 0;    // the command the controller holds
+  float tilt_rad = 0;                                // from upright
+  std::int8_t schedule_phase = -1;                   // -1: after the schedule
+  std::uint8_t loop_phase = 0, mode = 0;
+  std::uint8_t feet = 0;  // contact bits
+  bool body_contact = false;
+};
+
+struct PhaseTracking {
+  std::string name;
+  double start_s = 0, end_s = 0;
+  double command[3] = {0, 0, 0};         // vx, vy, yaw rate
+  double mean_abs_error[3] = {0, 0, 0};  // after the settling time
+  double mean_measured[3] = {0, 0, 0};
+  std::uint64_t samples = 0;
+};
+
+struct RigReport {
+  std::vector<PhaseTracking> phases;
+  bool fell = false;  // a body contact or a tilt beyond 60 degrees
+  double fell_at_s = -1;
+  double distance_m = 0;
+  double max_planar_error = 0;  // the largest per-phase mean |error| of vx, vy
+};
+
+class QuadrupedRig {
+ public:
+  static Result<std::unique_ptr<QuadrupedRig>> Make(const robot::RobotModel& model, QuadrupedHilOptions hil,
+                                                    loop::Schedule schedule, const RigOptions& options);
+  ~QuadrupedRig();
+
+  // One controller tick, then one HIL tick. False once the plant failed.
+  bool Tick() noexcept;
+  // Arms, then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
+  bool RunSchedule(double extra_s = 0);
+  // Per schedule phase: mean |velocity error| after `settle_s` of each phase.
+  RigReport Report(double settle_s) const;
+
+  const robot::RobotModel& model() const noexcept { return model_; }
+  QuadrupedHil& hil() noexcept { return *hil_; }
+  can::CanTransport& can() noexcept { return *can_; }
+  loop::ScheduleTransport& operator_source() noexcept { return *schedule_; }
+  loop::LoopData& loop() noexcept { return *loop_; }
+  const robot::RobotData& data() const noexcept { return data_; }
+  can::MemoryCanNetwork* network() noexcept { return network_.get(); }
+  const std::vector<RigSample>& trace() const noexcept { return trace_; }
+  std::uint64_t ticks() const noexcept { return tick_; }
+  loop::TickStatus status() const noexcept { return status_; }
+
+ private:
+  explicit QuadrupedRig(const robot::RobotModel& model) : model_(model) {}
+  const robot::RobotModel& model_;
+  std::unique_ptr<can::MemoryCanNetwork> network_;
+  std::unique_ptr<QuadrupedHil> hil_;
+  std::unique_ptr<can::CanTransport> can_;
+  std::unique_ptr<loop::ScheduleTransport> schedule_;
+  loop::LoadedSource source_;
+  robot::RobotData data_;
+  std::unique_ptr<loop::LoopData> loop_;
+  robot::Transport* transports_[2] = {};
+  std::vector<RigSample> trace_;
+  std::int32_t cmd_field_[3] = {-1, -1, -1};
+  std::int64_t wait_ns_ = 0;
+  bool memory_ = true;
+  std::uint64_t tick_ = 0;
+  loop::TickStatus status_ = loop::TickStatus::kRunning;
+};
+
+// Writes the trace as CSV (one row per `every` ticks); errors name the path.
+Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& path, std::uint32_t every = 10);
+
+}  // namespace pbppo::sim

@@ -1,0 +1,257 @@
+// The quadruped walking in the Simbody HIL, natively: the controller (runtime/loop, the shipped
+// walking policy, the demo schedule as its operator) and the HIL (plant on the ground, emulated
+// MIT drivers and IMU) ticked in lock-step in one process over the in-process CAN network: the
+// same frames, codecs and supervisor as over vcan. Sim-to-sim (MuJoCo-trained, Simbody-tested) on
+// every run; then each device fault, injected while the robot walks.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "runtime/loop/schedule.hpp"
+#include "sim_hil/quadruped_rig.hpp"
+#include "sim_hil/quadruped_scenario.hpp"
+#include "tests/support/robot_models.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+using safety::Mode;
+
+namespace {
+
+const std::string kPolicy = "policies/frozen/quadruped_walk/flat.blob";
+
+loop::Schedule DemoSchedule(const robot::RobotModel& m) {
+  auto s = loop::LoadSchedule(test::SourcePath("models/quadruped/schedules/demo.yaml"), m);
+  REQUIRE_MESSAGE(s.ok(), s.error().message);
+  return *s;
+}
+
+sim::QuadrupedHilOptions Flat(const robot::RobotModel& m) {
+  auto sc = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
+  REQUIRE_MESSAGE(sc.ok(), sc.error().message);
+  return sc->hil;
+}
+
+std::unique_ptr<sim::QuadrupedRig> MakeRig(sim::QuadrupedHilOptions hil, std::size_t record = 0) {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  sim::RigOptions o;
+  o.policy = test::SourcePath(kPolicy);
+  o.command_record_capacity = record;
+  auto r = sim::QuadrupedRig::Make(m, std::move(hil), DemoSchedule(m), o);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  return std::move(*r);
+}
+
+// Every command the CAN transport encoded is finite and inside the model's limits.
+void CheckCommandsWithinLimits(sim::QuadrupedRig& rig) {
+  const robot::RobotModel& m = rig.model();
+  std::uint64_t bad = 0;
+  for (const can::CommandRecord& c : rig.can().RecordedCommands()) {
+    const robot::MotorSpec& mo = m.motors[c.motor];
+    const double v[5] = {c.q_rad, c.dq_rad_s, c.kp, c.kd, c.tau_nm};
+    const std::uint32_t k[5] = {mo.q, mo.dq, mo.kp, mo.kd, mo.tau};
+    for (int i = 0; i < 5; ++i)
+      if (!(v[i] >= m.commands[k[i]].min - 1e-9 && v[i] <= m.commands[k[i]].max + 1e-9)) ++bad;
+  }
+  CHECK(rig.can().RecordedCommands().size() > 0);
+  CHECK(bad == 0);
+}
+
+}  // namespace
+
+TEST_CASE("quadruped HIL: the shipped walking policy follows the demo schedule in Simbody - <= 0.2 m/s, no fall") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto rig = MakeRig(Flat(m), 12 * 20000);
+  REQUIRE(rig->RunSchedule());
+  const sim::RigReport r = rig->Report(1.0);
+  for (const auto& p : r.phases) {
+    std::printf("HIL walk (Simbody, in-process lock-step): %-9s cmd (%.2f, %.2f, %.2f) |e| vx %.3f vy %.3f wz %.3f\n",
+                p.name.c_str(), p.command[0], p.command[1], p.command[2], p.mean_abs_error[0], p.mean_abs_error[1],
+                p.mean_abs_error[2]);
+    CAPTURE(p.name);
+    CHECK(p.samples > 0);
+    CHECK(p.mean_abs_error[0] <= 0.2);
+    CHECK(p.mean_abs_error[1] <= 0.2);
+  }
+  CHECK_FALSE(r.fell);
+  // It walked: forward, then sideways.
+  CHECK(r.phases[1].mean_measured[0] > 0.3);
+  CHECK(r.phases[2].mean_measured[1] > 0.15);
+  CHECK(rig->loop().phase() == loop::Phase::kRun);
+  CHECK(rig->loop().supervisor().mode == Mode::kNominal);
+  CheckCommandsWithinLimits(*rig);
+}
+
+TEST_CASE("quadruped HIL: lock-step runs are reproducible bit for bit") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto a = MakeRig(Flat(m)), b = MakeRig(Flat(m));
+  a->loop().Arm();
+  b->loop().Arm();
+  for (int k = 0; k < 5000; ++k) {
+    REQUIRE(a->Tick());
+    REQUIRE(b->Tick());
+  }
+  const auto& ta = a->trace();
+  const auto& tb = b->trace();
+  REQUIRE(ta.size() == tb.size());
+  std::size_t diff = 0;
+  for (std::size_t i = 0; i < ta.size(); ++i)
+    if (ta[i].x_m != tb[i].x_m || ta[i].vx_mps != tb[i].vx_mps || ta[i].yaw_rad != tb[i].yaw_rad) ++diff;
+  CHECK(diff == 0);
+  CHECK(ta.back().vx_mps != 0.0f);
+}
+
+namespace {
+
+// Walks forward until 5 s, injects the fault (through the HIL's scenario events, or by killing the
+// operator), and returns the tick the safe state was reached (mode safe-stop or e-stop).
+struct FaultRun {
+  std::unique_ptr<sim::QuadrupedRig> rig;
+  std::uint64_t fault_tick = 5000, safe_tick = 0;
+};
+
+FaultRun RunFault(sim::HilFault fault, bool kill_operator, std::uint64_t until_tick) {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  sim::QuadrupedHilOptions h = Flat(m);
+  FaultRun f;
+  fault.tick = f.fault_tick;
+  if (!kill_operator) h.faults = {fault};
+  f.rig = MakeRig(h, 12 * 12000);
+  f.rig->loop().Arm();
+  while (f.rig->ticks() < until_tick) {
+    if (kill_operator && f.rig->ticks() == f.fault_tick) f.rig->operator_source().Kill();
+    REQUIRE(f.rig->Tick());
+    const Mode mode = f.rig->loop().supervisor().mode;
+    if (f.safe_tick == 0 && (mode == Mode::kSafeStop || mode == Mode::kEStop)) f.safe_tick = f.rig->ticks() - 1;
+  }
+  return f;
+}
+
+std::string Reason(const sim::QuadrupedRig& rig, Mode mode) {
+  return safety::Describe(
+      const_cast<sim::QuadrupedRig&>(rig).model().supervisor_model,
+      const_cast<sim::QuadrupedRig&>(rig).loop().supervisor().entered[static_cast<std::size_t>(mode)]);
+}
+
+}  // namespace
+
+TEST_CASE("quadruped HIL fault: a motor falls silent while walking - safe-stop within 3 ticks of the stale limit") {
+  sim::HilFault f;
+  f.kind = sim::HilFaultKind::kSilentMotor;
+  f.motor = 2;  // LF_KFE
+  FaultRun r = RunFault(f, false, 5600);
+  const std::string why = Reason(*r.rig, Mode::kSafeStop);
+  std::printf("fault silent motor at tick %llu: safe-stop at tick %llu (%s)\n",
+              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
+  REQUIRE(r.safe_tick > 0);
+  // The reply is owed at the fault tick; its age passes the safe-stop limit (2) at +3: detection.
+  CHECK(r.safe_tick <= r.fault_tick + 3 + 3);
+  CHECK(why.find("LF_KFE") != std::string::npos);
+  CheckCommandsWithinLimits(*r.rig);
+}
+
+TEST_CASE("quadruped HIL fault: the IMU stops - safe-stop within 3 ticks of its stale limit") {
+  sim::HilFault f;
+  f.kind = sim::HilFaultKind::kImuSilent;
+  FaultRun r = RunFault(f, false, 5600);
+  const std::string why = Reason(*r.rig, Mode::kSafeStop);
+  std::printf("fault IMU silent at tick %llu: safe-stop at tick %llu (%s)\n",
+              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
+  REQUIRE(r.safe_tick > 0);
+  const auto& imu = r.rig->model().streams[static_cast<std::size_t>(r.rig->model().StreamIndex("base_imu"))];
+  CHECK(r.safe_tick <= r.fault_tick + imu.stale_safe_stop_ticks + 1 + 3);
+  CHECK(why.find("base_imu") != std::string::npos);
+  CheckCommandsWithinLimits(*r.rig);
+}
+
+TEST_CASE("quadruped HIL fault: bus-off on one bus - safe-stop within 3 ticks, naming the bus") {
+  sim::HilFault f;
+  f.kind = sim::HilFaultKind::kBusOff;
+  f.bus = 1;
+  FaultRun r = RunFault(f, false, 5600);
+  const std::string why = Reason(*r.rig, Mode::kSafeStop);
+  std::printf("fault bus-off at tick %llu: safe-stop at tick %llu (%s)\n",
+              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
+  REQUIRE(r.safe_tick > 0);
+  CHECK(r.safe_tick <= r.fault_tick + 3);
+  CHECK(why.find(r.rig->model().can->buses[1].name) != std::string::npos);
+  CheckCommandsWithinLimits(*r.rig);
+}
+
+TEST_CASE("quadruped HIL fault: the operator dies - safe-stop within 3 ticks of the command stream's stale limit") {
+  FaultRun r = RunFault({}, true, 6000);
+  const std::string why = Reason(*r.rig, Mode::kSafeStop);
+  std::printf("fault operator dead at tick %llu: safe-stop at tick %llu (%s)\n",
+              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
+  REQUIRE(r.safe_tick > 0);
+  const auto& op = r.rig->model().streams[static_cast<std::size_t>(r.rig->model().StreamIndex("velocity_command"))];
+  // The last sample came at most one period before the kill; stale beyond safe_stop ticks.
+  CHECK(r.safe_tick <= r.fault_tick + op.stale_safe_stop_ticks + 1 + 3);
+  CHECK(r.safe_tick > r.fault_tick);
+  CHECK(why.find("velocity_command") != std::string::npos);
+  CheckCommandsWithinLimits(*r.rig);
+}
+
+TEST_CASE("quadruped HIL fault: 10 % of frames dropped (bursts of at most 2) - it keeps walking, degraded at most") {
+  sim::HilFault f;
+  f.kind = sim::HilFaultKind::kDropFrames;
+  f.probability = 0.10;
+  f.max_burst = 2;
+  FaultRun r = RunFault(f, false, 9000);
+  const sim::RigReport rep = r.rig->Report(1.0);
+  std::printf("fault 10%% drops from tick %llu: mode %s, fell %d, dropped %llu frames at LF_HAA\n",
+              static_cast<unsigned long long>(r.fault_tick), safety::ToString(r.rig->loop().supervisor().mode),
+              rep.fell ? 1 : 0, static_cast<unsigned long long>(r.rig->hil().motor(0).dropped));
+  CHECK(r.safe_tick == 0);
+  CHECK_FALSE(rep.fell);
+  CHECK(r.rig->hil().motor(0).dropped > 100);
+  CheckCommandsWithinLimits(*r.rig);
+}
+
+TEST_CASE("quadruped scenario: bad files are refused naming the field and the value") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto bad = [&](const std::string& text, const std::string& want) {
+    auto r = sim::ParseQuadrupedScenario(text, "bad.yaml", m, m.tick_period_s);
+    REQUIRE_FALSE(r.ok());
+    CAPTURE(r.error().message);
+    CHECK(r.error().message.find(want) != std::string::npos);
+  };
+  bad("mount: wall\n", "mount: 'wall'");
+  bad("terrain: {kind: lava}\n", "terrain.kind: 'lava'");
+  bad("events:\n  - {at_s: 1, silent_motor: LF_XXX}\n", "'LF_XXX' is not a motor");
+  bad("events:\n  - {at_s: 1, bus_off: rear}\n", "'rear' is not a bus");
+  bad("events:\n  - {at_s: 1, drop_frames: 1.5}\n", "drop_frames");
+  bad("events:\n  - {at_s: 1}\n", "exactly one of");
+  bad("start: {height_m: -1}\n", "start.height_m");
+  bad("mount: stand\nevents:\n  - {at_s: 1, push: [1, 0, 0]}\n", "a push needs mount: ground");
+  bad("contact: {friction: nan}\n", "contact.friction");
+  bad("colour: red\n", "colour");
+}
+
+TEST_CASE("schedule: bad files are refused naming the phase, the field and the value") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto bad = [&](const std::string& text, const std::string& want) {
+    auto r = loop::ParseSchedule(text, "bad.yaml", m);
+    REQUIRE_FALSE(r.ok());
+    CAPTURE(r.error().message);
+    CHECK(r.error().message.find(want) != std::string::npos);
+  };
+  bad("stream: nothing\nphases: [{name: a, duration_s: 1}]\n", "'nothing' is not a declared stream");
+  bad("stream: velocity_command\nphases: []\n", "no phase");
+  bad("stream: velocity_command\nphases: [{name: a, duration_s: 1, command_vx: 3}]\n", "command_vx");
+  bad("stream: velocity_command\nphases: [{name: a, duration_s: 1, command_vz: 1}]\n", "command_vz");
+  bad("stream: velocity_command\nphases: [{name: a, duration_s: -1}]\n", "duration_s");
+  bad("stream: velocity_command\nphases: [{name: a, duration_s: 1, command_vx: .nan}]\n", "command_vx");
+}
+
+TEST_CASE("robot model: the walking gains equal the training task's (walk.yaml control)") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto walk = robot::LoadYamlFile(test::SourcePath("models/quadruped/walk.yaml"));
+  REQUIRE(walk.ok());
+  for (const auto& mo : m.motors) {
+    CHECK(mo.policy_kp == (*walk)["control"]["kp_nm_rad"].as<double>());
+    CHECK(mo.policy_kd == (*walk)["control"]["kd_nm_s_rad"].as<double>());
+  }
+}
