@@ -85,10 +85,13 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
     meas.title = std::string("measured ") + kNames[k];
     for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
       const RigSample& s = rig.trace()[i];
-      const double c[3] = {s.cmd_vx, s.cmd_vy, s.cmd_yaw_rate}, m[3] = {s.vx_mps, s.vy_mps, s.yaw_rate_radps};
-      cmd.x.push_back(s.t_s);
+      const double c[3] = {static_cast<double>(s.cmd_vx), static_cast<double>(s.cmd_vy),
+                           static_cast<double>(s.cmd_yaw_rate)};
+      const double m[3] = {static_cast<double>(s.vx_mps), static_cast<double>(s.vy_mps),
+                           static_cast<double>(s.yaw_rate_radps)};
+      cmd.x.push_back(static_cast<double>(s.t_s));
       cmd.y.push_back(c[k]);
-      meas.x.push_back(s.t_s);
+      meas.x.push_back(static_cast<double>(s.t_s));
       meas.y.push_back(m[k]);
     }
     p.series = {cmd, meas};
@@ -101,11 +104,11 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
   report::MapPlot::Path path;
   for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
     const RigSample& s = rig.trace()[i];
-    path.xy.push_back({s.x_m, s.y_m});
-    x0 = std::min<double>(x0, s.x_m);
-    x1 = std::max<double>(x1, s.x_m);
-    y0 = std::min<double>(y0, s.y_m);
-    y1 = std::max<double>(y1, s.y_m);
+    path.xy.push_back({static_cast<double>(s.x_m), static_cast<double>(s.y_m)});
+    x0 = std::min(x0, static_cast<double>(s.x_m));
+    x1 = std::max(x1, static_cast<double>(s.x_m));
+    y0 = std::min(y0, static_cast<double>(s.y_m));
+    y1 = std::max(y1, static_cast<double>(s.y_m));
   }
   map.paths.push_back(path);
   map.arena = {x0 - 0.5, x1 + 0.5, y0 - 0.5, y1 + 0.5};

@@ -129,7 +129,10 @@ RigReport QuadrupedRig::Report(double settle_s) const {
     if (x.schedule_phase < 0) continue;
     PhaseTracking& t = rep.phases[static_cast<std::size_t>(x.schedule_phase)];
     if (static_cast<double>(x.t_s) < t.start_s + settle_s) continue;
-    const double cmd[3] = {x.cmd_vx, x.cmd_vy, x.cmd_yaw_rate}, meas[3] = {x.vx_mps, x.vy_mps, x.yaw_rate_radps};
+    const double cmd[3] = {static_cast<double>(x.cmd_vx), static_cast<double>(x.cmd_vy),
+                           static_cast<double>(x.cmd_yaw_rate)};
+    const double meas[3] = {static_cast<double>(x.vx_mps), static_cast<double>(x.vy_mps),
+                            static_cast<double>(x.yaw_rate_radps)};
     for (int k = 0; k < 3; ++k) {
       t.command[k] = cmd[k];
       t.mean_abs_error[k] += std::fabs(cmd[k] - meas[k]);

@@ -122,10 +122,11 @@ Result<QuadrupedScenario> ParseQuadrupedScenario(const std::string& text, const 
     }
     if (f.kind != HilFaultKind::kDropFrames && e["max_burst"])
       return y.Fail(YamlFields::Join(where, "max_burst"), "belongs to drop_frames");
-    o.faults.push_back(f);
+    // Kept sorted by tick; events at the same tick in file order.
+    const auto at = std::upper_bound(o.faults.begin(), o.faults.end(), f.tick,
+                                     [](std::uint64_t t, const HilFault& g) { return t < g.tick; });
+    o.faults.insert(at, f);
   }
-  std::stable_sort(o.faults.begin(), o.faults.end(),
-                   [](const HilFault& a, const HilFault& b) { return a.tick < b.tick; });
   return sc;
 }
 
