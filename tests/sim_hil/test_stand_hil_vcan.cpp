@@ -305,8 +305,9 @@ TEST_CASE(
   CHECK(at > 1500);
   CHECK(at <= 1503);
   CHECK(entered.cause == Cause::kStaleSample);
-  CHECK(entered.subject == 2);
-  CHECK(rig.model.supervisor_model.streams[2].name == "LF_KFE");
+  const auto lf_kfe = static_cast<std::int32_t>(rig.model.motors[2].stream);
+  CHECK(entered.subject == lf_kfe);
+  CHECK(rig.model.supervisor_model.streams[static_cast<std::size_t>(lf_kfe)].name == "LF_KFE");
   CHECK(rig.Describe(Mode::kSafeStop) == "safe-stop: stale sample: LF_KFE: age 3 ticks > 2");
   // The commands since then are damping: kp 0, kd = the damping gain, no feed-forward.
   const auto& rec = rig.can->RecordedCommands();
@@ -325,7 +326,7 @@ TEST_CASE(
   REQUIRE(sup.mode == Mode::kEStop);
   CHECK(sup.entered_tick[static_cast<int>(Mode::kEStop)] == 1500 + 500);
   CHECK(sup.entered[static_cast<int>(Mode::kEStop)].cause == Cause::kLostPeer);
-  CHECK(sup.entered[static_cast<int>(Mode::kEStop)].subject == 2);
+  CHECK(sup.entered[static_cast<int>(Mode::kEStop)].subject == lf_kfe);
   for (std::size_t m = 0; m < 12; ++m)
     if (m != 2) CHECK_FALSE(rig.hil->motor(m).motor_mode);
 }
