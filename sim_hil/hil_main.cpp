@@ -22,19 +22,13 @@
 // one process in lock-step over the in-process CAN network: the walking demo and the sim-to-sim
 // measurement, with per-phase tracking and the real-time factor.
 #include <signal.h>
-#include <time.h>
 
-#include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
-#include <sstream>
 #include <string>
 #include <vector>
 
-#include "runtime/robot/robot_model.hpp"
 #include "sim_hil/auv_hil.hpp"
 #include "sim_hil/quadruped_main.hpp"
 

@@ -5,13 +5,14 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "report/plots.hpp"
 #include "runtime/loop/schedule.hpp"
+#include "runtime/policy/blob.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
 
@@ -19,18 +20,12 @@ namespace pbppo::sim {
 namespace {
 
 struct Options {
-  std::string robot = "models/quadruped/robot.yaml", scenario, can, policy, commands, trace, report, plot;
+  std::string robot = "models/quadruped/robot.yaml", scenario, policy, commands, trace, report, plot;
+  std::vector<std::string> can;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false;
   double duration_s = 0, settle_s = 1.0;
   std::uint64_t seed = 1;
 };
-
-std::vector<std::string> Split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-  return out;
-}
 
 int Fail(const std::string& msg, int rc) {
   std::fprintf(stderr, "pbppo-hil quadruped: %s\n", msg.c_str());
@@ -51,25 +46,22 @@ void PrintReport(const RigReport& r) {
 }
 
 Status WriteReportJson(const RigReport& r, double rtf, const std::string& path) {
-  const std::string part = path + ".part";
-  {
-    std::ofstream f(part);
-    f << "{\n  \"fell\": " << (r.fell ? "true" : "false") << ",\n  \"fell_at_s\": " << r.fell_at_s
-      << ",\n  \"distance_m\": " << r.distance_m << ",\n  \"real_time_factor\": " << rtf << ",\n  \"phases\": [\n";
-    for (std::size_t i = 0; i < r.phases.size(); ++i) {
-      const PhaseTracking& p = r.phases[i];
-      f << "    {\"name\": \"" << p.name << "\", \"start_s\": " << p.start_s << ", \"end_s\": " << p.end_s
-        << ", \"command\": [" << p.command[0] << ", " << p.command[1] << ", " << p.command[2]
-        << "], \"mean_abs_error\": [" << p.mean_abs_error[0] << ", " << p.mean_abs_error[1] << ", "
-        << p.mean_abs_error[2] << "], \"mean_measured\": [" << p.mean_measured[0] << ", " << p.mean_measured[1] << ", "
-        << p.mean_measured[2] << "]}" << (i + 1 < r.phases.size() ? "," : "") << "\n";
-    }
-    f << "  ]\n}\n";
-    if (!f) return MakeError(ErrorCode::kIo, "--report: cannot write '" + part + "'");
+  nlohmann::json j = {{"fell", r.fell},
+                      {"fell_at_s", r.fell_at_s},
+                      {"distance_m", r.distance_m},
+                      {"real_time_factor", rtf},
+                      {"phases", nlohmann::json::array()}};
+  for (const PhaseTracking& p : r.phases) {
+    auto three = [](const double* v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
+    j["phases"].push_back({{"name", p.name},
+                           {"start_s", p.start_s},
+                           {"end_s", p.end_s},
+                           {"command", three(p.command)},
+                           {"mean_abs_error", three(p.mean_abs_error)},
+                           {"mean_measured", three(p.mean_measured)}});
   }
-  if (std::rename(part.c_str(), path.c_str()) != 0)
-    return MakeError(ErrorCode::kIo, "--report: cannot rename '" + part + "'");
-  return {};
+  const std::string text = j.dump(2) + "\n";
+  return policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
 }
 
 Status Plot(const QuadrupedRig& rig, const std::string& png) {
@@ -161,7 +153,7 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)");
   app.add_option("--scenario", o.scenario, "Scenario file (terrain, start, pushes, faults); default: flat ground");
   app.add_flag("--stand", o.stand, "The base welded to a stand (no contact)");
-  app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
+  app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)")->delimiter(',');
   app.add_flag("--lockstep", o.lockstep, "Each tick waits for the controller's frames");
   app.add_option("--duration", o.duration_s, "Stop after this much simulated time (s)")->check(CLI::Range(0.0, 1e7));
   app.add_option("--seed", o.seed, "Seed of the emulated drivers' frame drops");
@@ -192,7 +184,7 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   }
   hil.seed = o.seed;
   if (o.in_process) return InProcess(o, *model, std::move(hil));
-  hil.interfaces = Split(o.can);
+  hil.interfaces = o.can;
   auto h = QuadrupedHil::Make(*model, hil);
   if (!h) return Fail(h.error().message, 2);
   QuadrupedHil& sim = **h;

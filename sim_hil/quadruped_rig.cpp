@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+
+#include "runtime/policy/blob.hpp"
 
 namespace pbppo::sim {
 
@@ -35,7 +36,6 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   if (!c) return std::move(c).error();
   r->can_ = std::move(*c);
   r->can_->SetLockStep(r->wait_ns_);
-  const std::string stream = schedule.stream;
   auto s = loop::ScheduleTransport::Create(model, std::move(schedule));
   if (!s) return std::move(s).error();
   r->schedule_ = std::move(*s);
@@ -48,7 +48,6 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   r->transports_[1] = r->schedule_.get();
   const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
   for (int k = 0; k < 3; ++k) r->cmd_field_[k] = model.FieldIndex(names[k]);
-  (void)stream;
   return r;
 }
 
@@ -154,27 +153,21 @@ RigReport QuadrupedRig::Report(double settle_s) const {
 }
 
 Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& path, std::uint32_t every) {
-  const std::string part = path + ".part";
-  {
-    std::ofstream f(part);
-    f << "t_s,x_m,y_m,z_m,yaw_rad,vx_mps,vy_mps,yaw_rate_radps,cmd_vx,cmd_vy,cmd_yaw_rate,tilt_rad,schedule_phase,"
-         "loop_phase,mode,feet,body_contact\n";
-    char line[320];
-    for (std::size_t i = 0; i < trace.size(); i += std::max<std::uint32_t>(every, 1)) {
-      const RigSample& s = trace[i];
-      std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%d,%d,%d,%d,%d\n",
-                    static_cast<double>(s.t_s), static_cast<double>(s.x_m), static_cast<double>(s.y_m),
-                    static_cast<double>(s.z_m), static_cast<double>(s.yaw_rad), static_cast<double>(s.vx_mps),
-                    static_cast<double>(s.vy_mps), static_cast<double>(s.yaw_rate_radps), static_cast<double>(s.cmd_vx),
-                    static_cast<double>(s.cmd_vy), static_cast<double>(s.cmd_yaw_rate), static_cast<double>(s.tilt_rad),
-                    s.schedule_phase, s.loop_phase, s.mode, s.feet, s.body_contact ? 1 : 0);
-      f << line;
-    }
-    if (!f) return MakeError(ErrorCode::kIo, "trace: cannot write '" + part + "'");
+  std::string text =
+      "t_s,x_m,y_m,z_m,yaw_rad,vx_mps,vy_mps,yaw_rate_radps,cmd_vx,cmd_vy,cmd_yaw_rate,tilt_rad,schedule_phase,"
+      "loop_phase,mode,feet,body_contact\n";
+  char line[320];
+  for (std::size_t i = 0; i < trace.size(); i += std::max<std::uint32_t>(every, 1)) {
+    const RigSample& s = trace[i];
+    std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%d,%d,%d,%d,%d\n",
+                  static_cast<double>(s.t_s), static_cast<double>(s.x_m), static_cast<double>(s.y_m),
+                  static_cast<double>(s.z_m), static_cast<double>(s.yaw_rad), static_cast<double>(s.vx_mps),
+                  static_cast<double>(s.vy_mps), static_cast<double>(s.yaw_rate_radps), static_cast<double>(s.cmd_vx),
+                  static_cast<double>(s.cmd_vy), static_cast<double>(s.cmd_yaw_rate), static_cast<double>(s.tilt_rad),
+                  s.schedule_phase, s.loop_phase, s.mode, s.feet, s.body_contact ? 1 : 0);
+    text += line;
   }
-  if (std::rename(part.c_str(), path.c_str()) != 0)
-    return MakeError(ErrorCode::kIo, "trace: cannot rename '" + part + "' to '" + path + "'");
-  return {};
+  return policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
 }
 
 }  // namespace pbppo::sim

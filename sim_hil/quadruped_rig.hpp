@@ -81,6 +81,7 @@ class QuadrupedRig {
   can::CanTransport& can() noexcept { return *can_; }
   loop::ScheduleTransport& operator_source() noexcept { return *schedule_; }
   loop::LoopData& loop() noexcept { return *loop_; }
+  const loop::LoopData& loop() const noexcept { return *loop_; }
   const robot::RobotData& data() const noexcept { return data_; }
   can::MemoryCanNetwork* network() noexcept { return network_.get(); }
   const std::vector<RigSample>& trace() const noexcept { return trace_; }

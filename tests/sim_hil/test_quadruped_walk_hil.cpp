@@ -130,9 +130,8 @@ FaultRun RunFault(sim::HilFault fault, bool kill_operator, std::uint64_t until_t
 }
 
 std::string Reason(const sim::QuadrupedRig& rig, Mode mode) {
-  return safety::Describe(
-      const_cast<sim::QuadrupedRig&>(rig).model().supervisor_model,
-      const_cast<sim::QuadrupedRig&>(rig).loop().supervisor().entered[static_cast<std::size_t>(mode)]);
+  return safety::Describe(rig.model().supervisor_model,
+                          rig.loop().supervisor().entered[static_cast<std::size_t>(mode)]);
 }
 
 }  // namespace
