@@ -13,6 +13,7 @@
 #include "report/plots.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/transport/can/can_transport.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
 
@@ -21,7 +22,7 @@ namespace {
 
 struct Options {
   std::string robot = "models/quadruped/robot.yaml", scenario, policy, commands, trace, report, plot;
-  std::vector<std::string> can;
+  std::string can;  // IF0[,IF1]
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false;
   double duration_s = 0, settle_s = 1.0;
   std::uint64_t seed = 1;
@@ -153,7 +154,7 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)");
   app.add_option("--scenario", o.scenario, "Scenario file (terrain, start, pushes, faults); default: flat ground");
   app.add_flag("--stand", o.stand, "The base welded to a stand (no contact)");
-  app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)")->delimiter(',');
+  app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
   app.add_flag("--lockstep", o.lockstep, "Each tick waits for the controller's frames");
   app.add_option("--duration", o.duration_s, "Stop after this much simulated time (s)")->check(CLI::Range(0.0, 1e7));
   app.add_option("--seed", o.seed, "Seed of the emulated drivers' frame drops");
@@ -184,7 +185,9 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   }
   hil.seed = o.seed;
   if (o.in_process) return InProcess(o, *model, std::move(hil));
-  hil.interfaces = o.can;
+  auto interfaces = can::ParseInterfaceList(o.can);
+  if (!interfaces) return Fail("--can: " + interfaces.error().message, 2);
+  hil.interfaces = std::move(*interfaces);
   auto h = QuadrupedHil::Make(*model, hil);
   if (!h) return Fail(h.error().message, 2);
   QuadrupedHil& sim = **h;

@@ -4,6 +4,19 @@
 
 namespace pbppo::can {
 
+Result<std::vector<std::string>> ParseInterfaceList(const std::string& list) {
+  std::vector<std::string> out;
+  for (std::size_t at = 0; !list.empty();) {
+    const std::size_t comma = list.find(',', at);
+    out.push_back(list.substr(at, comma == std::string::npos ? std::string::npos : comma - at));
+    if (out.back().empty())
+      return MakeError(ErrorCode::kInvalidValue, "CAN interface list '" + list + "': an empty interface name");
+    if (comma == std::string::npos) break;
+    at = comma + 1;
+  }
+  return out;
+}
+
 Result<std::unique_ptr<CanTransport>> CanTransport::Open(const robot::RobotModel& m, const std::string& name,
                                                          const CanTransportOptions& o) {
   const int index = m.TransportIndex(name);

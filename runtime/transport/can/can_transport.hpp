@@ -36,6 +36,10 @@ struct CanTransportOptions {
   MemoryCanNetwork* network = nullptr;
 };
 
+// "can0,can1" (a command line's interface list) -> {"can0", "can1"}; "" -> {} (the map's own).
+// Errors quote the list when a name is empty.
+Result<std::vector<std::string>> ParseInterfaceList(const std::string& list);
+
 // A command as the transport encoded it (before quantisation).
 struct CommandRecord {
   std::uint64_t tick = 0;

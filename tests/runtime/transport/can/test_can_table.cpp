@@ -4,6 +4,7 @@
 
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/transport/can/can_table.hpp"
+#include "runtime/transport/can/can_transport.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo::can;
@@ -103,4 +104,18 @@ TEST_CASE("device table: commands and special frames reach the emulated motor") 
   CHECK(data.last_special[7] == 0xFC);
   CHECK(data.special_count[7] == 1);
   CHECK(data.command_count[7] == 1);
+}
+
+TEST_CASE("a command line's CAN interface list: names in bus order, an empty name refused") {
+  auto none = ParseInterfaceList("");
+  REQUIRE(none);
+  CHECK(none->empty());
+  auto two = ParseInterfaceList("vcan0,vcan1");
+  REQUIRE(two);
+  CHECK(*two == std::vector<std::string>{"vcan0", "vcan1"});
+  for (const char* bad : {"vcan0,", ",vcan1", "vcan0,,vcan1", ","}) {
+    auto r = ParseInterfaceList(bad);
+    REQUIRE_FALSE(r);
+    CHECK(r.error().message.find(std::string("'") + bad + "'") != std::string::npos);
+  }
 }
