@@ -1,7 +1,7 @@
 # Installs the runtime libraries, headers and programs with a CMake package config,
 # so a controller project can find_package(pbppo-rt) and link pbppo::runtime (inference),
-# pbppo::robot, pbppo::can, pbppo::safety, pbppo::rt and pbppo::dds; the AUV's Fast DDS profile goes
-# to share/pbppo-rt/auv/dds_profile.xml.
+# pbppo::robot, pbppo::can, pbppo::safety, pbppo::rt and pbppo::dds; the robots' Fast DDS profile goes
+# to share/pbppo-rt/dds_profile.xml.
 include(CMakePackageConfigHelpers)
 
 install(EXPORT pbppo-rtTargets

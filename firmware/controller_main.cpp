@@ -29,12 +29,12 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "firmware/auv/auv_transport.hpp"
+#include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/loop/log.hpp"
@@ -51,6 +51,7 @@ using namespace pbppo;
 
 struct Options {
   std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump, commands;
+  std::string dds_naming = "native";
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
@@ -78,6 +79,9 @@ void AddOptions(CLI::App& app, Options& o) {
       ->check(CLI::Range(0.01, 10000.0));
   app.add_option("--domain", o.domain, "DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--dds-profile", o.dds_profile, "Fast DDS XML profile file (default: the robot's)");
+  app.add_option("--dds-naming", o.dds_naming,
+                 "DDS topic and type names: native (pbppo/<robot>/...) or ros2 (rt/pbppo/<robot>/..., "
+                 "pbppo_msgs::msg::dds_::<Type>_)");
   app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
   app.add_option("--candump", o.candump, "Log every CAN frame (candump -L)");
   app.add_flag("--receive-all", o.receive_all, "CAN: no kernel filter (count strays)");
@@ -104,13 +108,6 @@ void AddOptions(CLI::App& app, Options& o) {
                  "DDS writer thread polls for commands every N us, so the tick makes no system call (0: the "
                  "tick wakes it; default: 200 free-running, 0 in lock-step)")
       ->check(CLI::Range(-1, 1000000));
-}
-
-std::vector<std::string> Split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-  return out;
 }
 
 void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const loop::RunResult& r,
@@ -158,8 +155,26 @@ int main(int argc, char** argv) {
   if (!source) return Fail(source.error().message);
 
   // The transports.
+  auto naming = dds::ParseDdsNaming(o.dds_naming);
+  if (!naming) return Fail("--dds-naming: " + naming.error().message);
+  // A DDS transport's participant: the robot's profiles (or --dds-profile's file), the
+  // transport's participant_profile, --domain.
+  auto participant_options = [&](const robot::TransportSpec& t) -> Result<dds::DdsOptions> {
+    dds::DdsOptions d;
+    d.domain_id = o.domain;
+    if (t.options.count("participant_profile") != 0) d.participant_profile = t.options.at("participant_profile");
+    d.profile_file = o.dds_profile;
+    if (o.dds_profile.empty()) {
+      auto doc = robot.Document("dds_profile");  // read with the robot
+      if (!doc) return std::move(doc).error();
+      d.profile_xml = (*doc)->text;
+    }
+    return d;
+  };
   std::unique_ptr<dds::AuvDdsLink> link;
   std::unique_ptr<auv::AuvTransport> auv;
+  std::unique_ptr<dds::OperatorDdsLink> operator_link;
+  std::unique_ptr<quadruped::OperatorTransport> op;
   std::unique_ptr<can::CanTransport> can;
   std::unique_ptr<loop::ScheduleTransport> schedule;
   std::vector<robot::Transport*> transports;
@@ -177,19 +192,12 @@ int main(int argc, char** argv) {
       transports.push_back(schedule.get());
       continue;
     }
-    // A transport whose streams may stay silent (an operator who has not spoken) can be left unbound.
-    bool optional = true;
-    for (const robot::StreamSpec& st : robot.streams)
-      if (st.transport == t.name && st.required) optional = false;
-    if (optional && t.kind == "dds" && t.options.count("messages") != 0 && t.options.at("messages") != "auv") {
-      if (!o.quiet)
-        std::fprintf(stderr, "pbppo-controller: transport '%s' unbound (no --commands): its streams stay silent\n",
-                     t.name.c_str());
-      continue;
-    }
+    const std::string messages = t.options.count("messages") != 0 ? t.options.at("messages") : "";
     if (t.kind == "can") {
       can::CanTransportOptions co;
-      co.interfaces = Split(o.can);
+      auto interfaces = can::ParseInterfaceList(o.can);
+      if (!interfaces) return Fail("--can: " + interfaces.error().message, 2);
+      co.interfaces = std::move(*interfaces);
       co.receive_all = o.receive_all;
       co.candump_path = o.candump;
       auto c = can::CanTransport::Open(robot, t.name, co);
@@ -197,16 +205,12 @@ int main(int argc, char** argv) {
       can = std::move(*c);
       can->SetLockStep(static_cast<std::int64_t>(o.lockstep_wait_ms) * 1'000'000);
       transports.push_back(can.get());
-    } else if (t.kind == "dds" && t.options.count("messages") != 0 && t.options.at("messages") == "auv") {
+    } else if (t.kind == "dds" && messages == "auv") {
+      auto participant = participant_options(t);
+      if (!participant) return Fail(participant.error().message);
       dds::AuvDdsOptions d;
-      d.domain_id = o.domain;
-      if (t.options.count("participant_profile") != 0) d.participant_profile = t.options.at("participant_profile");
-      d.profile_file = o.dds_profile;
-      if (o.dds_profile.empty()) {
-        auto doc = robot.Document("dds_profile");  // read with the robot
-        if (!doc) return Fail(doc.error().message);
-        d.profile_xml = (*doc)->text;
-      }
+      static_cast<dds::DdsOptions&>(d) = *participant;
+      d.naming = *naming;
       d.writer_poll_us = o.writer_poll_us >= 0 ? o.writer_poll_us : (o.lockstep ? 0 : 200);
       auto l = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, d);
       if (!l) return Fail(l.error().message);
@@ -220,8 +224,31 @@ int main(int argc, char** argv) {
       if (!a) return Fail(a.error().message);
       auv = std::move(*a);
       transports.push_back(auv.get());
+    } else if (t.kind == "dds" && messages == "velocity_command") {
+      // Velocity commands feed the walking policy: with a trajectory (or no source) nobody listens.
+      if (source->kind != loop::SourceKind::kPolicy) {
+        if (!o.quiet)
+          std::fprintf(stderr, "pbppo-controller: transport '%s' unbound (no policy to command)\n", t.name.c_str());
+        continue;
+      }
+      auto participant = participant_options(t);
+      if (!participant) return Fail(participant.error().message);
+      dds::OperatorDdsOptions d;
+      static_cast<dds::DdsOptions&>(d) = *participant;
+      d.naming = *naming;
+      auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, d);
+      if (!l) return Fail(l.error().message);
+      operator_link = std::move(*l);
+      auto ot = quadruped::OperatorTransport::Create(robot, *operator_link);
+      if (!ot) return Fail(ot.error().message);
+      op = std::move(*ot);
+      transports.push_back(op.get());
+      if (!o.quiet)
+        std::fprintf(stderr, "pbppo-controller: velocity commands on DDS domain %d (%s naming)\n", o.domain,
+                     dds::ToString(*naming));
     } else {
-      return Fail(robot.path + ": transport '" + t.name + "' (" + t.kind + "): no binding in this program");
+      return Fail(robot.path + ": transport '" + t.name + "' (" + t.kind + (messages.empty() ? "" : ", " + messages) +
+                  "): no binding in this program");
     }
   }
 
@@ -290,6 +317,7 @@ int main(int argc, char** argv) {
       if (std::chrono::steady_clock::now() < next) continue;
       next += std::chrono::milliseconds(static_cast<long>(o.status_every_s * 1000));
       if (link) (void)link->PublishStatus(auv::StatusOf(*loop));
+      if (operator_link) (void)operator_link->PublishStatus(quadruped::StatusOf(*loop, op.get()));
       if (!o.quiet && !can) {
         std::fprintf(stderr, "\rtick %llu  mode %s  stale %llu  invalid %llu   ",
                      static_cast<unsigned long long>(st.tick), safety::ToString(st.mode),
@@ -321,6 +349,10 @@ int main(int argc, char** argv) {
   if (pacer.joinable()) pacer.join();
   status.join();
   if (link) (void)link->Flush(1000000000);
+  if (operator_link) {
+    (void)operator_link->PublishStatus(quadruped::StatusOf(*loop, op.get()));  // the final state
+    (void)operator_link->Flush(1000000000);
+  }
   if (can) can->Stop();
   if (recorder)
     if (auto st = recorder->Stop(); !st) return Fail(st.error().message, 1);

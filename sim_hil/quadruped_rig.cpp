@@ -1,8 +1,10 @@
 #include "sim_hil/quadruped_rig.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <thread>
 
 #include "runtime/policy/blob.hpp"
 
@@ -45,7 +47,8 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   r->data_ = robot::MakeRobotData(model);
   r->loop_ = loop::MakeLoopData(model, r->source_.source.get());
   r->transports_[0] = r->can_.get();
-  r->transports_[1] = r->schedule_.get();
+  r->transports_[1] = o.operator_transport != nullptr ? o.operator_transport : r->schedule_.get();
+  r->max_speed_ = o.max_speed;
   const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
   for (int k = 0; k < 3; ++k) r->cmd_field_[k] = model.FieldIndex(names[k]);
   return r;
@@ -103,7 +106,13 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
       static_cast<std::uint64_t>(std::llround((schedule_->schedule().duration_s() + extra_s) / model_.tick_period_s));
   trace_.reserve(trace_.size() + total);
   loop_->Arm();
+  const auto t0 = std::chrono::steady_clock::now();
+  const double wall_per_tick_s = max_speed_ > 0 ? model_.tick_period_s / max_speed_ : 0;
   while (tick_ < total) {
+    if (wall_per_tick_s > 0)
+      std::this_thread::sleep_until(t0 +
+                                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                        std::chrono::duration<double>(static_cast<double>(tick_) * wall_per_tick_s)));
     if (!Tick()) return false;
     if (status_ != loop::TickStatus::kRunning) break;
   }

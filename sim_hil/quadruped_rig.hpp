@@ -31,6 +31,12 @@ struct RigOptions {
   std::vector<std::string> interfaces;      // SocketCAN interfaces; empty: the in-process network
   std::int64_t wait_ns = 2'000'000'000;     // SocketCAN lock-step: the longest wait for a tick's frames
   std::size_t command_record_capacity = 0;  // commands kept by the CAN transport (tests)
+  // The operator instead of the schedule (velocity commands over DDS: firmware/quadruped/
+  // operator_transport.hpp); the schedule then only names the phases of the report. Must outlive
+  // the rig.
+  robot::Transport* operator_transport = nullptr;
+  // > 0: RunSchedule ticks no faster than this many times real time (an operator on a wall clock).
+  double max_speed = 0;
 };
 
 // One tick of the trace.
@@ -102,6 +108,7 @@ class QuadrupedRig {
   std::vector<RigSample> trace_;
   std::int32_t cmd_field_[3] = {-1, -1, -1};
   std::int64_t wait_ns_ = 0;
+  double max_speed_ = 0;
   bool memory_ = true;
   std::uint64_t tick_ = 0;
   loop::TickStatus status_ = loop::TickStatus::kRunning;

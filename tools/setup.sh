@@ -17,6 +17,8 @@ PACKAGES=(
   gnuplot-nox
   # DDS: Fast DDS 2.9 with its CDR library, and the IDL code generator (a Java program)
   libfastrtps-dev libfastcdr-dev fastddsgen default-jre-headless
+  # a second DDS implementation (and its IDL compiler) for the ROS 2 naming interop test
+  cyclonedds-dev cyclonedds-tools
   # CAN: tools, DBC decoding (python3-yaml: tools/gen_can_dbc.py), and the QEMU runner for the vcan tests (kernel has no AF_CAN)
   can-utils python3-can python3-canmatrix python3-yaml
   qemu-system-x86 busybox-static kmod cpio xz-utils

@@ -129,8 +129,7 @@ TEST_CASE("auv controller: limits from robot.yaml - bad fields named with their 
   CHECK(m.FieldIndex("sonar_15_m") >= 0);
 
   // A copy of the robot's folder with one change in robot.yaml.
-  const std::string dir = test::ScratchDir("auv_controller_yaml") + "/auv";
-  std::filesystem::copy(test::SourcePath("models/auv"), dir, std::filesystem::copy_options::recursive);
+  const std::string dir = test::CopyRobotFolder("auv", "auv_controller_yaml");
   std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string p = dir + "/robot.yaml";

@@ -29,9 +29,9 @@ endif()
 message(STATUS "${out}")
 # The DDS transport from the installed tree, with the installed profile (domain 231: outside the
 # 10-229 that the dds tests draw from).
-set(profile ${WORK}/prefix/share/pbppo-rt/auv/dds_profile.xml)
+set(profile ${WORK}/prefix/share/pbppo-rt/dds_profile.xml)
 if(NOT EXISTS ${profile})
-  message(FATAL_ERROR "not installed: share/pbppo-rt/auv/dds_profile.xml")
+  message(FATAL_ERROR "not installed: share/pbppo-rt/dds_profile.xml")
 endif()
 execute_process(COMMAND ${WORK}/build/consumer_dds ${profile} 231 TIMEOUT 60
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)

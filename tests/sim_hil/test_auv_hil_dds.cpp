@@ -1,6 +1,6 @@
 // The AUV HIL simulator as a separate process (`pbppo-hil auv`) driven over DDS by a scripted
 // controller in this test through dds::AuvDdsLink (controller side), on the loopback profile
-// models/auv/dds_profile.xml and a domain of this test's own.
+// models/dds_profile.xml and a domain of this test's own.
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <signal.h>

@@ -12,6 +12,7 @@
 #include "runtime/loop/schedule.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
+#include "tests/support/command_limits.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -46,17 +47,8 @@ std::unique_ptr<sim::QuadrupedRig> MakeRig(sim::QuadrupedHilOptions hil, std::si
 
 // Every command the CAN transport encoded is finite and inside the model's limits.
 void CheckCommandsWithinLimits(sim::QuadrupedRig& rig) {
-  const robot::RobotModel& m = rig.model();
-  std::uint64_t bad = 0;
-  for (const can::CommandRecord& c : rig.can().RecordedCommands()) {
-    const robot::MotorSpec& mo = m.motors[c.motor];
-    const double v[5] = {c.q_rad, c.dq_rad_s, c.kp, c.kd, c.tau_nm};
-    const std::uint32_t k[5] = {mo.q, mo.dq, mo.kp, mo.kd, mo.tau};
-    for (int i = 0; i < 5; ++i)
-      if (!(v[i] >= m.commands[k[i]].min - 1e-9 && v[i] <= m.commands[k[i]].max + 1e-9)) ++bad;
-  }
   CHECK(rig.can().RecordedCommands().size() > 0);
-  CHECK(bad == 0);
+  CHECK(test::CommandsOutsideLimits(rig.model(), rig.can().RecordedCommands()) == 0);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@ inline int TestDomain(int salt = 0) {
 }
 
 inline std::string DdsProfile() {
-  return SourcePath("models/auv/dds_profile.xml");
+  return SourcePath("models/dds_profile.xml");
 }
 
 }  // namespace pbppo::test

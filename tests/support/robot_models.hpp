@@ -3,12 +3,22 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 
 #include "runtime/robot/robot_model.hpp"
 #include "tests/support/test_paths.hpp"
 
 namespace pbppo::test {
+
+// A fresh copy of a shipped robot's folder to edit: <scratch dir `scratch`>/<name>, with the
+// robots' shared files beside it (models/dds_profile.xml). Returns the copy's folder.
+inline std::string CopyRobotFolder(const std::string& name, const std::string& scratch) {
+  const std::string root = ScratchDir(scratch), dir = root + "/" + name;
+  std::filesystem::copy(SourcePath("models/" + name), dir, std::filesystem::copy_options::recursive);
+  std::filesystem::copy_file(SourcePath("models/dds_profile.xml"), root + "/dds_profile.xml");
+  return dir;
+}
 
 inline const robot::RobotModel& LoadShipped(const std::string& name) {
   auto m = robot::LoadRobotModel(SourcePath("models/" + name + "/robot.yaml"));

@@ -41,13 +41,6 @@ Error Fail(const std::string& what) {
   return MakeError(ErrorCode::kInvalidValue, "dds: " + what);
 }
 
-template <typename T>
-Status Take(Result<std::unique_ptr<T>> r, std::unique_ptr<T>* out) {
-  if (!r) return std::move(r).error();
-  *out = std::move(*r);
-  return {};
-}
-
 }  // namespace
 
 Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const AuvDdsOptions& o) {
@@ -56,30 +49,36 @@ Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const Au
   if (o.command_inbox_capacity < 1 || o.command_inbox_capacity > 65536)
     return Fail("command_inbox_capacity " + std::to_string(o.command_inbox_capacity) + " is outside 1..65536");
   if (o.topic_prefix.empty()) return Fail("topic_prefix is empty");
-  auto participant = DdsParticipant::Create({o.profile_xml, o.profile_file, o.participant_profile, o.domain_id});
+  auto participant = DdsParticipant::Create(o);
   if (!participant) return std::move(participant).error();
   auto impl = std::make_unique<Impl>();
   Impl& m = *impl;
   m.role = role;
   m.participant = std::move(*participant);
   DdsParticipant& p = *m.participant;
-  const std::string sensor = o.topic_prefix + "sensor_state", command = o.topic_prefix + "command",
-                    status = o.topic_prefix + "controller_status";
-  const DdsReaderOptions latest{DdsReaderMode::kLatest, 1, o.history_depth, kSampleTooManyBeams};
-  const DdsWriterOptions direct{o.history_depth, 0, 0};
+  const std::string sensor = WireTopic(o.naming, o.topic_prefix + "sensor_state"),
+                    command = WireTopic(o.naming, o.topic_prefix + "command"),
+                    status = WireTopic(o.naming, o.topic_prefix + "controller_status");
+  const std::string sensor_type = WireTypeName(o.naming, "AuvSensorState"),
+                    command_type = WireTypeName(o.naming, "AuvCommand"),
+                    status_type = WireTypeName(o.naming, "AuvControllerStatus");
+  const DdsReaderOptions latest{DdsReaderMode::kLatest, 1, o.history_depth, kSampleTooManyBeams, sensor_type};
+  const DdsWriterOptions direct{o.history_depth, 0, 0, sensor_type};
   Status st;
   if (role == AuvDdsRole::kController) {
-    const DdsWriterOptions queued{o.history_depth, o.command_queue_capacity, o.writer_poll_us};
-    if (!(st = Take(DdsReader<robot::AuvSensorSample>::Create(p, sensor, latest, CheckSample), &m.samples_in)) ||
-        !(st = Take(DdsWriter<robot::AuvCommand>::Create(p, command, queued), &m.commands_out)) ||
-        !(st = Take(DdsWriter<robot::AuvControllerStatus>::Create(p, status, {4, 0, 0}), &m.status_out)))
+    const DdsWriterOptions queued{o.history_depth, o.command_queue_capacity, o.writer_poll_us, command_type};
+    if (!(st = TakeInto(DdsReader<robot::AuvSensorSample>::Create(p, sensor, latest, CheckSample), &m.samples_in)) ||
+        !(st = TakeInto(DdsWriter<robot::AuvCommand>::Create(p, command, queued), &m.commands_out)) ||
+        !(st = TakeInto(DdsWriter<robot::AuvControllerStatus>::Create(p, status, {4, 0, 0, status_type}),
+                        &m.status_out)))
       return st.error();
   } else {
-    const DdsReaderOptions inbox{DdsReaderMode::kQueue, o.command_inbox_capacity, o.history_depth, 0};
-    if (!(st = Take(DdsWriter<robot::AuvSensorSample>::Create(p, sensor, direct), &m.samples_out)) ||
-        !(st = Take(DdsReader<robot::AuvCommand>::Create(p, command, inbox, CheckCommand), &m.commands_in)) ||
-        !(st = Take(DdsReader<robot::AuvControllerStatus>::Create(p, status, {DdsReaderMode::kLatest, 1, 4, 0}),
-                    &m.status_in)))
+    const DdsReaderOptions inbox{DdsReaderMode::kQueue, o.command_inbox_capacity, o.history_depth, 0, command_type};
+    if (!(st = TakeInto(DdsWriter<robot::AuvSensorSample>::Create(p, sensor, direct), &m.samples_out)) ||
+        !(st = TakeInto(DdsReader<robot::AuvCommand>::Create(p, command, inbox, CheckCommand), &m.commands_in)) ||
+        !(st = TakeInto(
+              DdsReader<robot::AuvControllerStatus>::Create(p, status, {DdsReaderMode::kLatest, 1, 4, 0, status_type}),
+              &m.status_in)))
       return st.error();
   }
   return std::unique_ptr<AuvDdsLink>(new AuvDdsLink(std::move(impl)));

@@ -34,15 +34,15 @@ namespace pbppo::dds {
 
 enum class AuvDdsRole { kController, kVehicle };
 
-struct AuvDdsOptions {
-  std::string profile_xml;                             // Fast DDS XML profiles: the robot's dds_profile document
-  std::string profile_file;                            // ... or a file (models/auv/dds_profile.xml)
-  std::string participant_profile = "pbppo_loopback";  // a <participant profile_name=...> in that file
-  int domain_id = 0;                                   // 0 ... 232
-  std::string topic_prefix = "pbppo/auv/";             // topics: <prefix>sensor_state, command, controller_status
-  std::size_t command_queue_capacity = 16;             // controller: tick -> writer thread
-  std::size_t command_inbox_capacity = 256;            // vehicle: listener -> simulator
-  std::int32_t history_depth = 32;                     // KEEP_LAST depth of the reliable writers/readers
+// The participant (profiles, participant profile, domain: DdsOptions), and the link's own settings.
+struct AuvDdsOptions : DdsOptions {
+  std::string topic_prefix = "pbppo/auv/";  // topics: <prefix>sensor_state, command, controller_status
+  // kRos2: topics rt/<prefix>..., types pbppo_msgs::msg::dds_::AuvSensorState_, AuvCommand_,
+  // AuvControllerStatus_ (dds_endpoint.hpp). Both sides must use the same naming.
+  DdsNaming naming = DdsNaming::kNative;
+  std::size_t command_queue_capacity = 16;   // controller: tick -> writer thread
+  std::size_t command_inbox_capacity = 256;  // vehicle: listener -> simulator
+  std::int32_t history_depth = 32;           // KEEP_LAST depth of the reliable writers/readers
   // Controller: how the writer thread learns of a command. 0: PushCommand wakes it (a futex
   // system call in the tick, lowest delivery latency); > 0: the writer polls the queue every
   // writer_poll_us and the tick makes no system call (delivery up to that much later).

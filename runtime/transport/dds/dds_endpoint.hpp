@@ -25,6 +25,20 @@
 
 namespace pbppo::dds {
 
+// How topics and types are named on the wire. kNative: the IDL's type names
+// (pbppo_idl::quadruped::VelocityCommand) on the robot's topics (pbppo/quadruped/velocity_command).
+// kRos2: ROS 2's conventions, so that ROS 2 tools and other DDS implementations that follow them
+// see the same topics: "rt/" before the topic name, types named pbppo_msgs::msg::dds_::<Type>_
+// (the ROS 2 message pbppo_msgs/msg/<Type> with the IDL's fields).
+enum class DdsNaming : std::uint8_t { kNative, kRos2 };
+// "native" or "ros2"; the error names the value.
+Result<DdsNaming> ParseDdsNaming(const std::string& text);
+const char* ToString(DdsNaming naming) noexcept;
+// The topic as written on the wire: `topic` (kNative) or "rt/" + `topic` (kRos2).
+std::string WireTopic(DdsNaming naming, const std::string& topic);
+// The type name: "" (kNative: the IDL's own) or "pbppo_msgs::msg::dds_::" + ros2_message + "_".
+std::string WireTypeName(DdsNaming naming, const std::string& ros2_message);
+
 struct DdsOptions {
   std::string profile_xml;                             // Fast DDS XML profiles, as text (a robot's document)
   std::string profile_file;                            // ... or a file to read them from (profile_xml empty)
@@ -65,6 +79,10 @@ struct DdsReaderOptions {
   std::size_t queue_capacity = 256;  // kQueue
   std::int32_t history_depth = 32;   // KEEP_LAST depth
   std::uint32_t reject_mask = 0;     // check flags that drop a message instead of delivering it
+  std::string type_name;             // the type's name on the wire ("": the IDL's; see WireTypeName)
+  // Transient-local (a late reader gets the writer's last messages; matches transient-local
+  // writers only) or volatile (matches any writer: ROS 2 publishers are volatile by default).
+  bool transient_local = true;
 };
 
 struct DdsReaderCounters {
@@ -111,6 +129,7 @@ struct DdsWriterOptions {
   // The writer thread learns of a pushed message: 0, Push wakes it (a futex system call in the
   // caller, lowest latency); > 0, it polls the queue every poll_us and Push makes no system call.
   std::int64_t poll_us = 0;
+  std::string type_name;  // the type's name on the wire ("": the IDL's; see WireTypeName)
 };
 
 struct DdsWriterCounters {

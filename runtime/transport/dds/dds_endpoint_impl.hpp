@@ -53,13 +53,22 @@ struct DdsParticipant::Impl {
   std::map<std::string, fdds::Topic*> topics;
   ~Impl();
   // The topic `name` of `type` (the type registered, the topic created once); null on failure.
-  fdds::Topic* TopicFor(const std::string& name, fdds::TypeSupport type);
+  // `type_name` non-empty: the type registered under that name instead of the IDL's.
+  fdds::Topic* TopicFor(const std::string& name, fdds::TypeSupport type, const std::string& type_name);
 };
 
 // Reliable, transient-local, keep-last `depth`, no data-sharing (dds_participant.cpp says why).
 fdds::DataWriterQos WriterQos(std::int32_t depth);
-fdds::DataReaderQos ReaderQos(std::int32_t depth);
+fdds::DataReaderQos ReaderQos(std::int32_t depth, bool transient_local);
 Error DdsError(const std::string& what);
+
+// Moves a created reader or writer into `out`; the creation's error otherwise.
+template <typename T>
+Status TakeInto(Result<std::unique_ptr<T>> r, std::unique_ptr<T>* out) {
+  if (!r) return std::move(r).error();
+  *out = std::move(*r);
+  return {};
+}
 
 // ---- DdsReader ---------------------------------------------------------------------------------
 
@@ -137,10 +146,11 @@ Result<std::unique_ptr<DdsReader<T>>> DdsReader<T>::Create(DdsParticipant& parti
   impl->options = o;
   impl->check = check;
   if (o.mode == DdsReaderMode::kQueue) impl->queue = std::make_unique<SpscQueue<DdsReceived<T>>>(o.queue_capacity);
-  fdds::Topic* t = impl->owner->TopicFor(topic, fdds::TypeSupport(new typename DdsType<T>::PubSubType()));
-  if (t == nullptr) return DdsError("cannot create topic '" + topic + "'");
+  fdds::Topic* t = impl->owner->TopicFor(topic, fdds::TypeSupport(new typename DdsType<T>::PubSubType()), o.type_name);
+  if (t == nullptr) return DdsError("cannot create topic '" + topic + "' (type '" + o.type_name + "')");
   const fdds::StatusMask mask = fdds::StatusMask::data_available() << fdds::StatusMask::subscription_matched();
-  impl->reader = impl->owner->subscriber->create_datareader(t, ReaderQos(o.history_depth), impl.get(), mask);
+  impl->reader =
+      impl->owner->subscriber->create_datareader(t, ReaderQos(o.history_depth, o.transient_local), impl.get(), mask);
   if (impl->reader == nullptr) return DdsError("cannot create a reader of topic '" + topic + "'");
   return std::unique_ptr<DdsReader>(new DdsReader(std::move(impl)));
 }
@@ -274,8 +284,8 @@ Result<std::unique_ptr<DdsWriter<T>>> DdsWriter<T>::Create(DdsParticipant& parti
   auto impl = std::make_unique<Impl>();
   impl->owner = &participant.impl();
   impl->options = o;
-  fdds::Topic* t = impl->owner->TopicFor(topic, fdds::TypeSupport(new typename DdsType<T>::PubSubType()));
-  if (t == nullptr) return DdsError("cannot create topic '" + topic + "'");
+  fdds::Topic* t = impl->owner->TopicFor(topic, fdds::TypeSupport(new typename DdsType<T>::PubSubType()), o.type_name);
+  if (t == nullptr) return DdsError("cannot create topic '" + topic + "' (type '" + o.type_name + "')");
   impl->writer = impl->owner->publisher->create_datawriter(t, WriterQos(o.history_depth), impl.get(),
                                                            fdds::StatusMask::publication_matched());
   if (impl->writer == nullptr) return DdsError("cannot create a writer of topic '" + topic + "'");

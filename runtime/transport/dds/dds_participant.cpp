@@ -1,5 +1,6 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "runtime/transport/dds/dds_endpoint_impl.hpp"
@@ -27,10 +28,10 @@ fdds::DataWriterQos WriterQos(std::int32_t depth) {
   return q;
 }
 
-fdds::DataReaderQos ReaderQos(std::int32_t depth) {
+fdds::DataReaderQos ReaderQos(std::int32_t depth, bool transient_local) {
   fdds::DataReaderQos q = fdds::DATAREADER_QOS_DEFAULT;
   q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
-  q.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  q.durability().kind = transient_local ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS : fdds::VOLATILE_DURABILITY_QOS;
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = depth;
   // No data-sharing (shared-memory delivery between participants on one host): Fast DDS 2.9's
@@ -43,17 +44,37 @@ fdds::DataReaderQos ReaderQos(std::int32_t depth) {
   return q;
 }
 
+Result<DdsNaming> ParseDdsNaming(const std::string& text) {
+  if (text == "native") return DdsNaming::kNative;
+  if (text == "ros2") return DdsNaming::kRos2;
+  return DdsError("naming '" + text + "': expected native or ros2");
+}
+
+const char* ToString(DdsNaming naming) noexcept {
+  return naming == DdsNaming::kRos2 ? "ros2" : "native";
+}
+
+std::string WireTopic(DdsNaming naming, const std::string& topic) {
+  return naming == DdsNaming::kRos2 ? "rt/" + topic : topic;
+}
+
+std::string WireTypeName(DdsNaming naming, const std::string& ros2_message) {
+  return naming == DdsNaming::kRos2 ? "pbppo_msgs::msg::dds_::" + ros2_message + "_" : std::string();
+}
+
 DdsParticipant::Impl::~Impl() {
   if (participant == nullptr) return;
   participant->delete_contained_entities();
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
 }
 
-fdds::Topic* DdsParticipant::Impl::TopicFor(const std::string& name, fdds::TypeSupport type) {
+fdds::Topic* DdsParticipant::Impl::TopicFor(const std::string& name, fdds::TypeSupport type,
+                                            const std::string& type_name) {
   std::lock_guard<std::mutex> lk(topics_mu);
   if (const auto it = topics.find(name); it != topics.end()) return it->second;
-  if (type.register_type(participant) != ReturnCode_t::RETCODE_OK) return nullptr;
-  fdds::Topic* t = participant->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  const std::string registered = type_name.empty() ? type.get_type_name() : type_name;
+  if (type.register_type(participant, registered) != ReturnCode_t::RETCODE_OK) return nullptr;
+  fdds::Topic* t = participant->create_topic(name, registered, fdds::TOPIC_QOS_DEFAULT);
   if (t != nullptr) topics[name] = t;
   return t;
 }
@@ -72,9 +93,18 @@ Result<std::unique_ptr<DdsParticipant>> DdsParticipant::Create(const DdsOptions&
     origin = "profile_file '" + o.profile_file + "'";
   }
   auto* factory = fdds::DomainParticipantFactory::get_instance();
-  // Loading the same profiles a second time in one process is harmless; profiles Fast DDS cannot
-  // parse make the lookup below fail, which names both.
-  const bool loaded = factory->load_XML_profiles_string(xml.data(), xml.size()) == ReturnCode_t::RETCODE_OK;
+  // Each text of profiles is loaded once per process (a second load only makes Fast DDS log that
+  // the names exist); profiles Fast DDS cannot parse make the lookup below fail, which names both.
+  static std::mutex loaded_mu;
+  static std::set<std::string> loaded_texts;
+  bool loaded = true;
+  {
+    std::lock_guard<std::mutex> lk(loaded_mu);
+    if (loaded_texts.count(xml) == 0) {
+      loaded = factory->load_XML_profiles_string(xml.data(), xml.size()) == ReturnCode_t::RETCODE_OK;
+      if (loaded) loaded_texts.insert(xml);
+    }
+  }
   auto impl = std::make_unique<Impl>();
   impl->domain_id = o.domain_id;
   impl->participant =

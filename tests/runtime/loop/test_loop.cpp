@@ -142,8 +142,7 @@ namespace {
 // The quadruped with a walking policy's layout and an operator's velocity command (issue 18's
 // signals), in a copy of its folder.
 std::string WalkingRobot() {
-  const std::string dir = test::ScratchDir("walking") + "/quadruped";
-  std::filesystem::copy(test::SourcePath("models/quadruped"), dir, std::filesystem::copy_options::recursive);
+  const std::string dir = test::CopyRobotFolder("quadruped", "walking");
   const auto& m = test::QuadrupedRobot();
   std::ofstream io(dir + "/io_layout.yaml");
   io << "robot: quadruped\nobservations:\n";

@@ -9,6 +9,7 @@
 
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/robot/text_file.hpp"
+#include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo;
@@ -53,8 +54,9 @@ TEST_CASE("robot model: loading a robot reads each file it names exactly once") 
       ++files;
     }
     // robot.yaml, and for the AUV the IO layout, plant, DDS profile and three layouts; for the
-    // quadruped the description, its URDF, the IO layout, the CAN map and the stand trajectory.
-    CHECK(files == (m.name == "auv" ? 7u : 6u));
+    // quadruped the description, its URDF, the IO layout, the CAN map, the stand trajectory and the
+    // DDS profile.
+    CHECK(files == 7u);
     CHECK(m.hash != 0);
   }
 }
@@ -143,8 +145,7 @@ TEST_CASE("robot model: another tick period - stale ages, rates and the policy p
 }
 
 TEST_CASE("robot model: bad robot files are refused naming the file, the field and the value") {
-  const std::string dir = test::ScratchDir("robot_model") + "/auv";
-  std::filesystem::copy(test::SourcePath("models/auv"), dir, std::filesystem::copy_options::recursive);
+  const std::string dir = test::CopyRobotFolder("auv", "robot_model");
   std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string p = dir + "/robot.yaml";

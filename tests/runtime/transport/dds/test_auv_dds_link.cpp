@@ -1,5 +1,5 @@
 // The AUV DDS link with two real Fast DDS participants in one process (controller side and
-// vehicle side) on the loopback interface, configured by models/auv/dds_profile.xml.
+// vehicle side) on the loopback interface, configured by models/dds_profile.xml.
 #include <doctest/doctest.h>
 
 #include <chrono>

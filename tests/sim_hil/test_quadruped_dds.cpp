@@ -1,0 +1,237 @@
+// The quadruped driven by velocity commands over DDS while it walks in the HIL: the controller's
+// operator transport (firmware/quadruped/operator_transport.hpp) on a real Fast DDS participant,
+// the HIL and the controller ticked in lock-step in this process at real time (the operator runs
+// on a wall clock). First an operator on Fast DDS with the project's names; then an operator
+// written against Cyclone DDS with ROS 2's names (tests/interop/cyclone_operator.c, a child
+// process): it commands a walk, reads the controller's status back, then falls silent, and the
+// controller must stop the robot.
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
+#include "firmware/quadruped/operator_transport.hpp"
+#include "runtime/loop/schedule.hpp"
+#include "runtime/transport/dds/operator_dds_link.hpp"
+#include "sim_hil/quadruped_rig.hpp"
+#include "sim_hil/quadruped_scenario.hpp"
+#include "tests/support/dds_domain.hpp"
+#include "tests/support/robot_models.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+
+namespace {
+
+constexpr std::int64_t kSecond = 1'000'000'000;
+
+struct Controller {
+  std::unique_ptr<dds::OperatorDdsLink> link;
+  std::unique_ptr<quadruped::OperatorTransport> op;
+};
+
+Controller MakeController(dds::DdsNaming naming, int domain) {
+  dds::OperatorDdsOptions o;
+  o.profile_file = test::DdsProfile();
+  o.domain_id = domain;
+  o.naming = naming;
+  auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, o);
+  REQUIRE_MESSAGE(l.ok(), l.error().message);
+  Controller c;
+  c.link = std::move(*l);
+  auto t = quadruped::OperatorTransport::Create(test::QuadrupedRobot(), *c.link);
+  REQUIRE_MESSAGE(t.ok(), t.error().message);
+  c.op = std::move(*t);
+  return c;
+}
+
+std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, robot::Transport* op) {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto s = loop::ParseSchedule(schedule_yaml, "test schedule", m);
+  REQUIRE_MESSAGE(s.ok(), s.error().message);
+  auto sc = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
+  REQUIRE_MESSAGE(sc.ok(), sc.error().message);
+  sim::RigOptions o;
+  o.policy = test::SourcePath("policies/frozen/quadruped_walk/flat.blob");
+  o.operator_transport = op;
+  o.max_speed = 1.0;  // the operator's clock is the wall clock
+  auto r = sim::QuadrupedRig::Make(m, sc->hil, std::move(*s), o);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  return std::move(*r);
+}
+
+// The controller's status published every 50 ms, as pbppo-controller's status thread does.
+class StatusPublisher {
+ public:
+  StatusPublisher(Controller& c, const loop::LoopData& loop)
+      : thread_([this, &c, &loop] {
+          while (!stop_.load()) {
+            (void)c.link->PublishStatus(quadruped::StatusOf(loop, c.op.get()));
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+          }
+        }) {}
+  ~StatusPublisher() {
+    stop_.store(true);
+    thread_.join();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Mean |vx - command| over the walking (nominal) ticks where `command` was in force, from `settle_s` after
+// the first of them.
+double TrackingError(const std::vector<sim::RigSample>& trace, float command, double settle_s, std::uint64_t* n) {
+  double first = -1, sum = 0;
+  *n = 0;
+  for (const sim::RigSample& s : trace) {
+    if (s.cmd_vx != command || s.loop_phase != static_cast<std::uint8_t>(loop::Phase::kRun) || s.mode != 0) continue;
+    if (first < 0) first = s.t_s;
+    if (s.t_s < first + settle_s) continue;
+    sum += std::fabs(static_cast<double>(s.vx_mps - command));
+    ++*n;
+  }
+  return *n > 0 ? sum / static_cast<double>(*n) : 1e9;
+}
+
+}  // namespace
+
+TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes back") {
+  const int domain = test::TestDomain(41);
+  Controller ctl = MakeController(dds::DdsNaming::kNative, domain);
+  dds::OperatorDdsOptions oo;
+  oo.profile_file = test::DdsProfile();
+  oo.domain_id = domain;
+  auto opl = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kOperator, oo);
+  REQUIRE_MESSAGE(opl.ok(), opl.error().message);
+  dds::OperatorDdsLink& oper = **opl;
+  REQUIRE(ctl.link->WaitForPeer(20 * kSecond));
+  REQUIRE(oper.WaitForPeer(20 * kSecond));
+
+  auto rig = MakeRig(
+      "stream: velocity_command\n"
+      "phases:\n"
+      "  - {name: stand, duration_s: 2.0}\n"
+      "  - {name: forward, duration_s: 3.5, command_vx: 0.4}\n",
+      ctl.op.get());
+  std::atomic<bool> done{false};
+  std::uint64_t published = 0;
+  bool ran = false;
+  {
+    StatusPublisher status(ctl, rig->loop());
+    // The operator: stand for 2 s of its clock, then 0.4 m/s forward, at 20 Hz until the rig is done.
+    std::thread oper_thread([&] {
+      const auto t0 = std::chrono::steady_clock::now();
+      auto next = t0;
+      while (!done.load()) {
+        robot::VelocityCommand c;
+        c.seq = ++published;
+        c.vx_mps = std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2) ? 0.0 : 0.4;
+        (void)oper.PublishCommand(c);
+        next += std::chrono::milliseconds(50);
+        std::this_thread::sleep_until(next);
+      }
+    });
+    ran = rig->RunSchedule();
+    done.store(true);
+    oper_thread.join();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a status after the last tick
+  }
+  REQUIRE(ran);
+  const sim::RigReport rep = rig->Report(1.0);
+  CAPTURE(rep.phases[1].mean_abs_error[0]);
+  CAPTURE(rep.phases[1].mean_measured[0]);
+  CHECK_FALSE(rep.fell);
+  CHECK(rep.phases[1].mean_abs_error[0] <= 0.2);
+  CHECK(ctl.op->commands() >= 50);  // 20 Hz for 5.5 s, less discovery
+  CHECK(ctl.link->command_counters().invalid == 0);
+
+  robot::QuadrupedStatus st;
+  REQUIRE(oper.ReadStatus(&st) != 0);
+  CHECK(st.phase == static_cast<std::uint8_t>(loop::Phase::kRun));
+  CHECK(st.mode == static_cast<std::uint8_t>(safety::Mode::kNominal));
+  CHECK(st.commands_received == ctl.op->commands());
+  CHECK(st.command_vx_mps == doctest::Approx(0.4));
+  CHECK(st.tick >= 5000);
+}
+
+TEST_CASE(
+    "a Cyclone DDS operator with ROS 2 names drives the walk, reads the status, and its silence stops the robot") {
+  const int domain = test::TestDomain(42);
+  Controller ctl = MakeController(dds::DdsNaming::kRos2, domain);
+  // Cyclone on the loopback interface, discovery by unicast to 127.0.0.1 like the Fast DDS profile.
+  setenv("CYCLONEDDS_URI",
+         "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+         "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
+         1);
+  const std::string cmd = std::string(PBPPO_CYCLONE_OPERATOR) + " " + std::to_string(domain) + " 0.4 5.0 3.0 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  REQUIRE(child != nullptr);
+  const bool matched = ctl.link->WaitForPeer(30 * kSecond);  // its writer and reader discovered
+  std::string out;
+  if (matched) {
+    auto rig = MakeRig(
+        "stream: velocity_command\n"
+        "phases:\n"
+        "  - {name: operator, duration_s: 7.0}\n",
+        ctl.op.get());
+    bool ran = false;
+    {
+      StatusPublisher status(ctl, rig->loop());
+      ran = rig->RunSchedule();
+    }
+    CHECK(ran);
+    // While commanded: the robot walks at the command, no fall.
+    std::uint64_t n = 0;
+    const double err = TrackingError(rig->trace(), 0.4f, 1.0, &n);
+    CAPTURE(n);
+    CHECK(n >= 1500);  // >= 1.5 s of settled walking
+    CHECK(n <= 4500);  // ... and not after the commands stopped
+    CHECK(err <= 0.2);
+    bool contact_while_commanded = false;
+    for (const sim::RigSample& s : rig->trace())
+      if (s.cmd_vx == 0.4f && s.mode == 0 && s.body_contact) contact_while_commanded = true;
+    CHECK_FALSE(contact_while_commanded);
+    // Silent: the stale velocity command stream takes the controller to safe-stop.
+    bool safe_stop = false;
+    for (const loop::ModeChange& c : rig->loop().mode_changes())
+      if (c.mode >= safety::Mode::kSafeStop) {
+        CAPTURE(c.reason);
+        safe_stop = true;
+        CHECK(std::string(c.reason).find("velocity_command") != std::string::npos);
+        break;
+      }
+    CHECK(safe_stop);
+    CHECK(ctl.op->commands() >= 40);
+  }
+  char line[512];
+  while (std::fgets(line, sizeof line, child) != nullptr) out += line;
+  const int rc = pclose(child);
+  CAPTURE(out);
+  REQUIRE(matched);
+  CHECK(rc == 0);
+  // What the Cyclone operator read back: walking, nominal, its own command while it commanded; the
+  // controller in safe-stop or beyond after it fell silent.
+  unsigned long long tick = 0, commands = 0;
+  unsigned phase = 0, mode = 9, cause = 0;
+  double vx = 0;
+  const auto at = out.find("commanding ");
+  REQUIRE(at != std::string::npos);
+  REQUIRE(std::sscanf(out.c_str() + at, "commanding tick=%llu phase=%u mode=%u cause=%u commands=%llu vx=%lf", &tick,
+                      &phase, &mode, &cause, &commands, &vx) == 6);
+  CHECK(phase == static_cast<unsigned>(loop::Phase::kRun));
+  CHECK(mode == 0);
+  CHECK(commands > 0);
+  CHECK(vx == doctest::Approx(0.4));
+  const auto after = out.find("after ");
+  REQUIRE(after != std::string::npos);
+  REQUIRE(std::sscanf(out.c_str() + after, "after tick=%llu phase=%u mode=%u", &tick, &phase, &mode) == 3);
+  CHECK(mode >= static_cast<unsigned>(safety::Mode::kSafeStop));
+}
