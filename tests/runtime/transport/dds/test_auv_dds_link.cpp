@@ -21,11 +21,13 @@ namespace {
 
 constexpr std::int64_t kSecond = 1'000'000'000;
 
-std::unique_ptr<AuvDdsLink> Make(AuvDdsRole role, int domain, std::size_t queue = 16) {
+std::unique_ptr<AuvDdsLink> Make(AuvDdsRole role, int domain, std::size_t queue = 16,
+                                 dds::DdsNaming naming = dds::DdsNaming::kNative) {
   dds::AuvDdsOptions o;
   o.profile_file = test::DdsProfile();
   o.domain_id = domain;
   o.command_queue_capacity = queue;
+  o.naming = naming;
   auto r = AuvDdsLink::Create(role, o);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   return std::move(*r);
@@ -209,6 +211,32 @@ TEST_CASE(
   CHECK((got.flags & dds::kCommandNonFinite) != 0);
   CHECK((got.flags & dds::kCommandModeOutOfRange) != 0);
   CHECK(p.vehicle->counters().invalid == 1);
+}
+
+TEST_CASE("dds link: ROS 2 naming - both sides talk on rt/ topics, and not to a side with the native names") {
+  const int domain = test::TestDomain(7);
+  auto vehicle = Make(AuvDdsRole::kVehicle, domain, 16, dds::DdsNaming::kRos2);
+  auto controller = Make(AuvDdsRole::kController, domain, 16, dds::DdsNaming::kRos2);
+  auto native = Make(AuvDdsRole::kController, domain);  // same domain, the project's own names
+  REQUIRE(vehicle->WaitForPeer(10 * kSecond));
+  REQUIRE(controller->WaitForPeer(10 * kSecond));
+  REQUIRE(vehicle->PublishSample(Distinct(5)).ok());
+  REQUIRE(controller->WaitForSample(0, 10 * kSecond));
+  dds::AuvSensorInput in;
+  REQUIRE(controller->ReadSample(&in) == 1);
+  CHECK(in.value.tick == 5);
+  CHECK(in.value.x_m == 1.5);
+  // Other topic names: the native controller never matched the ROS 2 vehicle.
+  CHECK(native->Peer().matched_writers == 0);
+  CHECK(native->Peer().matched_readers == 0);
+  CHECK(native->ReadSample(&in) == 0);
+  // The names themselves, as ROS 2 tools expect them.
+  CHECK(dds::WireTopic(dds::DdsNaming::kRos2, "pbppo/auv/command") == "rt/pbppo/auv/command");
+  CHECK(dds::WireTypeName(dds::DdsNaming::kRos2, "AuvCommand") == "pbppo_msgs::msg::dds_::AuvCommand_");
+  CHECK(dds::WireTypeName(dds::DdsNaming::kNative, "AuvCommand").empty());
+  auto bad = dds::ParseDdsNaming("ros");
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("'ros'") != std::string::npos);
 }
 
 TEST_CASE("dds link: a full command queue drops and counts, the rest is written in order") {
