@@ -3,10 +3,11 @@
 //   pbppo-controller --robot models/auv/robot.yaml --policy policies/frozen/auv_nav/auv_nav.blob
 //       [--lockstep] [--period-ms MS] [--domain D] [--dds-profile FILE] [--lost-after-s S]
 //       [--peer-timeout-s S] [--writer-poll-us N] [--status-every-s S]
-//   pbppo-controller --robot models/quadruped/robot.yaml [--policy BLOB --commands SCHEDULE |
+//   pbppo-controller --robot models/quadruped/robot.yaml [--policy BLOB [--commands SCHEDULE] |
 //       --trajectory FILE] [--can IF0,IF1]
 //       [--lockstep-wait-ms N] [--candump FILE] [--receive-all]
-//   both: [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
+//       (with a policy and no --commands: velocity commands over DDS on --domain, status published)
+//   both: [--dds-naming native|ros2] [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
 //       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it

@@ -22,8 +22,9 @@ namespace {
 
 struct Options {
   std::string robot = "models/quadruped/robot.yaml", scenario, policy, commands, trace, report, plot;
-  std::string can;  // IF0[,IF1]
-  bool stand = false, lockstep = false, in_process = false, skip_self_test = false;
+  std::string can;      // IF0[,IF1]
+  std::string profile;  // --in-process: the controller's tick profile (JSON)
+  bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
   std::uint64_t seed = 1;
 };
@@ -34,6 +35,11 @@ int Fail(const std::string& msg, int rc) {
 }
 
 const char* kNames[3] = {"vx", "vy", "yaw rate"};
+
+// "out.png" -> "out": the stem the other plots' names extend.
+std::string PngStem(const std::string& png) {
+  return png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
+}
 
 void PrintReport(const RigReport& r) {
   std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
@@ -105,8 +111,7 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
   }
   map.paths.push_back(path);
   map.arena = {x0 - 0.5, x1 + 0.5, y0 - 0.5, y1 + 0.5};
-  std::string base = png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
-  return report::PlotMap(map, base + "_path.png");
+  return report::PlotMap(map, PngStem(png) + "_path.png");
 }
 
 int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOptions hil) {
@@ -116,9 +121,11 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   RigOptions ro;
   ro.policy = o.policy;
   ro.self_test = !o.skip_self_test;
+  ro.realtime = o.realtime;
   auto rig = QuadrupedRig::Make(model, std::move(hil), std::move(*schedule), ro);
   if (!rig) return Fail(rig.error().message, 2);
-  std::printf("pbppo-hil quadruped: controller and HIL in one process, lock-step, %s, %s, schedule %s (%.1f s)\n",
+  std::printf("pbppo-hil quadruped: controller and HIL in one process, %s, %s, %s, schedule %s (%.1f s)\n",
+              o.realtime ? "free-running at the tick period" : "lock-step",
               o.scenario.empty() ? "flat ground" : o.scenario.c_str(),
               o.policy.empty() ? "no policy" : o.policy.c_str(), o.commands.c_str(),
               (*rig)->operator_source().schedule().duration_s());
@@ -134,15 +141,31 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
               loop::ToString((*rig)->loop().phase()), safety::ToString(sup.mode),
               static_cast<unsigned long long>((*rig)->hil().imu_samples()),
               static_cast<unsigned long long>((*rig)->can().commands_sent(0)));
-  std::printf("%.2f s simulated in %.2f s wall: real-time factor %.2f (lock-step, Simbody RK2 4 x 0.25 ms per tick)\n",
-              sim_s, wall, sim_s / wall);
+  std::printf("%.2f s simulated in %.2f s wall: real-time factor %.2f (%s, Simbody RK2 4 x 0.25 ms per tick)\n", sim_s,
+              wall, sim_s / wall, o.realtime ? "free-running" : "lock-step");
+  // The controller's own tick, stage by stage (the HIL's step is outside it); free-running, also
+  // the wake-up jitter and the ticks that started late (controller and HIL together overran).
+  const rt::ProfileReport profile = rt::TakeReport((*rig)->loop().profiler());
+  std::printf("controller tick profile:\n%s", rt::FormatText(profile).c_str());
+  if (!o.profile.empty()) {
+    const std::string json = rt::FormatJson(profile);
+    if (auto st = policy::WriteFileAtomic(o.profile, {reinterpret_cast<const std::uint8_t*>(json.data()), json.size()});
+        !st)
+      return Fail(st.error().message, 1);
+  }
   if (!o.trace.empty())
     if (auto st = WriteRigTrace((*rig)->trace(), o.trace); !st) return Fail(st.error().message, 1);
   if (!o.report.empty())
     if (auto st = WriteReportJson(rep, sim_s / wall, o.report); !st) return Fail(st.error().message, 1);
-  if (!o.plot.empty())
+  if (!o.plot.empty()) {
     if (auto st = Plot(**rig, o.plot); !st)
       std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
+    if (auto st = report::PlotLatency(
+            profile, PngStem(o.plot) + "_latency.png",
+            std::string("quadruped controller tick (") + (o.realtime ? "free-running 1 kHz" : "lock-step") + ")");
+        !st)
+      std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
+  }
   return ok && !rep.fell ? 0 : 1;
 }
 
@@ -164,7 +187,11 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_flag("--skip-self-test", o.skip_self_test, "--in-process: arm without the blob's golden vectors");
   app.add_option("--trace", o.trace, "--in-process: write the trace (CSV, every 10 ms)");
   app.add_option("--report", o.report, "--in-process: write per-phase tracking (JSON)");
-  app.add_option("--plot", o.plot, "--in-process: velocities PNG (and <name>_path.png, the base path)");
+  app.add_option("--plot", o.plot,
+                 "--in-process: velocities PNG (and <name>_path.png, the base path; <name>_latency.png, the tick)");
+  app.add_option("--profile", o.profile, "--in-process: write the controller's tick profile (JSON)");
+  app.add_flag("--realtime", o.realtime,
+               "--in-process: tick at the robot's period on the controller's clock (jitter, deadline misses)");
   app.add_option("--settle-s", o.settle_s, "--in-process: tracking is measured this long after each phase starts")
       ->check(CLI::Range(0.0, 100.0));
   try {

@@ -1,10 +1,8 @@
 #include "sim_hil/quadruped_rig.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 
 #include "runtime/policy/blob.hpp"
 
@@ -48,7 +46,9 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   r->loop_ = loop::MakeLoopData(model, r->source_.source.get());
   r->transports_[0] = r->can_.get();
   r->transports_[1] = o.operator_transport != nullptr ? o.operator_transport : r->schedule_.get();
-  r->max_speed_ = o.max_speed;
+  if (o.realtime)
+    r->clock_ =
+        std::make_unique<rt::FreeRunningClock>(static_cast<std::int64_t>(std::llround(model.tick_period_s * 1e9)));
   const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
   for (int k = 0; k < 3; ++k) r->cmd_field_[k] = model.FieldIndex(names[k]);
   return r;
@@ -59,7 +59,8 @@ bool QuadrupedRig::Tick() noexcept {
   for (std::size_t b = 0; b < hil_->bus_count() && b < 8; ++b) from_hil[b] = hil_->sent_last_tick(b);
   can_->Expect({from_hil, hil_->bus_count()});
   rt::TickTiming timing;
-  timing.tick = tick_;
+  if (clock_) (void)clock_->Wait(timing);
+  timing.tick = tick_;  // simulated time: one tick per tick, whatever the clock skipped
   status_ = loop::Tick(model_, data_, *loop_, transports_, timing);
   std::uint32_t from_ctl[8] = {};
   for (std::size_t b = 0; b < can_->bus_count() && b < 8; ++b) from_ctl[b] = can_->sent_last_tick(b);
@@ -106,13 +107,8 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
       static_cast<std::uint64_t>(std::llround((schedule_->schedule().duration_s() + extra_s) / model_.tick_period_s));
   trace_.reserve(trace_.size() + total);
   loop_->Arm();
-  const auto t0 = std::chrono::steady_clock::now();
-  const double wall_per_tick_s = max_speed_ > 0 ? model_.tick_period_s / max_speed_ : 0;
+  if (clock_) clock_->Start();
   while (tick_ < total) {
-    if (wall_per_tick_s > 0)
-      std::this_thread::sleep_until(t0 +
-                                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                        std::chrono::duration<double>(static_cast<double>(tick_) * wall_per_tick_s)));
     if (!Tick()) return false;
     if (status_ != loop::TickStatus::kRunning) break;
   }

@@ -19,6 +19,7 @@
 #include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
 #include "runtime/robot/robot_model.hpp"
+#include "runtime/rt/tick_clock.hpp"
 #include "runtime/transport/can/can_transport.hpp"
 #include "runtime/transport/can/memory_bus.hpp"
 #include "sim_hil/quadruped_hil.hpp"
@@ -35,8 +36,10 @@ struct RigOptions {
   // operator_transport.hpp); the schedule then only names the phases of the report. Must outlive
   // the rig.
   robot::Transport* operator_transport = nullptr;
-  // > 0: RunSchedule ticks no faster than this many times real time (an operator on a wall clock).
-  double max_speed = 0;
+  // RunSchedule ticks at the robot's tick period on the controller's own clock (rt::FreeRunningClock,
+  // as pbppo-controller free-running): the loop's profile then holds wake-up jitter and deadline
+  // misses. Else as fast as the plant allows (lock-step).
+  bool realtime = false;
 };
 
 // One tick of the trace.
@@ -75,7 +78,8 @@ class QuadrupedRig {
                                                     loop::Schedule schedule, const RigOptions& options);
   ~QuadrupedRig();
 
-  // One controller tick, then one HIL tick. False once the plant failed.
+  // One controller tick, then one HIL tick (realtime: first waits for the tick's deadline). False
+  // once the plant failed.
   bool Tick() noexcept;
   // Arms, then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
   bool RunSchedule(double extra_s = 0);
@@ -108,7 +112,7 @@ class QuadrupedRig {
   std::vector<RigSample> trace_;
   std::int32_t cmd_field_[3] = {-1, -1, -1};
   std::int64_t wait_ns_ = 0;
-  double max_speed_ = 0;
+  std::unique_ptr<rt::FreeRunningClock> clock_;  // realtime
   bool memory_ = true;
   std::uint64_t tick_ = 0;
   loop::TickStatus status_ = loop::TickStatus::kRunning;

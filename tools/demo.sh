@@ -56,7 +56,8 @@ build/default/sim_hil/pbppo-hil quadruped --in-process --policy "$qblob" \
 qrc=$?
 set -e
 echo "files: $out/quadruped.png (commanded vs measured velocity), $out/quadruped_path.png (base path),"
-echo "       $out/quadruped.json (per-phase tracking), $out/quadruped_trace.csv"
+echo "       $out/quadruped_latency.png (controller tick latency), $out/quadruped.json (per-phase tracking),"
+echo "       $out/quadruped_trace.csv"
 if [ "$crc" -ne 0 ] || [ "$hrc" -ne 0 ] || [ "$qrc" -ne 0 ]; then
   echo "demo: AUV controller exited $crc, AUV simulator exited $hrc, quadruped HIL exited $qrc" >&2
   exit 1

@@ -59,7 +59,7 @@ std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, rob
   sim::RigOptions o;
   o.policy = test::SourcePath("policies/frozen/quadruped_walk/flat.blob");
   o.operator_transport = op;
-  o.max_speed = 1.0;  // the operator's clock is the wall clock
+  o.realtime = true;  // the operator's clock is the wall clock
   auto r = sim::QuadrupedRig::Make(m, sc->hil, std::move(*s), o);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   return std::move(*r);
