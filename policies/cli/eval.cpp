@@ -33,6 +33,11 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_flag("--randomize", o.env.randomize,
              "quadruped-walk: randomised robots as in training (friction, mass, gains, latency, pushes); default: "
              "the nominal robot");
+  s.add_option("--schedule", o.schedule,
+               "quadruped-walk: one robot commanded by this velocity schedule (the HIL's, e.g. "
+               "models/quadruped/schedules/demo.yaml): per-phase tracking, as pbppo-hil quadruped prints it");
+  s.add_option("--settle-s", o.settle_s, "--schedule: tracking is judged this long after each phase starts")
+      ->check(CLI::Range(0.0, 100.0));
   s.add_option("--seed", o.seed, "Seed for the initial states");
   s.add_option("--models", o.env.models_dir, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
@@ -134,6 +139,11 @@ int Eval(const EvalOptions& o_in) {
   auto env = envs::MakeEnv(env_options);
   if (!env) {
     std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());
+    return 2;
+  }
+  if (!o_in.schedule.empty() && !walk) {
+    std::fprintf(stderr, "pbppo eval: --schedule: only quadruped-walk takes a velocity schedule, not '%s'\n",
+                 o_in.env.name.c_str());
     return 2;
   }
   if (walk) return EvalWalk(o_in, *model, dynamic_cast<envs::QuadrupedWalk&>(**env));

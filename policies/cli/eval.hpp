@@ -22,6 +22,8 @@ struct EvalOptions {
   std::string plot;          // PNG of the trajectories over the map (auv-nav)
   std::string trajectories;  // CSV of every episode's trajectory (auv-nav)
   std::string outcomes;      // CSV, one row per episode: outcome, end pose, random obstacles (auv-nav)
+  std::string schedule;      // quadruped-walk: one robot commanded by a velocity schedule (models/quadruped/schedules)
+  double settle_s = 1.0;     // --schedule: tracking is judged this long after each phase starts
   int episodes = 0;          // 0: the environment's test size (100; quadruped-walk: the paper's 50 robots)
   std::uint64_t seed = 7;
   bool json = false;

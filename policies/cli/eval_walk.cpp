@@ -7,6 +7,8 @@
 
 #include "policies/envs/walk_eval.hpp"
 #include "report/plots.hpp"
+#include "runtime/loop/schedule.hpp"
+#include "runtime/robot/robot_model.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -39,9 +41,84 @@ Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::st
   return report::PlotTimeSeries(p, png);
 }
 
+// --schedule: the HIL's velocity schedule played to one robot in MuJoCo, per-phase tracking.
+int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
+  const std::string models = o.env.models_dir.empty() ? envs::DefaultModelsDir() : o.env.models_dir;
+  auto robot = robot::LoadRobotModel(models + "/quadruped/robot.yaml");
+  if (!robot) {
+    std::fprintf(stderr, "pbppo eval: %s\n", robot.error().message.c_str());
+    return 2;
+  }
+  auto schedule = loop::LoadSchedule(o.schedule, *robot);
+  if (!schedule) {
+    std::fprintf(stderr, "pbppo eval: --schedule: %s\n", schedule.error().message.c_str());
+    return 2;
+  }
+  // The schedule's fields by name: the velocity command's three.
+  const robot::StreamSpec& stream = robot->streams[schedule->stream_index];
+  int field[3] = {-1, -1, -1};
+  const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
+  for (int a = 0; a < 3; ++a)
+    for (std::uint32_t f = 0; f < stream.field_count; ++f)
+      if (robot->fields[stream.first_field + f].name == names[a]) field[a] = static_cast<int>(f);
+  if (field[0] < 0 || field[1] < 0 || field[2] < 0) {
+    std::fprintf(stderr, "pbppo eval: --schedule %s: stream '%s' is not the velocity command\n", o.schedule.c_str(),
+                 stream.name.c_str());
+    return 2;
+  }
+  std::vector<envs::WalkSchedulePhase> phases;
+  for (const loop::SchedulePhase& p : schedule->phases)
+    phases.push_back({p.name,
+                      p.start_s,
+                      p.duration_s,
+                      {p.values[static_cast<std::size_t>(field[0])], p.values[static_cast<std::size_t>(field[1])],
+                       p.values[static_cast<std::size_t>(field[2])]}});
+  auto r = envs::EvaluateWalkSchedule(model, env, phases, o.settle_s, o.seed);
+  if (!r) {
+    std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
+    return 1;
+  }
+  if (o.json) {
+    nlohmann::json j = {{"blob", o.blob},
+                        {"env", "quadruped-walk"},
+                        {"terrain", o.env.terrain},
+                        {"schedule", o.schedule},
+                        {"seed", o.seed},
+                        {"settle_s", o.settle_s},
+                        {"fell", r->fell},
+                        {"fell_at_s", r->fell_at_s},
+                        {"distance_m", r->distance_m},
+                        {"phases", nlohmann::json::array()}};
+    for (const auto& p : r->phases) {
+      auto three = [](const std::array<double, 3>& v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
+      j["phases"].push_back({{"name", p.phase.name},
+                             {"start_s", p.phase.start_s},
+                             {"end_s", p.phase.start_s + p.phase.duration_s},
+                             {"command", three(p.phase.command)},
+                             {"mean_abs_error", three(p.mean_abs_error)},
+                             {"mean_measured", three(p.mean_measured)}});
+    }
+    std::printf("%s\n", j.dump(2).c_str());
+    return r->fell ? 1 : 0;
+  }
+  std::printf("%s on quadruped-walk (MuJoCo), %s terrain%s, schedule %s, seed %llu\n", o.blob.c_str(),
+              o.env.terrain.c_str(), o.env.randomize ? " (randomised robot)" : "", o.schedule.c_str(),
+              static_cast<unsigned long long>(o.seed));
+  std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
+              "|e| vx", "|e| vy", "|e| wz");
+  for (const auto& p : r->phases)
+    std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %8.3f %8.3f %8.3f\n", p.phase.name.c_str(), p.phase.start_s,
+                p.phase.start_s + p.phase.duration_s, p.phase.command[0], p.phase.command[1], p.phase.command[2],
+                p.mean_abs_error[0], p.mean_abs_error[1], p.mean_abs_error[2]);
+  std::printf("walked %.2f m; %s\n", r->distance_m,
+              r->fell ? ("FELL at " + std::to_string(r->fell_at_s) + " s").c_str() : "no fall");
+  return r->fell ? 1 : 0;
+}
+
 }  // namespace
 
 int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
+  if (!o.schedule.empty()) return EvalWalkSchedule(o, model, env);
   envs::WalkEvalOptions eo;
   eo.robots = o.episodes > 0 ? o.episodes : 50;
   eo.seed = o.seed;

@@ -283,7 +283,6 @@ EpisodeInfo QuadrupedWalk::episode_info() const noexcept {
 
 void QuadrupedWalk::BuildTerrain(bool blocks) noexcept {
   const Shared& s = *shared_;
-  const QuadrupedWalkParams& p = s.params;
   on_blocks_ = blocks && !s.block_geom.empty();
   blocks_.clear();
   block_slot_.clear();
@@ -340,7 +339,13 @@ double QuadrupedWalk::GroundHeight(double x, double y) const noexcept {
   return sim::TerrainHeight(blocks_, x, y);
 }
 
+void QuadrupedWalk::HoldCommand(const std::array<double, 3>& c) noexcept {
+  held_ = true;
+  command_ = {c[0], c[1], c[2], 0.0};
+}
+
 void QuadrupedWalk::ResampleCommand() noexcept {
+  if (held_) return;
   const QuadrupedWalkParams& p = shared_->params;
   command_[0] = rng_.Uniform(p.vx_mps[0], p.vx_mps[1]);
   command_[1] = rng_.Uniform(p.vy_mps[0], p.vy_mps[1]);
@@ -390,7 +395,7 @@ void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
   fell_ = false;
   done_ = false;
   tel_ = WalkTelemetry{};
-  command_ = {0, 0, 0, 0};
+  if (!held_) command_ = {0, 0, 0, 0};
   error_sum_ = {0, 0, 0};
   ResampleCommand();
   Contacts();
@@ -565,7 +570,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   mjtNum rot[9];
   mju_quat2Mat(rot, d_->qpos + 3);
   const double yaw = std::atan2(rot[3], rot[0]);
-  if (p.heading_command)
+  if (p.heading_command && !held_)
     command_[2] = std::clamp(p.heading_gain * Wrap(command_[3] - yaw), p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
   Contacts();
   const double tilt = std::acos(std::clamp(rot[8], -1.0, 1.0));

@@ -89,6 +89,10 @@ class QuadrupedWalk final : public Env {
   EpisodeInfo episode_info() const noexcept override;
 
   const WalkTelemetry& telemetry() const noexcept { return tel_; }
+  // From now on the command is `vx, vy, yaw rate` (base frame) instead of the task's draws and
+  // heading controller: Reset and Step then observe it (a scripted operator, as in the HIL's
+  // schedules). Call before Reset for the first observation, before each Step for the next.
+  void HoldCommand(const std::array<double, 3>& command) noexcept;
   const QuadrupedWalkParams& params() const noexcept;
   const robot::RobotDescription& robot() const noexcept;
   // Benchmarks: `steps` MuJoCo steps of a copy of the current state with only the joint PD
@@ -129,7 +133,7 @@ class QuadrupedWalk final : public Env {
   std::array<double, 4> command_{};    // vx, vy, yaw rate, heading
   std::array<double, 3> error_sum_{};  // sum over the episode's steps of |command - measured|
   int step_ = 0;
-  bool on_blocks_ = false, fell_ = false, done_ = true;
+  bool on_blocks_ = false, fell_ = false, done_ = true, held_ = false;
   std::vector<sim::TerrainBlock> blocks_;  // this episode's blocks
   std::vector<int> block_slot_;            // per block: its pool geom, or -1
   std::vector<int> slot_block_;            // per pool geom: its block, or -1

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "policies/envs/quadruped_walk.hpp"
@@ -45,6 +46,35 @@ struct WalkEvalResult {
   std::vector<WalkFall> fall_list;
   std::vector<std::vector<WalkTelemetry>> traces;
 };
+
+// A velocity command schedule played to one robot in MuJoCo (the HIL's schedules, runtime/loop/
+// schedule.hpp, converted by the caller): sim-to-sim on the same commands as the Simbody HIL.
+struct WalkSchedulePhase {
+  std::string name;
+  double start_s = 0, duration_s = 0;
+  std::array<double, 3> command{};  // vx, vy (m/s), yaw rate (rad/s)
+};
+
+struct WalkSchedulePhaseResult {
+  WalkSchedulePhase phase;
+  std::array<double, 3> mean_abs_error{};  // the steps at least settle_s into the phase
+  std::array<double, 3> mean_measured{};
+  std::uint64_t samples = 0;
+};
+
+struct WalkScheduleResult {
+  std::vector<WalkSchedulePhaseResult> phases;
+  bool fell = false;
+  double fell_at_s = -1;
+  double distance_m = 0;             // the base's path length
+  std::vector<WalkTelemetry> trace;  // every policy step
+};
+
+// One robot from `seed`'s reset, commanded phase by phase (QuadrupedWalk::HoldCommand) until the
+// schedule ends, a fall, or the episode's end; the phases must fit in one episode.
+Result<WalkScheduleResult> EvaluateWalkSchedule(const policy::PolicyModel& model, QuadrupedWalk& env,
+                                                const std::vector<WalkSchedulePhase>& phases, double settle_s,
+                                                std::uint64_t seed);
 
 // Refuses a blob whose IO layout is not the environment's, naming the first difference.
 Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedWalk& env,

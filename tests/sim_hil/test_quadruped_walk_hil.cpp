@@ -5,6 +5,7 @@
 // every run; then each device fault, injected while the robot walks.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -29,18 +30,25 @@ loop::Schedule DemoSchedule(const robot::RobotModel& m) {
   return *s;
 }
 
-sim::QuadrupedHilOptions Flat(const robot::RobotModel& m) {
-  auto sc = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
+sim::QuadrupedHilOptions Scenario(const robot::RobotModel& m, const std::string& name) {
+  auto sc = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/" + name), m, m.tick_period_s);
   REQUIRE_MESSAGE(sc.ok(), sc.error().message);
   return sc->hil;
 }
 
-std::unique_ptr<sim::QuadrupedRig> MakeRig(sim::QuadrupedHilOptions hil, std::size_t record = 0) {
+std::unique_ptr<sim::QuadrupedRig> MakeRig(sim::QuadrupedHilOptions hil, std::size_t record = 0,
+                                           const std::string& policy = kPolicy, const std::string& schedule = "") {
   const robot::RobotModel& m = test::QuadrupedRobot();
   sim::RigOptions o;
-  o.policy = test::SourcePath(kPolicy);
+  o.policy = test::SourcePath(policy);
   o.command_record_capacity = record;
-  auto r = sim::QuadrupedRig::Make(m, std::move(hil), DemoSchedule(m), o);
+  loop::Schedule s = DemoSchedule(m);
+  if (!schedule.empty()) {
+    auto parsed = loop::ParseSchedule(schedule, "test schedule", m);
+    REQUIRE_MESSAGE(parsed.ok(), parsed.error().message);
+    s = std::move(*parsed);
+  }
+  auto r = sim::QuadrupedRig::Make(m, std::move(hil), std::move(s), o);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   return std::move(*r);
 }
@@ -55,7 +63,7 @@ void CheckCommandsWithinLimits(sim::QuadrupedRig& rig) {
 
 TEST_CASE("quadruped HIL: the shipped walking policy follows the demo schedule in Simbody - <= 0.2 m/s, no fall") {
   const robot::RobotModel& m = test::QuadrupedRobot();
-  auto rig = MakeRig(Flat(m), 12 * 20000);
+  auto rig = MakeRig(Scenario(m, "flat.yaml"), 12 * 20000);
   REQUIRE(rig->RunSchedule());
   const sim::RigReport r = rig->Report(1.0);
   for (const auto& p : r.phases) {
@@ -76,9 +84,50 @@ TEST_CASE("quadruped HIL: the shipped walking policy follows the demo schedule i
   CheckCommandsWithinLimits(*rig);
 }
 
+namespace {
+const char* kForward =
+    "stream: velocity_command\n"
+    "phases:\n"
+    "  - {name: stand, duration_s: 3.0}\n"
+    "  - {name: forward, duration_s: 8.0, command_vx: 0.5}\n"
+    "  - {name: stop, duration_s: 2.0}\n";
+}  // namespace
+
+TEST_CASE("quadruped HIL: pushed sideways and from behind while walking (push.yaml) - no fall, <= 0.2 m/s") {
+  auto rig = MakeRig(Scenario(test::QuadrupedRobot(), "push.yaml"), 200000, kPolicy, kForward);
+  REQUIRE(rig->RunSchedule());
+  const sim::RigReport r = rig->Report(1.0);
+  std::printf("HIL walk, pushed at 6 s and 9 s: forward |e| vx %.3f vy %.3f, walked %.2f m\n",
+              r.phases[1].mean_abs_error[0], r.phases[1].mean_abs_error[1], r.distance_m);
+  CHECK_FALSE(r.fell);
+  CHECK(r.phases[1].mean_abs_error[0] <= 0.2);
+  CHECK(r.phases[1].mean_abs_error[1] <= 0.2);
+  // The pushes happened: the base was shoved sideways (left) at 6 s.
+  double max_vy = 0;
+  for (const sim::RigSample& t : rig->trace())
+    if (t.t_s > 6.0f && t.t_s < 6.5f) max_vy = std::max(max_vy, static_cast<double>(t.vy_mps));
+  CHECK(max_vy > 0.3);
+  CHECK(rig->loop().supervisor().mode == Mode::kNominal);
+  CheckCommandsWithinLimits(*rig);
+}
+
+TEST_CASE("quadruped HIL: the mixed-terrain policy on the training terrain's blocks (blocks.yaml) - no fall") {
+  // Measured, not asserted: tracking on blocks (docs/quadruped_hil.md: it stops in front of a block).
+  auto rig = MakeRig(Scenario(test::QuadrupedRobot(), "blocks.yaml"), 200000,
+                     "policies/frozen/quadruped_walk/mixed.blob", kForward);
+  REQUIRE(rig->RunSchedule());
+  const sim::RigReport r = rig->Report(1.0);
+  std::printf("HIL walk on blocks (mixed policy): forward |e| vx %.3f vy %.3f, walked %.2f m\n",
+              r.phases[1].mean_abs_error[0], r.phases[1].mean_abs_error[1], r.distance_m);
+  CHECK_FALSE(r.fell);
+  CHECK(r.distance_m > 1.0);
+  CHECK(rig->loop().supervisor().mode == Mode::kNominal);
+  CheckCommandsWithinLimits(*rig);
+}
+
 TEST_CASE("quadruped HIL: lock-step runs are reproducible bit for bit") {
   const robot::RobotModel& m = test::QuadrupedRobot();
-  auto a = MakeRig(Flat(m)), b = MakeRig(Flat(m));
+  auto a = MakeRig(Scenario(m, "flat.yaml")), b = MakeRig(Scenario(m, "flat.yaml"));
   a->loop().Arm();
   b->loop().Arm();
   for (int k = 0; k < 5000; ++k) {
@@ -106,7 +155,7 @@ struct FaultRun {
 
 FaultRun RunFault(sim::HilFault fault, bool kill_operator, std::uint64_t until_tick) {
   const robot::RobotModel& m = test::QuadrupedRobot();
-  sim::QuadrupedHilOptions h = Flat(m);
+  sim::QuadrupedHilOptions h = Scenario(m, "flat.yaml");
   FaultRun f;
   fault.tick = f.fault_tick;
   if (!kill_operator) h.faults = {fault};

@@ -87,3 +87,31 @@ TEST_CASE("shipped mixed policy: the paper's test on flat ground and blocks - at
   CheckTracking(flat);
   CHECK(flat.falls == 0);
 }
+
+TEST_CASE("shipped flat policy in MuJoCo on a held velocity schedule - the command observed, tracked, no fall") {
+  auto model = policy::PolicyModel::FromFile(test::SourcePath(kDir + "flat.blob"));
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  envs::QuadrupedWalkOptions o;
+  o.models_dir = test::SourcePath("models");
+  o.randomize = false;
+  auto env = envs::QuadrupedWalk::Make(o);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  const std::vector<envs::WalkSchedulePhase> phases = {{"stand", 0.0, 2.0, {0, 0, 0}},
+                                                       {"forward", 2.0, 4.0, {0.5, 0, 0}}};
+  auto r = envs::EvaluateWalkSchedule(*model, **env, phases, 1.0, 7);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  CHECK_FALSE(r->fell);
+  REQUIRE(r->phases.size() == 2);
+  CHECK(r->phases[1].samples == 150);  // 3 s after settling, 50 Hz
+  CHECK(r->phases[1].mean_abs_error[0] <= 0.2);
+  CHECK(r->phases[1].mean_measured[0] > 0.3);
+  // The environment held the schedule's command: no draw, no heading controller.
+  for (const envs::WalkTelemetry& t : r->trace) {
+    CHECK(t.command[0] == (t.time_s < 2.0 - 1e-9 ? 0.0 : 0.5));  // the command observed for the next step
+    CHECK(t.command[2] == 0.0);
+  }
+  // A schedule longer than an episode is refused, naming both lengths.
+  auto too_long = envs::EvaluateWalkSchedule(*model, **env, {{"long", 0.0, 25.0, {0, 0, 0}}}, 1.0, 7);
+  REQUIRE_FALSE(too_long.ok());
+  CHECK(too_long.error().message.find("longer than an episode") != std::string::npos);
+}
