@@ -16,11 +16,16 @@
 // follows the controller at whatever speed the machine allows.
 //
 //   pbppo-hil quadruped --in-process --policy BLOB --commands SCHEDULE [--scenario FILE]
-//             [--trace out.csv] [--report out.json] [--plot out.png] [--settle-s S]
+//             [--realtime] [--trace out.csv] [--report out.json] [--plot out.png] [--profile out.json]
+//             [--settle-s S]
+//   pbppo-hil quadruped --in-process --policy BLOB --operator dds [--domain D] [--dds-naming ros2]
+//             (--duration S | --commands SCHEDULE) ...
 //
 // The controller (runtime/loop, the policy, the schedule as its operator) and the HIL ticked in
-// one process in lock-step over the in-process CAN network: the walking demo and the sim-to-sim
-// measurement, with per-phase tracking and the real-time factor.
+// one process over the in-process CAN network: in lock-step (the walking demo and the sim-to-sim
+// measurement, with per-phase tracking and the real-time factor) or at 1 kHz on the controller's
+// clock (--realtime: its tick latency). --operator dds: the velocity commands come over DDS from
+// another process (pbppo-operator, a ROS 2 node with --dds-naming ros2), at real time.
 #include <signal.h>
 
 #include <atomic>

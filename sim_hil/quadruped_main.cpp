@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
@@ -24,6 +25,8 @@ struct Options {
   std::string robot = "models/quadruped/robot.yaml", scenario, policy, commands, trace, report, plot;
   std::string can;      // IF0[,IF1]
   std::string profile;  // --in-process: the controller's tick profile (JSON)
+  std::string operator_kind = "schedule", dds_naming = "native";
+  int domain = 0;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
   std::uint64_t seed = 1;
@@ -115,26 +118,60 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
 }
 
 int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOptions hil) {
-  if (o.commands.empty()) return Fail("--in-process needs --commands SCHEDULE", 2);
-  auto schedule = loop::LoadSchedule(o.commands, model);
+  const bool dds_operator = o.operator_kind == "dds";
+  if (!dds_operator && o.commands.empty()) return Fail("--in-process needs --commands SCHEDULE (or --operator dds)", 2);
+  if (dds_operator && o.commands.empty() && o.duration_s <= 0)
+    return Fail("--operator dds needs --duration S or --commands SCHEDULE (the phases of the report)", 2);
+  // The schedule plays the operator, or (--operator dds) only names the report's phases.
+  auto schedule = !o.commands.empty()
+                      ? loop::LoadSchedule(o.commands, model)
+                      : loop::ParseSchedule("stream: velocity_command\nphases: [{name: operator, duration_s: " +
+                                                std::to_string(o.duration_s) + "}]\n",
+                                            "--duration", model);
   if (!schedule) return Fail(schedule.error().message, 2);
+  std::unique_ptr<dds::OperatorDdsLink> link;
+  std::unique_ptr<quadruped::OperatorTransport> op;
+  if (dds_operator) {
+    auto naming = dds::ParseDdsNaming(o.dds_naming);
+    if (!naming) return Fail("--dds-naming: " + naming.error().message, 2);
+    auto doc = model.Document("dds_profile");
+    if (!doc) return Fail(doc.error().message, 2);
+    dds::OperatorDdsOptions d;
+    d.profile_xml = (*doc)->text;
+    d.domain_id = o.domain;
+    d.naming = *naming;
+    auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, d);
+    if (!l) return Fail(l.error().message, 2);
+    link = std::move(*l);
+    auto t = quadruped::OperatorTransport::Create(model, *link);
+    if (!t) return Fail(t.error().message, 2);
+    op = std::move(*t);
+  }
   RigOptions ro;
   ro.policy = o.policy;
   ro.self_test = !o.skip_self_test;
-  ro.realtime = o.realtime;
+  ro.realtime = o.realtime || dds_operator;  // an operator over DDS is on a wall clock
+  ro.operator_transport = op.get();
   auto rig = QuadrupedRig::Make(model, std::move(hil), std::move(*schedule), ro);
   if (!rig) return Fail(rig.error().message, 2);
-  std::printf("pbppo-hil quadruped: controller and HIL in one process, %s, %s, %s, schedule %s (%.1f s)\n",
-              o.realtime ? "free-running at the tick period" : "lock-step",
-              o.scenario.empty() ? "flat ground" : o.scenario.c_str(),
-              o.policy.empty() ? "no policy" : o.policy.c_str(), o.commands.c_str(),
-              (*rig)->operator_source().schedule().duration_s());
+  std::printf(
+      "pbppo-hil quadruped: controller and HIL in one process, %s, %s, %s, %s (%.1f s)\n",
+      ro.realtime ? "free-running at the tick period" : "lock-step",
+      o.scenario.empty() ? "flat ground" : o.scenario.c_str(), o.policy.empty() ? "no policy" : o.policy.c_str(),
+      dds_operator
+          ? ("velocity commands over DDS, domain " + std::to_string(o.domain) + ", " + o.dds_naming + " names").c_str()
+          : ("schedule " + o.commands).c_str(),
+      (*rig)->operator_source().schedule().duration_s());
+  std::unique_ptr<quadruped::StatusPublisher> status;
+  if (link) status = std::make_unique<quadruped::StatusPublisher>(*link, (*rig)->loop(), op.get(), 200'000'000);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
   const bool ok = (*rig)->RunSchedule();
+  status.reset();  // the final status out
+  if (link) (void)link->Flush(1'000'000'000);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
-  const RigReport rep = (*rig)->Report(o.settle_s);
+  const RigReport rep = (*rig)->Report(o.settle_s, dds_operator);
   PrintReport(rep);
   const safety::SupervisorState& sup = (*rig)->loop().supervisor();
   std::printf("controller: phase %s, mode %s; %llu IMU samples, %llu commands per motor\n",
@@ -142,7 +179,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
               static_cast<unsigned long long>((*rig)->hil().imu_samples()),
               static_cast<unsigned long long>((*rig)->can().commands_sent(0)));
   std::printf("%.2f s simulated in %.2f s wall: real-time factor %.2f (%s, Simbody RK2 4 x 0.25 ms per tick)\n", sim_s,
-              wall, sim_s / wall, o.realtime ? "free-running" : "lock-step");
+              wall, sim_s / wall, ro.realtime ? "free-running" : "lock-step");
   // The controller's own tick, stage by stage (the HIL's step is outside it); free-running, also
   // the wake-up jitter and the ticks that started late (controller and HIL together overran).
   const rt::ProfileReport profile = rt::TakeReport((*rig)->loop().profiler());
@@ -162,7 +199,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
       std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
     if (auto st = report::PlotLatency(
             profile, PngStem(o.plot) + "_latency.png",
-            std::string("quadruped controller tick (") + (o.realtime ? "free-running 1 kHz" : "lock-step") + ")");
+            std::string("quadruped controller tick (") + (ro.realtime ? "free-running 1 kHz" : "lock-step") + ")");
         !st)
       std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
   }
@@ -190,6 +227,12 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--plot", o.plot,
                  "--in-process: velocities PNG (and <name>_path.png, the base path; <name>_latency.png, the tick)");
   app.add_option("--profile", o.profile, "--in-process: write the controller's tick profile (JSON)");
+  app.add_option("--operator", o.operator_kind,
+                 "--in-process: the operator: schedule (--commands) or dds (velocity commands over DDS, e.g. from "
+                 "pbppo-operator; real time)")
+      ->check(CLI::IsMember({"schedule", "dds"}));
+  app.add_option("--domain", o.domain, "--operator dds: DDS domain id")->check(CLI::Range(0, 232));
+  app.add_option("--dds-naming", o.dds_naming, "--operator dds: native or ros2 names");
   app.add_flag("--realtime", o.realtime,
                "--in-process: tick at the robot's period on the controller's clock (jitter, deadline misses)");
   app.add_option("--settle-s", o.settle_s, "--in-process: tracking is measured this long after each phase starts")

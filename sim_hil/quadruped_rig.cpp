@@ -115,23 +115,45 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
   return true;
 }
 
-RigReport QuadrupedRig::Report(double settle_s) const {
+RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
   RigReport rep;
   const loop::Schedule& s = schedule_->schedule();
-  for (const loop::SchedulePhase& ph : s.phases) {
-    PhaseTracking t;
-    t.name = ph.name;
-    t.start_s = ph.start_s;
-    t.end_s = ph.start_s + ph.duration_s;
-    rep.phases.push_back(t);
-  }
+  if (!by_command)
+    for (const loop::SchedulePhase& ph : s.phases) {
+      PhaseTracking t;
+      t.name = ph.name;
+      t.start_s = ph.start_s;
+      t.end_s = ph.start_s + ph.duration_s;
+      rep.phases.push_back(t);
+    }
   for (const RigSample& x : trace_) {
-    if (!rep.fell && (x.body_contact || x.tilt_rad > 1.047f)) {
+    // A fall: tilted beyond 60 degrees, or the body on the ground while the controller still
+    // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state).
+    const bool stopped = x.mode >= static_cast<std::uint8_t>(safety::Mode::kSafeStop);
+    if (!rep.fell && ((x.body_contact && !stopped) || x.tilt_rad > 1.047f)) {
       rep.fell = true;
       rep.fell_at_s = static_cast<double>(x.t_s);
     }
-    if (x.schedule_phase < 0) continue;
-    PhaseTracking& t = rep.phases[static_cast<std::size_t>(x.schedule_phase)];
+    std::size_t phase = 0;
+    if (by_command) {
+      // A phase per run of one command in force.
+      const double c[3] = {static_cast<double>(x.cmd_vx), static_cast<double>(x.cmd_vy),
+                           static_cast<double>(x.cmd_yaw_rate)};
+      if (rep.phases.empty() || c[0] != rep.phases.back().command[0] || c[1] != rep.phases.back().command[1] ||
+          c[2] != rep.phases.back().command[2]) {
+        PhaseTracking t;
+        t.name = "command " + std::to_string(rep.phases.size() + 1);
+        t.start_s = static_cast<double>(x.t_s);
+        std::copy(c, c + 3, t.command);
+        rep.phases.push_back(t);
+      }
+      rep.phases.back().end_s = static_cast<double>(x.t_s);
+      phase = rep.phases.size() - 1;
+    } else {
+      if (x.schedule_phase < 0) continue;
+      phase = static_cast<std::size_t>(x.schedule_phase);
+    }
+    PhaseTracking& t = rep.phases[phase];
     if (static_cast<double>(x.t_s) < t.start_s + settle_s) continue;
     const double cmd[3] = {static_cast<double>(x.cmd_vx), static_cast<double>(x.cmd_vy),
                            static_cast<double>(x.cmd_yaw_rate)};

@@ -66,7 +66,7 @@ struct PhaseTracking {
 
 struct RigReport {
   std::vector<PhaseTracking> phases;
-  bool fell = false;  // a body contact or a tilt beyond 60 degrees
+  bool fell = false;  // a tilt beyond 60 degrees, or a body contact before any safe-stop
   double fell_at_s = -1;
   double distance_m = 0;
   double max_planar_error = 0;  // the largest per-phase mean |error| of vx, vy
@@ -83,8 +83,9 @@ class QuadrupedRig {
   bool Tick() noexcept;
   // Arms, then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
   bool RunSchedule(double extra_s = 0);
-  // Per schedule phase: mean |velocity error| after `settle_s` of each phase.
-  RigReport Report(double settle_s) const;
+  // Per schedule phase (`by_command`: per run of one command in force, as an operator over DDS
+  // gives them on its own clock): mean |velocity error| after `settle_s` of each phase.
+  RigReport Report(double settle_s, bool by_command = false) const;
 
   const robot::RobotModel& model() const noexcept { return model_; }
   QuadrupedHil& hil() noexcept { return *hil_; }

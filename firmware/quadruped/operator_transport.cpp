@@ -1,5 +1,8 @@
 #include "firmware/quadruped/operator_transport.hpp"
 
+#include <algorithm>
+#include <chrono>
+
 namespace pbppo::quadruped {
 
 Result<std::unique_ptr<OperatorTransport>> OperatorTransport::Create(const robot::RobotModel& m,
@@ -62,6 +65,26 @@ robot::QuadrupedStatus StatusOf(const loop::LoopData& l, const OperatorTransport
   s.tick_median_us = static_cast<double>(t.p50_ns) / 1000.0;
   s.tick_max_us = static_cast<double>(t.max_ns) / 1000.0;
   return s;
+}
+
+StatusPublisher::StatusPublisher(dds::OperatorDdsLink& link, const loop::LoopData& loop, const OperatorTransport* op,
+                                 std::int64_t period_ns)
+    : thread_([this, &link, &loop, op, period_ns] {
+        const auto period = std::chrono::nanoseconds(period_ns);
+        auto next = std::chrono::steady_clock::now();
+        while (!stop_.load()) {
+          (void)link.PublishStatus(StatusOf(loop, op));
+          next += period;
+          while (!stop_.load() && std::chrono::steady_clock::now() < next)
+            std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(
+                std::chrono::milliseconds(10), next - std::chrono::steady_clock::now()));
+        }
+        (void)link.PublishStatus(StatusOf(loop, op));  // the final state
+      }) {}
+
+StatusPublisher::~StatusPublisher() {
+  stop_.store(true);
+  thread_.join();
 }
 
 }  // namespace pbppo::quadruped

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "runtime/core/result.hpp"
 #include "runtime/loop/loop.hpp"
@@ -42,5 +43,21 @@ class OperatorTransport final : public robot::Transport {
 // The controller's status for the operator, from another thread than the tick (`op`: the operator
 // transport, null when unbound).
 robot::QuadrupedStatus StatusOf(const loop::LoopData& loop, const OperatorTransport* op);
+
+// Publishes StatusOf(loop, op) on `link` every `period_ns` from a thread of its own, and a last
+// one when destroyed (a simulator's or a test's controller; pbppo-controller's status thread does
+// the same among its other work).
+class StatusPublisher {
+ public:
+  StatusPublisher(dds::OperatorDdsLink& link, const loop::LoopData& loop, const OperatorTransport* op,
+                  std::int64_t period_ns);
+  ~StatusPublisher();
+  StatusPublisher(const StatusPublisher&) = delete;
+  StatusPublisher& operator=(const StatusPublisher&) = delete;
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 }  // namespace pbppo::quadruped

@@ -65,26 +65,6 @@ std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, rob
   return std::move(*r);
 }
 
-// The controller's status published every 50 ms, as pbppo-controller's status thread does.
-class StatusPublisher {
- public:
-  StatusPublisher(Controller& c, const loop::LoopData& loop)
-      : thread_([this, &c, &loop] {
-          while (!stop_.load()) {
-            (void)c.link->PublishStatus(quadruped::StatusOf(loop, c.op.get()));
-            std::this_thread::sleep_for(std::chrono::milliseconds(50));
-          }
-        }) {}
-  ~StatusPublisher() {
-    stop_.store(true);
-    thread_.join();
-  }
-
- private:
-  std::atomic<bool> stop_{false};
-  std::thread thread_;
-};
-
 // Mean |vx - command| over the walking (nominal) ticks where `command` was in force, from `settle_s` after
 // the first of them.
 double TrackingError(const std::vector<sim::RigSample>& trace, float command, double settle_s, std::uint64_t* n) {
@@ -124,7 +104,7 @@ TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes 
   std::uint64_t published = 0;
   bool ran = false;
   {
-    StatusPublisher status(ctl, rig->loop());
+    quadruped::StatusPublisher status(*ctl.link, rig->loop(), ctl.op.get(), 50'000'000);
     // The operator: stand for 2 s of its clock, then 0.4 m/s forward, at 20 Hz until the rig is done.
     std::thread oper_thread([&] {
       const auto t0 = std::chrono::steady_clock::now();
@@ -184,7 +164,7 @@ TEST_CASE(
         ctl.op.get());
     bool ran = false;
     {
-      StatusPublisher status(ctl, rig->loop());
+      quadruped::StatusPublisher status(*ctl.link, rig->loop(), ctl.op.get(), 50'000'000);
       ran = rig->RunSchedule();
     }
     CHECK(ran);

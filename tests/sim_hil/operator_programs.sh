@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# The quadruped driven over DDS by another process (label dds): pbppo-hil quadruped --in-process
+# --operator dds (controller and HIL in one process, at real time) and pbppo-operator playing a
+# velocity schedule, with ROS 2's names.
+#   1. pbppo-operator refuses bad arguments and files (exit 2, naming them) and reports a missing
+#      controller (exit 1, naming the domain);
+#   2. the robot walks the schedule sent over DDS: 0.5 m/s tracked within 0.2 m/s, no fall; the
+#      operator reads the status back, and after it falls silent the controller is in safe-stop;
+#   3. an operator with the native names does not reach a controller with ROS 2's.
+# usage: operator_programs.sh HIL OPERATOR SOURCE_DIR WORK_DIR
+set -euo pipefail
+hil=$1 op=$2 src=$3 work=$4
+rm -rf "$work"
+mkdir -p "$work"
+cd "$src"
+blob=policies/frozen/quadruped_walk/flat.blob
+domain=$((30 + $$ % 150))
+fail() {
+  echo "FAIL: $*"
+  exit 1
+}
+expect() {  # expect FILE PATTERN
+  grep -Eq -- "$2" "$1" || { cat "$1"; fail "'$2' not found in $1"; }
+}
+cat > "$work/short.yaml" <<'YAML'
+stream: velocity_command
+phases:
+  - {name: stand, duration_s: 2.0}
+  - {name: forward, duration_s: 4.0, command_vx: 0.5}
+  - {name: stop, duration_s: 1.0}
+YAML
+
+echo "== 1: bad arguments and files"
+rc=0; "$op" >"$work/a1.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "no --schedule: exit $rc"
+expect "$work/a1.log" "schedule"
+rc=0; "$op" --schedule "$work/short.yaml" --dds-naming ros >"$work/a2.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "--dds-naming ros: exit $rc"
+expect "$work/a2.log" "naming 'ros'"
+rc=0; "$op" --schedule "$work/none.yaml" >"$work/a3.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "a missing schedule: exit $rc"
+expect "$work/a3.log" "none.yaml"
+sed 's/command_vx: 0.5/command_vx: 5.0/' "$work/short.yaml" > "$work/fast.yaml"
+rc=0; "$op" --schedule "$work/fast.yaml" >"$work/a4.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "a command beyond the field's bounds: exit $rc"
+expect "$work/a4.log" "command_vx"
+rc=0; "$op" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 1 >"$work/a5.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "no controller: exit $rc"
+expect "$work/a5.log" "no controller on DDS domain $domain"
+
+echo "== 2: walking on commands sent over DDS (ROS 2 names)"
+"$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 9 \
+  --report "$work/walk.json" >"$work/hil.log" 2>&1 &
+hpid=$!
+rc=0
+"$op" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 >"$work/op.log" 2>&1 || rc=$?
+hrc=0; wait $hpid || hrc=$?
+[ "$rc" -eq 0 ] || { cat "$work/op.log"; fail "pbppo-operator exited $rc"; }
+[ "$hrc" -eq 0 ] || { cat "$work/hil.log"; fail "pbppo-hil exited $hrc"; }
+expect "$work/op.log" "status t=.*run, nominal, commands [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
+expect "$work/op.log" "status t=.*run, safe-stop"
+expect "$work/op.log" "last status .*(safe-stop|e-stop)"
+python3 - "$work/walk.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert not r["fell"], "fell at %s s" % r["fell_at_s"]
+fwd = [p for p in r["phases"] if abs(p["command"][0] - 0.5) < 1e-9]
+assert len(fwd) == 1, r["phases"]
+e = fwd[0]["mean_abs_error"]
+print("forward over DDS: |e| vx %.3f vy %.3f yaw rate %.3f, measured vx %.3f" % (e[0], e[1], e[2], fwd[0]["mean_measured"][0]))
+assert e[0] <= 0.2 and e[1] <= 0.2, e
+PY
+
+echo "== 3: native names do not reach a controller with ROS 2's"
+"$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 4 \
+  >"$work/hil3.log" 2>&1 &
+hpid=$!
+rc=0; "$op" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 3 >"$work/op3.log" 2>&1 || rc=$?
+wait $hpid || true
+[ "$rc" -eq 1 ] || { cat "$work/op3.log"; fail "a native operator reached a ROS 2 controller (exit $rc)"; }
+echo "operator programs: all passed"
