@@ -14,6 +14,7 @@
 #include "report/plots.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/rt/rt_setup.hpp"
 #include "runtime/transport/can/can_transport.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
@@ -162,6 +163,12 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
           ? ("velocity commands over DDS, domain " + std::to_string(o.domain) + ", " + o.dds_naming + " names").c_str()
           : ("schedule " + o.commands).c_str(),
       (*rig)->operator_source().schedule().duration_s());
+  if (ro.realtime) {
+    // As pbppo-controller does: locked memory, SCHED_FIFO where permitted (warnings otherwise).
+    const rt::RtSetupResult rs = rt::SetUpRealTime(rt::RtOptions{});
+    for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-hil quadruped: warning: %s\n", w.c_str());
+    std::printf("%s\n", rs.Summary().c_str());
+  }
   std::unique_ptr<quadruped::StatusPublisher> status;
   if (link) status = std::make_unique<quadruped::StatusPublisher>(*link, (*rig)->loop(), op.get(), 200'000'000);
   std::fflush(stdout);
