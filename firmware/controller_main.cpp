@@ -7,8 +7,8 @@
 //       --trajectory FILE] [--can IF0,IF1]
 //       [--lockstep-wait-ms N] [--candump FILE] [--receive-all]
 //       (with a policy and no --commands: velocity commands over DDS on --domain, status published)
-//   both: [--dds-naming native|ros2] [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
-//       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
+//   both: [--dds-naming native|ros2] [--ticks N] [--duration S] [--record LOG] [--profile out.json]
+//       [--profile-plot out.png] [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it
 // was trained for another layout, naming the first difference) and runs the blob's golden vectors

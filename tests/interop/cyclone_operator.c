@@ -69,7 +69,8 @@ int main(int argc, char** argv) {
   }
   const dds_entity_t command_topic =
       dds_create_topic(participant, &command_desc, "rt/pbppo/quadruped/velocity_command", NULL, NULL);
-  const dds_entity_t status_topic = dds_create_topic(participant, &status_desc, "rt/pbppo/quadruped/status", NULL, NULL);
+  const dds_entity_t status_topic =
+      dds_create_topic(participant, &status_desc, "rt/pbppo/quadruped/status", NULL, NULL);
   if (command_topic < 0 || status_topic < 0) {
     fprintf(stderr, "cyclone_operator: dds_create_topic failed\n");
     return 1;
