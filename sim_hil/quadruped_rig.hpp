@@ -40,6 +40,11 @@ struct RigOptions {
   // as pbppo-controller free-running): the loop's profile then holds wake-up jitter and deadline
   // misses. Else as fast as the plant allows (lock-step).
   bool realtime = false;
+  // realtime: whether the supervisor acts on late ticks (they are counted in the profile either
+  // way). The plant steps in the controller's thread, so on a loaded or sanitised build the
+  // simulator, not the controller, makes ticks late; a run that only needs the wall clock (an
+  // operator over DDS) turns this off.
+  bool supervise_deadlines = true;
 };
 
 // One tick of the trace.
@@ -114,6 +119,7 @@ class QuadrupedRig {
   std::int32_t cmd_field_[3] = {-1, -1, -1};
   std::int64_t wait_ns_ = 0;
   std::unique_ptr<rt::FreeRunningClock> clock_;  // realtime
+  bool supervise_deadlines_ = true;
   bool memory_ = true;
   std::uint64_t tick_ = 0;
   loop::TickStatus status_ = loop::TickStatus::kRunning;
