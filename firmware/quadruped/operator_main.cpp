@@ -74,13 +74,9 @@ int main(int argc, char** argv) {
   auto schedule = loop::LoadSchedule(schedule_path, *robot);
   if (!schedule) return Fail(schedule.error().message, 2);
   const robot::StreamSpec& stream = robot->streams[schedule->stream_index];
-  int field[3] = {-1, -1, -1};
-  const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
-  for (int a = 0; a < 3; ++a)
-    for (std::uint32_t f = 0; f < stream.field_count; ++f)
-      if (robot->fields[stream.first_field + f].name == names[a]) field[a] = static_cast<int>(f);
-  if (field[0] < 0 || field[1] < 0 || field[2] < 0)
-    return Fail(schedule_path + ": stream '" + stream.name + "' is not the velocity command", 2);
+  auto columns = schedule->Columns(*robot, {"command_vx", "command_vy", "command_yaw_rate"});
+  if (!columns) return Fail(columns.error().message, 2);
+  const std::vector<std::size_t>& field = *columns;
 
   dds::OperatorDdsOptions o;
   o.domain_id = domain;
@@ -123,9 +119,9 @@ int main(int argc, char** argv) {
         robot::VelocityCommand c;
         c.seq = ++seq;
         c.stamp_ns = MonotonicNs();
-        c.vx_mps = p.values[static_cast<std::size_t>(field[0])];
-        c.vy_mps = p.values[static_cast<std::size_t>(field[1])];
-        c.yaw_rate_radps = p.values[static_cast<std::size_t>(field[2])];
+        c.vx_mps = p.values[field[0]];
+        c.vy_mps = p.values[field[1]];
+        c.yaw_rate_radps = p.values[field[2]];
         if (auto st = (*link)->PublishCommand(c); !st) return Fail(st.error().message, 1);
         if (phase != last_phase && !quiet) {
           std::printf("t=%.1f s: phase '%s': (%.2f, %.2f, %.2f)\n", t, p.name.c_str(), c.vx_mps, c.vy_mps,

@@ -54,25 +54,15 @@ int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, env
     std::fprintf(stderr, "pbppo eval: --schedule: %s\n", schedule.error().message.c_str());
     return 2;
   }
-  // The schedule's fields by name: the velocity command's three.
-  const robot::StreamSpec& stream = robot->streams[schedule->stream_index];
-  int field[3] = {-1, -1, -1};
-  const char* names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
-  for (int a = 0; a < 3; ++a)
-    for (std::uint32_t f = 0; f < stream.field_count; ++f)
-      if (robot->fields[stream.first_field + f].name == names[a]) field[a] = static_cast<int>(f);
-  if (field[0] < 0 || field[1] < 0 || field[2] < 0) {
-    std::fprintf(stderr, "pbppo eval: --schedule %s: stream '%s' is not the velocity command\n", o.schedule.c_str(),
-                 stream.name.c_str());
+  auto columns = schedule->Columns(*robot, {"command_vx", "command_vy", "command_yaw_rate"});
+  if (!columns) {
+    std::fprintf(stderr, "pbppo eval: --schedule: %s\n", columns.error().message.c_str());
     return 2;
   }
+  const std::vector<std::size_t>& field = *columns;
   std::vector<envs::WalkSchedulePhase> phases;
   for (const loop::SchedulePhase& p : schedule->phases)
-    phases.push_back({p.name,
-                      p.start_s,
-                      p.duration_s,
-                      {p.values[static_cast<std::size_t>(field[0])], p.values[static_cast<std::size_t>(field[1])],
-                       p.values[static_cast<std::size_t>(field[2])]}});
+    phases.push_back({p.name, p.start_s, p.duration_s, {p.values[field[0]], p.values[field[1]], p.values[field[2]]}});
   auto r = envs::EvaluateWalkSchedule(model, env, phases, o.settle_s, o.seed);
   if (!r) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());

@@ -79,6 +79,21 @@ Result<std::unique_ptr<ScheduleTransport>> ScheduleTransport::Create(const robot
   return t;
 }
 
+Result<std::vector<std::size_t>> Schedule::Columns(const robot::RobotModel& m,
+                                                   std::initializer_list<std::string_view> fields) const {
+  const robot::StreamSpec& spec = m.streams[stream_index];
+  std::vector<std::size_t> out;
+  for (std::string_view name : fields) {
+    std::size_t f = 0;
+    while (f < spec.field_count && m.fields[spec.first_field + f].name != name) ++f;
+    if (f == spec.field_count)
+      return MakeError(ErrorCode::kMismatch,
+                       path + ": stream '" + stream + "' has no field '" + std::string(name) + "'");
+    out.push_back(f);
+  }
+  return out;
+}
+
 void ScheduleTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept {
   if (!started_) {
     started_ = true;

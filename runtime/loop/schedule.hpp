@@ -15,8 +15,10 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "runtime/core/result.hpp"
@@ -38,6 +40,10 @@ struct Schedule {
   double duration_s() const noexcept { return phases.empty() ? 0 : phases.back().start_s + phases.back().duration_s; }
   // The phase at time t (s from the schedule's start); -1 after the end.
   int PhaseAt(double t_s) const noexcept;
+  // Where each named field of the stream sits in a phase's values (e.g. the velocity command's
+  // command_vx, command_vy, command_yaw_rate); errors name the file and the field it lacks.
+  Result<std::vector<std::size_t>> Columns(const robot::RobotModel& model,
+                                           std::initializer_list<std::string_view> fields) const;
 };
 
 Result<Schedule> ParseSchedule(const std::string& yaml_text, const std::string& origin, const robot::RobotModel& model);

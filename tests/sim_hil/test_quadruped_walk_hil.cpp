@@ -270,6 +270,19 @@ TEST_CASE("quadruped scenario: bad files are refused naming the field and the va
   bad("colour: red\n", "colour");
 }
 
+TEST_CASE("schedule: columns of named fields in each phase's values, a missing field named") {
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  const loop::Schedule s = DemoSchedule(m);
+  auto c = s.Columns(m, {"command_yaw_rate", "command_vx"});
+  REQUIRE_MESSAGE(c.ok(), c.error().message);
+  REQUIRE(c->size() == 2);
+  CHECK(s.phases[3].values[(*c)[0]] == 0.5);  // turn: yaw rate 0.5
+  CHECK(s.phases[1].values[(*c)[1]] == 0.5);  // forward: vx 0.5
+  auto bad = s.Columns(m, {"command_vz"});
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("no field 'command_vz'") != std::string::npos);
+}
+
 TEST_CASE("schedule: bad files are refused naming the phase, the field and the value") {
   const robot::RobotModel& m = test::QuadrupedRobot();
   auto bad = [&](const std::string& text, const std::string& want) {
