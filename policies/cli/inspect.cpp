@@ -25,11 +25,18 @@ std::string Hex64(std::uint64_t v) {
 
 std::string ShapeLine(const PolicySpec& s) {
   std::string t = std::to_string(s.input_size);
-  for (const auto& l : s.layers) t += " -> " + std::to_string(l.out) + " " + policy::ToString(l.activation);
+  for (const auto& l : s.layers) {
+    t += " -> " + std::to_string(l.out) + " " + policy::ToString(l.activation);
+    if (l.activation == policy::Activation::kLeakyRelu) {
+      char a[40];
+      std::snprintf(a, sizeof a, "(alpha=%g)", static_cast<double>(l.alpha));
+      t += a;
+    }
+  }
   return t;
 }
 
-nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t crc) {
+nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t crc, bool weights) {
   nlohmann::json j;
   j["format_version"] = policy::kBlobFormatVersion;
   j["file_bytes"] = file_bytes;
@@ -38,8 +45,14 @@ nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t
   j["output_size"] = s.output_size;
   j["parameter_count"] = s.ParameterCount();
   j["layers"] = nlohmann::json::array();
-  for (const auto& l : s.layers)
+  for (const auto& l : s.layers) {
     j["layers"].push_back({{"in", l.in}, {"out", l.out}, {"activation", policy::ToString(l.activation)}});
+    if (l.activation == policy::Activation::kLeakyRelu) j["layers"].back()["alpha"] = l.alpha;
+    if (weights) {
+      j["layers"].back()["weight"] = l.weight;  // row-major [out][in]
+      j["layers"].back()["bias"] = l.bias;
+    }
+  }
   j["normaliser"] = {{"mean", s.obs_mean}, {"inv_std", s.obs_inv_std}, {"clip", s.obs_clip}};
   j["action_head"] = policy::ToString(s.action_head);
   j["action_map"] = {
@@ -60,13 +73,13 @@ nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t
 
 }  // namespace
 
-int Inspect(const std::string& path, bool json) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    std::fprintf(stderr, "pbppo inspect: %s: cannot open\n", path.c_str());
+int Inspect(const std::string& path, bool json, bool weights) {
+  auto read = policy::ReadFileBytes(path, policy::BlobLimits{}.max_file_bytes);
+  if (!read) {
+    std::fprintf(stderr, "pbppo inspect: %s\n", read.error().message.c_str());
     return 1;
   }
-  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::vector<std::uint8_t>& bytes = *read;
   auto spec = policy::DecodeBlob(bytes);
   if (!spec) {
     std::fprintf(stderr, "pbppo inspect: %s: %s\n", path.c_str(), spec.error().message.c_str());
@@ -76,7 +89,7 @@ int Inspect(const std::string& path, bool json) {
   std::uint32_t crc = 0;
   std::memcpy(&crc, bytes.data() + bytes.size() - 4, 4);
   if (json) {
-    std::cout << ToJson(s, bytes.size(), crc).dump(2) << "\n";
+    std::cout << ToJson(s, bytes.size(), crc, weights).dump(2) << "\n";
     return 0;
   }
   std::printf("policy blob   %s\n", path.c_str());
@@ -132,7 +145,8 @@ int Synth(const SynthOptions& o) {
   }
   policy::Activation act{};
   if (!policy::ParseActivation(o.activation, &act)) {
-    std::fprintf(stderr, "pbppo synth: --activation '%s' unknown (identity, tanh, elu, relu)\n", o.activation.c_str());
+    std::fprintf(stderr, "pbppo synth: --activation '%s' unknown (identity, tanh, elu, relu, leaky_relu)\n",
+                 o.activation.c_str());
     return 2;
   }
   const PolicySpec spec = policy::MakeRandomSpec(widths, act, o.seed);

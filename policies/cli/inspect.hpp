@@ -6,7 +6,8 @@
 
 namespace pbppo::cli {
 
-int Inspect(const std::string& path, bool json);
+// `weights`: with `json`, each layer object also carries "weight" (row-major [out][in], flat) and "bias".
+int Inspect(const std::string& path, bool json, bool weights = false);
 
 struct SynthOptions {
   std::string widths = "48-512-256-128-12";

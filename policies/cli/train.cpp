@@ -215,6 +215,8 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
        [&o](const std::string& v) {
          if (!policy::ParseActivation(v, &o.activation))
            throw CLI::ValidationError("--activation", "'" + v + "' unknown (tanh, elu, relu, identity)");
+         if (o.activation == policy::Activation::kLeakyRelu)
+           throw CLI::ValidationError("--activation", "'" + v + "' is not trainable here (tanh, elu, relu, identity)");
        },
        "Hidden activation: tanh, elu, relu, identity")
       ->default_str("tanh");

@@ -49,6 +49,7 @@ void ApplyActivation(Activation a, Eigen::MatrixBase<Derived>& y) {
     case Activation::kElu:
       y.derived().array() = (y.derived().array() > S(0)).select(y.derived().array(), y.derived().array().exp() - S(1));
       break;
+    case Activation::kLeakyRelu: break;  // blob and runtime only: Mlp refuses it
   }
 }
 
@@ -60,6 +61,7 @@ void MultiplyActivationDerivative(Activation a, Eigen::MatrixBase<DerivedD>& d, 
     case Activation::kTanh: d.derived().array() *= S(1) - y.array().square(); break;
     case Activation::kRelu: d.derived().array() *= (y.array() > S(0)).template cast<S>(); break;
     case Activation::kElu: d.derived().array() *= (y.array() > S(0)).select(S(1), y.array() + S(1)); break;
+    case Activation::kLeakyRelu: break;  // blob and runtime only: Mlp refuses it
   }
 }
 
@@ -74,6 +76,8 @@ class Mlp {
   Mlp() = default;
   explicit Mlp(MlpShape shape) : shape_(std::move(shape)) {
     if (shape_.widths.size() < 2) throw std::invalid_argument("mlp: needs at least input and output widths");
+    if (shape_.hidden == Activation::kLeakyRelu || shape_.output == Activation::kLeakyRelu)
+      throw std::invalid_argument("mlp: leaky_relu is not trainable here (blob and runtime only)");
     std::size_t off = 0;
     for (std::size_t l = 0; l + 1 < shape_.widths.size(); ++l) {
       if (shape_.widths[l] <= 0 || shape_.widths[l + 1] <= 0)

@@ -107,8 +107,25 @@ Status CheckLayerShape(std::size_t index, std::uint32_t in, std::uint32_t out, s
     return Fail(ErrorCode::kMismatch,
                 Str("layer %zu: width %u of the last layer does not match output_size %u", index, out, output));
   }
-  if (act > static_cast<std::uint32_t>(Activation::kRelu)) {
-    return Fail(ErrorCode::kInvalidValue, Str("layer %zu: activation %u unknown (0..3)", index, act));
+  if (act > static_cast<std::uint32_t>(Activation::kLeakyRelu)) {
+    return Fail(ErrorCode::kInvalidValue, Str("layer %zu: activation %u unknown (0..4)", index, act));
+  }
+  return {};
+}
+
+// The leaky_relu slope of a layer whose activation is known: finite and in [0, 1] (the error
+// bound of the golden vectors needs every activation 1-Lipschitz). Other activations have none.
+Status CheckLayerAlpha(std::size_t index, Activation act, float alpha) {
+  if (act == Activation::kLeakyRelu) {
+    if (!(alpha >= 0.0f && alpha <= 1.0f)) {  // NaN fails too
+      return Fail(ErrorCode::kInvalidValue,
+                  Str("layer %zu: leaky_relu alpha %.9g outside [0, 1]", index, static_cast<double>(alpha)));
+    }
+    return {};
+  }
+  if (std::bit_cast<std::uint32_t>(alpha) != 0) {
+    return Fail(ErrorCode::kInvalidValue, Str("layer %zu: alpha %.9g given for activation %s (only leaky_relu has one)",
+                                              index, static_cast<double>(alpha), ToString(act)));
   }
   return {};
 }
@@ -197,6 +214,7 @@ Status ValidateSpec(const PolicySpec& s, const BlobLimits& limits) {
         !st) {
       return st;
     }
+    if (auto st = CheckLayerAlpha(i, l.activation, l.alpha); !st) return st;
     params += static_cast<std::uint64_t>(l.in) * l.out + l.out;
     if (params > limits.max_parameters) {
       return Fail(ErrorCode::kLimit,
@@ -273,7 +291,7 @@ Result<std::vector<std::uint8_t>> EncodeBlob(const PolicySpec& s) {
     w.U32(l.in);
     w.U32(l.out);
     w.U32(static_cast<std::uint32_t>(l.activation));
-    w.U32(0);
+    w.U32(std::bit_cast<std::uint32_t>(l.alpha));  // leaky_relu's slope; 0 for the others (validated)
   }
   w.Floats(s.obs_mean);
   w.Floats(s.obs_inv_std);
@@ -363,7 +381,12 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
     if (auto st = CheckLayerShape(i, rec[0], rec[1], rec[2], prev, i + 1 == layer_count, s.output_size, limits); !st) {
       return st.error();
     }
-    if (rec[3] != 0) return Fail(ErrorCode::kFormat, Str("layer %u: reserved field %u is not 0", i, rec[3]));
+    // The 4th word: leaky_relu's alpha (float32 bits), reserved and 0 for every other activation.
+    if (rec[2] == static_cast<std::uint32_t>(Activation::kLeakyRelu)) {
+      if (auto st = CheckLayerAlpha(i, Activation::kLeakyRelu, std::bit_cast<float>(rec[3])); !st) return st.error();
+    } else if (rec[3] != 0) {
+      return Fail(ErrorCode::kFormat, Str("layer %u: reserved field %u is not 0", i, rec[3]));
+    }
     params += static_cast<std::uint64_t>(rec[0]) * rec[1] + rec[1];
     prev = rec[1];
   }
@@ -389,6 +412,7 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
     l.in = records[i][0];
     l.out = records[i][1];
     l.activation = static_cast<Activation>(records[i][2]);
+    l.alpha = std::bit_cast<float>(records[i][3]);
     (void)r.Floats(&l.weight, static_cast<std::size_t>(l.in) * l.out);
     (void)r.Floats(&l.bias, l.out);
   }
@@ -418,20 +442,26 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
   return s;
 }
 
-Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limits) {
+Result<std::vector<std::uint8_t>> ReadFileBytes(const std::string& path, std::uint64_t max_bytes) {
   std::ifstream f(path, std::ios::binary | std::ios::ate);
   if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open: " + std::strerror(errno));
   const std::streamoff size = f.tellg();
   if (size < 0) return MakeError(ErrorCode::kIo, path + ": cannot read its size");
-  if (static_cast<std::uint64_t>(size) > limits.max_file_bytes) {
-    return MakeError(ErrorCode::kLimit,
-                     Str("%s: %lld bytes exceeds limit %llu", path.c_str(), static_cast<long long>(size),
-                         static_cast<unsigned long long>(limits.max_file_bytes)));
+  if (static_cast<std::uint64_t>(size) > max_bytes) {
+    return MakeError(ErrorCode::kLimit, Str("%s: %lld bytes exceeds limit %llu", path.c_str(),
+                                            static_cast<long long>(size), static_cast<unsigned long long>(max_bytes)));
   }
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
   f.seekg(0);
-  if (!f.read(reinterpret_cast<char*>(bytes.data()), size)) return MakeError(ErrorCode::kIo, path + ": read failed");
-  auto r = DecodeBlob(bytes, limits);
+  if (size > 0 && !f.read(reinterpret_cast<char*>(bytes.data()), size))
+    return MakeError(ErrorCode::kIo, path + ": read failed");
+  return bytes;
+}
+
+Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limits) {
+  auto bytes = ReadFileBytes(path, limits.max_file_bytes);
+  if (!bytes) return std::move(bytes).error();
+  auto r = DecodeBlob(*bytes, limits);
   if (!r) return MakeError(r.error().code, path + ": " + r.error().message);
   return r;
 }

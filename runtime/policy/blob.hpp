@@ -13,7 +13,8 @@
 namespace pbppo::policy {
 
 // Checks every field of a spec: sizes against `limits`, chained layer widths, array lengths,
-// finite values, positive 1/std and clip, low <= high, names. Errors name the field and value.
+// finite values, positive 1/std and clip, low <= high, names, a leaky_relu alpha in [0, 1] (and
+// alpha 0 on every other layer). Errors name the field and value.
 Status ValidateSpec(const PolicySpec& spec, const BlobLimits& limits = {});
 
 // Serialises a valid spec (validated first) into blob bytes, CRC included.
@@ -24,6 +25,9 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> bytes, const BlobLim
 
 // Reads a whole file (at most limits.max_file_bytes) and decodes it; errors start with the path.
 Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limits = {});
+
+// Reads a whole file of at most `max_bytes` (checked before reading); errors start with the path.
+Result<std::vector<std::uint8_t>> ReadFileBytes(const std::string& path, std::uint64_t max_bytes);
 
 // Writes bytes to `path` atomically: a temporary file beside it, fsync, rename. On failure the
 // previous file at `path`, if any, is untouched and no temporary is left behind.

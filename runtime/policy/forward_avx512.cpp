@@ -47,7 +47,7 @@ inline __m512 Tanh(__m512 x) {
   return _mm512_castsi512_ps(_mm512_or_si512(_mm512_castps_si512(t), _mm512_and_si512(sign_mask, xi)));
 }
 
-inline __m512 Activate(std::uint32_t activation, __m512 y) {
+inline __m512 Activate(std::uint32_t activation, float alpha, __m512 y) {
   switch (activation) {
     case 1: return Tanh(y);
     case 2: {
@@ -55,6 +55,10 @@ inline __m512 Activate(std::uint32_t activation, __m512 y) {
       return _mm512_mask_blend_ps(pos, _mm512_sub_ps(Exp(y), Set(1.0f)), y);
     }
     case 3: return _mm512_max_ps(y, _mm512_setzero_ps());
+    case 4: {  // leaky_relu: y > 0 ? y : alpha * y (a NaN lane is not > 0 and stays NaN)
+      const __mmask16 not_pos = _mm512_cmp_ps_mask(y, _mm512_setzero_ps(), _CMP_NGT_UQ);
+      return _mm512_mask_mul_ps(y, not_pos, y, Set(alpha));
+    }
     default: return y;
   }
 }
@@ -64,7 +68,7 @@ inline __m512 Activate(std::uint32_t activation, __m512 y) {
 // N > 0: the input count is known at compile time and the loop is unrolled completely.
 template <unsigned NV, unsigned S, unsigned N = 0>
 inline void Tile(const float* __restrict w, const float* __restrict bias, const float* __restrict x, std::uint32_t n_rt,
-                 std::uint32_t activation, float* __restrict y) {
+                 std::uint32_t activation, float alpha, float* __restrict y) {
   const std::uint32_t n = N > 0 ? N : n_rt;
   constexpr unsigned kW = NV * 16;
   __m512 acc[S][NV];
@@ -102,7 +106,7 @@ inline void Tile(const float* __restrict w, const float* __restrict bias, const 
     }
   }
 #pragma GCC unroll 8
-  for (unsigned k = 0; k < NV; ++k) _mm512_store_ps(y + 16 * k, Activate(activation, acc[0][k]));
+  for (unsigned k = 0; k < NV; ++k) _mm512_store_ps(y + 16 * k, Activate(activation, alpha, acc[0][k]));
 }
 
 // Narrow layers (out <= kRowFormMaxOut): one dot product per output over row-major weights
@@ -121,7 +125,7 @@ void DenseRows(const KernelLayer& l, const float* x, float* y) {
     if (i < in_pad) a0 = _mm512_fmadd_ps(_mm512_load_ps(row + i), _mm512_load_ps(x + i), a0);
     out[j] = _mm512_reduce_add_ps(_mm512_add_ps(a0, a1));
   }
-  _mm512_store_ps(y, Activate(l.activation, _mm512_add_ps(_mm512_load_ps(out), _mm512_load_ps(l.bias))));
+  _mm512_store_ps(y, Activate(l.activation, l.alpha, _mm512_add_ps(_mm512_load_ps(out), _mm512_load_ps(l.bias))));
 }
 
 void Dense(const KernelLayer& l, const float* x, float* y) {
@@ -136,22 +140,22 @@ void Dense(const KernelLayer& l, const float* x, float* y) {
     const float* b = l.bias + 16 * v0;
     float* out = y + 16 * v0;
     switch (nv) {
-      case 1: Tile<1, 8>(w, b, x, l.in, l.activation, out); break;
-      case 2: Tile<2, 4>(w, b, x, l.in, l.activation, out); break;
-      case 3: Tile<3, 2>(w, b, x, l.in, l.activation, out); break;
+      case 1: Tile<1, 8>(w, b, x, l.in, l.activation, l.alpha, out); break;
+      case 2: Tile<2, 4>(w, b, x, l.in, l.activation, l.alpha, out); break;
+      case 3: Tile<3, 2>(w, b, x, l.in, l.activation, l.alpha, out); break;
       case 4:
         if (l.in == 64) {
-          Tile<4, 2, 64>(w, b, x, l.in, l.activation, out);
+          Tile<4, 2, 64>(w, b, x, l.in, l.activation, l.alpha, out);
         } else if (l.in == 24) {
-          Tile<4, 2, 24>(w, b, x, l.in, l.activation, out);
+          Tile<4, 2, 24>(w, b, x, l.in, l.activation, l.alpha, out);
         } else {
-          Tile<4, 2>(w, b, x, l.in, l.activation, out);
+          Tile<4, 2>(w, b, x, l.in, l.activation, l.alpha, out);
         }
         break;
-      case 5: Tile<5, 1>(w, b, x, l.in, l.activation, out); break;
-      case 6: Tile<6, 1>(w, b, x, l.in, l.activation, out); break;
-      case 7: Tile<7, 1>(w, b, x, l.in, l.activation, out); break;
-      default: Tile<8, 1>(w, b, x, l.in, l.activation, out); break;
+      case 5: Tile<5, 1>(w, b, x, l.in, l.activation, l.alpha, out); break;
+      case 6: Tile<6, 1>(w, b, x, l.in, l.activation, l.alpha, out); break;
+      case 7: Tile<7, 1>(w, b, x, l.in, l.activation, l.alpha, out); break;
+      default: Tile<8, 1>(w, b, x, l.in, l.activation, l.alpha, out); break;
     }
     w += static_cast<std::size_t>(l.in) * nv * 16;
   }

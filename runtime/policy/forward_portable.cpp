@@ -17,11 +17,15 @@ inline Eigen::Index Ix(std::uint32_t n) noexcept {
 }
 
 // Vectorised forms only: a select() with exp() evaluates exp per scalar.
-void Activate(std::uint32_t activation, VecMap y) noexcept {
+// leaky_relu as max(x, alpha * x): for 0 <= alpha <= 1 (validated) this is x > 0 ? x : alpha * x
+// bit for bit, because the rounded product of a float x and alpha lies between 0 and x (so it is
+// <= x for x > 0 and >= x for x <= 0), and a NaN stays NaN; Eigen 3.4 would not vectorise a select().
+void Activate(std::uint32_t activation, float alpha, VecMap y) noexcept {
   switch (activation) {
     case 1: y = y.tanh(); break;
     case 2: y = y.max(0.0f) + y.min(0.0f).exp() - 1.0f; break;
     case 3: y = y.max(0.0f); break;
+    case 4: y = y.max(y * alpha); break;
     default: break;
   }
 }
@@ -45,7 +49,7 @@ std::uint32_t ForwardPortable(const ModelView& m, const DataView& d) noexcept {
     VecMap y(dst, Ix(l.out));
     y.matrix().noalias() = MatMap(l.weight, Ix(l.out), Ix(l.in)) * ConstVecMap(src, Ix(l.in)).matrix();
     y += ConstVecMap(l.bias, Ix(l.out));
-    Activate(l.activation, y);
+    Activate(l.activation, l.alpha, y);
     src = dst;
     dst = (dst == d.ping) ? d.pong : d.ping;
   }

@@ -20,6 +20,7 @@ struct KernelLayer {
   std::uint32_t out;
   std::uint32_t out_pad;  // out rounded up to 16
   std::uint32_t activation;
+  float alpha;  // leaky_relu (activation 4): y = x > 0 ? x : alpha * x; 0 otherwise
 };
 
 struct ModelView {

@@ -133,8 +133,8 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
       copy(l.weight, at(off_w[li]));
     }
     copy(l.bias, at(off_b[li]));
-    m.layers_.push_back(
-        detail::KernelLayer{at(off_w[li]), at(off_b[li]), l.in, l.out, lp, static_cast<std::uint32_t>(l.activation)});
+    m.layers_.push_back(detail::KernelLayer{at(off_w[li]), at(off_b[li]), l.in, l.out, lp,
+                                            static_cast<std::uint32_t>(l.activation), l.alpha});
   }
   m.max_width_pad_ = max_pad;
   m.view_ = detail::ModelView{m.layers_.data(),

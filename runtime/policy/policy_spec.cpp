@@ -12,6 +12,7 @@ const char* ToString(Activation a) noexcept {
     case Activation::kTanh: return "tanh";
     case Activation::kElu: return "elu";
     case Activation::kRelu: return "relu";
+    case Activation::kLeakyRelu: return "leaky_relu";
   }
   return "unknown";
 }
@@ -25,7 +26,8 @@ const char* ToString(ActionHead h) noexcept {
 }
 
 bool ParseActivation(const std::string& s, Activation* out) noexcept {
-  for (auto a : {Activation::kIdentity, Activation::kTanh, Activation::kElu, Activation::kRelu}) {
+  for (auto a :
+       {Activation::kIdentity, Activation::kTanh, Activation::kElu, Activation::kRelu, Activation::kLeakyRelu}) {
     if (s == ToString(a)) {
       *out = a;
       return true;
@@ -51,6 +53,7 @@ PolicySpec MakeRandomSpec(const std::vector<std::uint32_t>& widths, Activation h
     l.in = widths[i];
     l.out = widths[i + 1];
     l.activation = (i + 2 == widths.size()) ? Activation::kIdentity : hidden;
+    if (l.activation == Activation::kLeakyRelu) l.alpha = kRandomSpecLeakyAlpha;
     // Variance-preserving scale, so that activations stay in the interesting range.
     const double gain = 1.0 / std::sqrt(static_cast<double>(l.in));
     l.weight.resize(static_cast<std::size_t>(l.in) * l.out);

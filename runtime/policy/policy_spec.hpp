@@ -8,7 +8,8 @@
 
 namespace pbppo::policy {
 
-enum class Activation : std::uint32_t { kIdentity = 0, kTanh = 1, kElu = 2, kRelu = 3 };
+// kLeakyRelu: x > 0 ? x : alpha * x, with the layer's alpha (the negative slope) in [0, 1].
+enum class Activation : std::uint32_t { kIdentity = 0, kTanh = 1, kElu = 2, kRelu = 3, kLeakyRelu = 4 };
 // The deterministic action head applied to the last layer's output (the Gaussian mean).
 enum class ActionHead : std::uint32_t { kLinear = 0, kTanh = 1 };
 
@@ -20,6 +21,9 @@ struct DenseLayer {
   std::uint32_t in = 0;
   std::uint32_t out = 0;
   Activation activation = Activation::kIdentity;
+  // The negative slope of kLeakyRelu, in [0, 1] (so the activation stays 1-Lipschitz); must be
+  // 0 for every other activation.
+  float alpha = 0.0f;
   std::vector<float> weight;  // row-major [out][in]
   std::vector<float> bias;    // [out]
 };
@@ -59,7 +63,9 @@ struct PolicySpec {
 
 // A spec with the given layer widths (input first, output last), hidden activation and
 // Gaussian-random weights from `seed`; identity normaliser and action map, generated names.
+// Hidden kLeakyRelu layers get alpha = kRandomSpecLeakyAlpha.
 // For benchmarks, tests and latency work on shapes that have no trained policy yet.
+inline constexpr float kRandomSpecLeakyAlpha = 0.01f;
 PolicySpec MakeRandomSpec(const std::vector<std::uint32_t>& widths, Activation hidden, std::uint64_t seed);
 
 }  // namespace pbppo::policy

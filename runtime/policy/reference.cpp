@@ -18,18 +18,37 @@ double Gamma(std::size_t n) {
   return static_cast<double>(n) * kU / (1.0 - static_cast<double>(n) * kU);
 }
 
-double Activate(Activation a, double x) {
+double Activate(Activation a, double alpha, double x) {
   switch (a) {
     case Activation::kIdentity: return x;
     case Activation::kTanh: return std::tanh(x);
     case Activation::kElu: return x > 0.0 ? x : std::expm1(x);
     case Activation::kRelu: return x > 0.0 ? x : 0.0;
+    case Activation::kLeakyRelu: return x > 0.0 ? x : alpha * x;
   }
   return x;
 }
 
-double ActivationRoundoff(Activation a, double fx) {
-  return a == Activation::kIdentity || a == Activation::kRelu ? 0.0 : 4.0 * kU * std::max(std::fabs(fx), 1.0);
+// The float32 activation's own error at output fx = act(f), beyond the error e of its input
+// (|f^ - f| <= e, carried on through |W|: every activation here is 1-Lipschitz).
+// - identity, relu: exact (a copy, a max with 0).
+// - tanh, elu: the kernels' approximations, within 4 kU of max(|fx|, 1).
+// - leaky_relu: one float multiply, alpha * f^, where the kernel's pre-activation f^ is not
+//   positive. Rounded to nearest it is off by at most u * alpha * |f^| (u = kU). With
+//   0 <= alpha <= 1, alpha |f^| <= |fx| + alpha e: for f <= 0, alpha |f^| <= alpha (|f| + e) =
+//   |fx| + alpha e; for f > 0 (f^ <= 0 across the sign change), |f^| <= e. So u (|fx| + alpha e)
+//   bounds it rigorously, also next to 0 where f and f^ differ in sign and a bound in |fx| alone
+//   (even a whole ulp of |fx|) would not. The kernels' max(x, alpha x) and masked-multiply forms
+//   return this same float. Underflow is left to the final absolute slack, as in the dot products.
+double ActivationRoundoff(Activation a, double alpha, double fx, double e) {
+  switch (a) {
+    case Activation::kIdentity:
+    case Activation::kRelu: return 0.0;
+    case Activation::kLeakyRelu: return kU * (std::fabs(fx) + alpha * e);
+    case Activation::kTanh:
+    case Activation::kElu: break;
+  }
+  return 4.0 * kU * std::max(std::fabs(fx), 1.0);
 }
 
 }  // namespace
@@ -46,6 +65,7 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
   for (const DenseLayer& l : s.layers) {
     std::vector<double> y(l.out), ey(l.out);
     const double g = Gamma(l.in + 1);
+    const auto alpha = static_cast<double>(l.alpha);
     for (std::size_t j = 0; j < l.out; ++j) {
       double acc = static_cast<double>(l.bias[j]), mag = std::fabs(static_cast<double>(l.bias[j])), prop = 0.0;
       const float* w = l.weight.data() + j * l.in;
@@ -54,8 +74,9 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
         mag += std::fabs(static_cast<double>(w[i])) * (std::fabs(x[i]) + e[i]);
         prop += std::fabs(static_cast<double>(w[i])) * e[i];
       }
-      y[j] = Activate(l.activation, acc);
-      ey[j] = prop + g * mag + ActivationRoundoff(l.activation, y[j]);
+      y[j] = Activate(l.activation, alpha, acc);
+      const double e_pre = prop + g * mag;
+      ey[j] = e_pre + ActivationRoundoff(l.activation, alpha, y[j], e_pre);
     }
     x = std::move(y);
     e = std::move(ey);
@@ -67,7 +88,7 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
     double a = x[j], ea = e[j];
     if (s.action_head == ActionHead::kTanh) {
       a = std::tanh(a);
-      ea += ActivationRoundoff(Activation::kTanh, a);
+      ea += ActivationRoundoff(Activation::kTanh, 0.0, a, ea);
     }
     const double sc = static_cast<double>(s.action_scale[j]), off = static_cast<double>(s.action_offset[j]);
     const double scaled = a * sc + off;

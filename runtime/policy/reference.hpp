@@ -14,9 +14,10 @@ namespace pbppo::policy {
 struct ReferenceOutput {
   std::vector<double> action;
   // A first-order bound on |float32 forward - float64 reference| per action element: each dot
-  // product of length n rounds within gamma(n+1) * sum|w||x| (Higham), each activation within
-  // 4 ulp of max(|f|, 1), errors propagate through |W| (activations are 1-Lipschitz), and the
-  // action map adds two roundings. Any summation order and FMA use stay within it.
+  // product of length n rounds within gamma(n+1) * sum|w||x| (Higham), each tanh/ELU within
+  // 4 ulp of max(|f|, 1), each leaky_relu multiply within u (|f| + alpha e) for an input error e,
+  // errors propagate through |W| (activations are 1-Lipschitz), and the action map adds two
+  // roundings. Any summation order and FMA use stay within it.
   std::vector<double> error_bound;
 };
 

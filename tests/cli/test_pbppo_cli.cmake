@@ -34,6 +34,21 @@ if(NOT n EQUAL 5890)
   message(FATAL_ERROR "parameter_count ${n}")
 endif()
 
+# leaky_relu: synth gives hidden layers alpha 0.01; inspect shows it (JSON: only on those layers).
+run(0 ${PBPPO} synth --widths 6-16-8-3 --activation leaky_relu --seed 2 --out ${WORK}/leaky.blob)
+run(0 ${PBPPO} inspect ${WORK}/leaky.blob)
+expect_in("${OUT}" "6 -> 16 leaky_relu(alpha=0.01) -> 8 leaky_relu(alpha=0.01) -> 3 identity")
+run(0 ${PBPPO} inspect --json ${WORK}/leaky.blob)
+string(JSON act GET "${OUT}" layers 0 activation)
+string(JSON alpha GET "${OUT}" layers 1 alpha)
+string(JSON none ERROR_VARIABLE no_alpha GET "${OUT}" layers 2 alpha)
+if(NOT act STREQUAL "leaky_relu" OR NOT alpha MATCHES "^0\\.0099999" OR no_alpha STREQUAL "NOTFOUND")
+  message(FATAL_ERROR "inspect --json of a leaky_relu blob: activation '${act}', alpha '${alpha}', "
+                      "identity layer's alpha '${none}' (${no_alpha})")
+endif()
+run(2 ${PBPPO} train --activation leaky_relu --out ${WORK}/bad)
+expect_in("${ERR}" "--activation: 'leaky_relu' is not trainable here")
+
 # The shipped P3 blob: synth with the same seed reproduces it byte for byte.
 run(0 ${PBPPO} synth --widths 24-64-64-2 --activation tanh --seed 3 --out ${WORK}/again.blob)
 file(SHA256 ${WORK}/again.blob a)

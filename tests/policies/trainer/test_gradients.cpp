@@ -219,5 +219,11 @@ TEST_CASE("Gaussian log-probability and entropy match the closed forms") {
   CHECK(GaussianEntropy(&log_std, 1) == doctest::Approx(0.5 * std::log(2 * M_PI * M_E * 4.0)).epsilon(1e-14));
 }
 
+TEST_CASE("the trainer's MLP refuses leaky_relu (a blob and runtime activation only)") {
+  CHECK_THROWS_AS(Mlp<double>(MlpShape{{3, 4, 2}, Activation::kLeakyRelu, Activation::kIdentity}),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(Mlp<float>(MlpShape{{3, 4, 2}, Activation::kTanh, Activation::kLeakyRelu}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pbppo::trainer

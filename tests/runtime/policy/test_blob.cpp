@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -128,6 +129,101 @@ TEST_CASE("invalid values are refused by the writer, naming the field") {
   s = Small();
   s.layers[0].weight.pop_back();
   expect(s, "policy blob: layer 0 weight: has 34 values, expected 35");
+}
+
+TEST_CASE("activation names parse back, leaky_relu included") {
+  for (Activation a :
+       {Activation::kIdentity, Activation::kTanh, Activation::kElu, Activation::kRelu, Activation::kLeakyRelu}) {
+    Activation back = Activation::kIdentity;
+    REQUIRE(ParseActivation(ToString(a), &back));
+    CHECK(back == a);
+  }
+  CHECK(std::string(ToString(Activation::kLeakyRelu)) == "leaky_relu");
+  CHECK(static_cast<std::uint32_t>(Activation::kLeakyRelu) == 4);
+  Activation a = Activation::kTanh;
+  CHECK_FALSE(ParseActivation("leaky", &a));
+  CHECK(a == Activation::kTanh);
+}
+
+TEST_CASE("MakeRandomSpec gives hidden leaky_relu layers alpha 0.01 and the output layer none") {
+  const PolicySpec s = MakeRandomSpec({6, 9, 8, 3}, Activation::kLeakyRelu, 7);
+  REQUIRE(s.layers.size() == 3);
+  for (std::size_t i = 0; i < 2; ++i) {
+    CHECK(s.layers[i].activation == Activation::kLeakyRelu);
+    CHECK(s.layers[i].alpha == 0.01f);
+  }
+  CHECK(s.layers[2].activation == Activation::kIdentity);
+  CHECK(s.layers[2].alpha == 0.0f);
+  CHECK(ValidateSpec(s).ok());
+  for (const DenseLayer& l : MakeRandomSpec({6, 9, 3}, Activation::kRelu, 7).layers) CHECK(l.alpha == 0.0f);
+}
+
+TEST_CASE("a leaky_relu layer's alpha round-trips as float32 bits in the layer record's 4th word") {
+  PolicySpec s = MakeRandomSpec({6, 9, 8, 5, 3}, Activation::kLeakyRelu, 7);
+  s.layers[0].alpha = 0.37f;
+  s.layers[1].alpha = 1.0f;  // both ends of [0, 1] are valid
+  s.layers[2].alpha = 0.0f;
+  s.layers[3].activation = Activation::kLeakyRelu;  // the output layer may have one too
+  s.layers[3].alpha = 0x1.fffffep-1f;
+  auto bytes = EncodeBlob(s);
+  REQUIRE(bytes.ok());
+  for (std::size_t i = 0; i < s.layers.size(); ++i) {
+    std::uint32_t rec[4];
+    std::memcpy(rec, bytes->data() + kBlobHeaderBytes + i * kLayerRecordBytes, sizeof rec);
+    CHECK(rec[2] == 4u);
+    CHECK(rec[3] == std::bit_cast<std::uint32_t>(s.layers[i].alpha));
+  }
+  auto back = DecodeBlob(*bytes);
+  REQUIRE_MESSAGE(back.ok(), back.error().message);
+  for (std::size_t i = 0; i < s.layers.size(); ++i) {
+    CHECK(back->layers[i].activation == Activation::kLeakyRelu);
+    CHECK(std::bit_cast<std::uint32_t>(back->layers[i].alpha) == std::bit_cast<std::uint32_t>(s.layers[i].alpha));
+    CHECK(back->layers[i].weight == s.layers[i].weight);
+  }
+  auto again = EncodeBlob(*back);
+  REQUIRE(again.ok());
+  CHECK(*again == *bytes);
+
+  // Other activations keep the word 0, and decode with alpha 0.
+  bytes = EncodeBlob(MakeRandomSpec({5, 7, 3}, Activation::kElu, 2));
+  REQUIRE(bytes.ok());
+  for (std::size_t i = 0; i < 2; ++i) {
+    std::uint32_t word = 1;
+    std::memcpy(&word, bytes->data() + kBlobHeaderBytes + i * kLayerRecordBytes + 12, 4);
+    CHECK(word == 0u);
+  }
+  back = DecodeBlob(*bytes);
+  REQUIRE(back.ok());
+  for (const DenseLayer& l : back->layers) CHECK(std::bit_cast<std::uint32_t>(l.alpha) == 0u);
+}
+
+TEST_CASE("the writer refuses a leaky_relu alpha outside [0, 1] and an alpha on any other layer") {
+  auto expect = [](PolicySpec s, const std::string& msg) {
+    const auto st = ValidateSpec(s);
+    REQUIRE_FALSE(st.ok());
+    CHECK(st.error().message == msg);
+    auto r = EncodeBlob(s);
+    REQUIRE_FALSE(r.ok());
+    CHECK(r.error().message == msg);
+  };
+  const PolicySpec leaky = MakeRandomSpec({5, 7, 6, 3}, Activation::kLeakyRelu, 3);
+  PolicySpec s = leaky;
+  s.layers[1].alpha = 1.5f;
+  expect(s, "policy blob: layer 1: leaky_relu alpha 1.5 outside [0, 1]");
+  s.layers[1].alpha = -0.25f;
+  expect(s, "policy blob: layer 1: leaky_relu alpha -0.25 outside [0, 1]");
+  s.layers[1].alpha = std::nextafter(1.0f, 2.0f);
+  expect(s, "policy blob: layer 1: leaky_relu alpha 1.00000012 outside [0, 1]");
+  s.layers[1].alpha = std::numeric_limits<float>::quiet_NaN();
+  expect(s, "policy blob: layer 1: leaky_relu alpha nan outside [0, 1]");
+  s.layers[0].alpha = std::numeric_limits<float>::infinity();
+  expect(s, "policy blob: layer 0: leaky_relu alpha inf outside [0, 1]");
+  s = leaky;
+  s.layers[2].alpha = 0.5f;  // the identity output layer
+  expect(s, "policy blob: layer 2: alpha 0.5 given for activation identity (only leaky_relu has one)");
+  s = Small();
+  s.layers[0].alpha = -0.0f;  // not even a negative zero: the word must stay 0
+  expect(s, "policy blob: layer 0: alpha -0 given for activation tanh (only leaky_relu has one)");
 }
 
 TEST_CASE("files are written atomically and read back, errors name the path") {

@@ -2,6 +2,7 @@
 // and header fields corrupted with a recomputed CRC (so the CRC is not the only guard).
 #include <doctest/doctest.h>
 
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -80,7 +81,7 @@ TEST_CASE("structural header fields corrupted under a valid CRC are rejected, na
   for (std::size_t off = 0; off < 40; ++off) structural.push_back(off);  // magic .. action_head
   for (std::size_t off = layer0; off < layer1 + kLayerRecordBytes; ++off) {
     if ((off - layer0) % kLayerRecordBytes >= 8 && (off - layer0) % kLayerRecordBytes < 12)
-      continue;  // activation: 0..3 are all valid
+      continue;  // activation: 0..4 are all valid (4, leaky_relu, with alpha 0 in the next word)
     structural.push_back(off);
   }
   std::size_t accepted = 0;
@@ -115,13 +116,56 @@ TEST_CASE("structural header fields corrupted under a valid CRC are rejected, na
   CHECK(with(kOffActionHead, 7) == "policy blob: action_head 7 unknown (0..1)");
   CHECK(with(layer0 + 4, 900) == "policy blob: layer 1: input width 4 does not match the previous width 900");
   CHECK(with(layer0 + 4, 5000) == "policy blob: layer 0: width 5000 exceeds limit 2048");
-  CHECK(with(layer0 + 8, 4) == "policy blob: layer 0: activation 4 unknown (0..3)");
+  CHECK(with(layer0 + 8, 5) == "policy blob: layer 0: activation 5 unknown (0..4)");
   CHECK(with(layer0 + 12, 1) == "policy blob: layer 0: reserved field 1 is not 0");
 
   auto b = good;
   Put<std::uint64_t>(b, kOffFileBytes, 1ull << 40);
   Recrc(b);
   CHECK(Refused(b) == "policy blob: file_bytes 1099511627776 exceeds limit 134217728");
+}
+
+TEST_CASE("a leaky_relu alpha outside [0, 1], or a non-zero 4th word on another layer, is rejected under a valid CRC") {
+  PolicySpec spec = MakeRandomSpec({3, 4, 2}, Activation::kLeakyRelu, 9);
+  REQUIRE(spec.layers[0].activation == Activation::kLeakyRelu);
+  REQUIRE(spec.layers[1].activation == Activation::kIdentity);
+  auto encoded = EncodeBlob(spec);
+  REQUIRE(encoded.ok());
+  const std::vector<std::uint8_t> good = *encoded;
+  const std::size_t layer0 = kBlobHeaderBytes, layer1 = kBlobHeaderBytes + kLayerRecordBytes;
+  auto with = [&](std::size_t off, std::uint32_t v) {
+    auto b = good;
+    Put(b, off, v);
+    Recrc(b);
+    return b;
+  };
+  auto alpha = [&](float a) { return with(layer0 + 12, std::bit_cast<std::uint32_t>(a)); };
+
+  CHECK(Refused(alpha(1.5f)) == "policy blob: layer 0: leaky_relu alpha 1.5 outside [0, 1]");
+  CHECK(Refused(alpha(-0.125f)) == "policy blob: layer 0: leaky_relu alpha -0.125 outside [0, 1]");
+  CHECK(Refused(alpha(std::numeric_limits<float>::quiet_NaN())) ==
+        "policy blob: layer 0: leaky_relu alpha nan outside [0, 1]");
+  CHECK(Refused(alpha(-std::numeric_limits<float>::infinity())) ==
+        "policy blob: layer 0: leaky_relu alpha -inf outside [0, 1]");
+  CHECK(Refused(with(layer0 + 12, 0xFFFFFFFFu)) == "policy blob: layer 0: leaky_relu alpha -nan outside [0, 1]");
+  for (float a : {0.0f, 0.25f, 1.0f, 0x1p-149f}) {
+    auto back = DecodeBlob(alpha(a));
+    REQUIRE_MESSAGE(back.ok(), back.error().message);
+    CHECK(back->layers[0].alpha == a);
+  }
+
+  // The identity output layer's word, and the leaky layer's once it becomes tanh: reserved, 0.
+  CHECK(Refused(with(layer1 + 12, std::bit_cast<std::uint32_t>(0.5f))) ==
+        "policy blob: layer 1: reserved field 1056964608 is not 0");
+  CHECK(Refused(with(layer0 + 8, 1)) == "policy blob: layer 0: reserved field 1008981770 is not 0");
+  // The other way round: a tanh layer becomes leaky_relu with alpha 0, which is valid.
+  auto b = SmallBlob();
+  Put<std::uint32_t>(b, layer0 + 8, 4);
+  Recrc(b);
+  auto back = DecodeBlob(b);
+  REQUIRE_MESSAGE(back.ok(), back.error().message);
+  CHECK(back->layers[0].activation == Activation::kLeakyRelu);
+  CHECK(back->layers[0].alpha == 0.0f);
 }
 
 TEST_CASE("non-finite parameters and bad names under a valid CRC are rejected") {

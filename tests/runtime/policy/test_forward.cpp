@@ -55,6 +55,8 @@ const Shape kShapes[] = {
     {"P2", {48, 256, 128, 64, 12}, Activation::kElu, ActionHead::kLinear},
     {"P3", {24, 64, 64, 2}, Activation::kTanh, ActionHead::kLinear},
     {"relu-odd", {7, 33, 17, 5}, Activation::kRelu, ActionHead::kTanh},
+    {"leaky-P2", {48, 256, 128, 64, 12}, Activation::kLeakyRelu, ActionHead::kLinear},
+    {"leaky-odd", {7, 33, 17, 5}, Activation::kLeakyRelu, ActionHead::kTanh},
     {"identity-wide", {130, 200, 19}, Activation::kIdentity, ActionHead::kLinear},
     {"single-layer", {1, 1}, Activation::kIdentity, ActionHead::kTanh},
 };
@@ -85,6 +87,85 @@ TEST_CASE("every kernel reproduces the golden vectors within the float32 error b
       // The bound is a worst case; a float32 forward lands far inside it. This catches a path
       // that silently lost precision (reduced-precision weights deviate by ~1e-3).
       CHECK(d.worst_abs < 1e-5);
+    }
+  }
+}
+
+TEST_CASE("leaky_relu with random slopes in [0, 1]: every kernel within the bound, on every tile form") {
+  // Output widths reach every avx512 tile width (1..8 vectors, more than 8, the unrolled 24- and
+  // 64-input tiles) and the row form (<= 4 outputs); the output layer is leaky in some specs too.
+  const std::vector<std::vector<std::uint32_t>> shapes = {
+      {13, 16, 48, 97, 130, 3}, {11, 32, 64, 96, 128, 4}, {24, 64, 64, 2}, {5, 80, 112, 200, 1}, {1, 1}};
+  pbppo::Rng rng(31);
+  int specs = 0;
+  for (const auto& widths : shapes) {
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+      PolicySpec spec = MakeRandomSpec(widths, Activation::kLeakyRelu, seed);
+      if (seed != 1) {
+        spec.layers.back().activation = Activation::kLeakyRelu;
+        spec.layers.back().alpha = 0.0f;
+      }
+      spec.action_head = seed == 3 ? ActionHead::kTanh : ActionHead::kLinear;
+      for (DenseLayer& l : spec.layers) {
+        if (l.activation != Activation::kLeakyRelu) continue;
+        const double u = rng.Uniform();
+        l.alpha = u < 0.15 ? 0.0f : u < 0.3 ? 1.0f : u < 0.45 ? 0.01f : static_cast<float>(rng.Uniform());
+      }
+      for (std::size_t j = 0; j < spec.output_size; ++j) spec.action_scale[j] = 0.9f;
+      REQUIRE(ValidateSpec(spec).ok());
+      const GoldenVectors g = MakeGoldenVectors(spec, 48, seed + 10);
+      for (Kernel k : AvailableKernels()) {
+        CAPTURE(specs);
+        CAPTURE(ToString(k));
+        auto model = PolicyModel::FromSpec(spec, {.kernel = k});
+        REQUIRE(model.ok());
+        const Deviation d = Check(*model, g);
+        CHECK(d.worst_abs < 1e-5);
+      }
+      ++specs;
+    }
+  }
+  CHECK(specs == 15);
+}
+
+TEST_CASE("leaky_relu is x > 0 ? x : alpha * x exactly, on every kernel") {
+  // One layer with W = I and b = 0, identity normaliser and action map: the action is the
+  // activation of the observation, bit for bit.
+  for (std::uint32_t n : {3u, 20u, 130u}) {  // avx512 row form, a 2-vector tile, 8 + 1 vectors
+    PolicySpec spec = MakeRandomSpec({n, n}, Activation::kIdentity, 1);
+    DenseLayer& l = spec.layers[0];
+    l.activation = Activation::kLeakyRelu;
+    l.alpha = 0.3f;
+    std::fill(l.weight.begin(), l.weight.end(), 0.0f);
+    for (std::uint32_t i = 0; i < n; ++i) l.weight[static_cast<std::size_t>(i) * n + i] = 1.0f;
+    std::fill(l.bias.begin(), l.bias.end(), 0.0f);
+    std::fill(spec.obs_mean.begin(), spec.obs_mean.end(), 0.0f);
+    std::fill(spec.obs_inv_std.begin(), spec.obs_inv_std.end(), 1.0f);
+    spec.obs_clip = 1e30f;
+    std::fill(spec.action_scale.begin(), spec.action_scale.end(), 1.0f);
+    std::fill(spec.action_low.begin(), spec.action_low.end(), -1e30f);
+    std::fill(spec.action_high.begin(), spec.action_high.end(), 1e30f);
+    for (Kernel k : AvailableKernels()) {
+      CAPTURE(n);
+      CAPTURE(ToString(k));
+      auto model = PolicyModel::FromSpec(spec, {.kernel = k});
+      REQUIRE(model.ok());
+      auto data = MakePolicyData(*model);
+      REQUIRE(data.ok());
+      pbppo::Rng rng(n);
+      for (int r = 0; r < 20; ++r) {
+        auto obs = data->observation();
+        for (float& o : obs) o = static_cast<float>(rng.Normal() * std::exp(8.0 * rng.Normal()));
+        obs[0] = 0.0f;
+        if (n > 1) obs[1] = -1e-40f;  // subnormal
+        if (n > 2) obs[2] = 1e-40f;
+        REQUIRE(Forward(*model, *data) == ForwardStatus::kOk);
+        for (std::uint32_t i = 0; i < n; ++i) {
+          const float x = obs[i];
+          const float want = x > 0.0f ? x : 0.3f * x;
+          CHECK_MESSAGE(data->action()[i] == want, "x " << x << " got " << data->action()[i] << " want " << want);
+        }
+      }
     }
   }
 }

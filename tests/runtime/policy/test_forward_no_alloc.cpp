@@ -22,9 +22,13 @@ TEST_CASE("the allocation counter sees allocations") {
 }
 
 TEST_CASE("100,000 forward calls allocate nothing") {
-  for (const auto& widths :
-       {std::vector<std::uint32_t>{48, 512, 256, 128, 12}, std::vector<std::uint32_t>{24, 64, 64, 2}}) {
-    const PolicySpec spec = MakeRandomSpec(widths, Activation::kElu, 2);
+  struct Net {
+    std::vector<std::uint32_t> widths;
+    Activation act;
+  };
+  for (const Net& net : {Net{{48, 512, 256, 128, 12}, Activation::kElu}, Net{{24, 64, 64, 2}, Activation::kElu},
+                         Net{{24, 64, 64, 2}, Activation::kLeakyRelu}}) {
+    const PolicySpec spec = MakeRandomSpec(net.widths, net.act, 2);
     for (Kernel k : AvailableKernels()) {
       CAPTURE(ToString(k));
       auto model = PolicyModel::FromSpec(spec, {.kernel = k});
