@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "runtime/core/clock.hpp"
 #include "runtime/policy/blob.hpp"
 
 namespace pbppo::sim {
@@ -63,6 +64,8 @@ bool QuadrupedRig::Tick() noexcept {
   if (clock_) {
     (void)clock_->Wait(timing);
     if (!supervise_deadlines_) timing.consecutive_misses = 0;  // counted by the profiler, not acted on
+  } else {
+    timing.wake_ns = timing.deadline_ns = MonotonicNs();  // lock-step: the tick starts now
   }
   timing.tick = tick_;  // simulated time: one tick per tick, whatever the clock skipped
   status_ = loop::Tick(model_, data_, *loop_, transports_, timing);
