@@ -85,8 +85,7 @@ int main(int argc, char** argv) {
       for (int k = 0; k < steps; ++k) {
         std::copy(obs.begin(), obs.end(), data->observation().begin());
         (void)policy::Forward(*model, *data);
-        for (std::size_t j = 0; j < act.size(); ++j)
-          act[j] = (data->action()[j] - spec.action_offset[j]) / spec.action_scale[j];
+        robot::ToPolicyUnits(e.layout(), data->action(), act);
         const envs::StepResult r = e.Step(act, obs);
         if (r.terminated || r.truncated) e.Reset(rng, obs);
       }

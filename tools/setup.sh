@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Installs every Debian package pbppo-rt needs on a Debian 12 machine.
-# Idempotent: packages already present are skipped; apt runs only when something is missing.
+# Installs every Debian package pbppo-rt needs on a Debian 12 machine, then the ONNX Runtime
+# reference evaluator's npm packages (tools/onnx, pinned by its package-lock.json).
+# Idempotent: packages already present are skipped; apt runs only when something is missing, npm
+# only when tools/onnx/node_modules is missing or older than the lock.
 # The one place where the project's system dependencies are listed.
 set -euo pipefail
 
@@ -22,24 +24,45 @@ PACKAGES=(
   # CAN: tools, DBC decoding (python3-yaml: tools/gen_can_dbc.py), and the QEMU runner for the vcan tests (kernel has no AF_CAN)
   can-utils python3-can python3-canmatrix python3-yaml
   qemu-system-x86 busybox-static kmod cpio xz-utils
+  # ONNX import (pbppo import-onnx): the ONNX library and protobuf, the test-model generator
+  # (tools/onnx/make_models.py) and the ONNX Runtime reference it is checked against (tools/onnx)
+  libonnx-dev libprotobuf-dev protobuf-compiler python3-onnx python3-numpy nodejs npm
 )
+
+# installed PACKAGE: dpkg has it, or (npm) another installed nodejs package provides its command:
+# NodeSource's nodejs ships npm and conflicts with Debian's npm package.
+installed() {
+  dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed' && return 0
+  [ "$1" = npm ] && command -v npm >/dev/null
+}
 
 missing=()
 for p in "${PACKAGES[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+  if ! installed "$p"; then
     missing+=("$p")
   fi
 done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "setup: all ${#PACKAGES[@]} packages present"
-  exit 0
+else
+  echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+# onnxruntime-node for tools/onnx/ort_eval.js, exactly as the lock pins it. --ignore-scripts: its
+# install script would download CUDA binaries; the CPU binaries are in the npm package itself.
+# npm ci writes node_modules/.package-lock.json last, so that file's age is node_modules' age.
+onnx_tools="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/onnx"
+if [ ! -f "$onnx_tools/node_modules/.package-lock.json" ] ||
+  [ "$onnx_tools/package-lock.json" -nt "$onnx_tools/node_modules/.package-lock.json" ]; then
+  echo "setup: installing tools/onnx's npm packages (npm ci)"
+  (cd "$onnx_tools" && npm ci --ignore-scripts --no-audit --no-fund --loglevel=error)
+else
+  echo "setup: tools/onnx's npm packages present"
+fi
 echo "setup: done"

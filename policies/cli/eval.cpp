@@ -170,7 +170,6 @@ int Eval(const EvalOptions& o_in) {
   }
   envs::Env& e = **env;
   // The blob outputs commands (the layout's map applied); the environment takes policy units.
-  const auto& spec = model->description();
   Rng rng(o.seed);
   std::vector<float> obs(e.observation_size()), act(e.action_size());
   std::vector<double> returns;
@@ -205,10 +204,7 @@ int Eval(const EvalOptions& o_in) {
     for (;;) {
       std::copy(obs.begin(), obs.end(), data->observation().begin());
       if (policy::Forward(model.value(), data.value()) != policy::ForwardStatus::kOk) ++bad;
-      for (std::size_t j = 0; j < act.size(); ++j) {
-        const float scale = spec.action_scale[j];
-        act[j] = scale != 0.f ? (data->action()[j] - spec.action_offset[j]) / scale : 0.f;
-      }
+      robot::ToPolicyUnits(e.layout(), data->action(), act);
       const envs::StepResult r = e.Step(act, obs);
       ret += r.reward;
       ++steps;

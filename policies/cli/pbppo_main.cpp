@@ -3,6 +3,7 @@
 
 #include "policies/cli/curves.hpp"
 #include "policies/cli/eval.hpp"
+#include "policies/cli/import_onnx.hpp"
 #include "policies/cli/inspect.hpp"
 #include "policies/cli/replay.hpp"
 #include "policies/cli/train.hpp"
@@ -16,11 +17,15 @@ int main(int argc, char** argv) {
   auto* inspect = app.add_subcommand("inspect", "Show everything in a policy blob's header");
   inspect->add_option("blob", inspect_path, "Policy blob file")->required();
   inspect->add_flag("--json", inspect_json, "Print JSON instead of text");
+  bool inspect_weights = false;
+  inspect->add_flag("--weights", inspect_weights, "With --json: every layer's weight (row-major [out][in]) and bias")
+      ->needs("--json");
 
   pbppo::cli::SynthOptions synth_opts;
   auto* synth = app.add_subcommand("synth", "Write a random-weight blob of a given shape, with golden vectors");
   synth->add_option("--widths", synth_opts.widths, "Layer widths, input first, e.g. 48-512-256-128-12");
-  synth->add_option("--activation", synth_opts.activation, "Hidden activation: identity, tanh, elu, relu");
+  synth->add_option("--activation", synth_opts.activation,
+                    "Hidden activation: identity, tanh, elu, relu, leaky_relu (alpha 0.01)");
   synth->add_option("--seed", synth_opts.seed, "Seed for the weights");
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
@@ -42,16 +47,20 @@ int main(int argc, char** argv) {
   pbppo::cli::ReplayOptions replay_opts;
   auto* replay = pbppo::cli::AddReplay(app, replay_opts);
 
+  pbppo::cli::ImportOnnxOptions import_opts;
+  auto* import_onnx = pbppo::cli::AddImportOnnx(app, import_opts);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors exit 2, after CLI11 printed the reason
   }
-  if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json);
+  if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json, inspect_weights);
   if (*synth) return pbppo::cli::Synth(synth_opts);
   if (*train) return pbppo::cli::Train(train_opts, train_quiet);
   if (*eval) return pbppo::cli::Eval(eval_opts);
   if (*curves) return pbppo::cli::Curves(curves_opts);
   if (*replay) return pbppo::cli::Replay(replay_opts);
+  if (*import_onnx) return pbppo::cli::ImportOnnx(import_opts);
   return 2;
 }

@@ -4,15 +4,6 @@
 
 namespace pbppo::envs {
 
-namespace {
-
-// The blob gives joint targets (its action map applied); the environment takes policy units.
-void ToPolicyUnits(const policy::PolicySpec& spec, std::span<const float> targets, std::vector<float>& act) {
-  for (std::size_t j = 0; j < act.size(); ++j) act[j] = (targets[j] - spec.action_offset[j]) / spec.action_scale[j];
-}
-
-}  // namespace
-
 Result<WalkScheduleResult> EvaluateWalkSchedule(const policy::PolicyModel& model, QuadrupedWalk& env,
                                                 const std::vector<WalkSchedulePhase>& phases, double settle_s,
                                                 std::uint64_t seed) {
@@ -42,7 +33,7 @@ Result<WalkScheduleResult> EvaluateWalkSchedule(const policy::PolicyModel& model
   for (int k = 0; k < steps; ++k) {
     std::copy(obs.begin(), obs.end(), data->observation().begin());
     (void)policy::Forward(model, *data);
-    ToPolicyUnits(model.description(), data->action(), act);
+    robot::ToPolicyUnits(env.layout(), data->action(), act);
     env.HoldCommand(command_at((k + 1) * dt));  // observed at the end of this step
     const StepResult r = env.Step(act, obs);
     const WalkTelemetry& t = env.telemetry();
@@ -85,7 +76,6 @@ Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedW
                                                    std::to_string(env.params().resample_s) + " s");
   auto data = policy::MakePolicyData(model);
   if (!data) return std::move(data).error();
-  const policy::PolicySpec& spec = model.description();
   WalkEvalResult res;
   res.robots = o.robots;
   Rng rng(o.seed);
@@ -100,7 +90,7 @@ Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedW
     for (;;) {
       std::copy(obs.begin(), obs.end(), data->observation().begin());
       if (policy::Forward(model, *data) != policy::ForwardStatus::kOk) ++res.forward_problems;
-      ToPolicyUnits(spec, data->action(), act);
+      robot::ToPolicyUnits(env.layout(), data->action(), act);
       const StepResult r = env.Step(act, obs);
       returns += r.reward;
       const WalkTelemetry& t = env.telemetry();

@@ -127,6 +127,7 @@ Result<IoLayout> ParseIoLayout(const std::string& yaml_text, const std::string& 
       if (!st) return st.error();
     }
     if (!(e.low <= e.high)) return f.Fail(w, "low " + Num(e.low) + " is above high " + Num(e.high));
+    if (e.scale == 0.0) return f.Fail(w + ".scale", "0 would make every command the offset");
     if (!names.insert("act:" + e.name).second) return f.Fail(w + ".name", "'" + e.name + "' appears twice");
     l.actions.push_back(std::move(e));
   }
@@ -153,6 +154,14 @@ void ApplyLayoutToSpec(const IoLayout& layout, policy::PolicySpec& spec) {
     spec.action_offset.push_back(static_cast<float>(a.offset));
     spec.action_low.push_back(static_cast<float>(a.low));
     spec.action_high.push_back(static_cast<float>(a.high));
+  }
+}
+
+void ToPolicyUnits(const IoLayout& layout, std::span<const float> commands, std::span<float> actions) {
+  for (std::size_t j = 0; j < actions.size() && j < layout.actions.size(); ++j) {
+    const ActionElement& a = layout.actions[j];
+    // In float, as the blob's own float32 action map rounds them (a trained blob's equal these).
+    actions[j] = (commands[j] - static_cast<float>(a.offset)) / static_cast<float>(a.scale);
   }
 }
 

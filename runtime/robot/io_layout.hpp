@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,12 @@ Result<IoLayout> ParseIoLayout(const std::string& yaml_text, const std::string& 
 
 // Copies names, hash and the action map (scale, offset, low, high) into a policy spec.
 void ApplyLayoutToSpec(const IoLayout& layout, policy::PolicySpec& spec);
+
+// The policy units of the commands a blob gives (its action map applied): per action,
+// (command - offset) / scale with the layout's own scale and offset: what an environment's Step()
+// and the last_action observations take. (An imported blob's action map may fold the model's own
+// output scale into the layout's, so its scale is not the one to divide by.)
+void ToPolicyUnits(const IoLayout& layout, std::span<const float> commands, std::span<float> actions);
 
 // Refuses a policy trained for another layout, naming the first difference.
 Status CheckPolicyMatchesLayout(const policy::PolicySpec& policy, const IoLayout& layout);

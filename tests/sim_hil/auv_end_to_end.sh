@@ -22,13 +22,7 @@ robot=models/auv/robot.yaml
 # Missions the shipped policy must complete: "layout:seed ...".
 missions=${PBPPO_AUV_MISSIONS:-$(cat policies/frozen/auv_nav/test_missions.txt)}
 domain=$((100 + $$ % 100))
-fail() {
-  echo "FAIL: $*"
-  exit 1
-}
-expect() {  # expect FILE PATTERN
-  grep -Eq -- "$2" "$1" || { cat "$1"; fail "'$2' not found in $1"; }
-}
+source "$src/tests/support/checks.sh"  # fail, expect
 
 echo "== 1: start-up refusals"
 cp "$blob" "$work/corrupt.blob"

@@ -15,13 +15,7 @@ mkdir -p "$work"
 cd "$src"
 blob=policies/frozen/quadruped_walk/flat.blob
 domain=$((30 + $$ % 150))
-fail() {
-  echo "FAIL: $*"
-  exit 1
-}
-expect() {  # expect FILE PATTERN
-  grep -Eq -- "$2" "$1" || { cat "$1"; fail "'$2' not found in $1"; }
-}
+source "$src/tests/support/checks.sh"  # fail, expect
 cat > "$work/short.yaml" <<'YAML'
 stream: velocity_command
 phases:

@@ -1,0 +1,67 @@
+#include "policies/cli/import_onnx.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+
+#include "policies/onnx/onnx_import.hpp"
+#include "policies/trainer/exporter.hpp"
+#include "runtime/policy/blob.hpp"
+#include "runtime/robot/robot_model.hpp"
+
+namespace pbppo::cli {
+
+CLI::App* AddImportOnnx(CLI::App& app, ImportOnnxOptions& o) {
+  auto* c =
+      app.add_subcommand("import-onnx", "Import an ONNX actor (rsl_rl, stable-baselines3, ...) into a policy blob");
+  c->add_option("model", o.model, "ONNX model file")->required();
+  c->add_option("--robot", o.robot, "The robot file (models/<robot>/robot.yaml): its IO layout")->required();
+  c->add_option("--map", o.map, "Mapping file: the model's input and output elements in layout names")->required();
+  c->add_option("--out", o.out, "Output blob path (golden vectors go beside it)")->required();
+  c->add_option("--seed", o.seed, "Seed of the golden-vector observations");
+  return c;
+}
+
+int ImportOnnx(const ImportOnnxOptions& o) {
+  auto fail = [](const std::string& m) {
+    std::fprintf(stderr, "pbppo import-onnx: %s\n", m.c_str());
+    return 1;
+  };
+  auto robot = robot::LoadRobotModel(o.robot);
+  if (!robot) return fail(robot.error().message);
+  if (!robot->io) return fail(o.robot + ": files: no io_layout (the layout a policy runs on)");
+  auto bytes = policy::ReadFileBytes(o.model, onnx::ReadLimits{}.max_file_bytes);
+  if (!bytes) return fail(bytes.error().message);
+  auto model = onnx::ParseModel(*bytes, o.model);
+  if (!model) return fail(model.error().message);
+  auto mapping = onnx::LoadMapping(o.map, *robot->io);
+  if (!mapping) return fail(mapping.error().message);
+  onnx::ImportOptions io;
+  io.source_name = std::filesystem::path(o.model).filename().string();
+  io.source_sha256 = onnx::Sha256Hex(*bytes);
+  io.importer = std::string("pbppo-rt ") + PBPPO_VERSION + " " + trainer::BuildGitRevision();
+  io.golden_seed = o.seed;
+  auto imported = onnx::Import(*model, *mapping, *robot->io, io);
+  if (!imported) return fail(imported.error().message);
+  const policy::PolicySpec& s = imported->spec;
+  std::printf("model        %s (%s %s, opset %lld, ir %lld)\n  sha256     %s\n", o.model.c_str(),
+              model->producer_name.c_str(), model->producer_version.c_str(), static_cast<long long>(model->opset),
+              static_cast<long long>(model->ir_version), io.source_sha256.c_str());
+  std::printf("robot        %s (layout '%s': %u observations, %u actions)\n", o.robot.c_str(), robot->io->robot.c_str(),
+              s.input_size, s.output_size);
+  for (const std::string& n : imported->notes) std::printf("  %s\n", n.c_str());
+  std::printf(
+      "check        the blob's float64 reference against the graph's own evaluation on %zu rows: max |diff| "
+      "%.3g (%.2g of the tolerance)\n",
+      imported->golden.observations.size(), imported->check_max_abs, imported->check_max_ratio);
+  if (auto st = policy::WriteBlobFile(o.out, s); !st) return fail(st.error().message);
+  if (auto st = policy::WriteGoldenFile(policy::GoldenPathFor(o.out), imported->golden); !st) {
+    std::filesystem::remove(o.out);  // a blob without its golden vectors is not left behind
+    return fail(st.error().message);
+  }
+  std::printf("wrote        %s (%llu parameters) and %s\n", o.out.c_str(),
+              static_cast<unsigned long long>(s.ParameterCount()), policy::GoldenPathFor(o.out).c_str());
+  return 0;
+}
+
+}  // namespace pbppo::cli

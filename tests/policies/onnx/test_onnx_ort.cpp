@@ -1,0 +1,190 @@
+// The imported blobs against ONNX Runtime (label onnx): the models tools/onnx/make_models.py built
+// (the onnx.models fixture) are imported, then run by the runtime engine and by ONNX Runtime
+// (tools/onnx/ort_eval.js, onnxruntime-node) on random observations and on observations recorded
+// from the training environments, and the commands compared.
+//
+// Tolerance: both sides compute in float32 from the same float32 weights, so each lies within the
+// float64 reference's first-order float32 bound (docs/policy_blob.md, golden vectors); two sides:
+// twice the bound. Added: 1e-5 relative for what the importer rounds once more to float32 (folded
+// normalisers, constants and output maps) and for ONNX Runtime's tanh and exp approximations.
+// That is onnx::CheckTolerance, the same figure pbppo import-onnx checks its blob against. Because
+// that first-order bound is loose for wide layers, the largest difference must also stay below
+// 1e-5 (measured: at most 1.6e-6), which a reduced-precision path would not meet.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "policies/envs/env.hpp"
+#include "policies/onnx/onnx_eval.hpp"
+#include "policies/onnx/onnx_import.hpp"
+#include "runtime/policy/policy_model.hpp"
+#include "runtime/policy/reference.hpp"
+#include "runtime/robot/robot_model.hpp"
+#include "tests/support/test_paths.hpp"
+
+using namespace pbppo;
+namespace ox = pbppo::onnx;
+
+namespace {
+
+const std::string kModels = PBPPO_ONNX_MODELS_DIR;
+
+// Observations from the environment, acting with the shipped blob (the runtime engine).
+std::vector<std::vector<float>> Recorded(const std::string& env_name, const std::string& blob, int steps) {
+  envs::EnvOptions o;
+  o.name = env_name;
+  if (env_name == "quadruped-walk") o.randomize = false;
+  if (env_name == "auv-nav") o.layout = "hard";
+  auto env = envs::MakeEnv(o);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  auto pm = policy::PolicyModel::FromFile(test::SourcePath(blob));
+  REQUIRE(pm.ok());
+  auto pd = policy::MakePolicyData(*pm);
+  REQUIRE(pd.ok());
+  envs::Env& e = **env;
+  const robot::IoLayout& layout = e.layout();
+  Rng rng(11);
+  std::vector<float> obs(e.observation_size()), act(e.action_size());
+  std::vector<std::vector<float>> rows;
+  e.Reset(rng, obs);
+  for (int s = 0; s < steps; ++s) {
+    rows.push_back(obs);
+    std::copy(obs.begin(), obs.end(), pd->observation().begin());
+    (void)policy::Forward(*pm, *pd);
+    robot::ToPolicyUnits(layout, pd->action(), act);
+    const envs::StepResult r = e.Step(act, obs);
+    if (r.terminated || r.truncated) e.Reset(rng, obs);
+  }
+  return rows;
+}
+
+struct Compared {
+  double max_abs = 0, max_ratio = 0, graph_ratio = 0;
+  std::size_t rows = 0;
+};
+
+Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const robot::IoLayout& layout,
+                    const ox::Mapping& map, const std::vector<std::vector<float>>& observations) {
+  auto model = ox::ReadModelFile(onnx_file);
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  auto imp = ox::Import(*model, map, layout, {});
+  REQUIRE_MESSAGE(imp.ok(), imp.error().message);
+  auto pm = policy::PolicyModel::FromSpec(imp->spec);
+  REQUIRE_MESSAGE(pm.ok(), pm.error().message);
+  auto pd = policy::MakePolicyData(*pm);
+  REQUIRE(pd.ok());
+  const std::string dir = test::ScratchDir("onnx_ort_" + name);
+  const std::string in = dir + "/in.f32", out = dir + "/out.f32";
+  {
+    std::ofstream f(in, std::ios::binary);
+    for (const auto& obs : observations)
+      for (double v : ox::InputRow(map, obs)) {
+        const float x = static_cast<float>(v);
+        f.write(reinterpret_cast<const char*>(&x), 4);
+      }
+  }
+  const std::string cmd = "node " + test::SourcePath("tools/onnx/ort_eval.js") + " " + onnx_file + " " + in + " " +
+                          std::to_string(observations.size()) + " " + out;
+  REQUIRE_MESSAGE(std::system(cmd.c_str()) == 0, cmd);
+  std::ifstream f(out, std::ios::binary);
+  std::vector<float> y(observations.size() * map.output_size);
+  f.read(reinterpret_cast<char*>(y.data()), static_cast<std::streamsize>(y.size() * 4));
+  REQUIRE(f.gcount() == static_cast<std::streamsize>(y.size() * 4));
+  Compared c;
+  c.rows = observations.size();
+  for (std::size_t r = 0; r < observations.size(); ++r) {
+    const std::vector<double> ort_row(y.begin() + static_cast<long>(r * map.output_size),
+                                      y.begin() + static_cast<long>((r + 1) * map.output_size));
+    const std::vector<double> ort_cmd = ox::CommandsOf(map, layout, ort_row);
+    std::copy(observations[r].begin(), observations[r].end(), pd->observation().begin());
+    REQUIRE(policy::Forward(*pm, *pd) == policy::ForwardStatus::kOk);
+    const policy::ReferenceOutput ref = policy::ReferenceForward(imp->spec, observations[r].data());
+    auto graph = ox::Evaluate(*model, ox::InputRow(map, observations[r]));
+    REQUIRE(graph.ok());
+    const std::vector<double> graph_cmd = ox::CommandsOf(map, layout, *graph);
+    for (std::size_t k = 0; k < ort_cmd.size(); ++k) {
+      const double engine = static_cast<double>(pd->action()[k]);
+      const double tol = ox::CheckTolerance(ref.error_bound[k], ort_cmd[k]);
+      c.max_abs = std::max(c.max_abs, std::fabs(engine - ort_cmd[k]));
+      c.max_ratio = std::max(c.max_ratio, std::fabs(engine - ort_cmd[k]) / tol);
+      c.graph_ratio = std::max(c.graph_ratio, std::fabs(graph_cmd[k] - ort_cmd[k]) / tol);
+    }
+  }
+  MESSAGE(name << ": " << c.rows << " rows, engine vs ONNX Runtime max |diff| " << c.max_abs << " (" << c.max_ratio
+               << " of the tolerance); float64 graph vs ONNX Runtime " << c.graph_ratio);
+  return c;
+}
+
+std::vector<std::vector<float>> RandomRows(std::size_t n, std::size_t width, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> nd(0.0f, 1.5f);
+  std::vector<std::vector<float>> rows(n, std::vector<float>(width));
+  for (auto& r : rows)
+    for (float& x : r) x = nd(rng);
+  return rows;
+}
+
+void CheckRobotModel(const std::string& name, const std::string& robot_yaml, const std::string& env,
+                     const std::string& blob) {
+  auto robot = robot::LoadRobotModel(test::SourcePath(robot_yaml));
+  REQUIRE_MESSAGE(robot.ok(), robot.error().message);
+  const robot::IoLayout& layout = *robot->io;
+  auto map = ox::LoadMapping(kModels + "/" + name + ".yaml", layout);
+  REQUIRE_MESSAGE(map.ok(), map.error().message);
+  auto rows = RandomRows(256, layout.observation_size(), 5);
+  const auto recorded = Recorded(env, blob, 400);
+  rows.insert(rows.end(), recorded.begin(), recorded.end());
+  const Compared c = AgainstOrt(name, kModels + "/" + name + ".onnx", layout, *map, rows);
+  CHECK(c.max_ratio <= 1.0);
+  CHECK(c.max_abs < 1e-5);
+  CHECK(c.graph_ratio <= 1.0);
+}
+
+}  // namespace
+
+TEST_CASE("rsl_rl-style walking actor (48-512-256-128-12 ELU): the engine matches ONNX Runtime") {
+  CheckRobotModel("rsl_rl_walk", "models/quadruped/robot.yaml", "quadruped-walk",
+                  "policies/frozen/quadruped_walk/flat.blob");
+}
+
+TEST_CASE("walking actor with its normaliser in the graph, inputs and outputs reordered: matches ONNX Runtime") {
+  CheckRobotModel("normalised_walk", "models/quadruped/robot.yaml", "quadruped-walk",
+                  "policies/frozen/quadruped_walk/flat.blob");
+}
+
+TEST_CASE("stable-baselines3-style AUV actor (64-64 tanh, MatMul+Add, output clip): matches ONNX Runtime") {
+  CheckRobotModel("sb3_auv", "models/auv/robot.yaml", "auv-nav", "policies/frozen/auv_nav/auv_nav.blob");
+}
+
+TEST_CASE("LeakyReLU layers and a tanh head with an output scale and offset: matches ONNX Runtime") {
+  auto layout = robot::ParseIoLayout(R"(
+robot: testbot
+observations: [{name: o0}, {name: o1}, {name: o2}, {name: o3}, {name: o4}, {name: o5}]
+actions:
+  - {name: a0, command: c0, scale: 1, offset: 0, low: -5, high: 5}
+  - {name: a1, command: c1, scale: 0.5, offset: 0.1, low: -5, high: 5}
+  - {name: a2, command: c2, scale: 2, offset: 0, low: -5, high: 5}
+)",
+                                     "testbot.yaml");
+  REQUIRE_MESSAGE(layout.ok(), layout.error().message);
+  auto map = ox::ParseMapping(R"(
+robot: testbot
+input: {name: obs, size: 6}
+output: {name: actions, size: 3}
+observations: [o5, o4, o3, o2, o1, o0]
+actions: [a1, a2, a0]
+)",
+                              "map.yaml", *layout);
+  REQUIRE_MESSAGE(map.ok(), map.error().message);
+  const Compared c =
+      AgainstOrt("leaky_tanh_head", kModels + "/leaky_tanh_head.onnx", *layout, *map, RandomRows(1000, 6, 9));
+  CHECK(c.max_ratio <= 1.0);
+  CHECK(c.max_abs < 1e-5);
+  CHECK(c.graph_ratio <= 1.0);
+}

@@ -1,0 +1,717 @@
+#!/usr/bin/python3
+"""Writes the ONNX test models of `pbppo import-onnx` and their mapping files.
+
+    tools/onnx/make_models.py OUT_DIR --flat-json F --auv-json A
+
+F and A are `pbppo inspect --json --weights` of policies/frozen/quadruped_walk/flat.blob and
+policies/frozen/auv_nav/auv_nav.blob. Everything is deterministic (fixed seeds): the same JSON
+gives byte-identical files. Uses Debian's python3-onnx and python3-numpy only.
+
+OUT_DIR/
+  rsl_rl_walk.onnx + .yaml      flat.blob as an rsl_rl / legged_gym actor 48-512-256-128-12 ELU
+                                (Gemm transB=1); the 3 base_lin_vel inputs are fed a constant 0
+  normalised_walk.onnx + .yaml  flat.blob behind an EmpiricalNormalization-style normaliser
+                                (Sub mean, Div std+eps, Clip +-100), inputs and outputs reordered
+  sb3_auv.onnx + .yaml          auv_nav.blob as a stable-baselines3 actor 64-64 tanh (MatMul + Add),
+                                its normaliser folded into Mul + Add + Clip, output Clip(-1, 1)
+  leaky_tanh_head.onnx          6-16-16-3 LeakyReLU(0.2) on random weights, Tanh, Mul, Add at the
+                                output: for importer unit tests with a synthetic layout
+  bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
+
+The good models are what torch.onnx.export writes for these trainers (opset 17, producer
+"pytorch", torch's node naming); ir_version is 8 so that ONNX Runtime 1.30 loads them.
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+import onnx
+from onnx import TensorProto, helper, numpy_helper
+
+OPSET = 17
+IR_VERSION = 8
+PRODUCER = "pytorch"
+PRODUCER_VERSION = "2.1.0"
+
+# rsl_rl's EmpiricalNormalization adds this to the running std before dividing.
+NORMALIZER_EPS = 1e-2
+
+
+# ------------------------------------------------------------------------------------------ helpers
+
+
+def f32(a):
+    return np.ascontiguousarray(np.asarray(a, dtype=np.float32))
+
+
+def init(name, array):
+    return numpy_helper.from_array(f32(array), name)
+
+
+def scalar(name, value):
+    return numpy_helper.from_array(np.array(value, dtype=np.float32), name)
+
+
+def normaliser_nodes(first, second, clip):
+    """The input normaliser as torch exports it: two elementwise ops with constants, then Clip(-clip, clip).
+    first/second: (op, initializer name, values). Returns (nodes, initializers); the output is
+    '/normalizer/Clip_output_0'."""
+    nodes, inits, x = [], [], "obs"
+    for op, name, values in (first, second):
+        y = f"/normalizer/{op}_output_0"
+        nodes.append(helper.make_node(op, [x, name], [y], name=f"/normalizer/{op}"))
+        inits.append(init(name, values))
+        x = y
+    lo, hi = "/normalizer/Constant_output_0", "/normalizer/Constant_1_output_0"
+    nodes.append(helper.make_node("Clip", [x, lo, hi], ["/normalizer/Clip_output_0"], name="/normalizer/Clip"))
+    inits += [scalar(lo, -clip), scalar(hi, clip)]
+    return nodes, inits
+
+
+def torch_gemm_chain(layers, act="Elu", act_attrs=None):
+    """An nn.Sequential of Linear and activation layers as torch exports it, from "obs" to "actions":
+    Gemm (transB 1) at torch's indices 0, 2, 4, ..., the activation at 1, 3, 5, ...; layers: (W [out][in], b)."""
+    nodes, inits, x = [], [], "obs"
+    for k, (w, b) in enumerate(layers):
+        wn, bn = f"actor.{2 * k}.weight", f"actor.{2 * k}.bias"
+        inits += [init(wn, w), init(bn, b)]
+        last = k == len(layers) - 1
+        y = "actions" if last else f"/actor/actor.{2 * k}/Gemm_output_0"
+        nodes.append(gemm(f"/actor/actor.{2 * k}/Gemm", x, wn, bn, y))
+        x = y
+        if not last:
+            a = f"/actor/actor.{2 * k + 1}/{act}"
+            nodes.append(helper.make_node(act, [x], [a + "_output_0"], name=a, **(act_attrs or {"alpha": 1.0})))
+            x = a + "_output_0"
+    return nodes, inits
+
+
+def io(name, dims):
+    return helper.make_tensor_value_info(name, TensorProto.FLOAT, dims)
+
+
+def model(graph, doc, check=True):
+    m = helper.make_model(
+        graph,
+        opset_imports=[helper.make_opsetid("", OPSET)],
+        producer_name=PRODUCER,
+        producer_version=PRODUCER_VERSION,
+        doc_string=doc,
+    )
+    m.ir_version = IR_VERSION
+    if check:
+        onnx.checker.check_model(m, full_check=True)
+    return m
+
+
+def save(m, path):
+    data = m.SerializeToString()
+    with open(path, "wb") as f:
+        f.write(data)
+    return data
+
+
+def gemm(name, a, w, b, out, trans_b=1, trans_a=0):
+    attrs = {"alpha": 1.0, "beta": 1.0, "transB": trans_b}
+    if trans_a:
+        attrs["transA"] = trans_a
+    return helper.make_node("Gemm", [a, w, b], [out], name=name, **attrs)
+
+
+def load_blob_json(path, what):
+    with open(path) as f:
+        j = json.load(f)
+    for layer in j["layers"]:
+        if "weight" not in layer:
+            sys.exit(f"make_models: {path}: layers carry no weights (use pbppo inspect --json --weights)")
+    layers = []
+    for layer in j["layers"]:
+        w = np.array(layer["weight"], dtype=np.float64).reshape(layer["out"], layer["in"])
+        b = np.array(layer["bias"], dtype=np.float64)
+        layers.append((w, b, layer["activation"]))
+    print(f"make_models: {what}: {j['input_size']} -> " + " -> ".join(f"{l['out']} {l['activation']}" for l in j["layers"]))
+    return j, layers
+
+
+def write_mapping(path, robot, in_name, observations, out_name, actions, header):
+    """observations: per ONNX input element, (layout name or None for a constant, constant, comment)."""
+    lines = [
+        "# How the ONNX model's input and output elements correspond to the robot's IO layout.",
+        *[f"# {h}" for h in header],
+        f"robot: {robot}",
+        f"input: {{name: {in_name}, size: {len(observations)}}}",
+        f"output: {{name: {out_name}, size: {len(actions)}}}",
+        "observations:",
+    ]
+    for i, (name, constant, comment) in enumerate(observations):
+        entry = f"{{constant: {constant!r}}}" if name is None else name
+        note = f"  # {i}" + (f": {comment}" if comment else "")
+        lines.append(f"  - {entry:<28}{note}")
+    lines.append("actions:")
+    for i, (name, comment) in enumerate(actions):
+        note = f"  # {i}" + (f": {comment}" if comment else "")
+        lines.append(f"  - {name:<28}{note}")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+# ----------------------------------------------------------------------------- a. rsl_rl_walk
+
+# legged_gym's observation order for flat terrain; the base linear velocity comes first.
+LEGGED_GYM_PREFIX = ["base_lin_vel_x", "base_lin_vel_y", "base_lin_vel_z"]
+RSL_RL_HIDDEN = [512, 256, 128]
+
+
+def rsl_rl_walk(out_dir, flat, flat_layers):
+    rng = np.random.default_rng(20240601)
+    names = flat["observation_names"]
+    n_in = len(LEGGED_GYM_PREFIX) + len(names)  # 48
+    assert n_in == 48 and flat["output_size"] == 12
+    widths = [n_in] + RSL_RL_HIDDEN + [flat["output_size"]]
+    acts = [l[2] for l in flat_layers]
+    assert acts[:-1] == ["elu"] * 3 and acts[-1] == "identity" and flat["action_head"] == "linear"
+    # The blob's normaliser must be the identity for the weights to carry over unchanged.
+    assert all(m == 0.0 for m in flat["normaliser"]["mean"]) and all(s == 1.0 for s in flat["normaliser"]["inv_std"])
+
+    weights = []
+    for k, (w, b, _) in enumerate(flat_layers):
+        n_out, n_prev = widths[k + 1], widths[k]
+        W = np.zeros((n_out, n_prev))
+        B = np.zeros(n_out)
+        o, i = w.shape
+        col0 = len(LEGGED_GYM_PREFIX) if k == 0 else 0
+        # flat's weights in the top-left block (after the base_lin_vel columns in layer 0)
+        W[:o, col0 : col0 + i] = w
+        B[:o] = b
+        if k == 0:
+            # base_lin_vel columns: small weights; the mapping feeds them 0, so they contribute 0
+            W[:o, :col0] = rng.normal(0.0, 0.05, (o, col0))
+        if n_out > o:
+            # extra hidden units: small random incoming weights and bias; their outgoing weights
+            # (the next layer's columns past flat's width) stay exactly 0, so they change nothing
+            W[o:, :] = rng.normal(0.0, 0.05, (n_out - o, n_prev))
+            B[o:] = rng.normal(0.0, 0.05, n_out - o)
+        weights.append((W, B))
+
+    nodes, inits = torch_gemm_chain(weights)
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", n_in])], [io("actions", ["batch", widths[-1]])], inits)
+    m = model(
+        g,
+        "rsl_rl ActorCritic actor (legged_gym flat terrain), 48-512-256-128-12 ELU: "
+        "the weights of pbppo's flat.blob with unused extra hidden units",
+    )
+    save(m, os.path.join(out_dir, "rsl_rl_walk.onnx"))
+
+    obs = [(None, 0.0, f"{n}: no device of the robot measures it") for n in LEGGED_GYM_PREFIX]
+    obs += [(n, None, None) for n in names]
+    write_mapping(
+        os.path.join(out_dir, "rsl_rl_walk.yaml"),
+        "quadruped",
+        "obs",
+        obs,
+        "actions",
+        [(n, None) for n in flat["action_names"]],
+        ["rsl_rl_walk.onnx: legged_gym's 48 flat-terrain inputs; the policy acts like flat.blob."],
+    )
+
+
+# ------------------------------------------------------------------------- b. normalised_walk
+
+# ONNX position -> layout index swaps: a few inputs and two outputs out of the layout's order.
+INPUT_SWAPS = [(0, 2), (6, 8), (9, 21), (40, 44)]  # ang_vel x<->z, cmd vx<->yaw, q/dq LF_HAA, 2 last actions
+OUTPUT_SWAPS = [(1, 10)]  # LF_HFE <-> RH_HFE
+
+
+def permutation(n, swaps):
+    p = list(range(n))
+    for a, b in swaps:
+        p[a], p[b] = p[b], p[a]
+    return p
+
+
+def normalised_walk(out_dir, flat, flat_layers):
+    rng = np.random.default_rng(20240602)
+    names, act_names = flat["observation_names"], flat["action_names"]
+    n_in, n_out = len(names), len(act_names)
+    perm_in = permutation(n_in, INPUT_SWAPS)  # ONNX input j is layout observation perm_in[j]
+    perm_out = permutation(n_out, OUTPUT_SWAPS)  # ONNX output j is layout action perm_out[j]
+
+    mean = f32(rng.normal(0.0, 0.3, n_in)).astype(np.float64)
+    std = f32(rng.uniform(0.5, 2.0, n_in)).astype(np.float64)
+    div = f32(std + NORMALIZER_EPS).astype(np.float64)  # torch folds std + eps into one constant
+
+    layers = [(w.copy(), b.copy(), a) for w, b, a in flat_layers]
+    # layer 0 in ONNX input order, then undo the normaliser: W' = W diag(d), b' = b + W mean
+    w0 = layers[0][0][:, perm_in]
+    b0 = layers[0][1] + w0 @ mean
+    layers[0] = (w0 * div[None, :], b0, layers[0][2])
+    wl, bl, al = layers[-1]
+    layers[-1] = (wl[perm_out, :], bl[perm_out], al)
+
+    # rsl_rl keeps the running statistics as [1, n] buffers
+    nodes, inits = normaliser_nodes(("Sub", "normalizer._mean", mean[None, :]), ("Div", "normalizer._std_eps", div[None, :]), 100.0)
+    x = "/normalizer/Clip_output_0"
+    for k, (W, B, a) in enumerate(layers):
+        idx = 2 * k
+        wn, bn = f"actor.{idx}.weight", f"actor.{idx}.bias"
+        inits += [init(wn, W), init(bn, B)]
+        last = k == len(layers) - 1
+        y = "actions" if last else f"/actor/actor.{idx}/Gemm_output_0"
+        nodes.append(gemm(f"/actor/actor.{idx}/Gemm", x, wn, bn, y))
+        x = y
+        if not last:
+            assert a == "elu"
+            e = f"/actor/actor.{idx + 1}/Elu_output_0"
+            nodes.append(helper.make_node("Elu", [x], [e], name=f"/actor/actor.{idx + 1}/Elu", alpha=1.0))
+            x = e
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", n_in])], [io("actions", ["batch", n_out])], inits)
+    m = model(
+        g,
+        "rsl_rl ActorCritic actor behind EmpiricalNormalization (clipped at 100), 45-128-64-32-12 ELU: "
+        "computes what pbppo's flat.blob computes, inputs and outputs partly reordered",
+    )
+    save(m, os.path.join(out_dir, "normalised_walk.onnx"))
+
+    moved_in = {j for s in INPUT_SWAPS for j in s}
+    moved_out = {j for s in OUTPUT_SWAPS for j in s}
+    write_mapping(
+        os.path.join(out_dir, "normalised_walk.yaml"),
+        "quadruped",
+        "obs",
+        [(names[perm_in[j]], None, "moved" if j in moved_in else None) for j in range(n_in)],
+        "actions",
+        [(act_names[perm_out[j]], "moved" if j in moved_out else None) for j in range(n_out)],
+        [
+            "normalised_walk.onnx: flat.blob's inputs and outputs in the layout's order except the ones",
+            "marked 'moved' (swapped in pairs); the model normalises its inputs itself.",
+        ],
+    )
+    return perm_in, perm_out
+
+
+# ---------------------------------------------------------------------------------- c. sb3_auv
+
+
+def sb3_auv(out_dir, auv, auv_layers, layout_actions):
+    norm = auv["normaliser"]
+    mean = np.array(norm["mean"], dtype=np.float64)
+    inv_std = f32(norm["inv_std"]).astype(np.float64)
+    clip = float(norm["clip"])
+    acts = [l[2] for l in auv_layers]
+    assert acts == ["tanh", "tanh", "identity"] and auv["action_head"] == "linear", acts
+
+    # Does the blob's action map already clamp the policy output y to a box? The map is
+    # clamp(y * scale + offset, low, high); with scale > 0 it is the same as clamping y to
+    # [(low - offset) / scale, (high - offset) / scale] first.
+    amap = auv["action_map"]
+    bounds = []
+    for i, name in enumerate(auv["action_names"]):
+        s, o, lo, hi = (float(amap[k][i]) for k in ("scale", "offset", "low", "high"))
+        la = layout_actions.get(name)
+        assert la is not None and abs(la["scale"] - s) < 1e-6 and abs(la["offset"] - o) < 1e-6, (name, la)
+        assert abs(la["low"] - lo) < 1e-6 and abs(la["high"] - hi) < 1e-6, (name, la)
+        assert s > 0
+        bounds.append(((lo - o) / s, (hi - o) / s))
+    clip_out = all(abs(lo + 1.0) < 1e-9 and abs(hi - 1.0) < 1e-9 for lo, hi in bounds)
+    print(f"make_models: auv action map clamps the policy output to {bounds}: output Clip(-1, 1) {'emitted' if clip_out else 'left out'}")
+
+    nodes, inits = normaliser_nodes(("Mul", "normalizer.inv_std", inv_std), ("Add", "normalizer.shift", -mean * inv_std), clip)
+    # torch exports Linear on a non-2-D input as MatMul(x, W^T) then Add(bias, x): bias first
+    scopes = ["/mlp_extractor/policy_net/policy_net.0", "/mlp_extractor/policy_net/policy_net.2", "/action_net"]
+    bias_names = ["mlp_extractor.policy_net.0.bias", "mlp_extractor.policy_net.2.bias", "action_net.bias"]
+    x = "/normalizer/Clip_output_0"
+    for k, (w, b, a) in enumerate(auv_layers):
+        wn = f"onnx::MatMul_{101 + k}"  # torch's name for a transposed weight constant
+        inits += [init(wn, w.T), init(bias_names[k], b)]
+        mm = f"{scopes[k]}/MatMul_output_0"
+        nodes.append(helper.make_node("MatMul", [x, wn], [mm], name=f"{scopes[k]}/MatMul"))
+        last = k == len(auv_layers) - 1
+        y = ("/action_net/Add_output_0" if clip_out else "actions") if last else f"{scopes[k]}/Add_output_0"
+        nodes.append(helper.make_node("Add", [bias_names[k], mm], [y], name=f"{scopes[k]}/Add"))
+        x = y
+        if not last:
+            t = f"/mlp_extractor/policy_net/policy_net.{2 * k + 1}/Tanh"
+            nodes.append(helper.make_node("Tanh", [x], [t + "_output_0"], name=t))
+            x = t + "_output_0"
+    if clip_out:
+        nodes.append(helper.make_node("Clip", [x, "/Constant_output_0", "/Constant_1_output_0"], ["actions"], name="/Clip"))
+        inits += [scalar("/Constant_output_0", -1.0), scalar("/Constant_1_output_0", 1.0)]
+    n_in, n_out = auv["input_size"], auv["output_size"]
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", n_in])], [io("actions", ["batch", n_out])], inits)
+    m = model(
+        g,
+        "stable-baselines3 PPO MlpPolicy actor, 64-64 tanh, with its VecNormalize statistics folded in: "
+        "the weights of pbppo's auv_nav.blob",
+    )
+    save(m, os.path.join(out_dir, "sb3_auv.onnx"))
+    write_mapping(
+        os.path.join(out_dir, "sb3_auv.yaml"),
+        "auv",
+        "obs",
+        [(n, None, None) for n in auv["observation_names"]],
+        "actions",
+        [(n, None) for n in auv["action_names"]],
+        ["sb3_auv.onnx: auv_nav.blob's inputs and outputs in the layout's order."]
+        + (
+            [
+                "Its output Clip(-1, 1) is the box the layout's action map (v: 0.75 a + 0.75 in [0, 1.5];",
+                "omega: 0.5 a in [-0.5, 0.5]) clamps the policy output to anyway.",
+            ]
+            if clip_out
+            else ["No output Clip: the layout's action map does not clamp the policy output to [-1, 1]."]
+        ),
+    )
+    return clip_out
+
+
+# -------------------------------------------------------------------------- d. leaky_tanh_head
+
+
+def leaky_tanh_head(out_dir):
+    """6-16-16-3, LeakyReLU(0.2) hidden, then Tanh, Mul(scale), Add(offset) at the output.
+
+    A clean import gives a 6-16-16-3 blob with leaky_relu(0.2) hidden activations, identity
+    normaliser, tanh action head and the action map's scale/offset from the Mul/Add vectors
+    (low/high from the synthetic layout). The first Gemm stores its weight as [in][out]
+    (transB=0), the others as [out][in] (transB=1), so both layouts are exercised.
+    """
+    rng = np.random.default_rng(20240604)
+    widths = [6, 16, 16, 3]
+    nodes, inits = [], []
+    x = "obs"
+    for k in range(3):
+        w = rng.normal(0.0, 1.0 / np.sqrt(widths[k]), (widths[k + 1], widths[k]))
+        b = rng.normal(0.0, 0.1, widths[k + 1])
+        trans_b = 0 if k == 0 else 1
+        wn, bn = f"actor.{2 * k}.weight", f"actor.{2 * k}.bias"
+        inits += [init(wn, w if trans_b else w.T), init(bn, b)]
+        y = f"/actor/actor.{2 * k}/Gemm_output_0"
+        nodes.append(gemm(f"/actor/actor.{2 * k}/Gemm", x, wn, bn, y, trans_b=trans_b))
+        x = y
+        if k < 2:
+            a = f"/actor/actor.{2 * k + 1}/LeakyRelu"
+            nodes.append(helper.make_node("LeakyRelu", [x], [a + "_output_0"], name=a, alpha=0.2))
+            x = a + "_output_0"
+    nodes.append(helper.make_node("Tanh", [x], ["/Tanh_output_0"], name="/Tanh"))
+    nodes.append(helper.make_node("Mul", ["/Tanh_output_0", "action_scale"], ["/Mul_output_0"], name="/Mul"))
+    nodes.append(helper.make_node("Add", ["/Mul_output_0", "action_offset"], ["actions"], name="/Add"))
+    inits += [init("action_scale", [0.5, 2.0, 0.25]), init("action_offset", [0.1, -0.3, 0.0])]
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", 6])], [io("actions", ["batch", 3])], inits)
+    m = model(g, "importer unit test: 6-16-16-3 LeakyReLU(0.2), tanh head with scale and offset, random weights")
+    return save(m, os.path.join(out_dir, "leaky_tanh_head.onnx"))
+
+
+# ------------------------------------------------------------------------------- e. bad models
+
+
+def small_layers(rng, widths):
+    out = []
+    for k in range(len(widths) - 1):
+        out.append((rng.normal(0.0, 0.5, (widths[k + 1], widths[k])), rng.normal(0.0, 0.1, widths[k + 1])))
+    return out
+
+
+def small_actor(rng, widths=(4, 8, 2), in_dims=None, act="Elu", act_attrs=None, tweak=None):
+    """A torch-named Gemm/ELU chain; `tweak(nodes, inits, inputs, outputs)` breaks it in place."""
+    nodes, inits = torch_gemm_chain(small_layers(rng, list(widths)), act, act_attrs)
+    inputs = [io("obs", in_dims or ["batch", widths[0]])]
+    outputs = [io("actions", ["batch", widths[-1]])]
+    if tweak:
+        tweak(nodes, inits, inputs, outputs)
+    return helper.make_graph(nodes, "main_graph", inputs, outputs, inits)
+
+
+def node_named(nodes, name):
+    return next(n for n in nodes if n.name == name)
+
+
+def parses(data):
+    try:
+        onnx.ModelProto().ParseFromString(data)
+        return True
+    except Exception:  # the protobuf DecodeError
+        return False
+
+
+def bad_models(out_dir, good_small_bytes):
+    bad = os.path.join(out_dir, "bad")
+    os.makedirs(bad, exist_ok=True)
+    rows = []  # (file, what is wrong, what the error must name)
+
+    def write(name, g, wrong, must_name, check=True):
+        m = model(g, f"importer refusal test: {wrong}", check=False)
+        if check:
+            onnx.checker.check_model(m)  # valid ONNX: the refusal is the importer's own rule
+        save(m, os.path.join(bad, name))
+        rows.append((name, wrong, must_name))
+
+    # truncated: the first 60% of a good model's bytes (cut inside an initializer's raw data)
+    cut = good_small_bytes[: int(len(good_small_bytes) * 0.6)]
+    assert not parses(cut), "truncated model still parses"
+    with open(os.path.join(bad, "truncated.onnx"), "wb") as f:
+        f.write(cut)
+    rows.append(
+        (
+            "truncated.onnx",
+            f"the first 60% ({len(cut)} of {len(good_small_bytes)} bytes) of leaky_tanh_head.onnx: not a complete protobuf",
+            "the file path (a parse error; no node)",
+        )
+    )
+
+    # garbage: random bytes
+    grng = np.random.default_rng(20240605)
+    junk = grng.integers(0, 256, 777, dtype=np.uint8).tobytes()
+    assert not parses(junk), "garbage parses as a model"
+    with open(os.path.join(bad, "garbage.onnx"), "wb") as f:
+        f.write(junk)
+    rows.append(("garbage.onnx", "777 random bytes: not an ONNX protobuf", "the file path (a parse error; no node)"))
+
+    rng = np.random.default_rng(20240606)
+
+    def softmax(nodes, inits, inputs, outputs):
+        # obs -> Gemm -> Softmax -> Gemm: the Softmax takes the ELU's place in the chain
+        i = nodes.index(node_named(nodes, "/actor/actor.1/Elu"))
+        nodes[i] = helper.make_node("Softmax", list(nodes[i].input), list(nodes[i].output), name="actor.softmax", axis=1)
+
+    write(
+        "unsupported_op.onnx",
+        small_actor(rng, tweak=softmax),
+        "a Softmax node between the two Gemms (4-8-2)",
+        "node 'actor.softmax', op Softmax",
+    )
+
+    def lstm(nodes, inits, inputs, outputs):
+        # rsl_rl's recurrent actor: obs -> Unsqueeze -> LSTM(4 -> 8) -> Squeeze -> Gemm(8 -> 2)
+        h = 8
+        w = rng.normal(0.0, 0.3, (1, 4 * h, 4))
+        r = rng.normal(0.0, 0.3, (1, 4 * h, h))
+        bb = rng.normal(0.0, 0.1, (1, 8 * h))
+        del nodes[:]
+        del inits[:]
+        inits += [
+            numpy_helper.from_array(np.array([0], dtype=np.int64), "/memory_a/Constant_output_0"),
+            numpy_helper.from_array(np.array([0, 1], dtype=np.int64), "/memory_a/Constant_1_output_0"),
+            init("onnx::LSTM_W", w),
+            init("onnx::LSTM_R", r),
+            init("onnx::LSTM_B", bb),
+            init("actor.0.weight", rng.normal(0.0, 0.5, (2, h))),
+            init("actor.0.bias", rng.normal(0.0, 0.1, 2)),
+        ]
+        nodes += [
+            helper.make_node(
+                "Unsqueeze", ["obs", "/memory_a/Constant_output_0"], ["/memory_a/Unsqueeze_output_0"], name="/memory_a/Unsqueeze"
+            ),
+            helper.make_node(
+                "LSTM",
+                ["/memory_a/Unsqueeze_output_0", "onnx::LSTM_W", "onnx::LSTM_R", "onnx::LSTM_B"],
+                ["/memory_a/rnn/LSTM_output_0"],
+                name="/memory_a/rnn/LSTM",
+                hidden_size=h,
+            ),
+            helper.make_node(
+                "Squeeze",
+                ["/memory_a/rnn/LSTM_output_0", "/memory_a/Constant_1_output_0"],
+                ["/memory_a/Squeeze_output_0"],
+                name="/memory_a/Squeeze",
+            ),
+            gemm("/actor/actor.0/Gemm", "/memory_a/Squeeze_output_0", "actor.0.weight", "actor.0.bias", "actions"),
+        ]
+
+    write(
+        "recurrent.onnx",
+        small_actor(rng, tweak=lstm),
+        "a recurrent actor: Unsqueeze, LSTM (hidden 8), Squeeze, Gemm; the LSTM is not the first node",
+        "node '/memory_a/rnn/LSTM', op LSTM: a walk from the input meets the Unsqueeze first, so the importer "
+        "must look for recurrent operators in the whole graph before it walks",
+    )
+
+    write(
+        "dynamic_dim.onnx",
+        small_actor(rng, in_dims=["batch", "n_obs"]),
+        "input 'obs' has shape [batch, n_obs]: its width is symbolic",
+        "input 'obs', dimension 1 'n_obs'",
+    )
+
+    def half(nodes, inits, inputs, outputs):
+        i = next(k for k, t in enumerate(inits) if t.name == "actor.2.weight")
+        w = numpy_helper.to_array(inits[i]).astype(np.float16)
+        inits[i] = numpy_helper.from_array(w, "actor.2.weight")
+
+    write(
+        "float16.onnx",
+        small_actor(rng, tweak=half),
+        "the second Gemm's weight initializer 'actor.2.weight' is FLOAT16 (the rest float32; ONNX Runtime refuses it too)",
+        "node '/actor/actor.2/Gemm' (Gemm), initializer 'actor.2.weight', type FLOAT16",
+    )
+
+    write(
+        "elu_alpha.onnx",
+        small_actor(rng, act_attrs={"alpha": 0.5}),
+        "Elu with alpha 0.5 (the blob's ELU has alpha 1)",
+        "node '/actor/actor.1/Elu', op Elu, alpha 0.5",
+    )
+
+    def weight_input(nodes, inits, inputs, outputs):
+        i = next(k for k, t in enumerate(inits) if t.name == "actor.0.weight")
+        del inits[i]
+        inputs.append(io("actor.0.weight", [8, 4]))
+
+    write(
+        "weight_as_input.onnx",
+        small_actor(rng, tweak=weight_input),
+        "the first Gemm's B 'actor.0.weight' is a second graph input, not an initializer",
+        "node '/actor/actor.0/Gemm' (Gemm), its B 'actor.0.weight' (a graph input, not an initializer)",
+    )
+
+    def trans_a(nodes, inits, inputs, outputs):
+        n = node_named(nodes, "/actor/actor.2/Gemm")
+        for a in n.attribute:
+            if a.name == "transA":
+                a.i = 1
+                break
+        else:
+            n.attribute.append(helper.make_attribute("transA", 1))
+
+    write(
+        "gemm_transA.onnx",
+        small_actor(rng, tweak=trans_a),
+        "the second Gemm has transA=1 (A would be the transposed activation)",
+        "node '/actor/actor.2/Gemm' (Gemm), transA=1",
+        check=False,  # the node itself is valid ONNX; shapes only fail at run time
+    )
+
+    def critic(nodes, inits, inputs, outputs):
+        # an actor-critic exported whole: the critic 4-8-1 reads obs too and is a second output
+        for k, (w, b) in enumerate(small_layers(rng, [4, 8, 1])):
+            inits += [init(f"critic.{2 * k}.weight", w), init(f"critic.{2 * k}.bias", b)]
+        nodes += [
+            gemm("/critic/critic.0/Gemm", "obs", "critic.0.weight", "critic.0.bias", "/critic/critic.0/Gemm_output_0"),
+            helper.make_node(
+                "Elu", ["/critic/critic.0/Gemm_output_0"], ["/critic/critic.1/Elu_output_0"], name="/critic/critic.1/Elu", alpha=1.0
+            ),
+            gemm("/critic/critic.2/Gemm", "/critic/critic.1/Elu_output_0", "critic.2.weight", "critic.2.bias", "values"),
+        ]
+        outputs.append(io("values", ["batch", 1]))
+
+    write(
+        "two_outputs.onnx",
+        small_actor(rng, tweak=critic),
+        "actor and critic exported together: graph outputs 'actions' and 'values'",
+        "the graph's 2 outputs, 'actions' and 'values'",
+    )
+
+    def external(nodes, inits, inputs, outputs):
+        t = next(t for t in inits if t.name == "actor.0.weight")
+        n = len(t.raw_data)
+        t.ClearField("raw_data")
+        t.data_location = TensorProto.EXTERNAL
+        for k, v in (("location", "actor.0.weight.bin"), ("offset", "0"), ("length", str(n))):
+            e = t.external_data.add()
+            e.key, e.value = k, v
+
+    write(
+        "external_data.onnx",
+        small_actor(rng, tweak=external),
+        "initializer 'actor.0.weight' has data_location EXTERNAL (file 'actor.0.weight.bin', not written): "
+        "the importer must refuse without opening it",
+        "initializer 'actor.0.weight' (external data)",
+        check=False,  # the checker would look for the external file
+    )
+
+    def residual(nodes, inits, inputs, outputs):
+        # obs -> Gemm 4-8 -> Elu (h1) -> Gemm 8-8 -> Elu (h2) -> Add(h1, h2) -> Gemm 8-2
+        i = next(k for k, n in enumerate(nodes) if n.name == "/actor/actor.4/Gemm")
+        add = helper.make_node(
+            "Add",
+            ["/actor/actor.1/Elu_output_0", "/actor/actor.3/Elu_output_0"],
+            ["/actor/residual/Add_output_0"],
+            name="/actor/residual/Add",
+        )
+        nodes[i].input[0] = "/actor/residual/Add_output_0"
+        nodes.insert(i, add)
+
+    write(
+        "branching.onnx",
+        small_actor(rng, widths=(4, 8, 8, 2), tweak=residual),
+        "a residual: the output of '/actor/actor.1/Elu' feeds '/actor/actor.2/Gemm' and the Add "
+        "'/actor/residual/Add' (whose other operand is '/actor/actor.3/Elu')",
+        "node '/actor/actor.1/Elu' (output used by 2 nodes), or the Add '/actor/residual/Add' of two activations",
+    )
+
+    def mismatch(nodes, inits, inputs, outputs):
+        i = next(k for k, t in enumerate(inits) if t.name == "actor.2.weight")
+        inits[i] = init("actor.2.weight", rng.normal(0.0, 0.5, (2, 6)))
+
+    write(
+        "shape_mismatch.onnx",
+        small_actor(rng, tweak=mismatch),
+        "the second Gemm's weight is [2][6] but the layer before it is 8 wide",
+        "node '/actor/actor.2/Gemm' (Gemm): weight width 6 vs 8",
+        check=False,  # full shape inference would reject it, the structural checker does not look
+    )
+
+    with open(os.path.join(bad, "README"), "w") as f:
+        f.write("# ONNX models `pbppo import-onnx` must refuse\n\n")
+        f.write("Written by tools/onnx/make_models.py (fixed seeds). Apart from the two that are not protobuf at all,\n")
+        f.write("each is a small actor (4-8-2 Gemm + Elu with torch's node names unless the table says otherwise)\n")
+        f.write("with one thing wrong. The last column is what the importer's error must name.\n\n")
+        f.write("| file | what is wrong | the error names |\n| --- | --- | --- |\n")
+        for name, wrong, must in rows:
+            f.write(f"| `{name}` | {wrong} | {must} |\n")
+    return rows
+
+
+# --------------------------------------------------------------------------------------- main
+
+
+def read_layout_actions(path):
+    """The action entries of a robot's io_layout.yaml (flow maps only; no YAML library needed)."""
+    acts, in_actions = {}, False
+    with open(path) as f:
+        for line in f:
+            s = line.strip()
+            if s.startswith("actions:"):
+                in_actions = True
+                continue
+            if in_actions and s.startswith("- {") and s.endswith("}"):
+                entry = {}
+                for part in s[3:-1].split(","):
+                    k, v = (t.strip() for t in part.split(":", 1))
+                    try:
+                        entry[k] = float(v)
+                    except ValueError:
+                        entry[k] = v.strip('"')
+                acts[entry["name"]] = entry
+    return acts
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out_dir")
+    ap.add_argument("--flat-json", required=True, help="pbppo inspect --json --weights of flat.blob")
+    ap.add_argument("--auv-json", required=True, help="pbppo inspect --json --weights of auv_nav.blob")
+    ap.add_argument(
+        "--auv-layout",
+        default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "models", "auv", "io_layout.yaml"),
+        help="the AUV's io_layout.yaml (default: the repository's)",
+    )
+    a = ap.parse_args()
+    os.makedirs(a.out_dir, exist_ok=True)
+
+    flat, flat_layers = load_blob_json(a.flat_json, "flat")
+    auv, auv_layers = load_blob_json(a.auv_json, "auv_nav")
+    rsl_rl_walk(a.out_dir, flat, flat_layers)
+    normalised_walk(a.out_dir, flat, flat_layers)
+    sb3_auv(a.out_dir, auv, auv_layers, read_layout_actions(a.auv_layout))
+    small = leaky_tanh_head(a.out_dir)
+    bad_models(a.out_dir, small)
+    for root, _, files in sorted(os.walk(a.out_dir)):
+        for fn in sorted(files):
+            p = os.path.join(root, fn)
+            print(f"  {os.path.relpath(p, a.out_dir):<28} {os.path.getsize(p):>9} bytes")
+
+
+if __name__ == "__main__":
+    main()
