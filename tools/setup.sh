@@ -13,6 +13,8 @@ PACKAGES=(
   # libraries
   libeigen3-dev doctest-dev libbenchmark-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
   libsimbody-dev
+  # signed policy blobs (SHA-256, Ed25519) and the key-making script (tools/security)
+  libssl-dev openssl
   # MuJoCo 2.2.2 (the quadruped's training physics); its CMake package needs qhull
   libmujoco-dev libqhull-dev
   # plots

@@ -7,6 +7,7 @@
 #include "policies/onnx/onnx_import.hpp"
 #include "policies/trainer/exporter.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/policy/signature.hpp"
 #include "runtime/robot/robot_model.hpp"
 
 namespace pbppo::cli {
@@ -38,7 +39,7 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   if (!mapping) return fail(mapping.error().message);
   onnx::ImportOptions io;
   io.source_name = std::filesystem::path(o.model).filename().string();
-  io.source_sha256 = onnx::Sha256Hex(*bytes);
+  io.source_sha256 = policy::Sha256Hex(*bytes);
   io.importer = std::string("pbppo-rt ") + PBPPO_VERSION + " " + trainer::BuildGitRevision();
   io.golden_seed = o.seed;
   auto imported = onnx::Import(*model, *mapping, *robot->io, io);

@@ -6,6 +6,7 @@
 #include "policies/cli/import_onnx.hpp"
 #include "policies/cli/inspect.hpp"
 #include "policies/cli/replay.hpp"
+#include "policies/cli/sign.hpp"
 #include "policies/cli/train.hpp"
 
 int main(int argc, char** argv) {
@@ -50,6 +51,11 @@ int main(int argc, char** argv) {
   pbppo::cli::ImportOnnxOptions import_opts;
   auto* import_onnx = pbppo::cli::AddImportOnnx(app, import_opts);
 
+  pbppo::cli::SignOptions sign_opts;
+  auto* sign = pbppo::cli::AddSign(app, sign_opts);
+  pbppo::cli::VerifyOptions verify_opts;
+  auto* verify = pbppo::cli::AddVerify(app, verify_opts);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -62,5 +68,7 @@ int main(int argc, char** argv) {
   if (*curves) return pbppo::cli::Curves(curves_opts);
   if (*replay) return pbppo::cli::Replay(replay_opts);
   if (*import_onnx) return pbppo::cli::ImportOnnx(import_opts);
+  if (*sign) return pbppo::cli::Sign(sign_opts);
+  if (*verify) return pbppo::cli::Verify(verify_opts);
   return 2;
 }

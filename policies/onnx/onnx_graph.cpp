@@ -1,7 +1,5 @@
 #include "policies/onnx/onnx_graph.hpp"
 
-#include <openssl/evp.h>
-
 #include <cstring>
 #include <set>
 
@@ -324,19 +322,6 @@ Result<Model> ReadModelFile(const std::string& path, const ReadLimits& limits) {
   auto bytes = policy::ReadFileBytes(path, limits.max_file_bytes);
   if (!bytes) return std::move(bytes).error();
   return ParseModel(*bytes, path, limits);
-}
-
-std::string Sha256Hex(std::span<const std::uint8_t> bytes) {
-  unsigned char md[EVP_MAX_MD_SIZE];
-  unsigned int len = 0;
-  EVP_Digest(bytes.data(), bytes.size(), md, &len, EVP_sha256(), nullptr);
-  static const char* hex = "0123456789abcdef";
-  std::string s;
-  for (unsigned int i = 0; i < len; ++i) {
-    s += hex[md[i] >> 4];
-    s += hex[md[i] & 15];
-  }
-  return s;
 }
 
 }  // namespace pbppo::onnx

@@ -86,7 +86,4 @@ Result<Model> ParseModel(std::span<const std::uint8_t> bytes, const std::string&
 // Reads and parses a file; errors start with the path.
 Result<Model> ReadModelFile(const std::string& path, const ReadLimits& limits = {});
 
-// SHA-256 of bytes as 64 lowercase hexadecimal digits.
-std::string Sha256Hex(std::span<const std::uint8_t> bytes);
-
 }  // namespace pbppo::onnx

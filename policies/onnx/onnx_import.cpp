@@ -106,6 +106,12 @@ Status Importer::Walk() {
     const Node& n = *u[0];
     if (!n.domain.empty() && n.domain != "ai.onnx")
       return Refuse(n, "an operator of domain '" + n.domain + "': only the default ONNX operator set is read");
+    for (const Attribute& a : n.attributes) {  // the attributes read below, of the type ONNX gives them
+      const bool is_float = a.name == "alpha" || a.name == "beta" || a.name == "min" || a.name == "max";
+      const bool is_int = a.name == "transA" || a.name == "transB" || a.name == "axis";
+      if ((is_float && a.kind != Attribute::Kind::kFloat) || (is_int && a.kind != Attribute::Kind::kInt))
+        return Refuse(n, "attribute '" + a.name + "' is not " + (is_float ? "a float" : "an integer"));
+    }
     if (n.outputs.size() != 1 || n.outputs[0].empty())
       return Refuse(n, std::to_string(n.outputs.size()) + " outputs: the engine's operators have one");
     std::size_t chain_at = n.inputs.size();

@@ -15,6 +15,33 @@ std::span<const std::uint8_t> Bytes(const std::string& s) {
 
 }  // namespace
 
+Result<std::vector<policy::PublicKey>> TrustedKeys(const robot::RobotModel& robot) {
+  std::vector<std::string> roles;
+  if (robot.documents.count("trusted_keys")) roles.push_back("trusted_keys");
+  for (const std::string& name : robot.DocumentGroup("trusted_keys")) roles.push_back("trusted_keys." + name);
+  std::vector<policy::PublicKey> keys;
+  for (const std::string& role : roles) {
+    auto doc = robot.Document(role);
+    if (!doc) return std::move(doc).error();
+    auto key = policy::ParsePublicKey((*doc)->text, "files." + role + " (" + (*doc)->path + ")");
+    if (!key) return MakeError(key.error().code, robot.path + ": " + key.error().message);
+    key->name = role == "trusted_keys" ? role : role.substr(std::string("trusted_keys.").size());
+    keys.push_back(std::move(*key));
+  }
+  return keys;
+}
+
+Status CheckSignature(std::span<const policy::PublicKey> trusted, const std::string& blob_path,
+                      std::span<const std::uint8_t> blob, const std::string& signature_path) {
+  if (trusted.empty()) return {};
+  const std::string sig_path = signature_path.empty() ? policy::SignaturePathFor(blob_path) : signature_path;
+  std::error_code ec;
+  if (!std::filesystem::exists(sig_path, ec)) return policy::VerifyBlob(blob, blob_path, nullptr, sig_path, trusted);
+  auto text = robot::ReadTextFile(sig_path);
+  if (!text) return std::move(text).error();
+  return policy::VerifyBlob(blob, blob_path, &*text, sig_path, trusted);
+}
+
 Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFiles& files) {
   LoadedSource s;
   if (!files.policy.empty() && !files.trajectory.empty())
@@ -22,6 +49,9 @@ Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFile
   if (!files.policy.empty()) {
     auto bytes = robot::ReadTextFile(files.policy);
     if (!bytes) return std::move(bytes).error();
+    auto keys = TrustedKeys(robot);
+    if (!keys) return std::move(keys).error();
+    if (auto st = CheckSignature(*keys, files.policy, Bytes(*bytes)); !st) return st.error();
     auto model = policy::PolicyModel::FromBlob(Bytes(*bytes));
     if (!model) return MakeError(model.error().code, files.policy + ": " + model.error().message);
     s.policy = std::make_unique<policy::PolicyModel>(std::move(*model));

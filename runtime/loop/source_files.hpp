@@ -1,19 +1,22 @@
 // A command source from its files, as a controller program and a replay load it: a policy blob
-// (checked against the robot's IO layout, its golden vectors run through the engine first: the
-// self-test at arming), a joint trajectory file (the robot's own stand_trajectory, read with the
-// robot, or another), or none (the loop holds the default pose). `hash` (LogHash of the file's
-// bytes) identifies the source in a recorded log. Set-up time only.
+// (its signature checked when the robot trusts keys, then checked against the robot's IO layout,
+// its golden vectors run through the engine first: the self-test at arming), a joint trajectory file (the robot's own
+// stand_trajectory, read with the robot, or another), or none (the loop holds the default pose). `hash` (LogHash of the
+// file's bytes) identifies the source in a recorded log. Set-up time only.
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "runtime/core/result.hpp"
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/loop.hpp"
 #include "runtime/loop/trajectory_source.hpp"
 #include "runtime/policy/policy_model.hpp"
+#include "runtime/policy/signature.hpp"
 
 namespace pbppo::loop {
 
@@ -32,6 +35,18 @@ struct LoadedSource {
 };
 
 // Errors name the file and what is wrong ("refusing to arm: golden vectors: row 3 ...").
+// When the robot file names trusted keys (files.trusted_keys), a blob must carry a valid
+// signature by one of them (CheckSignature) before anything else is done with it.
 Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFiles& files);
+
+// The Ed25519 public keys the robot trusts: files.trusted_keys (one file) or files.trusted_keys.NAME
+// (several), PEM; none: the robot runs unsigned blobs. Errors name the role and the file.
+Result<std::vector<policy::PublicKey>> TrustedKeys(const robot::RobotModel& robot);
+
+// The signature check of a blob's bytes against trusted keys (policy::VerifyBlob; none: passes),
+// the signature read from `signature_path` (default policy::SignaturePathFor(blob_path)) if it
+// exists.
+Status CheckSignature(std::span<const policy::PublicKey> trusted, const std::string& blob_path,
+                      std::span<const std::uint8_t> blob, const std::string& signature_path = "");
 
 }  // namespace pbppo::loop
