@@ -7,7 +7,8 @@
 //       --trajectory FILE] [--can IF0,IF1]
 //       [--lockstep-wait-ms N] [--candump FILE] [--receive-all]
 //       (with a policy and no --commands: velocity commands over DDS on --domain, status published)
-//   both: [--dds-naming native|ros2] [--ticks N] [--duration S] [--record LOG] [--profile out.json]
+//   both: [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]] [--ticks N] [--duration S] [--record
+//   LOG] [--profile out.json]
 //       [--profile-plot out.png] [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it
@@ -53,6 +54,7 @@ using namespace pbppo;
 struct Options {
   std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump, commands;
   std::string dds_naming = "native";
+  std::string dds_security, dds_identity = "controller";
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
@@ -83,6 +85,10 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--dds-naming", o.dds_naming,
                  "DDS topic and type names: native (pbppo/<robot>/...) or ros2 (rt/pbppo/<robot>/..., "
                  "pbppo_msgs::msg::dds_::<Type>_)");
+  app.add_option("--dds-security", o.dds_security,
+                 "DDS Security folder (tools/security/make_dds_security.sh): authenticated, encrypted DDS");
+  app.add_option("--dds-identity", o.dds_identity, "--dds-security: this participant's certificate name")
+      ->default_str("controller");
   app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
   app.add_option("--candump", o.candump, "Log every CAN frame (candump -L)");
   app.add_flag("--receive-all", o.receive_all, "CAN: no kernel filter (count strays)");
@@ -165,6 +171,7 @@ int main(int argc, char** argv) {
     d.domain_id = o.domain;
     if (t.options.count("participant_profile") != 0) d.participant_profile = t.options.at("participant_profile");
     d.profile_file = o.dds_profile;
+    d.security = {o.dds_security, o.dds_identity};
     if (o.dds_profile.empty()) {
       auto doc = robot.Document("dds_profile");  // read with the robot
       if (!doc) return std::move(doc).error();

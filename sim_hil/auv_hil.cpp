@@ -175,7 +175,7 @@ const char* ToString(AuvHilOutcome o) noexcept {
 
 std::string AuvHilUsage() {
   return "pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]\n"
-         "              [--dds-naming native|ros2]\n"
+         "              [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]\n"
          "              [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]\n"
          "              [--robot FILE] [--peer-timeout S] [--command-timeout S] [--fault nan|range@SECONDS]\n";
 }
@@ -210,6 +210,10 @@ Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
     } else if (a == "--dds-naming") {
       if (!dds::ParseDdsNaming(v)) return FlagError(a, v, "not native or ros2");
       o.dds_naming = v;
+    } else if (a == "--dds-security") {
+      o.dds_security = v;
+    } else if (a == "--dds-identity") {
+      o.dds_identity = v;
     } else if (a == "--max-time") {
       if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
       o.max_time_s = d;
@@ -268,6 +272,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   lo.profile_xml = (*profile)->text;
   lo.domain_id = o.domain_id;
   lo.naming = dds::ParseDdsNaming(o.dds_naming).value();
+  lo.security = {o.dds_security, o.dds_identity};
   auto link_r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kVehicle, lo);
   if (!link_r) return fail(link_r.error().message);
   dds::AuvDdsLink& link = **link_r;

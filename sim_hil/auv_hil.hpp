@@ -28,6 +28,8 @@ struct AuvHilOptions {
   bool lockstep = true;
   int domain_id = 0;
   std::string dds_naming = "native";                  // native | ros2 (runtime/transport/dds/dds_endpoint.hpp)
+  std::string dds_security;                           // a DDS Security folder ("": none)
+  std::string dds_identity = "hil";                   // --dds-security: this participant's certificate name
   double max_time_s = 0.0;                            // simulated seconds; 0: the task's episode limit only
   std::string trajectory_csv, plot_png, events_json;  // empty: not written
   std::string robot = "models/auv/robot.yaml";        // the robot (plant, layouts, IO layout, DDS profile)

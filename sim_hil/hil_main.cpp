@@ -18,7 +18,7 @@
 //   pbppo-hil quadruped --in-process --policy BLOB --commands SCHEDULE [--scenario FILE]
 //             [--realtime] [--trace out.csv] [--report out.json] [--plot out.png] [--profile out.json]
 //             [--settle-s S]
-//   pbppo-hil quadruped --in-process --policy BLOB --operator dds [--domain D] [--dds-naming ros2]
+//   pbppo-hil quadruped --in-process --policy BLOB --operator dds [--domain D] [--dds-naming ros2] [--dds-security DIR]
 //             (--duration S | --commands SCHEDULE) ...
 //
 // The controller (runtime/loop, the policy, the schedule as its operator) and the HIL ticked in

@@ -27,6 +27,7 @@ struct Options {
   std::string can;      // IF0[,IF1]
   std::string profile;  // --in-process: the controller's tick profile (JSON)
   std::string operator_kind = "schedule", dds_naming = "native";
+  std::string dds_security, dds_identity = "controller";
   int domain = 0;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
@@ -141,6 +142,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
     d.profile_xml = (*doc)->text;
     d.domain_id = o.domain;
     d.naming = *naming;
+    d.security = {o.dds_security, o.dds_identity};
     auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, d);
     if (!l) return Fail(l.error().message, 2);
     link = std::move(*l);
@@ -243,6 +245,9 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
       ->check(CLI::IsMember({"schedule", "dds"}));
   app.add_option("--domain", o.domain, "--operator dds: DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--dds-naming", o.dds_naming, "--operator dds: native or ros2 names");
+  app.add_option("--dds-security", o.dds_security, "--operator dds: DDS Security folder (make_dds_security.sh)");
+  app.add_option("--dds-identity", o.dds_identity, "--dds-security: this participant's certificate name")
+      ->default_str("controller");
   app.add_flag("--realtime", o.realtime,
                "--in-process: tick at the robot's period on the controller's clock (jitter, deadline misses)");
   app.add_option("--settle-s", o.settle_s, "--in-process: tracking is measured this long after each phase starts")

@@ -3,7 +3,8 @@
 // real time, and prints the controller's status as it comes back.
 //
 //   pbppo-operator --schedule models/quadruped/schedules/demo.yaml [--domain D]
-//       [--dds-naming native|ros2] [--dds-profile FILE] [--robot models/quadruped/robot.yaml]
+//       [--dds-naming native|ros2] [--dds-profile FILE] [--dds-security DIR [--dds-identity NAME]] [--robot
+//       models/quadruped/robot.yaml]
 //       [--peer-timeout-s S] [--linger-s S] [--quiet]
 //
 // Waits for a controller (pbppo-controller, or pbppo-hil quadruped --in-process --operator dds)
@@ -57,6 +58,11 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--dds-naming", naming_text, "native or ros2 (rt/ topics, pbppo_msgs::msg::dds_ types)");
   app.add_option("--dds-profile", profile, "Fast DDS XML profile file (default: the robot's)");
+  std::string security_dir, identity = "operator";
+  app.add_option("--dds-security", security_dir,
+                 "DDS Security folder (tools/security/make_dds_security.sh): authenticated, encrypted DDS");
+  app.add_option("--dds-identity", identity, "--dds-security: this participant's certificate name")
+      ->default_str("operator");
   app.add_option("--peer-timeout-s", peer_timeout_s, "How long to wait for a controller")
       ->check(CLI::Range(0.1, 3600.0));
   app.add_option("--linger-s", linger_s, "After the schedule: listen this long, silent")
@@ -82,6 +88,7 @@ int main(int argc, char** argv) {
   o.domain_id = domain;
   o.naming = *naming;
   o.profile_file = profile;
+  o.security = {security_dir, identity};
   if (profile.empty()) {
     auto doc = robot->Document("dds_profile");
     if (!doc) return Fail(doc.error().message, 2);

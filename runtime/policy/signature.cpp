@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "runtime/policy/blob.hpp"
+#include "runtime/policy/openssl_handles.hpp"
 
 namespace pbppo::policy {
 namespace {
@@ -17,16 +18,9 @@ constexpr std::string_view kMagic = "pbppo-blob-signature 1";
 constexpr std::size_t kMaxSignatureBytes = 4096;
 constexpr std::size_t kMaxPolicyLine = 600;
 
-struct PkeyFree {
-  void operator()(EVP_PKEY* p) const noexcept { EVP_PKEY_free(p); }
-};
-struct CtxFree {
-  void operator()(EVP_MD_CTX* c) const noexcept { EVP_MD_CTX_free(c); }
-};
-struct BioFree {
-  void operator()(BIO* b) const noexcept { BIO_free(b); }
-};
-using Pkey = std::unique_ptr<EVP_PKEY, PkeyFree>;
+using ossl::Bio;
+using ossl::MdCtx;
+using ossl::Pkey;
 
 std::string Hex(std::span<const std::uint8_t> b) {
   static const char* d = "0123456789abcdef";
@@ -153,7 +147,7 @@ std::string FormatSignature(const BlobSignature& s) {
 }
 
 Result<PublicKey> ParsePublicKey(std::string_view pem, const std::string& name) {
-  std::unique_ptr<BIO, BioFree> bio(BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size())));
+  Bio bio(BIO_new_mem_buf(pem.data(), static_cast<int>(pem.size())));
   if (!bio) return MakeError(ErrorCode::kIo, name + ": out of memory");
   Pkey key(PEM_read_bio_PUBKEY(bio.get(), nullptr, nullptr, nullptr));
   if (!key)
@@ -176,7 +170,7 @@ Result<PublicKey> ParsePublicKey(std::string_view pem, const std::string& name) 
 
 Result<BlobSignature> SignBlob(std::span<const std::uint8_t> blob, std::string_view private_pem,
                                const std::string& key_origin) {
-  std::unique_ptr<BIO, BioFree> bio(BIO_new_mem_buf(private_pem.data(), static_cast<int>(private_pem.size())));
+  Bio bio(BIO_new_mem_buf(private_pem.data(), static_cast<int>(private_pem.size())));
   if (!bio) return MakeError(ErrorCode::kIo, key_origin + ": out of memory");
   // No passphrase prompt: an encrypted key is refused.
   auto no_pass = [](char*, int, int, void*) -> int { return -1; };
@@ -197,7 +191,7 @@ Result<BlobSignature> SignBlob(std::span<const std::uint8_t> blob, std::string_v
   s.blob_bytes = blob.size();
   s.policy = BlobIdentity(blob);
   const std::string msg = SignedMessage(s);
-  std::unique_ptr<EVP_MD_CTX, CtxFree> ctx(EVP_MD_CTX_new());
+  MdCtx ctx(EVP_MD_CTX_new());
   std::size_t sig_len = s.signature.size();
   if (!ctx || EVP_DigestSignInit(ctx.get(), nullptr, nullptr, nullptr, key.get()) != 1 ||
       EVP_DigestSign(ctx.get(), s.signature.data(), &sig_len, reinterpret_cast<const unsigned char*>(msg.data()),
@@ -236,7 +230,7 @@ Status VerifyBlob(std::span<const std::uint8_t> blob, const std::string& blob_pa
                                                sig->policy + "), not of " + blob_path + " (" + now + ")");
   }
   Pkey pk(EVP_PKEY_new_raw_public_key(EVP_PKEY_ED25519, nullptr, key->raw.data(), key->raw.size()));
-  std::unique_ptr<EVP_MD_CTX, CtxFree> ctx(EVP_MD_CTX_new());
+  MdCtx ctx(EVP_MD_CTX_new());
   const std::string msg = SignedMessage(*sig);
   if (!pk || !ctx || EVP_DigestVerifyInit(ctx.get(), nullptr, nullptr, nullptr, pk.get()) != 1 ||
       EVP_DigestVerify(ctx.get(), sig->signature.data(), sig->signature.size(),

@@ -6,10 +6,13 @@
 #      controller (exit 1, naming the domain);
 #   2. the robot walks the schedule sent over DDS: 0.5 m/s tracked within 0.2 m/s, no fall; the
 #      operator reads the status back, and after it falls silent the controller is in safe-stop;
-#   3. an operator with the native names does not reach a controller with ROS 2's.
-# usage: operator_programs.sh HIL OPERATOR SOURCE_DIR WORK_DIR
+#   3. an operator with the native names does not reach a controller with ROS 2's;
+#   4. over DDS Security (tools/security/make_dds_security.sh): the operator with its certificate
+#      drives the robot; a Cyclone DDS operator without one (tests/interop/cyclone_operator.c,
+#      ROS 2's names) is never seen: the robot does not move and Cyclone reads no status.
+# usage: operator_programs.sh HIL OPERATOR CYCLONE_OPERATOR SOURCE_DIR WORK_DIR
 set -euo pipefail
-hil=$1 op=$2 src=$3 work=$4
+hil=$1 op=$2 cyclone=$3 src=$4 work=$5
 rm -rf "$work"
 mkdir -p "$work"
 cd "$src"
@@ -72,4 +75,38 @@ hpid=$!
 rc=0; "$op" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 3 >"$work/op3.log" 2>&1 || rc=$?
 wait $hpid || true
 [ "$rc" -eq 1 ] || { cat "$work/op3.log"; fail "a native operator reached a ROS 2 controller (exit $rc)"; }
+echo "== 4: DDS Security: the operator with a certificate drives the robot, Cyclone without one is not seen"
+sec=$work/sec
+tools/security/make_dds_security.sh "$sec" 'controller:rt/pbppo/quadruped/status:rt/pbppo/quadruped/*' \
+  'operator:rt/pbppo/quadruped/velocity_command:rt/pbppo/quadruped/*' >/dev/null
+"$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 9 \
+  --dds-security "$sec" --report "$work/secure.json" >"$work/hil4.log" 2>&1 &
+hpid=$!
+rc=0
+"$op" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 --dds-security "$sec" \
+  >"$work/op4.log" 2>&1 || rc=$?
+hrc=0; wait $hpid || hrc=$?
+[ "$rc" -eq 0 ] || { cat "$work/op4.log"; fail "the secured pbppo-operator exited $rc"; }
+[ "$hrc" -eq 0 ] || { cat "$work/hil4.log"; fail "the secured pbppo-hil exited $hrc"; }
+expect "$work/op4.log" "status t=.*run, nominal, commands [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
+"$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 6 \
+  --dds-security "$sec" --report "$work/intruded.json" >"$work/hil5.log" 2>&1 &
+hpid=$!
+export CYCLONEDDS_URI='<CycloneDDS><Domain id="any"><General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>'
+rc=0; "$cyclone" "$domain" 0.5 4 1 >"$work/cyclone.log" 2>&1 || rc=$?
+hrc=0; wait $hpid || hrc=$?
+[ "$hrc" -eq 0 ] || { cat "$work/hil5.log"; fail "the secured pbppo-hil exited $hrc"; }
+[ "$rc" -ne 0 ] || { cat "$work/cyclone.log"; fail "Cyclone DDS without a certificate read the robot's status"; }
+expect "$work/cyclone.log" "published [1-9][0-9]*"
+python3 - "$work/secure.json" "$work/intruded.json" <<'PY'
+import json, sys
+walked, intruded = (json.load(open(p)) for p in sys.argv[1:3])
+fwd = [p for p in walked["phases"] if abs(p["command"][0] - 0.5) < 1e-9][0]
+print("secured operator: forward |e| vx %.3f, measured vx %.3f" % (fwd["mean_abs_error"][0], fwd["mean_measured"][0]))
+assert fwd["mean_abs_error"][0] <= 0.2, fwd
+moved = max(abs(p["mean_measured"][0]) for p in intruded["phases"])
+print("Cyclone without a certificate: measured vx at most %.3f, distance %.2f m" % (moved, intruded["distance_m"]))
+assert moved < 0.1 and intruded["distance_m"] < 0.3, intruded
+PY
+sed 's/^/   cyclone: /' "$work/cyclone.log"
 echo "operator programs: all passed"

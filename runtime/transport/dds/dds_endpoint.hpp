@@ -39,11 +39,27 @@ std::string WireTopic(DdsNaming naming, const std::string& topic);
 // The type name: "" (kNative: the IDL's own) or "pbppo_msgs::msg::dds_::" + ros2_message + "_".
 std::string WireTypeName(DdsNaming naming, const std::string& ros2_message);
 
+// DDS Security (Fast DDS's builtin plugins: PKI-DH authentication, Access-Permissions, AES-GCM-GMAC)
+// from a folder made by tools/security/make_dds_security.sh (docs/security.md): ca.pem,
+// governance.p7s, <identity>.pem, <identity>_key.pem, <identity>_permissions.p7s. Empty `dir`: no
+// security (the participant talks to anyone on the domain).
+struct DdsSecurity {
+  std::string dir;
+  std::string identity;  // the participant's certificate and permissions
+  bool enabled() const noexcept { return !dir.empty(); }
+};
+
+// Checks a security folder before Fast DDS sees it, so that a bad file is refused at start with a
+// message naming it: every file present; the certificate signed by the CA, within its validity,
+// matching its key; governance and permissions signed (S/MIME) by the CA, unaltered.
+Status CheckDdsSecurity(const DdsSecurity& security);
+
 struct DdsOptions {
   std::string profile_xml;                             // Fast DDS XML profiles, as text (a robot's document)
   std::string profile_file;                            // ... or a file to read them from (profile_xml empty)
   std::string participant_profile = "pbppo_loopback";  // a <participant profile_name=...> in them
   int domain_id = 0;                                   // 0 ... 232
+  DdsSecurity security;                                // none by default
 };
 
 // One DDS participant with a publisher and a subscriber.

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "runtime/transport/dds/dds_endpoint_impl.hpp"
+#include "runtime/transport/dds/dds_security.hpp"
 
 namespace pbppo::dds {
 
@@ -107,12 +108,22 @@ Result<std::unique_ptr<DdsParticipant>> DdsParticipant::Create(const DdsOptions&
   }
   auto impl = std::make_unique<Impl>();
   impl->domain_id = o.domain_id;
-  impl->participant =
-      factory->create_participant_with_profile(static_cast<fdds::DomainId_t>(o.domain_id), o.participant_profile);
+  fdds::DomainParticipantQos qos;
+  if (factory->get_participant_qos_from_profile(o.participant_profile, qos) != ReturnCode_t::RETCODE_OK)
+    return DdsError("participant_profile '" + o.participant_profile + "' from " + origin +
+                    (loaded ? "" : " (the profiles did not load)") + ": no such participant profile");
+  if (o.security.enabled()) {
+    if (auto st = CheckDdsSecurity(o.security); !st) return st.error();
+    for (const auto& [name, value] : SecurityProperties(o.security))
+      qos.properties().properties().emplace_back(name, value);
+  }
+  impl->participant = factory->create_participant(static_cast<fdds::DomainId_t>(o.domain_id), qos);
   if (impl->participant == nullptr)
     return DdsError("participant_profile '" + o.participant_profile + "' from " + origin +
-                    (loaded ? "" : " (the profiles did not load)") + ": no participant on domain " +
-                    std::to_string(o.domain_id));
+                    ": no participant on domain " + std::to_string(o.domain_id) +
+                    (o.security.enabled() ? " (Fast DDS refused the security of identity '" + o.security.identity +
+                                                "' in " + o.security.dir + ")"
+                                          : std::string()));
   impl->publisher = impl->participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   impl->subscriber = impl->participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   if (impl->publisher == nullptr || impl->subscriber == nullptr) return DdsError("cannot create publisher/subscriber");
