@@ -55,11 +55,8 @@ int ImportOnnx(const ImportOnnxOptions& o) {
       "check        the blob's float64 reference against the graph's own evaluation on %zu rows: max |diff| "
       "%.3g (%.2g of the tolerance)\n",
       imported->golden.observations.size(), imported->check_max_abs, imported->check_max_ratio);
-  if (auto st = policy::WriteBlobFile(o.out, s); !st) return fail(st.error().message);
-  if (auto st = policy::WriteGoldenFile(policy::GoldenPathFor(o.out), imported->golden); !st) {
-    std::filesystem::remove(o.out);  // a blob without its golden vectors is not left behind
-    return fail(st.error().message);
-  }
+  // The same golden rows the check ran on (32 from --seed), written beside the blob.
+  if (auto st = trainer::WritePolicy(o.out, s, o.seed); !st) return fail(st.error().message);
   std::printf("wrote        %s (%llu parameters) and %s\n", o.out.c_str(),
               static_cast<unsigned long long>(s.ParameterCount()), policy::GoldenPathFor(o.out).c_str());
   return 0;

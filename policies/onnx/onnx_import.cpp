@@ -7,9 +7,12 @@
 
 #include "policies/onnx/onnx_eval.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::onnx {
 namespace {
+
+using robot::YamlFields;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -46,12 +49,6 @@ class Importer {
   const robot::IoLayout& layout_;
   std::vector<Piece> pieces_;
 };
-
-std::string Num(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.9g", v);
-  return b;
-}
 
 std::string Printable(const std::string& s, std::size_t max) {
   std::string out;
@@ -203,7 +200,8 @@ Status Importer::Walk() {
           (k == 1 ? p.lo : p.hi) = (*c)->values[0];
         }
       }
-      if (!(p.lo <= p.hi)) return Refuse(n, "bounds [" + Num(p.lo) + ", " + Num(p.hi) + "] are empty");
+      if (!(p.lo <= p.hi))
+        return Refuse(n, "bounds [" + YamlFields::Num(p.lo) + ", " + YamlFields::Num(p.hi) + "] are empty");
     } else if (op == "Relu" || op == "Tanh" || op == "Elu" || op == "LeakyRelu") {
       p.kind = Piece::Kind::kActivation;
       if (op == "Relu") p.activation = policy::Activation::kRelu;
@@ -211,13 +209,14 @@ Status Importer::Walk() {
       if (op == "Elu") {
         const Attribute* a = n.Find("alpha");
         if (a != nullptr && a->f != 1.0)
-          return Refuse(n, "alpha " + Num(a->f) + ": the engine's ELU has alpha 1 (never approximated)");
+          return Refuse(n, "alpha " + YamlFields::Num(a->f) + ": the engine's ELU has alpha 1 (never approximated)");
         p.activation = policy::Activation::kElu;
       }
       if (op == "LeakyRelu") {
         const Attribute* a = n.Find("alpha");
         p.alpha = a != nullptr ? a->f : static_cast<double>(0.01f);
-        if (!(p.alpha >= 0.0 && p.alpha <= 1.0)) return Refuse(n, "alpha " + Num(p.alpha) + " outside [0, 1]");
+        if (!(p.alpha >= 0.0 && p.alpha <= 1.0))
+          return Refuse(n, "alpha " + YamlFields::Num(p.alpha) + " outside [0, 1]");
         p.activation = policy::Activation::kLeakyRelu;
       }
     } else {
@@ -255,7 +254,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
                                  "): the blob's normaliser is an affine map, then one clip");
     if (p.kind == Piece::Kind::kClip) {
       if (!(p.hi > 0 && p.lo == -p.hi))
-        return Refuse(*p.node, "bounds [" + Num(p.lo) + ", " + Num(p.hi) +
+        return Refuse(*p.node, "bounds [" + YamlFields::Num(p.lo) + ", " + YamlFields::Num(p.hi) +
                                    "]: the blob's normaliser clips symmetrically about 0");
       clip = &p;
     } else {
@@ -348,7 +347,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   for (std::uint32_t j = 0; j < n_in; ++j)
     if (map_.input_source[j] >= 0 && !(a[j] > 0)) {
       if (clip != nullptr)
-        return Refuse(*clip->node, "input element " + std::to_string(j) + " is scaled by " + Num(a[j]) +
+        return Refuse(*clip->node, "input element " + std::to_string(j) + " is scaled by " + YamlFields::Num(a[j]) +
                                        " before this clip: the blob's normaliser needs a positive scale");
       fold = true;
     }
@@ -411,9 +410,10 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
     const double low = std::max(L.low, std::min(c1, c2)), high = std::min(L.high, std::max(c1, c2));
     if (!(low <= high))
       return Refuse(*out_nodes.back(), "output element " + std::to_string(j) + " ('" + L.name + "') is held in [" +
-                                           Num(ylo[j]) + ", " + Num(yhi[j]) + "], commands [" + Num(std::min(c1, c2)) +
-                                           ", " + Num(std::max(c1, c2)) + "], outside the layout's limits [" +
-                                           Num(L.low) + ", " + Num(L.high) + "]");
+                                           YamlFields::Num(ylo[j]) + ", " + YamlFields::Num(yhi[j]) + "], commands [" +
+                                           YamlFields::Num(std::min(c1, c2)) + ", " +
+                                           YamlFields::Num(std::max(c1, c2)) + "], outside the layout's limits [" +
+                                           YamlFields::Num(L.low) + ", " + YamlFields::Num(L.high) + "]");
     s.action_scale[k] = static_cast<float>(L.scale * sy[j]);
     s.action_offset[k] = static_cast<float>(L.scale * oy[j] + L.offset);
     s.action_low[k] = static_cast<float>(low);
@@ -422,7 +422,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
 
   // What was recognised.
   std::string norm = norm_nodes.empty() ? "none" : Names(norm_nodes);
-  if (clip) norm += ", clip at " + Num(clip->hi);
+  if (clip) norm += ", clip at " + YamlFields::Num(clip->hi);
   notes.push_back("normaliser:  " + norm +
                   (fold                 ? " (folded into the first layer: a scale is not positive)"
                    : norm_nodes.empty() ? ""
@@ -470,9 +470,10 @@ Result<Imported> Importer::Run(const ImportOptions& options) {
       if (!(ratio <= 1.0))
         return MakeError(ErrorCode::kMismatch,
                          m_.origin + ": the imported policy does not act as the graph: golden row " +
-                             std::to_string(r) + ", action '" + layout_.actions[k].name + "': " + Num(ref.action[k]) +
-                             " from the blob, " + Num(cmd[k]) + " from the graph (tolerance " +
-                             Num(CheckTolerance(ref.error_bound[k], ref.action[k])) + ")");
+                             std::to_string(r) + ", action '" + layout_.actions[k].name +
+                             "': " + YamlFields::Num(ref.action[k]) + " from the blob, " + YamlFields::Num(cmd[k]) +
+                             " from the graph (tolerance " +
+                             YamlFields::Num(CheckTolerance(ref.error_bound[k], ref.action[k])) + ")");
     }
   }
   return out;

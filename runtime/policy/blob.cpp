@@ -442,6 +442,14 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
   return s;
 }
 
+std::string PathBeside(const std::string& blob_path, const std::string& extension) {
+  const auto dot = blob_path.rfind('.');
+  const auto slash = blob_path.rfind('/');
+  if (dot != std::string::npos && (slash == std::string::npos || dot > slash))
+    return blob_path.substr(0, dot) + extension;
+  return blob_path + extension;
+}
+
 Result<std::vector<std::uint8_t>> ReadFileBytes(const std::string& path, std::uint64_t max_bytes) {
   std::ifstream f(path, std::ios::binary | std::ios::ate);
   if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open: " + std::strerror(errno));

@@ -26,6 +26,10 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> bytes, const BlobLim
 // Reads a whole file (at most limits.max_file_bytes) and decodes it; errors start with the path.
 Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limits = {});
 
+// A file beside a blob: its extension replaced ("x.blob" -> "x" + extension), or added when it
+// has none. The golden vectors (GoldenPathFor) and the signature (SignaturePathFor) live there.
+std::string PathBeside(const std::string& blob_path, const std::string& extension);
+
 // Reads a whole file of at most `max_bytes` (checked before reading); errors start with the path.
 Result<std::vector<std::uint8_t>> ReadFileBytes(const std::string& path, std::uint64_t max_bytes);
 

@@ -193,11 +193,7 @@ Result<GoldenVectors> ReadGoldenFile(const std::string& path) {
 }
 
 std::string GoldenPathFor(const std::string& blob_path) {
-  const auto dot = blob_path.rfind('.');
-  const auto slash = blob_path.rfind('/');
-  if (dot != std::string::npos && (slash == std::string::npos || dot > slash))
-    return blob_path.substr(0, dot) + ".golden";
-  return blob_path + ".golden";
+  return PathBeside(blob_path, ".golden");
 }
 
 }  // namespace pbppo::policy

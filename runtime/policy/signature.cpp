@@ -77,10 +77,7 @@ std::string Sha256Hex(std::span<const std::uint8_t> bytes) {
 }
 
 std::string SignaturePathFor(const std::string& blob_path) {
-  const std::string ext = ".blob";
-  if (blob_path.size() > ext.size() && blob_path.compare(blob_path.size() - ext.size(), ext.size(), ext) == 0)
-    return blob_path.substr(0, blob_path.size() - ext.size()) + ".sig";
-  return blob_path + ".sig";
+  return PathBeside(blob_path, ".sig");
 }
 
 std::string BlobIdentity(std::span<const std::uint8_t> blob) {
