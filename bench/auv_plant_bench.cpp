@@ -12,24 +12,17 @@
 #include <string>
 #include <vector>
 
+#include "bench/cpu_time.hpp"
 #include "runtime/core/random.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace {
 
-double CpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using pbppo::bench::CpuSeconds;
+using pbppo::bench::Median;
 
 const char* Name(pbppo::sim::AuvIntegrator i) {
   return i == pbppo::sim::AuvIntegrator::kRk2 ? "rk2" : "semi_explicit_euler";
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
 }
 
 // The route planner's pieces on the hard layout (0.25 m grid): the chart's clearances (once per

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/cpu_time.hpp"
 #include "policies/envs/quadruped_walk.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
@@ -22,16 +23,8 @@
 
 namespace {
 
-double CpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using pbppo::bench::CpuSeconds;
+using pbppo::bench::Median;
 
 }  // namespace
 

@@ -23,7 +23,8 @@ namespace pbppo::cli {
 
 void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("blob", o.blob, "Policy blob file")->required();
-  s.add_option("--env", o.env.name, "Environment: pendulum, auv-nav");
+  s.add_option("--env", o.env.name,
+               "Environment: pendulum, auv-nav, quadruped-walk, hopper, walker2d, half-cheetah, ant");
   s.add_option("--layout", o.env.layout,
                "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--episodes", o.episodes, "Episodes (quadruped-walk: robots; default 100, quadruped-walk 50)")

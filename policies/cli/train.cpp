@@ -89,7 +89,10 @@ std::string Human(double v) {
 
 void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   envs::EnvOptions& env = o.env;
-  s.add_option("--env", env.name, "Environment: pendulum, auv-nav, quadruped-walk");
+  s.add_option(
+      "--env", env.name,
+      "Environment: pendulum, auv-nav, quadruped-walk, or the MuJoCo tasks hopper, walker2d, half-cheetah, ant "
+      "(docs/mujoco_tasks.md)");
   s.add_option("--layout", env.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "

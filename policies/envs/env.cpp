@@ -3,13 +3,16 @@
 #include <cstdlib>
 
 #include "policies/envs/auv_nav.hpp"
+#include "policies/envs/mujoco_tasks.hpp"
 #include "policies/envs/pendulum.hpp"
 #include "policies/envs/quadruped_walk.hpp"
 
 namespace pbppo::envs {
 
 std::vector<std::string> EnvNames() {
-  return {"pendulum", "auv-nav", "quadruped-walk"};
+  std::vector<std::string> names = {"pendulum", "auv-nav", "quadruped-walk"};
+  for (auto& n : MujocoTaskNames()) names.push_back(std::move(n));
+  return names;
 }
 
 std::string DefaultModelsDir() {
@@ -56,6 +59,11 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     o.randomize = options.randomize;
     o.resample_s = options.resample_s;
     auto env = QuadrupedWalk::Make(o);
+    if (!env) return std::move(env).error();
+    return std::unique_ptr<Env>(std::move(env).value());
+  }
+  if (const MujocoTaskSpec* spec = FindMujocoTask(name)) {
+    auto env = MujocoTask::Make(*spec, dir);
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }
