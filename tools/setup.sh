@@ -19,6 +19,8 @@ PACKAGES=(
   libmujoco-dev libqhull-dev
   # plots
   gnuplot-nox
+  # pbppo sweep under mpirun (Open MPI: the library pbppo links, and mpirun)
+  libopenmpi-dev openmpi-bin
   # DDS: Fast DDS 2.9 with its CDR library, and the IDL code generator (a Java program)
   libfastrtps-dev libfastcdr-dev fastddsgen default-jre-headless
   # a second DDS implementation (and its IDL compiler) for the ROS 2 naming interop test

@@ -7,6 +7,7 @@
 #include "policies/cli/inspect.hpp"
 #include "policies/cli/replay.hpp"
 #include "policies/cli/sign.hpp"
+#include "policies/cli/sweep.hpp"
 #include "policies/cli/train.hpp"
 
 int main(int argc, char** argv) {
@@ -36,6 +37,9 @@ int main(int argc, char** argv) {
   auto* train = app.add_subcommand("train", "Train a policy with PPO and a clip schedule (Pb-PPO)");
   pbppo::cli::AddTrainOptions(*train, train_opts, train_quiet);
 
+  pbppo::cli::SweepOptions sweep_opts;
+  auto* sweep = pbppo::cli::AddSweep(app, sweep_opts);
+
   pbppo::cli::EvalOptions eval_opts;
   auto* eval = app.add_subcommand("eval", "Run a policy blob on an environment with the runtime forward");
   pbppo::cli::AddEvalOptions(*eval, eval_opts);
@@ -64,6 +68,7 @@ int main(int argc, char** argv) {
   if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json, inspect_weights);
   if (*synth) return pbppo::cli::Synth(synth_opts);
   if (*train) return pbppo::cli::Train(train_opts, train_quiet);
+  if (*sweep) return pbppo::cli::Sweep(sweep_opts);
   if (*eval) return pbppo::cli::Eval(eval_opts);
   if (*curves) return pbppo::cli::Curves(curves_opts);
   if (*replay) return pbppo::cli::Replay(replay_opts);
