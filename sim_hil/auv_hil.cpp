@@ -2,7 +2,6 @@
 
 #include <time.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,29 +20,6 @@ namespace pbppo::sim {
 namespace {
 
 constexpr std::int64_t kNsPerS = 1'000'000'000;
-
-Error FlagError(const std::string& flag, const std::string& value, const std::string& why) {
-  return MakeError(ErrorCode::kInvalidValue, flag + " '" + value + "': " + why);
-}
-
-bool ParseU64(const std::string& s, std::uint64_t* out) {
-  if (s.empty() || s[0] == '-' || s[0] == '+') return false;
-  errno = 0;
-  char* end = nullptr;
-  const unsigned long long v = std::strtoull(s.c_str(), &end, 10);
-  if (errno != 0 || end == s.c_str() || *end != '\0') return false;
-  *out = v;
-  return true;
-}
-
-bool ParseDouble(const std::string& s, double* out) {
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (errno != 0 || end == s.c_str() || *end != '\0' || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
-}
 
 struct Row {
   double t_s, x_m, y_m, yaw_rad, v_cmd, w_cmd, u_mps, r_radps;
@@ -171,79 +147,6 @@ const char* ToString(AuvHilOutcome o) noexcept {
     case AuvHilOutcome::kError: return "error";
   }
   return "?";
-}
-
-std::string AuvHilUsage() {
-  return "pbppo-hil auv --layout easy|medium|hard --seed N [--lockstep | --realtime] [--domain D]\n"
-         "              [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]\n"
-         "              [--max-time S] [--trajectory out.csv] [--plot out.png] [--events out.json]\n"
-         "              [--robot FILE] [--peer-timeout S] [--command-timeout S] [--fault nan|range@SECONDS]\n";
-}
-
-Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args) {
-  AuvHilOptions o;
-  bool have_seed = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "--lockstep") {
-      o.lockstep = true;
-      continue;
-    }
-    if (a == "--realtime") {
-      o.lockstep = false;
-      continue;
-    }
-    if (i + 1 >= args.size()) return MakeError(ErrorCode::kInvalidValue, a + ": unknown option or missing value");
-    const std::string& v = args[++i];
-    double d = 0;
-    std::uint64_t u = 0;
-    if (a == "--layout") {
-      if (v != "easy" && v != "medium" && v != "hard") return FlagError(a, v, "not one of easy, medium, hard");
-      o.layout = v;
-    } else if (a == "--seed") {
-      if (!ParseU64(v, &u)) return FlagError(a, v, "not a non-negative integer");
-      o.seed = u;
-      have_seed = true;
-    } else if (a == "--domain") {
-      if (!ParseU64(v, &u) || u > 232) return FlagError(a, v, "not a DDS domain id in 0..232");
-      o.domain_id = static_cast<int>(u);
-    } else if (a == "--dds-naming") {
-      if (!dds::ParseDdsNaming(v)) return FlagError(a, v, "not native or ros2");
-      o.dds_naming = v;
-    } else if (a == "--dds-security") {
-      o.dds_security = v;
-    } else if (a == "--dds-identity") {
-      o.dds_identity = v;
-    } else if (a == "--max-time") {
-      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
-      o.max_time_s = d;
-    } else if (a == "--peer-timeout") {
-      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
-      o.peer_timeout_s = d;
-    } else if (a == "--command-timeout") {
-      if (!ParseDouble(v, &d) || d <= 0) return FlagError(a, v, "not a positive number of seconds");
-      o.command_timeout_s = d;
-    } else if (a == "--trajectory") {
-      o.trajectory_csv = v;
-    } else if (a == "--plot") {
-      o.plot_png = v;
-    } else if (a == "--events") {
-      o.events_json = v;
-    } else if (a == "--robot") {
-      o.robot = v;
-    } else if (a == "--fault") {
-      const auto at = v.find('@');
-      const std::string kind = v.substr(0, at);
-      if (at == std::string::npos || (kind != "nan" && kind != "range") || !ParseDouble(v.substr(at + 1), &d) || d < 0)
-        return FlagError(a, v, "not KIND@SECONDS with KIND nan or range");
-      o.fault = kind;
-      o.fault_time_s = d;
-    } else {
-      return MakeError(ErrorCode::kInvalidValue, "unknown option " + a);
-    }
-  }
-  if (!have_seed) return MakeError(ErrorCode::kInvalidValue, "--seed is required");
-  return o;
 }
 
 int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {

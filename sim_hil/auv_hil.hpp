@@ -16,7 +16,6 @@
 #include <atomic>
 #include <cstdint>
 #include <string>
-#include <vector>
 
 #include "runtime/core/result.hpp"
 
@@ -41,10 +40,6 @@ struct AuvHilOptions {
   std::string fault;
   double fault_time_s = 0.0;
 };
-
-// Parses the arguments after `pbppo-hil auv`; errors name the flag and the value.
-Result<AuvHilOptions> ParseAuvHilArgs(const std::vector<std::string>& args);
-std::string AuvHilUsage();
 
 enum class AuvHilOutcome { kSuccess, kCollision, kTimeLimit, kMaxTime, kStopped, kControllerLost, kError };
 const char* ToString(AuvHilOutcome o) noexcept;

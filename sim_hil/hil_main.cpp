@@ -28,12 +28,15 @@
 // another process (pbppo-operator, a ROS 2 node with --dds-naming ros2), at real time.
 #include <signal.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
-#include <vector>
 
+#include "runtime/core/cli_checks.hpp"
+#include "runtime/transport/dds/dds_endpoint.hpp"
 #include "sim_hil/auv_hil.hpp"
 #include "sim_hil/quadruped_main.hpp"
 
@@ -42,6 +45,49 @@ namespace {
 std::atomic<bool> g_stop{false};
 void OnSignal(int) {
   g_stop.store(true);
+}
+
+// pbppo-hil auv's flags into `o` (errors name the flag and the value).
+void AddAuvOptions(CLI::App& app, pbppo::sim::AuvHilOptions& o) {
+  app.add_option("--layout", o.layout, "Obstacle layout")->check(CLI::IsMember({"easy", "medium", "hard"}));
+  app.add_option("--seed", o.seed, "Seed of the episode's start and obstacles")
+      ->check(pbppo::cli_checks::NonNegativeInteger())
+      ->required();
+  app.add_flag("--lockstep", o.lockstep, "Advance one control period per command (the default)");
+  app.add_flag_callback("--realtime", [&o] { o.lockstep = false; }, "One control period per period of wall time");
+  app.add_option("--domain", o.domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+  app.add_option("--dds-naming", o.dds_naming, "DDS topic and type names: native or ros2")
+      ->check(CLI::Validator(
+          [](const std::string& v) {
+            return pbppo::dds::ParseDdsNaming(v) ? std::string() : "'" + v + "' is not native or ros2";
+          },
+          "native|ros2"));
+  app.add_option("--dds-security", o.dds_security, "DDS Security folder (tools/security/make_dds_security.sh)");
+  app.add_option("--dds-identity", o.dds_identity, "--dds-security: this participant's certificate name")
+      ->default_str("hil");
+  const auto positive = pbppo::cli_checks::PositiveSeconds();
+  app.add_option("--max-time", o.max_time_s, "Stop after this much simulated time (s)")->check(positive);
+  app.add_option("--peer-timeout", o.peer_timeout_s, "Longest wait for the controller to appear (s)")->check(positive);
+  app.add_option("--command-timeout", o.command_timeout_s, "Lock-step: longest wait for the next command (s)")
+      ->check(positive);
+  app.add_option("--trajectory", o.trajectory_csv, "Write the trajectory (CSV)");
+  app.add_option("--plot", o.plot_png, "Plot the trajectory over the map (PNG)");
+  app.add_option("--events", o.events_json, "Write the episode's events (JSON)");
+  app.add_option("--robot", o.robot, "The robot (models/auv/robot.yaml)");
+  app.add_option_function<std::string>(
+      "--fault",
+      [&o](const std::string& v) {
+        const auto at = v.find('@');
+        const std::string kind = v.substr(0, at);
+        char* end = nullptr;
+        const double t = at == std::string::npos ? -1 : std::strtod(v.c_str() + at + 1, &end);
+        if (at == std::string::npos || (kind != "nan" && kind != "range") || end == v.c_str() + at + 1 ||
+            *end != '\0' || !(t >= 0))
+          throw CLI::ValidationError("--fault", "'" + v + "' is not KIND@SECONDS with KIND nan or range");
+        o.fault = kind;
+        o.fault_time_s = t;
+      },
+      "From this simulated time on, every sample carries the fault: nan@S or range@S");
 }
 
 int Usage(const char* why) {
@@ -57,19 +103,17 @@ int Usage(const char* why) {
 int main(int argc, char** argv) {
   using namespace pbppo;
   if (argc >= 2 && std::strcmp(argv[1], "auv") == 0) {
-    const std::vector<std::string> args(argv + 2, argv + argc);
-    if (args.size() == 1 && (args[0] == "--help" || args[0] == "-h")) {
-      std::printf("usage: %s", sim::AuvHilUsage().c_str());
-      return 0;
-    }
-    auto o = sim::ParseAuvHilArgs(args);
-    if (!o.ok()) {
-      std::fprintf(stderr, "pbppo-hil auv: %s\nusage: %s", o.error().message.c_str(), sim::AuvHilUsage().c_str());
-      return 2;
+    CLI::App app{"pbppo-hil auv: the AUV navigation task over DDS, the vehicle side of the controller's link"};
+    sim::AuvHilOptions o;
+    AddAuvOptions(app, o);
+    try {
+      app.parse(argc - 1, argv + 1);
+    } catch (const CLI::ParseError& e) {
+      return app.exit(e) == 0 ? 0 : 2;
     }
     signal(SIGINT, OnSignal);
     signal(SIGTERM, OnSignal);
-    return sim::RunAuvHil(*o, g_stop);
+    return sim::RunAuvHil(o, g_stop);
   }
   if (argc < 2 || std::strcmp(argv[1], "quadruped") != 0)
     return Usage("the first argument must be 'auv' or 'quadruped'");

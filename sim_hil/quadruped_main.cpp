@@ -12,6 +12,7 @@
 
 #include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
+#include "runtime/core/cli_checks.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/rt/rt_setup.hpp"
@@ -229,7 +230,8 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
   app.add_flag("--lockstep", o.lockstep, "Each tick waits for the controller's frames");
   app.add_option("--duration", o.duration_s, "Stop after this much simulated time (s)")->check(CLI::Range(0.0, 1e7));
-  app.add_option("--seed", o.seed, "Seed of the emulated drivers' frame drops");
+  app.add_option("--seed", o.seed, "Seed of the emulated drivers' frame drops")
+      ->check(cli_checks::NonNegativeInteger());
   app.add_flag("--in-process", o.in_process, "Run the controller in this process too (lock-step, no SocketCAN)");
   app.add_option("--policy", o.policy, "--in-process: the policy blob");
   app.add_option("--commands", o.commands, "--in-process: the velocity command schedule");

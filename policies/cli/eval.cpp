@@ -15,6 +15,7 @@
 #include "policies/envs/env.hpp"
 #include "policies/envs/walk_eval.hpp"
 #include "report/plots.hpp"
+#include "runtime/core/cli_checks.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "sim_hil/scenarios/auv_sonar.hpp"
@@ -39,7 +40,7 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
                "models/quadruped/schedules/demo.yaml): per-phase tracking, as pbppo-hil quadruped prints it");
   s.add_option("--settle-s", o.settle_s, "--schedule: tracking is judged this long after each phase starts")
       ->check(CLI::Range(0.0, 100.0));
-  s.add_option("--seed", o.seed, "Seed for the initial states");
+  s.add_option("--seed", o.seed, "Seed for the initial states")->check(cli_checks::NonNegativeInteger());
   s.add_option("--models", o.env.models_dir, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
   s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");

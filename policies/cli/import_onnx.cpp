@@ -6,6 +6,7 @@
 
 #include "policies/onnx/onnx_import.hpp"
 #include "policies/trainer/exporter.hpp"
+#include "runtime/core/cli_checks.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/signature.hpp"
 #include "runtime/robot/robot_model.hpp"
@@ -19,7 +20,7 @@ CLI::App* AddImportOnnx(CLI::App& app, ImportOnnxOptions& o) {
   c->add_option("--robot", o.robot, "The robot file (models/<robot>/robot.yaml): its IO layout")->required();
   c->add_option("--map", o.map, "Mapping file: the model's input and output elements in layout names")->required();
   c->add_option("--out", o.out, "Output blob path (golden vectors go beside it)")->required();
-  c->add_option("--seed", o.seed, "Seed of the golden-vector observations");
+  c->add_option("--seed", o.seed, "Seed of the golden-vector observations")->check(cli_checks::NonNegativeInteger());
   return c;
 }
 

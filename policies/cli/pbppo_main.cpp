@@ -9,6 +9,7 @@
 #include "policies/cli/sign.hpp"
 #include "policies/cli/sweep.hpp"
 #include "policies/cli/train.hpp"
+#include "runtime/core/cli_checks.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"pbppo: train Pb-PPO policies and work with frozen policy blobs"};
@@ -28,7 +29,7 @@ int main(int argc, char** argv) {
   synth->add_option("--widths", synth_opts.widths, "Layer widths, input first, e.g. 48-512-256-128-12");
   synth->add_option("--activation", synth_opts.activation,
                     "Hidden activation: identity, tanh, elu, relu, leaky_relu (alpha 0.01)");
-  synth->add_option("--seed", synth_opts.seed, "Seed for the weights");
+  synth->add_option("--seed", synth_opts.seed, "Seed for the weights")->check(pbppo::cli_checks::NonNegativeInteger());
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "policies/trainer/trainer.hpp"
+#include "runtime/core/cli_checks.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -173,7 +174,7 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
        "Training environment steps (e.g. 2e5)")
       ->default_str("2e5");
   o.total_steps = 200000;
-  s.add_option("--seed", o.seed, "Seed");
+  s.add_option("--seed", o.seed, "Seed")->check(cli_checks::NonNegativeInteger());
   s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
   s.add_option("--threads", o.threads,
                "Worker threads: the environments' steps and the update (see --chunked-minibatch)");

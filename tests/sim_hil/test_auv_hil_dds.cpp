@@ -193,10 +193,13 @@ TEST_CASE("auv hil: bad flags are refused naming the flag and the value") {
     std::string expect;
   };
   const std::vector<Case> cases = {
-      {{"--layout", "twisty", "--seed", "1"}, "--layout 'twisty'"},
-      {{"--layout", "easy", "--seed", "-4"}, "--seed '-4'"},
-      {{"--layout", "easy", "--seed", "1", "--domain", "300"}, "--domain '300'"},
-      {{"--layout", "easy", "--seed", "1", "--max-time", "abc"}, "--max-time 'abc'"},
+      {{"--layout", "twisty", "--seed", "1"}, "--layout: twisty"},
+      {{"--layout", "easy", "--seed", "-4"}, "--seed: '-4'"},
+      {{"--layout", "easy", "--seed", "1", "--domain", "300"}, "--domain: Value 300"},
+      {{"--layout", "easy", "--seed", "1", "--max-time", "abc"}, "--max-time: 'abc'"},
+      {{"--layout", "easy", "--seed", "1", "--fault", "nan@x"}, "--fault: 'nan@x'"},
+      {{"--layout", "easy", "--seed", "1", "--dds-naming", "ros3"}, "--dds-naming: 'ros3'"},
+      {{"--layout", "easy"}, "--seed is required"},
       {{"--layout", "easy", "--seed", "1", "--frobnicate", "2"}, "--frobnicate"},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
