@@ -10,6 +10,7 @@
 
 #include "policies/envs/mjcf.hpp"
 #include "runtime/robot/can_map.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "runtime/transport/can/imu_codec.hpp"
 #include "runtime/transport/can/mit_codec.hpp"
 #include "runtime/transport/can/quantize.hpp"
@@ -76,24 +77,38 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   if (!(options.blocks_fraction >= 0 && options.blocks_fraction <= 1))
     return MakeError(ErrorCode::kInvalidValue,
                      "blocks fraction: " + std::to_string(options.blocks_fraction) + " is not in [0, 1]");
+  // The robot as the controller and the HIL read it (robot.yaml: the URDF description, the IO
+  // layout, the CAN map, the policy's PD gains), and the training task it names (walk.yaml).
   const std::string dir = (options.models_dir.empty() ? DefaultModelsDir() : options.models_dir) + "/quadruped/";
-  auto robot = robot::LoadRobotDescription(dir + "quadruped.yaml");
-  if (!robot) return std::move(robot).error();
-  sh->robot = std::move(*robot);
-  auto layout = robot::LoadIoLayout(dir + "io_layout.yaml");
-  if (!layout) return std::move(layout).error();
-  sh->layout = std::move(*layout);
-  auto params = LoadQuadrupedWalkParams(dir + "walk.yaml");
+  auto robot_model = robot::LoadRobotModel(dir + "robot.yaml");
+  if (!robot_model) return std::move(robot_model).error();
+  if (!robot_model->body || !robot_model->io || !robot_model->can || robot_model->motors.empty())
+    return MakeError(ErrorCode::kMismatch, robot_model->path +
+                                               ": quadruped-walk needs files.description, files.io_layout, "
+                                               "files.can_map and the motors' policy_gains");
+  sh->robot = std::move(*robot_model->body);
+  sh->layout = std::move(*robot_model->io);
+  auto task = robot_model->Document("walk_task");
+  if (!task) return std::move(task).error();
+  auto params = ParseQuadrupedWalkParams((*task)->yaml, (*task)->path);
   if (!params) return std::move(params).error();
   sh->params = *params;
+  const robot::MotorSpec& gains = robot_model->motors.front();
+  for (const auto& mo : robot_model->motors)
+    if (mo.policy_kp != gains.policy_kp || mo.policy_kd != gains.policy_kd || mo.policy_kp < 0 || mo.policy_kd < 0)
+      return MakeError(ErrorCode::kMismatch, robot_model->path +
+                                                 ": motors.policy_gains must give every joint the same "
+                                                 "non-negative kp and kd (joint '" +
+                                                 mo.joint + "')");
+  sh->params.kp_nm_rad = gains.policy_kp;
+  sh->params.kd_nm_s_rad = gains.policy_kd;
   if (auto st = ApplyCommandSpec(options.commands, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
   if (options.resample_s < 0 || options.resample_s > 3600)
     return MakeError(ErrorCode::kInvalidValue,
                      "command resampling: " + std::to_string(options.resample_s) + " s is not in [0, 3600]");
   if (options.resample_s > 0) sh->params.resample_s = options.resample_s;
-  auto map = robot::LoadCanMap(dir + "can_map.yaml");
-  if (!map) return std::move(map).error();
+  const robot::CanMap* map = &*robot_model->can;
 
   const robot::RobotDescription& r = sh->robot;
   const robot::IoLayout& l = sh->layout;

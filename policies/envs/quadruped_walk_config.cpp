@@ -11,21 +11,19 @@ int QuadrupedWalkParams::episode_steps() const noexcept {
   return static_cast<int>(std::lround(episode_s / policy_dt_s()));
 }
 
-Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path) {
-  auto root = robot::LoadYamlFile(path);
-  if (!root) return std::move(root).error();
+Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, const std::string& path) {
+  const YAML::Node* root = &node;
   const robot::YamlFields f(path);
   QuadrupedWalkParams p;
   if (auto st =
-          f.Keys(*root, "",
-                 {"simulation", "control", "commands", "rewards", "termination", "noise", "randomization", "terrain"});
+          f.Keys(*root, "", {"simulation", "commands", "rewards", "termination", "noise", "randomization", "terrain"});
       !st)
     return st.error();
-  YAML::Node sim, ctl, cmd, rew, sc, term, noise, rnd, ter;
-  for (auto [key, node] : {std::pair{"simulation", &sim}, std::pair{"control", &ctl}, std::pair{"commands", &cmd},
-                           std::pair{"rewards", &rew}, std::pair{"termination", &term}, std::pair{"noise", &noise},
-                           std::pair{"randomization", &rnd}, std::pair{"terrain", &ter}})
-    if (auto st = f.Map(*root, key, "", node); !st) return st.error();
+  YAML::Node sim, cmd, rew, sc, term, noise, rnd, ter;
+  for (auto [key, n] : {std::pair{"simulation", &sim}, std::pair{"commands", &cmd}, std::pair{"rewards", &rew},
+                        std::pair{"termination", &term}, std::pair{"noise", &noise}, std::pair{"randomization", &rnd},
+                        std::pair{"terrain", &ter}})
+    if (auto st = f.Map(*root, key, "", n); !st) return st.error();
   if (auto st = f.Map(rew, "scales", "rewards", &sc); !st) return st.error();
   long decimation = 0, blocks = 0, pool = 0;
   double heading_command = 1, only_positive = 1, base_contact = 1;
@@ -49,9 +47,6 @@ Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path) {
            f.Number(sim, "init_base_height_m", "simulation", 0.05, 5, &p.init_base_height_m),
            f.Range(sim, "init_joint_scale", "simulation", 0, 3, &p.init_joint_scale),
            f.Number(sim, "init_base_velocity", "simulation", 0, 10, &p.init_base_velocity),
-           f.Keys(ctl, "control", {"kp_nm_rad", "kd_nm_s_rad"}),
-           f.Number(ctl, "kp_nm_rad", "control", 0, 1000, &p.kp_nm_rad),
-           f.Number(ctl, "kd_nm_s_rad", "control", 0, 100, &p.kd_nm_s_rad),
            f.Keys(cmd, "commands",
                   {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_command", "heading_gain",
                    "zero_below_mps"}),

@@ -7,6 +7,8 @@
 #include <array>
 #include <string>
 
+#include <yaml-cpp/yaml.h>
+
 #include "runtime/core/result.hpp"
 
 namespace pbppo::envs {
@@ -26,7 +28,7 @@ struct QuadrupedWalkParams {
   double init_base_height_m = 0.48;
   Range init_joint_scale{0.5, 1.5};
   double init_base_velocity = 0.5;
-  // control
+  // control: the joint PD, robot.yaml's motors.policy_gains (the controller's), not walk.yaml's
   double kp_nm_rad = 20.0, kd_nm_s_rad = 0.5;
   // commands
   double resample_s = 10.0;
@@ -62,7 +64,8 @@ struct QuadrupedWalkParams {
   int episode_steps() const noexcept;
 };
 
-Result<QuadrupedWalkParams> LoadQuadrupedWalkParams(const std::string& path);
+// Reads walk.yaml (every section but the control gains), parsed as `root`; errors name `path`.
+Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& root, const std::string& path);
 
 // The command ranges of a --commands spec "VX_MAX:VY_MAX:YAW_RATE_MAX" (each range [-max, max]);
 // an empty spec keeps walk.yaml's. Errors name the part of the spec.

@@ -298,13 +298,3 @@ TEST_CASE("schedule: bad files are refused naming the phase, the field and the v
   bad("stream: velocity_command\nphases: [{name: a, duration_s: -1}]\n", "duration_s");
   bad("stream: velocity_command\nphases: [{name: a, duration_s: 1, command_vx: .nan}]\n", "command_vx");
 }
-
-TEST_CASE("robot model: the walking gains equal the training task's (walk.yaml control)") {
-  const robot::RobotModel& m = test::QuadrupedRobot();
-  auto walk = robot::LoadYamlFile(test::SourcePath("models/quadruped/walk.yaml"));
-  REQUIRE(walk.ok());
-  for (const auto& mo : m.motors) {
-    CHECK(mo.policy_kp == (*walk)["control"]["kp_nm_rad"].as<double>());
-    CHECK(mo.policy_kd == (*walk)["control"]["kd_nm_s_rad"].as<double>());
-  }
-}

@@ -13,6 +13,7 @@
 
 #include "policies/envs/mjcf.hpp"
 #include "policies/envs/quadruped_walk.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "runtime/transport/can/mit_codec.hpp"
 #include "runtime/transport/can/quantize.hpp"
 #include "tests/support/test_paths.hpp"
@@ -50,6 +51,7 @@ std::string ModelsWith(const std::string& name, const std::string& file, const s
   std::filesystem::create_directories(dir + "/quadruped");
   for (const auto& f : std::filesystem::directory_iterator(test::SourcePath("models/quadruped")))
     if (f.is_regular_file()) std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
+  std::filesystem::copy_file(test::SourcePath("models/dds_profile.xml"), dir + "/dds_profile.xml");  // robot.yaml's
   std::string text = Read(dir + "/quadruped/" + file);
   for (std::size_t k = 0; k + 1 < edits.size(); k += 2) {
     const auto at = text.find(edits[k]);
@@ -72,6 +74,25 @@ std::string ErrorOf(const QuadrupedWalkOptions& o) {
 }
 
 }  // namespace
+
+TEST_CASE("quadruped-walk: trains with the controller's robot - robot.yaml's gains, layout and description") {
+  auto model = robot::LoadRobotModel(test::SourcePath("models/quadruped/robot.yaml"));
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  QuadrupedWalkOptions o;
+  o.models_dir = test::SourcePath("models");
+  auto env = QuadrupedWalk::Make(o);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  for (const auto& mo : model->motors) {
+    CHECK(mo.policy_kp == (*env)->params().kp_nm_rad);
+    CHECK(mo.policy_kd == (*env)->params().kd_nm_s_rad);
+  }
+  CHECK((*env)->layout().Hash() == model->io->Hash());
+  // Gains edited in robot.yaml reach training: one place for them.
+  o.models_dir = ModelsWith("walk_gains", "robot.yaml", "kp_nm_rad: 20.0", "kp_nm_rad: 25.0");
+  auto edited = QuadrupedWalk::Make(o);
+  REQUIRE_MESSAGE(edited.ok(), edited.error().message);
+  CHECK((*edited)->params().kp_nm_rad == 25.0);
+}
 
 TEST_CASE("quadruped-walk: the generated MJCF is the URDF - free base, 12 hinges with their limits, the mass") {
   auto robot = robot::LoadRobotDescription(test::SourcePath("models/quadruped/quadruped.yaml"));
@@ -244,7 +265,7 @@ TEST_CASE("quadruped-walk: bad inputs are refused at start naming the value") {
   CHECK(ErrorOf(o) == "--commands: '1:1' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
   o = Nominal();
   o.models_dir = test::ScratchDir("walk_no_robot");
-  CHECK(ErrorOf(o).find("quadruped/quadruped.yaml: cannot open") != std::string::npos);
+  CHECK(ErrorOf(o).find("quadruped/robot.yaml: cannot open") != std::string::npos);
   // A URDF whose joints are not the robot's joint order.
   o.models_dir = ModelsWith("walk_urdf", "quadruped.urdf", "<joint name=\"LF_KFE\"", "<joint name=\"LF_KNEE\"");
   CHECK(ErrorOf(o) == "quadruped.yaml: joints[2]: 'LF_KFE' is not a joint of quadruped.urdf");
