@@ -285,10 +285,12 @@ Result<Plan> MakePlan(const SweepOptions& o) {
 // ---------------------------------------------------------------------------------------------
 // Files.
 
+// The project's one file reader (policy::ReadFileBytes), as text: sweep.json, result.json,
+// eval.json and the runs' logs stay far below the limit.
 Result<std::string> ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return MakeError(ErrorCode::kIo, path + ": cannot open");
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  auto bytes = policy::ReadFileBytes(path, std::uint64_t{64} << 20);
+  if (!bytes) return std::move(bytes).error();
+  return std::string(bytes->begin(), bytes->end());
 }
 
 Status WriteText(const std::string& path, const std::string& text) {
@@ -488,9 +490,9 @@ std::string Duration(double s) {
   return buf;
 }
 
-// Runs `todo` (indices into the plan) `o.jobs` at a time; a line on stderr per finished run.
+// Runs the `assigned` runs (indices into the plan) `o.jobs` at a time; a line on stderr per finished run.
 // `tag` starts each line ("" or "rank R: ").
-std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::vector<std::size_t>& todo,
+std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::vector<std::size_t>& assigned,
                              const std::string& tag) {
   std::mutex mu;
   std::size_t next = 0, done = 0;
@@ -504,11 +506,11 @@ std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::ve
     const std::string name = (p.axes.empty() ? "" : CellName(p, r.cell) + " ") + "seed=" + std::to_string(r.seed);
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const std::string eta =
-        done < todo.size() && !g_stop.load()
-            ? ", ETA " + Duration(elapsed / static_cast<double>(done) * static_cast<double>(todo.size() - done))
+        done < assigned.size() && !g_stop.load()
+            ? ", ETA " + Duration(elapsed / static_cast<double>(done) * static_cast<double>(assigned.size() - done))
             : "";
     char head[64];
-    std::snprintf(head, sizeof head, "[%zu/%zu] ", done, todo.size());
+    std::snprintf(head, sizeof head, "[%zu/%zu] ", done, assigned.size());
     if (out.rc == 0) {
       auto res = ReadResult(out.result, p, r, r.rel + "/result.json");
       std::string line = name + ": ";
@@ -527,14 +529,14 @@ std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::ve
       Say(tag + head + "FAILED " + name + " (" + o.out + "/" + r.rel + "): " + out.result);
     }
   };
-  const int jobs = std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(todo.size(), 1)));
+  const int jobs = std::min<int>(o.jobs, static_cast<int>(std::max<std::size_t>(assigned.size(), 1)));
   auto worker = [&](int slot) {
     for (;;) {
       std::size_t i = 0;
       {
         std::lock_guard lock(mu);
-        if (next >= todo.size() || g_stop.load()) return;
-        i = todo[next++];
+        if (next >= assigned.size() || g_stop.load()) return;
+        i = assigned[next++];
       }
       report(RunOne(o, p, i, slot));
     }
