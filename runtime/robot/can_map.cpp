@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 
 #include "runtime/robot/text_file.hpp"
 #include "runtime/robot/yaml_fields.hpp"
@@ -115,17 +116,25 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
     *out = it->second;
     return {};
   };
+  // An entry's name (`key`, unique among its kind: `seen`) and its bus; `named` ("where 'name'")
+  // prefixes the entry's later errors.
+  auto name_and_bus = [&](const YAML::Node& n, const char* key, const std::string& where, const char* kind,
+                          std::set<std::string>* seen, std::string* name, std::string* named,
+                          std::uint32_t* bus) -> Status {
+    PBPPO_TRY(p.Text(n, key, where, name, Rule::kToken));
+    *named = where + " '" + *name + "'";
+    if (!seen->insert(*name).second)
+      return p.Fail(*named + "." + key, std::string("duplicate ") + kind + " '" + *name + "'");
+    return lookup_bus(n, *named, bus);
+  };
 
-  std::map<std::string, int> joints;
+  std::set<std::string> joints;
   for (std::size_t i = 0; i < motors.size(); ++i) {
     const std::string where = "motors[" + std::to_string(i) + "]";
     PBPPO_TRY(p.Keys(motors[i], where, {"joint", "bus", "id", "reply_id", "actuator"}));
     CanMotor mo;
-    PBPPO_TRY(p.Text(motors[i], "joint", where, &mo.joint, Rule::kToken));
-    const std::string named = where + " '" + mo.joint + "'";
-    if (joints.count(mo.joint)) return p.Fail(named + ".joint", "duplicate joint '" + mo.joint + "'");
-    joints[mo.joint] = 1;
-    PBPPO_TRY(lookup_bus(motors[i], named, &mo.bus));
+    std::string named;
+    PBPPO_TRY(name_and_bus(motors[i], "joint", where, "joint", &joints, &mo.joint, &named, &mo.bus));
     // The reply carries the motor id in one byte, and 0 is the broadcast/master id of most drivers.
     PBPPO_TRY(p.Id(motors[i], "id", named, 1, 0xFF, &mo.id));
     PBPPO_TRY(p.Id(motors[i], "reply_id", named, 0, kCanMaxStandardId, &mo.reply_id));
@@ -140,16 +149,13 @@ Result<CanMap> ParseCanMap(const std::string& yaml_text, const std::string& orig
   }
   if (m.motors.empty()) return p.Fail("motors", "is empty");
 
-  std::map<std::string, int> imu_names;
+  std::set<std::string> imu_names;
   for (std::size_t i = 0; i < imus.size(); ++i) {
     const std::string where = "imus[" + std::to_string(i) + "]";
     PBPPO_TRY(p.Keys(imus[i], where, {"name", "bus", "format", "id"}));
     CanImu u;
-    PBPPO_TRY(p.Text(imus[i], "name", where, &u.name, Rule::kToken));
-    const std::string named = where + " '" + u.name + "'";
-    if (imu_names.count(u.name)) return p.Fail(named + ".name", "duplicate IMU '" + u.name + "'");
-    imu_names[u.name] = 1;
-    PBPPO_TRY(lookup_bus(imus[i], named, &u.bus));
+    std::string named;
+    PBPPO_TRY(name_and_bus(imus[i], "name", where, "IMU", &imu_names, &u.name, &named, &u.bus));
     std::string fmt;
     PBPPO_TRY(p.Text(imus[i], "format", named, &fmt, Rule::kToken));
     if (fmt == "classic") {

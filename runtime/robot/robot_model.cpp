@@ -342,28 +342,29 @@ std::string ExpandIndex(const std::string& pattern, std::uint32_t i) {
   return pattern.substr(0, at) + std::to_string(i) + pattern.substr(at + 3);
 }
 
+namespace {
+
+// The index of the entry named `n` in `entries`; -1 when there is none.
+template <typename Entry>
+int IndexByName(const std::vector<Entry>& entries, std::string_view n) noexcept {
+  for (std::size_t i = 0; i < entries.size(); ++i)
+    if (entries[i].name == n) return static_cast<int>(i);
+  return -1;
+}
+
+}  // namespace
+
 int RobotModel::FieldIndex(std::string_view n) const noexcept {
-  for (std::size_t i = 0; i < fields.size(); ++i)
-    if (fields[i].name == n) return static_cast<int>(i);
-  return -1;
+  return IndexByName(fields, n);
 }
-
 int RobotModel::CommandIndex(std::string_view n) const noexcept {
-  for (std::size_t i = 0; i < commands.size(); ++i)
-    if (commands[i].name == n) return static_cast<int>(i);
-  return -1;
+  return IndexByName(commands, n);
 }
-
 int RobotModel::StreamIndex(std::string_view n) const noexcept {
-  for (std::size_t i = 0; i < streams.size(); ++i)
-    if (streams[i].name == n) return static_cast<int>(i);
-  return -1;
+  return IndexByName(streams, n);
 }
-
 int RobotModel::TransportIndex(std::string_view n) const noexcept {
-  for (std::size_t i = 0; i < transports.size(); ++i)
-    if (transports[i].name == n) return static_cast<int>(i);
-  return -1;
+  return IndexByName(transports, n);
 }
 
 Result<const RobotDocument*> RobotModel::Document(const std::string& role) const {

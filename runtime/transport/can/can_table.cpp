@@ -87,60 +87,48 @@ CanRxData MakeCanRxData(const CanCodecTable& table) {
 DispatchResult DispatchFrame(const CanCodecTable& t, std::uint32_t bus, const CanFrame& f, CanRxData& d,
                              BusStats& stats) noexcept {
   const CodecEntry e = t.Lookup(bus, f);
+  auto wrong_length = [&stats] {
+    ++stats.wrong_lengths;
+    return DispatchResult::kWrongLength;
+  };
+  // A frame taken: counted for its device (`count`, null: none) and the bus.
+  auto decoded = [&stats](std::uint64_t* count) {
+    if (count != nullptr) ++*count;
+    ++stats.decoded;
+    return DispatchResult::kDecoded;
+  };
   switch (e.kind) {
-    case CodecKind::kNone: ++stats.unknown_ids; return DispatchResult::kUnknownId;
+    case CodecKind::kNone: break;
     case CodecKind::kMitReply: {
       MitReply r;
-      if (!DecodeMitReply(t.range[e.index], f.data, f.len, &r)) {
-        ++stats.wrong_lengths;
-        return DispatchResult::kWrongLength;
-      }
+      if (!DecodeMitReply(t.range[e.index], f.data, f.len, &r)) return wrong_length();
       if (r.motor_id != t.motor_id[e.index]) {
         ++stats.wrong_motor_id;
         return DispatchResult::kWrongMotorId;
       }
       d.reply[e.index] = r;
-      ++d.reply_count[e.index];
-      ++stats.decoded;
-      return DispatchResult::kDecoded;
+      return decoded(&d.reply_count[e.index]);
     }
     case CodecKind::kMitCommand: {
-      if (f.len != kMitCommandLen) {
-        ++stats.wrong_lengths;
-        return DispatchResult::kWrongLength;
-      }
+      if (f.len != kMitCommandLen) return wrong_length();
       MitSpecial special{};
-      if (DecodeMitSpecial(f.data, f.len, &special)) {
-        d.last_special[e.index] = static_cast<std::uint8_t>(special);
-        ++d.special_count[e.index];
-      } else {
+      if (!DecodeMitSpecial(f.data, f.len, &special)) {
         DecodeMitCommand(t.range[e.index], f.data, f.len, &d.command[e.index]);
-        ++d.command_count[e.index];
+        return decoded(&d.command_count[e.index]);
       }
-      ++stats.decoded;
-      return DispatchResult::kDecoded;
+      d.last_special[e.index] = static_cast<std::uint8_t>(special);
+      return decoded(&d.special_count[e.index]);
     }
-    case CodecKind::kImuFd: {
-      if (!DecodeImuFd(f.data, f.len, &d.imu[e.index])) {
-        ++stats.wrong_lengths;
-        return DispatchResult::kWrongLength;
-      }
-      ++d.imu_count[e.index];
-      ++stats.decoded;
-      return DispatchResult::kDecoded;
-    }
-    case CodecKind::kImuClassic: {
-      if (f.len != kImuClassicLen) {
-        ++stats.wrong_lengths;
-        return DispatchResult::kWrongLength;
-      }
-      ++stats.decoded;
-      if (FeedImuClassic(d.imu_assembler[e.index], e.sub, f.data, f.len, &d.imu[e.index])) {
-        ++d.imu_count[e.index];
-        return DispatchResult::kDecoded;
-      }
+    case CodecKind::kImuFd:
+      if (!DecodeImuFd(f.data, f.len, &d.imu[e.index])) return wrong_length();
+      return decoded(&d.imu_count[e.index]);
+    case CodecKind::kImuClassic:
+      if (f.len != kImuClassicLen) return wrong_length();
+      // Each of the three frames is taken; the third completes a sample.
+      if (FeedImuClassic(d.imu_assembler[e.index], e.sub, f.data, f.len, &d.imu[e.index]))
+        return decoded(&d.imu_count[e.index]);
+      decoded(nullptr);
       return DispatchResult::kPartial;
-    }
   }
   ++stats.unknown_ids;
   return DispatchResult::kUnknownId;

@@ -13,31 +13,34 @@ std::uint16_t Code(double x, double lo, double hi, unsigned bits, std::uint16_t 
   return static_cast<std::uint16_t>(q.code);
 }
 
-std::uint8_t Byte(unsigned v) noexcept {
-  return static_cast<std::uint8_t>(v & 0xFFu);
+// The frames hold their fields big-endian, most significant first, packed without gaps: a frame
+// is one word of 8 x `bytes` bits, a field `bits` wide ends `shift` bits above the word's end.
+constexpr std::uint64_t Field(unsigned v, unsigned bits, unsigned shift) noexcept {
+  return (std::uint64_t{v} & ((std::uint64_t{1} << bits) - 1u)) << shift;
+}
+constexpr std::uint16_t FieldOf(std::uint64_t word, unsigned bits, unsigned shift) noexcept {
+  return static_cast<std::uint16_t>((word >> shift) & ((std::uint64_t{1} << bits) - 1u));
+}
+void Store(std::uint64_t word, std::uint8_t* out, unsigned bytes) noexcept {
+  for (unsigned i = 0; i < bytes; ++i) out[i] = static_cast<std::uint8_t>(word >> (8u * (bytes - 1u - i)));
+}
+std::uint64_t Load(const std::uint8_t* in, unsigned bytes) noexcept {
+  std::uint64_t word = 0;
+  for (unsigned i = 0; i < bytes; ++i) word = (word << 8u) | in[i];
+  return word;
 }
 
 }  // namespace
 
+// Command: p 16 | v 12 | kp 12 | kd 12 | t 12.
 void PackMitCommand(const MitCommandCodes& c, std::uint8_t out[8]) noexcept {
-  out[0] = Byte(c.p >> 8u);
-  out[1] = Byte(c.p);
-  out[2] = Byte(c.v >> 4u);
-  out[3] = Byte(((c.v & 0xFu) << 4u) | ((c.kp >> 8u) & 0xFu));
-  out[4] = Byte(c.kp);
-  out[5] = Byte(c.kd >> 4u);
-  out[6] = Byte(((c.kd & 0xFu) << 4u) | ((c.t >> 8u) & 0xFu));
-  out[7] = Byte(c.t);
+  Store(Field(c.p, 16, 48) | Field(c.v, 12, 36) | Field(c.kp, 12, 24) | Field(c.kd, 12, 12) | Field(c.t, 12, 0), out,
+        8);
 }
 
 MitCommandCodes UnpackMitCommand(const std::uint8_t in[8]) noexcept {
-  MitCommandCodes c{};
-  c.p = static_cast<std::uint16_t>((unsigned{in[0]} << 8u) | in[1]);
-  c.v = static_cast<std::uint16_t>((unsigned{in[2]} << 4u) | (unsigned{in[3]} >> 4u));
-  c.kp = static_cast<std::uint16_t>(((unsigned{in[3]} & 0xFu) << 8u) | in[4]);
-  c.kd = static_cast<std::uint16_t>((unsigned{in[5]} << 4u) | (unsigned{in[6]} >> 4u));
-  c.t = static_cast<std::uint16_t>(((unsigned{in[6]} & 0xFu) << 8u) | in[7]);
-  return c;
+  const std::uint64_t w = Load(in, 8);
+  return {FieldOf(w, 16, 48), FieldOf(w, 12, 36), FieldOf(w, 12, 24), FieldOf(w, 12, 12), FieldOf(w, 12, 0)};
 }
 
 std::uint16_t EncodeMitCommand(const MitRange& r, const MitCommand& cmd, std::uint8_t out[8]) noexcept {
@@ -71,22 +74,14 @@ bool DecodeMitCommand(const MitRange& r, const std::uint8_t* data, std::uint8_t 
   return true;
 }
 
+// Reply: motor id 8 | p 16 | v 12 | t 12.
 void PackMitReply(const MitReplyCodes& c, std::uint8_t out[6]) noexcept {
-  out[0] = c.motor_id;
-  out[1] = Byte(c.p >> 8u);
-  out[2] = Byte(c.p);
-  out[3] = Byte(c.v >> 4u);
-  out[4] = Byte(((c.v & 0xFu) << 4u) | ((c.t >> 8u) & 0xFu));
-  out[5] = Byte(c.t);
+  Store(Field(c.motor_id, 8, 40) | Field(c.p, 16, 24) | Field(c.v, 12, 12) | Field(c.t, 12, 0), out, 6);
 }
 
 MitReplyCodes UnpackMitReply(const std::uint8_t in[6]) noexcept {
-  MitReplyCodes c{};
-  c.motor_id = in[0];
-  c.p = static_cast<std::uint16_t>((unsigned{in[1]} << 8u) | in[2]);
-  c.v = static_cast<std::uint16_t>((unsigned{in[3]} << 4u) | (unsigned{in[4]} >> 4u));
-  c.t = static_cast<std::uint16_t>(((unsigned{in[4]} & 0xFu) << 8u) | in[5]);
-  return c;
+  const std::uint64_t w = Load(in, 6);
+  return {static_cast<std::uint8_t>(FieldOf(w, 8, 40)), FieldOf(w, 16, 24), FieldOf(w, 12, 12), FieldOf(w, 12, 0)};
 }
 
 std::uint16_t EncodeMitReply(const MitRange& r, const MitReply& reply, std::uint8_t out[6]) noexcept {

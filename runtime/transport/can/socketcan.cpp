@@ -337,26 +337,38 @@ void DescribeErrorFrame(std::uint32_t can_id, const std::uint8_t data[8], char* 
     const int w = std::snprintf(out + used, size - used, "%s%s", used == 0 ? "" : ", ", s);
     if (w > 0) used = std::min(size - 1, used + static_cast<std::size_t>(w));
   };
+  struct Bit {
+    std::uint32_t mask;
+    const char* text;  // null: the controller's problems, in data[1]
+  };
+  static constexpr Bit kClasses[] = {{CAN_ERR_TX_TIMEOUT, "tx timeout"},
+                                     {CAN_ERR_LOSTARB, "lost arbitration"},
+                                     {CAN_ERR_CRTL, nullptr},
+                                     {CAN_ERR_PROT, "protocol violation"},
+                                     {CAN_ERR_TRX, "transceiver"},
+                                     {CAN_ERR_ACK, "no ack"},
+                                     {CAN_ERR_BUSOFF, "bus-off"},
+                                     {CAN_ERR_BUSERROR, "bus error"},
+                                     {CAN_ERR_RESTARTED, "controller restarted"}};
+  static constexpr Bit kController[] = {{CAN_ERR_CRTL_RX_OVERFLOW, "controller: rx overflow"},
+                                        {CAN_ERR_CRTL_TX_OVERFLOW, "controller: tx overflow"},
+                                        {CAN_ERR_CRTL_RX_WARNING, "controller: rx error-warning"},
+                                        {CAN_ERR_CRTL_TX_WARNING, "controller: tx error-warning"},
+                                        {CAN_ERR_CRTL_RX_PASSIVE, "controller: rx error-passive"},
+                                        {CAN_ERR_CRTL_TX_PASSIVE, "controller: tx error-passive"},
+                                        {CAN_ERR_CRTL_ACTIVE, "controller: back to error-active"}};
   const std::uint32_t cls = can_id & CAN_ERR_MASK;
-  if ((cls & CAN_ERR_TX_TIMEOUT) != 0) add("tx timeout");
-  if ((cls & CAN_ERR_LOSTARB) != 0) add("lost arbitration");
-  if ((cls & CAN_ERR_CRTL) != 0) {
+  for (const Bit& b : kClasses) {
+    if ((cls & b.mask) == 0) continue;
+    if (b.text != nullptr) {
+      add(b.text);
+      continue;
+    }
     const std::uint8_t c = data[1];
-    if ((c & CAN_ERR_CRTL_RX_OVERFLOW) != 0) add("controller: rx overflow");
-    if ((c & CAN_ERR_CRTL_TX_OVERFLOW) != 0) add("controller: tx overflow");
-    if ((c & CAN_ERR_CRTL_RX_WARNING) != 0) add("controller: rx error-warning");
-    if ((c & CAN_ERR_CRTL_TX_WARNING) != 0) add("controller: tx error-warning");
-    if ((c & CAN_ERR_CRTL_RX_PASSIVE) != 0) add("controller: rx error-passive");
-    if ((c & CAN_ERR_CRTL_TX_PASSIVE) != 0) add("controller: tx error-passive");
-    if ((c & CAN_ERR_CRTL_ACTIVE) != 0) add("controller: back to error-active");
+    for (const Bit& cb : kController)
+      if ((c & cb.mask) != 0) add(cb.text);
     if (c == CAN_ERR_CRTL_UNSPEC) add("controller: unspecified problem");
   }
-  if ((cls & CAN_ERR_PROT) != 0) add("protocol violation");
-  if ((cls & CAN_ERR_TRX) != 0) add("transceiver");
-  if ((cls & CAN_ERR_ACK) != 0) add("no ack");
-  if ((cls & CAN_ERR_BUSOFF) != 0) add("bus-off");
-  if ((cls & CAN_ERR_BUSERROR) != 0) add("bus error");
-  if ((cls & CAN_ERR_RESTARTED) != 0) add("controller restarted");
   if (used == 0) add("error frame without class");
 }
 

@@ -16,37 +16,20 @@ namespace pbppo::dds {
   X(tick) X(mode) X(cause) X(deadline_misses) X(stale_samples) X(invalid_samples) X(limited_commands) \
   X(tick_median_us) X(tick_max_us)
 // clang-format on
-#define PBPPO_TO_WIRE(f) out->f(in.f);
-#define PBPPO_FROM_WIRE(f) out->f = in.f();
 
 void DdsType<robot::AuvSensorSample>::ToWire(const robot::AuvSensorSample& in, Wire* out) noexcept {
-  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_TO_WIRE)
+  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_DDS_TO_WIRE_FIELD)
   std::copy(in.sonar_m.begin(), in.sonar_m.end(), out->sonar_m().begin());
 }
 
 void DdsType<robot::AuvSensorSample>::FromWire(const Wire& in, robot::AuvSensorSample* out) noexcept {
-  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_FROM_WIRE)
+  PBPPO_AUV_SAMPLE_FIELDS(PBPPO_DDS_FROM_WIRE_FIELD)
   std::copy(in.sonar_m().begin(), in.sonar_m().end(), out->sonar_m.begin());
 }
 
-void DdsType<robot::AuvCommand>::ToWire(const robot::AuvCommand& in, Wire* out) noexcept {
-  PBPPO_AUV_COMMAND_FIELDS(PBPPO_TO_WIRE)
-}
+PBPPO_DDS_FIELD_CONVERSIONS(robot::AuvCommand, PBPPO_AUV_COMMAND_FIELDS)
+PBPPO_DDS_FIELD_CONVERSIONS(robot::AuvControllerStatus, PBPPO_AUV_STATUS_FIELDS)
 
-void DdsType<robot::AuvCommand>::FromWire(const Wire& in, robot::AuvCommand* out) noexcept {
-  PBPPO_AUV_COMMAND_FIELDS(PBPPO_FROM_WIRE)
-}
-
-void DdsType<robot::AuvControllerStatus>::ToWire(const robot::AuvControllerStatus& in, Wire* out) noexcept {
-  PBPPO_AUV_STATUS_FIELDS(PBPPO_TO_WIRE)
-}
-
-void DdsType<robot::AuvControllerStatus>::FromWire(const Wire& in, robot::AuvControllerStatus* out) noexcept {
-  PBPPO_AUV_STATUS_FIELDS(PBPPO_FROM_WIRE)
-}
-
-#undef PBPPO_FROM_WIRE
-#undef PBPPO_TO_WIRE
 #undef PBPPO_AUV_STATUS_FIELDS
 #undef PBPPO_AUV_COMMAND_FIELDS
 #undef PBPPO_AUV_SAMPLE_FIELDS

@@ -11,28 +11,8 @@
 
 namespace pbppo::dds {
 
-template <>
-struct DdsType<robot::AuvSensorSample> {
-  using Wire = pbppo_idl::auv::SensorState;
-  using PubSubType = pbppo_idl::auv::SensorStatePubSubType;
-  static void ToWire(const robot::AuvSensorSample& in, Wire* out) noexcept;
-  static void FromWire(const Wire& in, robot::AuvSensorSample* out) noexcept;
-};
-
-template <>
-struct DdsType<robot::AuvCommand> {
-  using Wire = pbppo_idl::auv::Command;
-  using PubSubType = pbppo_idl::auv::CommandPubSubType;
-  static void ToWire(const robot::AuvCommand& in, Wire* out) noexcept;
-  static void FromWire(const Wire& in, robot::AuvCommand* out) noexcept;
-};
-
-template <>
-struct DdsType<robot::AuvControllerStatus> {
-  using Wire = pbppo_idl::auv::ControllerStatus;
-  using PubSubType = pbppo_idl::auv::ControllerStatusPubSubType;
-  static void ToWire(const robot::AuvControllerStatus& in, Wire* out) noexcept;
-  static void FromWire(const Wire& in, robot::AuvControllerStatus* out) noexcept;
-};
+PBPPO_DDS_TYPE(robot::AuvSensorSample, pbppo_idl::auv::SensorState);
+PBPPO_DDS_TYPE(robot::AuvCommand, pbppo_idl::auv::Command);
+PBPPO_DDS_TYPE(robot::AuvControllerStatus, pbppo_idl::auv::ControllerStatus);
 
 }  // namespace pbppo::dds

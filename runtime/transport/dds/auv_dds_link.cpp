@@ -5,12 +5,9 @@
 
 namespace pbppo::dds {
 
-template class DdsReader<robot::AuvSensorSample>;
-template class DdsWriter<robot::AuvSensorSample>;
-template class DdsReader<robot::AuvCommand>;
-template class DdsWriter<robot::AuvCommand>;
-template class DdsReader<robot::AuvControllerStatus>;
-template class DdsWriter<robot::AuvControllerStatus>;
+PBPPO_DDS_INSTANTIATE(robot::AuvSensorSample);
+PBPPO_DDS_INSTANTIATE(robot::AuvCommand);
+PBPPO_DDS_INSTANTIATE(robot::AuvControllerStatus);
 
 namespace {
 
@@ -128,21 +125,16 @@ bool AuvDdsLink::WaitForCommand(AuvCommandInput* out, std::int64_t timeout_ns) {
 }
 
 std::uint64_t AuvDdsLink::ReadStatus(robot::AuvControllerStatus* out) noexcept {
-  if (!impl_->status_in) return 0;
-  DdsReceived<robot::AuvControllerStatus> r;
-  const std::uint64_t v = impl_->status_in->Read(&r);
-  if (v != 0) *out = r.value;
-  return v;
+  return impl_->status_in ? impl_->status_in->ReadValue(out) : 0;
 }
 
 bool AuvDdsLink::WaitForPeer(std::int64_t timeout_ns) {
-  const std::int64_t deadline = MonotonicNs() + timeout_ns;
-  for (;;) {
-    const AuvPeerView p = Peer();
-    if (p.matched_readers > 0 && p.matched_writers > 0) return true;
-    if (MonotonicNs() >= deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
+  return PollUntil(
+      [this] {
+        const AuvPeerView p = Peer();
+        return p.matched_readers > 0 && p.matched_writers > 0;
+      },
+      timeout_ns);
 }
 
 bool AuvDdsLink::Flush(std::int64_t timeout_ns) {

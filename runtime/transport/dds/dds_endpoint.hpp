@@ -121,6 +121,8 @@ class DdsReader {
   // kLatest, real-time safe: the newest message and its version (1, 2 ... in arrival order); 0
   // while none has arrived.
   std::uint64_t Read(DdsReceived<T>* out) noexcept;
+  // The same for the message alone: *out is left as it was while none has arrived.
+  std::uint64_t ReadValue(T* out) noexcept;
   std::uint64_t version() const noexcept;
   // kLatest, not for the tick: waits until a message newer than `after_version` arrived.
   bool WaitNewer(std::uint64_t after_version, std::int64_t timeout_ns);

@@ -1,14 +1,11 @@
 // The definitions of DdsReader<T> and DdsWriter<T> (dds_endpoint.hpp), with Fast DDS. Included
-// only by a robot's DDS binding (firmware/<robot>/), which specialises DdsType for each of its
-// message structs and instantiates the templates:
+// only by a robot's DDS binding (runtime/transport/dds/<robot>_dds_*), which declares how each of
+// its message structs travels (the type fastddsgen generates from the robot's IDL), defines the
+// conversions and instantiates the templates:
 //
-//   template <> struct dds::DdsType<auv::Command> {
-//     using Wire = pbppo_idl::auv::Command;             // fastddsgen's type from the robot's IDL
-//     using PubSubType = pbppo_idl::auv::CommandPubSubType;
-//     static void ToWire(const auv::Command& in, Wire* out) noexcept;
-//     static void FromWire(const Wire& in, auv::Command* out) noexcept;
-//   };
-//   template class dds::DdsWriter<auv::Command>;
+//   PBPPO_DDS_TYPE(robot::AuvCommand, pbppo_idl::auv::Command);              // the header
+//   PBPPO_DDS_FIELD_CONVERSIONS(robot::AuvCommand, PBPPO_AUV_COMMAND_FIELDS)  // a .cpp
+//   PBPPO_DDS_INSTANTIATE(robot::AuvCommand);                                // the link's .cpp
 #pragma once
 
 #include <atomic>
@@ -44,6 +41,33 @@ namespace fdds = eprosima::fastdds::dds;
 template <typename T>
 struct DdsType;
 
+// DdsType<Message> for a message carried as the IDL type `Idl` (and fastddsgen's IdlPubSubType).
+#define PBPPO_DDS_TYPE(Message, Idl)                             \
+  template <>                                                    \
+  struct DdsType<Message> {                                      \
+    using Wire = Idl;                                            \
+    using PubSubType = Idl##PubSubType;                          \
+    static void ToWire(const Message& in, Wire* out) noexcept;   \
+    static void FromWire(const Wire& in, Message* out) noexcept; \
+  }
+
+// The conversions of a message whose scalar fields are named alike in the struct and the IDL:
+// FIELDS(X) lists them as X(name) X(name) ...
+#define PBPPO_DDS_TO_WIRE_FIELD(f) out->f(in.f);
+#define PBPPO_DDS_FROM_WIRE_FIELD(f) out->f = in.f();
+#define PBPPO_DDS_FIELD_CONVERSIONS(Message, FIELDS)                       \
+  void DdsType<Message>::ToWire(const Message& in, Wire* out) noexcept {   \
+    FIELDS(PBPPO_DDS_TO_WIRE_FIELD)                                        \
+  }                                                                        \
+  void DdsType<Message>::FromWire(const Wire& in, Message* out) noexcept { \
+    FIELDS(PBPPO_DDS_FROM_WIRE_FIELD)                                      \
+  }
+
+// The reader and writer of a message, compiled once (in its link's .cpp).
+#define PBPPO_DDS_INSTANTIATE(Message) \
+  template class DdsReader<Message>;   \
+  template class DdsWriter<Message>
+
 struct DdsParticipant::Impl {
   int domain_id = 0;
   fdds::DomainParticipant* participant = nullptr;
@@ -68,6 +92,17 @@ Status TakeInto(Result<std::unique_ptr<T>> r, std::unique_ptr<T>* out) {
   if (!r) return std::move(r).error();
   *out = std::move(*r);
   return {};
+}
+
+// Polls `ready` every 5 ms: true once it holds, false when timeout_ns has passed first.
+template <typename Ready>
+bool PollUntil(Ready ready, std::int64_t timeout_ns) {
+  const std::int64_t deadline = MonotonicNs() + timeout_ns;
+  while (!ready()) {
+    if (MonotonicNs() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
 }
 
 // ---- DdsReader ---------------------------------------------------------------------------------
@@ -163,6 +198,14 @@ DdsReader<T>::~DdsReader() = default;
 template <typename T>
 std::uint64_t DdsReader<T>::Read(DdsReceived<T>* out) noexcept {
   return impl_->queue ? 0 : impl_->latest.Read(out);
+}
+
+template <typename T>
+std::uint64_t DdsReader<T>::ReadValue(T* out) noexcept {
+  DdsReceived<T> r;
+  const std::uint64_t v = Read(&r);
+  if (v != 0) *out = r.value;
+  return v;
 }
 
 template <typename T>

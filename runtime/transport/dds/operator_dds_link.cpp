@@ -6,10 +6,8 @@
 
 namespace pbppo::dds {
 
-template class DdsReader<robot::VelocityCommand>;
-template class DdsWriter<robot::VelocityCommand>;
-template class DdsReader<robot::QuadrupedStatus>;
-template class DdsWriter<robot::QuadrupedStatus>;
+PBPPO_DDS_INSTANTIATE(robot::VelocityCommand);
+PBPPO_DDS_INSTANTIATE(robot::QuadrupedStatus);
 
 namespace {
 
@@ -83,11 +81,7 @@ Status OperatorDdsLink::PublishCommand(const robot::VelocityCommand& command) {
 }
 
 std::uint64_t OperatorDdsLink::ReadStatus(robot::QuadrupedStatus* out) noexcept {
-  if (!impl_->status_in) return 0;
-  DdsReceived<robot::QuadrupedStatus> r;
-  const std::uint64_t v = impl_->status_in->Read(&r);
-  if (v != 0) *out = r.value;
-  return v;
+  return impl_->status_in ? impl_->status_in->ReadValue(out) : 0;
 }
 
 bool OperatorDdsLink::WaitForStatus(std::uint64_t after_version, std::int64_t timeout_ns) {
@@ -103,12 +97,7 @@ std::int32_t OperatorDdsLink::matched_writers() const noexcept {
 }
 
 bool OperatorDdsLink::WaitForPeer(std::int64_t timeout_ns) {
-  const std::int64_t deadline = MonotonicNs() + timeout_ns;
-  while (matched_readers() == 0 || matched_writers() == 0) {
-    if (MonotonicNs() >= deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
+  return PollUntil([this] { return matched_readers() > 0 && matched_writers() > 0; }, timeout_ns);
 }
 
 bool OperatorDdsLink::Flush(std::int64_t timeout_ns) {

@@ -9,27 +9,10 @@ namespace pbppo::dds {
   X(tick) X(phase) X(mode) X(cause) X(commands_received) X(command_vx_mps) X(command_vy_mps)             \
   X(command_yaw_rate_radps) X(deadline_misses) X(stale_samples) X(tick_median_us) X(tick_max_us)
 // clang-format on
-#define PBPPO_TO_WIRE(f) out->f(in.f);
-#define PBPPO_FROM_WIRE(f) out->f = in.f();
 
-void DdsType<robot::VelocityCommand>::ToWire(const robot::VelocityCommand& in, Wire* out) noexcept {
-  PBPPO_VELOCITY_COMMAND_FIELDS(PBPPO_TO_WIRE)
-}
+PBPPO_DDS_FIELD_CONVERSIONS(robot::VelocityCommand, PBPPO_VELOCITY_COMMAND_FIELDS)
+PBPPO_DDS_FIELD_CONVERSIONS(robot::QuadrupedStatus, PBPPO_QUADRUPED_STATUS_FIELDS)
 
-void DdsType<robot::VelocityCommand>::FromWire(const Wire& in, robot::VelocityCommand* out) noexcept {
-  PBPPO_VELOCITY_COMMAND_FIELDS(PBPPO_FROM_WIRE)
-}
-
-void DdsType<robot::QuadrupedStatus>::ToWire(const robot::QuadrupedStatus& in, Wire* out) noexcept {
-  PBPPO_QUADRUPED_STATUS_FIELDS(PBPPO_TO_WIRE)
-}
-
-void DdsType<robot::QuadrupedStatus>::FromWire(const Wire& in, robot::QuadrupedStatus* out) noexcept {
-  PBPPO_QUADRUPED_STATUS_FIELDS(PBPPO_FROM_WIRE)
-}
-
-#undef PBPPO_FROM_WIRE
-#undef PBPPO_TO_WIRE
 #undef PBPPO_QUADRUPED_STATUS_FIELDS
 #undef PBPPO_VELOCITY_COMMAND_FIELDS
 

@@ -10,20 +10,7 @@
 
 namespace pbppo::dds {
 
-template <>
-struct DdsType<robot::VelocityCommand> {
-  using Wire = pbppo_idl::quadruped::VelocityCommand;
-  using PubSubType = pbppo_idl::quadruped::VelocityCommandPubSubType;
-  static void ToWire(const robot::VelocityCommand& in, Wire* out) noexcept;
-  static void FromWire(const Wire& in, robot::VelocityCommand* out) noexcept;
-};
-
-template <>
-struct DdsType<robot::QuadrupedStatus> {
-  using Wire = pbppo_idl::quadruped::QuadrupedStatus;
-  using PubSubType = pbppo_idl::quadruped::QuadrupedStatusPubSubType;
-  static void ToWire(const robot::QuadrupedStatus& in, Wire* out) noexcept;
-  static void FromWire(const Wire& in, robot::QuadrupedStatus* out) noexcept;
-};
+PBPPO_DDS_TYPE(robot::VelocityCommand, pbppo_idl::quadruped::VelocityCommand);
+PBPPO_DDS_TYPE(robot::QuadrupedStatus, pbppo_idl::quadruped::QuadrupedStatus);
 
 }  // namespace pbppo::dds
