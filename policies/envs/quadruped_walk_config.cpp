@@ -69,18 +69,6 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Keys(sc, "rewards.scales",
                   {"tracking_lin_vel", "tracking_ang_vel", "lin_vel_z", "ang_vel_xy", "orientation", "torques",
                    "dof_acc", "action_rate", "collision", "feet_air_time", "dof_pos_limits", "termination"}),
-           f.Number(sc, "tracking_lin_vel", "rewards.scales", -kBig, kBig, &s.tracking_lin_vel),
-           f.Number(sc, "tracking_ang_vel", "rewards.scales", -kBig, kBig, &s.tracking_ang_vel),
-           f.Number(sc, "lin_vel_z", "rewards.scales", -kBig, kBig, &s.lin_vel_z),
-           f.Number(sc, "ang_vel_xy", "rewards.scales", -kBig, kBig, &s.ang_vel_xy),
-           f.Number(sc, "orientation", "rewards.scales", -kBig, kBig, &s.orientation),
-           f.Number(sc, "torques", "rewards.scales", -kBig, kBig, &s.torques),
-           f.Number(sc, "dof_acc", "rewards.scales", -kBig, kBig, &s.dof_acc),
-           f.Number(sc, "action_rate", "rewards.scales", -kBig, kBig, &s.action_rate),
-           f.Number(sc, "collision", "rewards.scales", -kBig, kBig, &s.collision),
-           f.Number(sc, "feet_air_time", "rewards.scales", -kBig, kBig, &s.feet_air_time),
-           f.Number(sc, "dof_pos_limits", "rewards.scales", -kBig, kBig, &s.dof_pos_limits),
-           f.OptionalNumber(sc, "termination", "rewards.scales", -kBig, kBig, &s.termination),
            f.Keys(term, "termination", {"base_contact", "max_tilt_rad"}),
            flag(term, "base_contact", "termination", &base_contact),
            f.Number(term, "max_tilt_rad", "termination", 0.05, 3.2, &p.max_tilt_rad),
@@ -112,6 +100,21 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
        }) {
     if (!st) return st.error();
   }
+  // legged_gym's reward scales, each any number (0: the term off); termination may be left out.
+  for (auto [key, out] : {std::pair{"tracking_lin_vel", &s.tracking_lin_vel},
+                          {"tracking_ang_vel", &s.tracking_ang_vel},
+                          {"lin_vel_z", &s.lin_vel_z},
+                          {"ang_vel_xy", &s.ang_vel_xy},
+                          {"orientation", &s.orientation},
+                          {"torques", &s.torques},
+                          {"dof_acc", &s.dof_acc},
+                          {"action_rate", &s.action_rate},
+                          {"collision", &s.collision},
+                          {"feet_air_time", &s.feet_air_time},
+                          {"dof_pos_limits", &s.dof_pos_limits}})
+    if (auto st = f.Number(sc, key, "rewards.scales", -kBig, kBig, out); !st) return st.error();
+  if (auto st = f.OptionalNumber(sc, "termination", "rewards.scales", -kBig, kBig, &s.termination); !st)
+    return st.error();
   p.decimation = static_cast<int>(decimation);
   p.blocks = static_cast<int>(blocks);
   p.pool = static_cast<int>(pool);

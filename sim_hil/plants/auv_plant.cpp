@@ -135,79 +135,71 @@ Status ValidateAuvParams(const AuvParams& p) {
 
 Result<AuvParams> ParseAuvParams(const YAML::Node& root, const std::string& path, double control_period_s) {
   YamlFields f(path);
-  if (auto st = f.Keys(
-          root, "",
-          {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task", "description"});
-      !st)
-    return st.error();
+  PBPPO_TRY(f.Keys(
+      root, "",
+      {"hull", "added_mass", "damping", "thrusters", "controller", "simulation", "sonar", "task", "description"}));
   AuvParams p;
   p.control_period_s = control_period_s;
   constexpr double kBig = 1e9;
   YAML::Node n;
-  if (auto st = f.Map(root, "hull", "", &n); !st) return st.error();
-  if (auto st =
-          f.Keys(n, "hull",
-                 {"mass_kg", "length_m", "diameter_m", "inertia_kgm2", "buoyancy_n", "cb_above_cg_m", "gravity_mps2"});
-      !st)
-    return st.error();
-  for (auto [k, out] : {std::pair<const char*, double*>{"mass_kg", &p.mass_kg},
-                        {"length_m", &p.length_m},
-                        {"diameter_m", &p.diameter_m},
-                        {"buoyancy_n", &p.buoyancy_n}}) {
-    if (auto st = f.Number(n, k, "hull", 1e-6, kBig, out); !st) return st.error();
-  }
-  if (auto st = f.Number(n, "cb_above_cg_m", "hull", 0.0, 1.0, &p.cb_above_cg_m); !st) return st.error();
-  if (auto st = f.OptionalNumber(n, "gravity_mps2", "hull", 1e-6, 100.0, &p.gravity_mps2); !st) return st.error();
-  if (auto st = f.Array<3>(n, "inertia_kgm2", "hull", 1e-9, kBig, &p.inertia_kgm2); !st) return st.error();
+  PBPPO_TRY(f.Map(root, "hull", "", &n));
+  PBPPO_TRY(f.Keys(
+      n, "hull", {"mass_kg", "length_m", "diameter_m", "inertia_kgm2", "buoyancy_n", "cb_above_cg_m", "gravity_mps2"}));
+  // Fields of the section `where` (in n) that must be positive.
+  auto positive = [&](const char* where, std::initializer_list<std::pair<const char*, double*>> fields) -> Status {
+    for (auto [k, out] : fields) PBPPO_TRY(f.Number(n, k, where, 1e-6, kBig, out));
+    return {};
+  };
+  PBPPO_TRY(positive("hull", {{"mass_kg", &p.mass_kg},
+                              {"length_m", &p.length_m},
+                              {"diameter_m", &p.diameter_m},
+                              {"buoyancy_n", &p.buoyancy_n}}));
+  PBPPO_TRY(f.Number(n, "cb_above_cg_m", "hull", 0.0, 1.0, &p.cb_above_cg_m));
+  PBPPO_TRY(f.OptionalNumber(n, "gravity_mps2", "hull", 1e-6, 100.0, &p.gravity_mps2));
+  PBPPO_TRY(f.Array<3>(n, "inertia_kgm2", "hull", 1e-9, kBig, &p.inertia_kgm2));
 
-  if (auto st = f.Map(root, "added_mass", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "added_mass", {"translational_kg", "rotational_kgm2"}); !st) return st.error();
-  if (auto st = f.Array<3>(n, "translational_kg", "added_mass", 0.0, kBig, &p.added_mass_kg); !st) return st.error();
-  if (auto st = f.Array<3>(n, "rotational_kgm2", "added_mass", 0.0, kBig, &p.added_inertia_kgm2); !st)
-    return st.error();
+  PBPPO_TRY(f.Map(root, "added_mass", "", &n));
+  PBPPO_TRY(f.Keys(n, "added_mass", {"translational_kg", "rotational_kgm2"}));
+  PBPPO_TRY(f.Array<3>(n, "translational_kg", "added_mass", 0.0, kBig, &p.added_mass_kg));
+  PBPPO_TRY(f.Array<3>(n, "rotational_kgm2", "added_mass", 0.0, kBig, &p.added_inertia_kgm2));
 
-  if (auto st = f.Map(root, "damping", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "damping", {"linear", "quadratic"}); !st) return st.error();
-  if (auto st = f.Array<6>(n, "linear", "damping", 0.0, kBig, &p.damping_linear); !st) return st.error();
-  if (auto st = f.Array<6>(n, "quadratic", "damping", 0.0, kBig, &p.damping_quadratic); !st) return st.error();
+  PBPPO_TRY(f.Map(root, "damping", "", &n));
+  PBPPO_TRY(f.Keys(n, "damping", {"linear", "quadratic"}));
+  PBPPO_TRY(f.Array<6>(n, "linear", "damping", 0.0, kBig, &p.damping_linear));
+  PBPPO_TRY(f.Array<6>(n, "quadratic", "damping", 0.0, kBig, &p.damping_quadratic));
 
-  if (auto st = f.Map(root, "thrusters", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "thrusters", {"lateral_offset_m", "forward_max_n", "reverse_max_n", "heave_max_n"}); !st)
-    return st.error();
-  for (auto [k, out] : {std::pair<const char*, double*>{"lateral_offset_m", &p.thruster_lateral_offset_m},
-                        {"forward_max_n", &p.thrust_forward_max_n},
-                        {"reverse_max_n", &p.thrust_reverse_max_n},
-                        {"heave_max_n", &p.heave_thrust_max_n}}) {
-    if (auto st = f.Number(n, k, "thrusters", 1e-6, kBig, out); !st) return st.error();
-  }
+  PBPPO_TRY(f.Map(root, "thrusters", "", &n));
+  PBPPO_TRY(f.Keys(n, "thrusters", {"lateral_offset_m", "forward_max_n", "reverse_max_n", "heave_max_n"}));
+  PBPPO_TRY(positive("thrusters", {{"lateral_offset_m", &p.thruster_lateral_offset_m},
+                                   {"forward_max_n", &p.thrust_forward_max_n},
+                                   {"reverse_max_n", &p.thrust_reverse_max_n},
+                                   {"heave_max_n", &p.heave_thrust_max_n}}));
 
-  if (auto st = f.Map(root, "controller", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "controller", {"surge", "yaw_rate", "depth", "surge_speed_mps", "yaw_rate_max_radps"}); !st)
-    return st.error();
+  PBPPO_TRY(f.Map(root, "controller", "", &n));
+  PBPPO_TRY(f.Keys(n, "controller", {"surge", "yaw_rate", "depth", "surge_speed_mps", "yaw_rate_max_radps"}));
   for (auto [k, g] :
        {std::pair<const char*, PidGains*>{"surge", &p.surge}, {"yaw_rate", &p.yaw_rate}, {"depth", &p.depth}}) {
     YAML::Node c;
     const std::string w = std::string("controller.") + k;
-    if (auto st = f.Map(n, k, "controller", &c); !st) return st.error();
-    if (auto st = f.Keys(c, w, {"kp", "ki", "kd", "integral_limit"}); !st) return st.error();
+    PBPPO_TRY(f.Map(n, k, "controller", &c));
+    PBPPO_TRY(f.Keys(c, w, {"kp", "ki", "kd", "integral_limit"}));
     g->kd = 0.0;
-    if (auto st = f.Number(c, "kp", w, 0.0, kBig, &g->kp); !st) return st.error();
-    if (auto st = f.Number(c, "ki", w, 0.0, kBig, &g->ki); !st) return st.error();
-    if (auto st = f.OptionalNumber(c, "kd", w, 0.0, kBig, &g->kd); !st) return st.error();
-    if (auto st = f.Number(c, "integral_limit", w, 0.0, kBig, &g->integral_limit); !st) return st.error();
+    PBPPO_TRY(f.Number(c, "kp", w, 0.0, kBig, &g->kp));
+    PBPPO_TRY(f.Number(c, "ki", w, 0.0, kBig, &g->ki));
+    PBPPO_TRY(f.OptionalNumber(c, "kd", w, 0.0, kBig, &g->kd));
+    PBPPO_TRY(f.Number(c, "integral_limit", w, 0.0, kBig, &g->integral_limit));
   }
   std::array<double, 2> speeds{};
-  if (auto st = f.Range(n, "surge_speed_mps", "controller", -10.0, 10.0, &speeds); !st) return st.error();
+  PBPPO_TRY(f.Range(n, "surge_speed_mps", "controller", -10.0, 10.0, &speeds));
   p.surge_speed_min_mps = speeds[0];
   p.surge_speed_max_mps = speeds[1];
-  if (auto st = f.Number(n, "yaw_rate_max_radps", "controller", 1e-6, 10.0, &p.yaw_rate_max_radps); !st)
-    return st.error();
+  PBPPO_TRY(f.Number(n, "yaw_rate_max_radps", "controller", 1e-6, 10.0, &p.yaw_rate_max_radps));
 
-  if (auto st = f.Map(root, "simulation", "", &n); !st) return st.error();
-  if (auto st = f.Keys(n, "simulation", {"physics_step_s", "integrator"}); !st) return st.error();
-  if (auto st = f.Number(n, "physics_step_s", "simulation", 1e-5, 1.0, &p.physics_step_s); !st) return st.error();
+  PBPPO_TRY(f.Map(root, "simulation", "", &n));
+  PBPPO_TRY(f.Keys(n, "simulation", {"physics_step_s", "integrator"}));
+  PBPPO_TRY(f.Number(n, "physics_step_s", "simulation", 1e-5, 1.0, &p.physics_step_s));
   std::string integ;
-  if (auto st = f.Text(n, "integrator", "simulation", &integ); !st) return st.error();
+  PBPPO_TRY(f.Text(n, "integrator", "simulation", &integ));
   if (integ == "rk2") {
     p.integrator = AuvIntegrator::kRk2;
   } else if (integ == "semi_explicit_euler") {
@@ -379,7 +371,7 @@ struct AuvPlant::Impl {
 };
 
 Result<AuvPlant> AuvPlant::Create(const AuvParams& params) {
-  if (auto st = ValidateAuvParams(params); !st) return st.error();
+  PBPPO_TRY(ValidateAuvParams(params));
   auto impl = std::make_unique<Impl>(params);
   impl->Reset(AuvPose{});
   return AuvPlant(std::move(impl));

@@ -11,6 +11,15 @@ function(run expect_rc)
   set(ERR "${err}" PARENT_SCOPE)
 endfunction()
 
+# Fails with `why` unless files a and b hold the same bytes.
+function(expect_same_bytes a b why)
+  file(SHA256 ${a} ha)
+  file(SHA256 ${b} hb)
+  if(NOT ha STREQUAL hb)
+    message(FATAL_ERROR "${why}: ${a} and ${b} differ")
+  endif()
+endfunction()
+
 function(expect_in haystack needle)
   string(FIND "${haystack}" "${needle}" at)
   if(at EQUAL -1)
@@ -64,11 +73,8 @@ expect_in("${ERR}" "--activation: 'leaky_relu' is not trainable here")
 
 # The shipped P3 blob: synth with the same seed reproduces it byte for byte.
 run(0 ${PBPPO} synth --widths 24-64-64-2 --activation tanh --seed 3 --out ${WORK}/again.blob)
-file(SHA256 ${WORK}/again.blob a)
-file(SHA256 ${SOURCE_DIR}/tests/data/blobs/p3.blob b)
-if(NOT a STREQUAL b)
-  message(FATAL_ERROR "synth is not deterministic or the shipped p3.blob drifted")
-endif()
+expect_same_bytes(${WORK}/again.blob ${SOURCE_DIR}/tests/data/blobs/p3.blob
+                  "synth is not deterministic or the shipped p3.blob drifted")
 
 # Bad inputs.
 file(WRITE ${WORK}/junk.blob "not a blob at all, definitely not a blob, this text is longer than a header")
@@ -110,11 +116,8 @@ foreach(k a b)
   run(0 ${PBPPO} train --schedule pbppo-reference --arms 0.1,0.2 --feedback rollout --steps 4096 --envs 4
       --rollout 256 --threads 2 --epochs 2 --normalize-obs --no-plots --quiet --out ${WORK}/det_${k})
 endforeach()
-file(SHA256 ${WORK}/det_a/policy.blob ha)
-file(SHA256 ${WORK}/det_b/policy.blob hb)
-if(NOT ha STREQUAL hb)
-  message(FATAL_ERROR "two runs with the same seed and threads wrote different blobs")
-endif()
+expect_same_bytes(${WORK}/det_a/policy.blob ${WORK}/det_b/policy.blob
+                  "two runs with the same seed and threads wrote different blobs")
 run(0 ${PBPPO} train --schedule fixed:0.2 --steps 2048 --rollout 1024 --epochs 1 --no-plots --quiet --out ${WORK}/run2)
 # --lr-schedule: the adaptive rule's rate in every log row, the schedule in the summary; bad ones refused.
 run(0 ${PBPPO} train --schedule fixed:0.2 --lr-schedule adaptive:0.02 --steps 4096 --rollout 1024 --epochs 2
@@ -327,11 +330,8 @@ foreach(k a b)
       --envs 8 --rollout 24 --minibatch 96 --chunked-minibatch 64 --epochs 2 --hidden 16-16 --activation elu
       --lr-schedule adaptive:0.01 --seed 2 --threads 2 --no-plots --quiet --out ${WORK}/walk_det_${k})
 endforeach()
-file(SHA256 ${WORK}/walk_det_a/policy.blob ha)
-file(SHA256 ${WORK}/walk_det_b/policy.blob hb)
-if(NOT ha STREQUAL hb)
-  message(FATAL_ERROR "two quadruped-walk runs with the same seed and threads wrote different blobs")
-endif()
+expect_same_bytes(${WORK}/walk_det_a/policy.blob ${WORK}/walk_det_b/policy.blob
+                  "two quadruped-walk runs with the same seed and threads wrote different blobs")
 run(2 ${PBPPO} train --env quadruped-walk --terrain stairs --steps 384 --envs 8 --rollout 24 --quiet
     --out ${WORK}/walk_bad)
 expect_in("${ERR}" "stairs")

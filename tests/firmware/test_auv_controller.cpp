@@ -25,6 +25,7 @@
 #include "tests/support/robot_models.hpp"
 #include "tests/support/scripted_transport.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
 
 using namespace pbppo;
 using safety::Mode;
@@ -129,20 +130,9 @@ TEST_CASE("auv controller: limits from robot.yaml - bad fields named with their 
   CHECK(m.FieldIndex("sonar_15_m") >= 0);
 
   // A copy of the robot's folder with one change in robot.yaml.
-  const std::string dir = test::CopyRobotFolder("auv", "auv_controller_yaml");
-  std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string p = dir + "/robot.yaml";
-  auto with = [&](const std::string& from, const std::string& to) {
-    std::string t = text;
-    const auto at = t.find(from);
-    REQUIRE(at != std::string::npos);
-    t.replace(at, from.size(), to);
-    std::ofstream(p) << t;
-    auto r = robot::LoadRobotModel(p);
-    REQUIRE_FALSE(r.ok());
-    return r.error().message;
-  };
+  const test::RobotFileEdits edits("auv", "auv_controller_yaml");
+  const std::string& p = edits.path();
+  auto with = [&](const std::string& from, const std::string& to) { return edits.Error(from, to); };
   CHECK(with("rate_per_s: 2.5", "rate_per_s: fast") == p + ": commands[1].rate_per_s: 'fast' is not a number");
   CHECK(with("invalid_safe_stop: 3", "invalid_safe_stop: 2.5") ==
         p + ": streams[0].invalid_safe_stop: '2.5' is not an integer");

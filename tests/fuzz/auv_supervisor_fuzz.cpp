@@ -5,26 +5,13 @@
 #include <cmath>
 
 #include "tests/fuzz/supervisor_fuzz_common.hpp"
-
-namespace {
+#include "tests/support/auv_supervisor_model.hpp"
 
 using namespace pbppo::safety;
 
-SupervisorModel Auv() {
-  SupervisorModel m;
-  m.commands = {{"v", 0.0, 1.5, 0.0, 0.75, 0.1, StopKind::kRamp, 0.3, 0, -1},
-                {"omega", -0.5, 0.5, -0.5, 0.5, 0.25, StopKind::kRamp, 0.5, 0, -1}};
-  m.streams = {{"sensor", 1, 2, 20, 3}};
-  m.input_names = {"x_m", "surge_mps"};
-  m.transport_names = {"dds"};
-  return m;
-}
-
-}  // namespace
-
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   pbppo::fuzz::Bytes b(data, size);
-  SupervisorModel m = Auv();
+  SupervisorModel m = pbppo::test::AuvLikeSupervisorModel();
   if (b.U8() & 1) {  // a perturbed model, used only if it validates
     SupervisorModel p = m;
     p.commands[0].min = p.commands[0].degraded_min = -std::abs(b.Real());

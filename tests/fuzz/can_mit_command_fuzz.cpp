@@ -11,18 +11,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::MitInput in;
   if (!fuzz::SplitMitInput(data, size, &in)) return 0;
   const can::MitRange& r = in.range;
-  const std::uint8_t* payload = in.payload;
-  const std::uint8_t len = in.len;
   can::MitSpecial special{};
-  const bool is_special = can::DecodeMitSpecial(payload, len, &special);
+  const bool is_special = can::DecodeMitSpecial(in.payload, in.len, &special);
   can::MitCommand c;
-  const bool is_command = can::DecodeMitCommand(r, payload, len, &c);
+  const bool is_command = can::DecodeMitCommand(r, in.payload, in.len, &c);
   fuzz::Require(!(is_special && is_command));
-  fuzz::Require((is_special || is_command) == (len == can::kMitCommandLen));
+  fuzz::Require((is_special || is_command) == (in.len == can::kMitCommandLen));
   if (is_special) {
     std::uint8_t again[8];
     can::EncodeMitSpecial(special, again);
-    fuzz::Require(std::memcmp(again, payload, 8) == 0);
+    fuzz::Require(std::memcmp(again, in.payload, 8) == 0);
     return 0;
   }
   if (!is_command) return 0;
@@ -33,6 +31,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::Require(fuzz::Within(c.tau_ff_nm, r.t_min, r.t_max));
   std::uint8_t again[8];
   fuzz::Require(can::EncodeMitCommand(r, c, again) == 0);
-  fuzz::Require(std::memcmp(again, payload, 8) == 0);
+  fuzz::Require(std::memcmp(again, in.payload, 8) == 0);
   return 0;
 }

@@ -11,18 +11,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::MitInput in;
   if (!fuzz::SplitMitInput(data, size, &in)) return 0;
   const can::MitRange& r = in.range;
-  const std::uint8_t* payload = in.payload;
-  const std::uint8_t len = in.len;
   can::MitReply rep;
-  const bool ok = can::DecodeMitReply(r, payload, len, &rep);
-  fuzz::Require(ok == (len == can::kMitReplyLen));
+  const bool ok = can::DecodeMitReply(r, in.payload, in.len, &rep);
+  fuzz::Require(ok == (in.len == can::kMitReplyLen));
   if (!ok) return 0;
-  fuzz::Require(rep.motor_id == payload[0]);
+  fuzz::Require(rep.motor_id == in.payload[0]);
   fuzz::Require(fuzz::Within(rep.q_rad, r.p_min, r.p_max));
   fuzz::Require(fuzz::Within(rep.dq_rad_s, r.v_min, r.v_max));
   fuzz::Require(fuzz::Within(rep.tau_nm, r.t_min, r.t_max));
   std::uint8_t again[6];
   fuzz::Require(can::EncodeMitReply(r, rep, again) == 0);
-  fuzz::Require(std::memcmp(again, payload, 6) == 0);
+  fuzz::Require(std::memcmp(again, in.payload, 6) == 0);
   return 0;
 }

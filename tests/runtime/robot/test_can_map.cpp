@@ -4,6 +4,9 @@
 
 #include "runtime/robot/can_map.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
+
+using pbppo::test::ReplaceOnce;
 
 using namespace pbppo::robot;
 
@@ -21,12 +24,6 @@ motors:
 imus:
   - {name: imu, bus: a, format: fd, id: 0x80}
 )";
-
-std::string Replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  REQUIRE_MESSAGE(at != std::string::npos, from);
-  return s.replace(at, from.size(), to);
-}
 
 std::string ErrorOf(const std::string& text) {
   auto r = ParseCanMap(text, "t.yaml");
@@ -63,41 +60,42 @@ TEST_CASE("a small map parses - ids may repeat on different buses") {
 TEST_CASE("errors name the file - the element and the field") {
   const std::string g = kGood;
   CHECK(ErrorOf("robot: [").find("t.yaml: YAML error") == 0);
-  CHECK(ErrorOf(Replace(g, "bus: b, id: 1", "bus: c, id: 1")) == "t.yaml: motors[1] 'J2'.bus: unknown bus 'c'");
-  CHECK(ErrorOf(Replace(g, "bus: b, id: 1, reply_id: 0x101", "bus: a, id: 1, reply_id: 0x102")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "bus: b, id: 1", "bus: c, id: 1")) == "t.yaml: motors[1] 'J2'.bus: unknown bus 'c'");
+  CHECK(ErrorOf(ReplaceOnce(g, "bus: b, id: 1, reply_id: 0x101", "bus: a, id: 1, reply_id: 0x102")) ==
         "t.yaml: motors[1] 'J2'.id: identifier 0x001 on bus 'a' is already used by motor 'J1' (id)");
-  CHECK(ErrorOf(Replace(g, "id: 0x80", "id: 0x101")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "id: 0x80", "id: 0x101")) ==
         "t.yaml: imus[0] 'imu'.id: identifier 0x101 on bus 'a' is already used by motor 'J1' (reply_id)");
-  CHECK(ErrorOf(Replace(g, "joint: J2", "joint: J1")) == "t.yaml: motors[1] 'J1'.joint: duplicate joint 'J1'");
-  CHECK(ErrorOf(Replace(g, "p_min: -12.5", "p_min: 12.5")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "joint: J2", "joint: J1")) == "t.yaml: motors[1] 'J1'.joint: duplicate joint 'J1'");
+  CHECK(ErrorOf(ReplaceOnce(g, "p_min: -12.5", "p_min: 12.5")) ==
         "t.yaml: actuators[0] 'm'.p_min: p_min 12.5 is not below p_max 12.5");
-  CHECK(ErrorOf(Replace(g, "kd_max: 5", "kd_max: -1")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "kd_max: 5", "kd_max: -1")) ==
         "t.yaml: actuators[0] 'm'.kd_min: kd_min 0 is not below kd_max -1");
-  CHECK(ErrorOf(Replace(g, "t_max: 25", "t_max: abc")) == "t.yaml: actuators[0] 'm'.t_max: 'abc' is not a number");
-  CHECK(ErrorOf(Replace(g, "v_min: -50, ", "")) == "t.yaml: actuators[0] 'm': missing field 'v_min'");
-  CHECK(ErrorOf(Replace(g, "actuator: m}\n  - {joint: J2", "actuator: n}\n  - {joint: J2")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "t_max: 25", "t_max: abc")) == "t.yaml: actuators[0] 'm'.t_max: 'abc' is not a number");
+  CHECK(ErrorOf(ReplaceOnce(g, "v_min: -50, ", "")) == "t.yaml: actuators[0] 'm': missing field 'v_min'");
+  CHECK(ErrorOf(ReplaceOnce(g, "actuator: m}\n  - {joint: J2", "actuator: n}\n  - {joint: J2")) ==
         "t.yaml: motors[0] 'J1'.actuator: unknown actuator 'n'");
-  CHECK(ErrorOf(Replace(g, "reply_id: 0x101, actuator: m}\n  - {joint: J2",
-                        "reply_id: 0x800, actuator: m}\n  - {joint: J2")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "reply_id: 0x101, actuator: m}\n  - {joint: J2",
+                            "reply_id: 0x800, actuator: m}\n  - {joint: J2")) ==
         "t.yaml: motors[0] 'J1'.reply_id: '0x800' is outside [0x000, 0x7FF]");
-  CHECK(ErrorOf(Replace(g, "bus: a, id: 1,", "bus: a, id: 256,")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "bus: a, id: 1,", "bus: a, id: 256,")) ==
         "t.yaml: motors[0] 'J1'.id: '256' is outside [0x001, 0x0FF]");
-  CHECK(ErrorOf(Replace(g, "bus: a, format: fd", "bus: b, format: fd")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "bus: a, format: fd", "bus: b, format: fd")) ==
         "t.yaml: imus[0] 'imu'.format: 'fd' on bus 'b', which is not an fd bus");
-  CHECK(ErrorOf(Replace(g, "format: fd", "format: can2")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "format: fd", "format: can2")) ==
         "t.yaml: imus[0] 'imu'.format: 'can2' is not classic or fd");
-  CHECK(ErrorOf(Replace(g, "interface: vcan1", "interface: vcan0")) ==
+  CHECK(ErrorOf(ReplaceOnce(g, "interface: vcan1", "interface: vcan0")) ==
         "t.yaml: buses[1].interface: 'vcan0' is already used by bus 'a'");
-  CHECK(ErrorOf(Replace(g, "{name: b,", "{name: a,")) == "t.yaml: buses[1].name: duplicate bus 'a'");
-  CHECK(ErrorOf(Replace(g, "fd: true", "fd: yes please")) == "t.yaml: buses[0].fd: 'yes please' is not true or false");
-  CHECK(ErrorOf(Replace(g, "robot: testbot", "robot: testbot\nextra: 1")) == "t.yaml: extra: unknown field");
-  CHECK(ErrorOf(Replace(g, "id: 0x80", "id: 0x80, gain: 2")) == "t.yaml: imus[0].gain: unknown field");
+  CHECK(ErrorOf(ReplaceOnce(g, "{name: b,", "{name: a,")) == "t.yaml: buses[1].name: duplicate bus 'a'");
+  CHECK(ErrorOf(ReplaceOnce(g, "fd: true", "fd: yes please")) ==
+        "t.yaml: buses[0].fd: 'yes please' is not true or false");
+  CHECK(ErrorOf(ReplaceOnce(g, "robot: testbot", "robot: testbot\nextra: 1")) == "t.yaml: extra: unknown field");
+  CHECK(ErrorOf(ReplaceOnce(g, "id: 0x80", "id: 0x80, gain: 2")) == "t.yaml: imus[0].gain: unknown field");
   CHECK(LoadCanMap("/nonexistent/can_map.yaml").error().message == "/nonexistent/can_map.yaml: cannot open");
 }
 
 TEST_CASE("a classic IMU claims three consecutive ids") {
-  std::string g = Replace(kGood, "format: fd, id: 0x80", "format: classic, id: 0xFF");
-  g = Replace(
+  std::string g = ReplaceOnce(kGood, "format: fd, id: 0x80", "format: classic, id: 0xFF");
+  g = ReplaceOnce(
       g, "reply_id: 0x101, actuator: m}\n  - {joint: J2",
       "reply_id: 0x101, actuator: m}\n  - {joint: J3, bus: a, id: 2, reply_id: 0x100, actuator: m}\n  - {joint: J2");
   CHECK(ErrorOf(g) == "t.yaml: imus[0] 'imu'.id: identifier 0x100 on bus 'a' is already used by motor 'J3' (reply_id)");

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "runtime/core/alloc_probe.hpp"
@@ -91,11 +93,21 @@ struct AuvSignals {
   SignalProgram program;
   std::vector<double> fields = std::vector<double>(m.fields.size(), 0.0), g;
 
-  explicit AuvSignals(const IoLayout& l) {
-    auto p = SignalProgram::ForLayout(m, l);
+  std::optional<ObservationBuilder> builder;
+
+  // The signals and the observation builder of an AUV layout with these observation lines and
+  // one action.
+  explicit AuvSignals(const std::string& observations) {
+    auto l = ParseIoLayout(
+        "robot: auv\nobservations:\n" + observations + "actions:\n  - {name: v, command: surge_speed}\n", "auv.yaml");
+    REQUIRE_MESSAGE(l.ok(), l.error().message);
+    auto p = SignalProgram::ForLayout(m, *l);
     REQUIRE_MESSAGE(p.ok(), p.error().message);
     program = std::move(*p);
     g.assign(program.size(), 0.0);
+    auto b = ObservationBuilder::Create(*l, program.names());
+    REQUIRE_MESSAGE(b.ok(), b.error().message);
+    builder.emplace(std::move(*b));
   }
   void Set(const std::string& field, double v) { fields[static_cast<std::size_t>(m.FieldIndex(field))] = v; }
   const double* Compute() {
@@ -106,20 +118,11 @@ struct AuvSignals {
 }  // namespace
 
 TEST_CASE("observation builder and the AUV's signals allocate nothing per tick") {
-  auto l = ParseIoLayout(R"(
-robot: auv
-observations:
-  - {name: s3, signal: sonar_3, scale: 0.1, history: 4}
+  AuvSignals sig(R"(  - {name: s3, signal: sonar_3, scale: 0.1, history: 4}
   - {name: d, signal: depth_error}
   - {name: y, signal: yaw}
-actions:
-  - {name: v, command: surge_speed}
-)",
-                         "auv.yaml");
-  REQUIRE(l.ok());
-  AuvSignals sig(*l);
-  auto b = ObservationBuilder::Create(*l, sig.program.names());
-  REQUIRE_MESSAGE(b.ok(), b.error().message);
+)");
+  ObservationBuilder& b = *sig.builder;
   sig.Set("depth_m", 5.5);  // the mission depth (robot.yaml's parameters.depth_m) is 5
   sig.Set("yaw_rad", 3.5);  // wrapped by the yaw signal
   const std::size_t sonar3 = static_cast<std::size_t>(sig.m.FieldIndex("sonar_3_m"));
@@ -127,7 +130,7 @@ actions:
   pbppo::AllocationScope scope;
   for (int k = 0; k < 1000; ++k) {
     sig.fields[sonar3] = static_cast<double>(k);
-    b->Build(sig.Compute(), k == 0, obs);
+    b.Build(sig.Compute(), k == 0, obs);
   }
   CHECK(scope.count() == 0);
   CHECK(obs[0] == doctest::Approx(99.9));
@@ -137,31 +140,21 @@ actions:
 }
 
 TEST_CASE("AUV signals: nearest_echo is the shortest sonar range, +inf (the element's clip) without an echo") {
-  auto l = ParseIoLayout(R"(
-robot: auv
-observations:
-  - {name: e, signal: nearest_echo, scale: 0.2, clip: 1.0}
-actions:
-  - {name: v, command: surge_speed}
-)",
-                         "auv.yaml");
-  REQUIRE(l.ok());
-  AuvSignals sig(*l);
-  auto b = ObservationBuilder::Create(*l, sig.program.names());
-  REQUIRE_MESSAGE(b.ok(), b.error().message);
+  AuvSignals sig("  - {name: e, signal: nearest_echo, scale: 0.2, clip: 1.0}\n");
+  ObservationBuilder& b = *sig.builder;
   for (std::uint32_t i = 0; i < 16; ++i) sig.Set(ExpandIndex("sonar_{i}_m", i), 15.0);
   sig.Set("sonar_1_m", 3.5);
   sig.Set("sonar_2_m", 2.5);
   sig.Set("sonar_9_m", 9.0);
   float obs[1];
   CHECK(sig.Compute()[0] == 2.5);
-  b->Build(sig.g.data(), true, obs);
+  b.Build(sig.g.data(), true, obs);
   CHECK(obs[0] == doctest::Approx(0.5));
   sig.Set("sonar_15_m", 0.25);
-  b->Build(sig.Compute(), false, obs);
+  b.Build(sig.Compute(), false, obs);
   CHECK(obs[0] == doctest::Approx(0.05));
   for (std::uint32_t i = 0; i < 16; ++i) sig.Set(ExpandIndex("sonar_{i}_m", i), HUGE_VAL);
   CHECK(std::isinf(sig.Compute()[0]));
-  b->Build(sig.g.data(), false, obs);
+  b.Build(sig.g.data(), false, obs);
   CHECK(obs[0] == 1.0f);
 }

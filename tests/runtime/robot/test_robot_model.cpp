@@ -11,6 +11,7 @@
 #include "runtime/robot/text_file.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
 
 using namespace pbppo;
 using namespace pbppo::robot;
@@ -146,20 +147,9 @@ TEST_CASE("robot model: another tick period - stale ages, rates and the policy p
 }
 
 TEST_CASE("robot model: bad robot files are refused naming the file, the field and the value") {
-  const std::string dir = test::CopyRobotFolder("auv", "robot_model");
-  std::ifstream in(test::SourcePath("models/auv/robot.yaml"));
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string p = dir + "/robot.yaml";
-  auto err = [&](const std::string& from, const std::string& to) {
-    std::string t = text;
-    const auto at = t.find(from);
-    REQUIRE_MESSAGE(at != std::string::npos, from);
-    t.replace(at, from.size(), to);
-    std::ofstream(p) << t;
-    auto m = LoadRobotModel(p);
-    REQUIRE_FALSE(m.ok());
-    return m.error().message;
-  };
+  const test::RobotFileEdits edits("auv", "robot_model");
+  const std::string &dir = edits.dir(), &p = edits.path();
+  auto err = [&](const std::string& from, const std::string& to) { return edits.Error(from, to); };
   CHECK(err("io_layout: io_layout.yaml", "io_layout: missing.yaml") == dir + "/missing.yaml: cannot open");
   CHECK(err("tick_period_s: 0.1", "tick_period_s: -1") == p + ": timing.tick_period_s: '-1' is outside [1e-06, 10]");
   CHECK(err("kind: dds", "kind: usb") == p + ": transports[0].kind: 'usb' is not can or dds");

@@ -5,6 +5,9 @@
 
 #include "runtime/robot/urdf.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
+
+using pbppo::test::ReplaceOnce;
 
 using namespace pbppo::robot;
 
@@ -37,12 +40,6 @@ const char* kGood = R"(<?xml version="1.0"?>
 </robot>
 )";
 
-std::string Replace(std::string s, const std::string& from, const std::string& to) {
-  const auto at = s.find(from);
-  REQUIRE_MESSAGE(at != std::string::npos, from);
-  return s.replace(at, from.size(), to);
-}
-
 std::string ErrorOf(const std::string& xml) {
   auto r = ParseUrdf(xml, "arm.urdf");
   REQUIRE_FALSE(r.ok());
@@ -68,7 +65,7 @@ TEST_CASE("urdf: a small arm parses - joints in topological order - axis normali
 }
 
 TEST_CASE("urdf: collision shapes - sphere, box and cylinder with their origins") {
-  const std::string xml = Replace(kGood, "<link name=\"base\"/>", R"(<link name="base">
+  const std::string xml = ReplaceOnce(kGood, "<link name=\"base\"/>", R"(<link name="base">
     <collision><origin xyz="0 0 0.1" rpy="0 0 0"/><geometry><box size="0.4 0.2 0.1"/></geometry></collision>
     <collision><origin xyz="0 0 -0.1" rpy="1.5707963 0 0"/><geometry><cylinder radius="0.02" length="0.3"/></geometry></collision>
   </link>)");
@@ -87,53 +84,54 @@ TEST_CASE("urdf: collision shapes - sphere, box and cylinder with their origins"
   const UrdfLink& tip = r->links[static_cast<std::size_t>(r->FindLink("tip"))];
   REQUIRE(tip.collisions.size() == 1);
   CHECK(tip.collisions[0].shape == UrdfShape::kSphere);
-  CHECK(ErrorOf(Replace(xml, "length=\"0.3\"", "length=\"-0.3\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(xml, "length=\"0.3\"", "length=\"-0.3\"")) ==
         "arm.urdf: link 'base'.collision.geometry.cylinder.length: '-0.3' is not a positive number");
-  CHECK(ErrorOf(Replace(xml, "<box size=\"0.4 0.2 0.1\"/>", "<mesh filename=\"a.stl\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(xml, "<box size=\"0.4 0.2 0.1\"/>", "<mesh filename=\"a.stl\"/>")) ==
         "arm.urdf: link 'base'.collision.geometry: has no sphere, box or cylinder (the shapes supported)");
-  CHECK(ErrorOf(Replace(xml, "size=\"0.4 0.2 0.1\"", "size=\"0.4 0.2\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(xml, "size=\"0.4 0.2 0.1\"", "size=\"0.4 0.2\"")) ==
         "arm.urdf: link 'base'.collision.geometry.box.size: '0.4 0.2' has fewer than 3 numbers");
 }
 
 TEST_CASE("urdf: bad files are refused naming the element and field") {
-  CHECK(ErrorOf(Replace(kGood, "effort=\"10\"", "effort=\"-1\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "effort=\"10\"", "effort=\"-1\"")) ==
         "arm.urdf: joint 'shoulder'.limit.effort: '-1' is not a positive number");
-  CHECK(ErrorOf(Replace(kGood, "lower=\"-1\"", "lower=\"2\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "lower=\"-1\"", "lower=\"2\"")) ==
         "arm.urdf: joint 'shoulder'.limit.lower: '2' is not below upper '1'");
-  CHECK(ErrorOf(Replace(kGood, " velocity=\"5\"", "")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, " velocity=\"5\"", "")) ==
         "arm.urdf: joint 'shoulder'.limit: missing attribute 'velocity'");
-  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=\"abc\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<mass value=\"1.5\"/>", "<mass value=\"abc\"/>")) ==
         "arm.urdf: link 'upper'.inertial.mass.value: 'abc' is not a number");
-  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=\"0\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<mass value=\"1.5\"/>", "<mass value=\"0\"/>")) ==
         "arm.urdf: link 'upper'.inertial.mass.value: '0' is not a positive number");
-  CHECK(ErrorOf(Replace(kGood, "izz=\"0.002\"", "izz=\"0.5\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "izz=\"0.002\"", "izz=\"0.5\"")) ==
         "arm.urdf: link 'upper'.inertial.inertia: moments ixx 0.01, iyy 0.01, izz 0.5 violate the triangle inequality");
-  CHECK(ErrorOf(Replace(kGood, "iyy=\"0.01\"", "iyy=\"nan\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "iyy=\"0.01\"", "iyy=\"nan\"")) ==
         "arm.urdf: link 'upper'.inertial.inertia.iyy: 'nan' is not finite");
-  CHECK(ErrorOf(Replace(kGood, "type=\"revolute\"", "type=\"prismatic\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "type=\"revolute\"", "type=\"prismatic\"")) ==
         "arm.urdf: joint 'shoulder'.type: 'prismatic' is not supported (revolute, fixed)");
-  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/>", "<parent link=\"torso\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<parent link=\"base\"/>", "<parent link=\"torso\"/>")) ==
         "arm.urdf: joint 'shoulder'.parent.link: 'torso' is not a link of this robot");
-  CHECK(ErrorOf(Replace(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 0 0\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 0 0\"")) ==
         "arm.urdf: joint 'shoulder'.axis.xyz: is the zero vector");
-  CHECK(ErrorOf(Replace(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 1\"")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 1\"")) ==
         "arm.urdf: joint 'shoulder'.axis.xyz: '0 1' has fewer than 3 numbers");
-  CHECK(ErrorOf(Replace(kGood, "<link name=\"tip\">", "<link name=\"upper\">")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<link name=\"tip\">", "<link name=\"upper\">")) ==
         "arm.urdf: link 'upper': name used twice");
-  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/><child link=\"upper\"/>",
-                        "<parent link=\"base\"/><child link=\"tip\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<parent link=\"base\"/><child link=\"upper\"/>",
+                            "<parent link=\"base\"/><child link=\"tip\"/>")) ==
         "arm.urdf: joint 'shoulder'.child.link: 'tip' is already the child of joint 'tip_fixed'");
-  CHECK(ErrorOf(Replace(kGood, "<link name=\"base\"/>", "<link name=\"base\"/><link name=\"spare\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<link name=\"base\"/>", "<link name=\"base\"/><link name=\"spare\"/>")) ==
         "arm.urdf: robot 'arm': links 'base' and 'spare' both have no parent joint (one tree expected)");
-  CHECK(ErrorOf(Replace(kGood, "<parent link=\"base\"/>", "<parent link=\"tip\"/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<parent link=\"base\"/>", "<parent link=\"tip\"/>")) ==
         "arm.urdf: joint 'tip_fixed': is part of a loop, not reachable from the root link");
 }
 
 TEST_CASE("urdf: malformed XML is refused with the line") {
-  CHECK(ErrorOf(Replace(kGood, "</robot>", "")) == "arm.urdf:3: XML: element <robot> is not closed");
-  CHECK(ErrorOf(Replace(kGood, "<mass value=\"1.5\"/>", "<mass value=1.5/>")) ==
+  CHECK(ErrorOf(ReplaceOnce(kGood, "</robot>", "")) == "arm.urdf:3: XML: element <robot> is not closed");
+  CHECK(ErrorOf(ReplaceOnce(kGood, "<mass value=\"1.5\"/>", "<mass value=1.5/>")) ==
         "arm.urdf:8: XML: attribute 'value' of <mass> is not quoted");
-  CHECK(ErrorOf(Replace(kGood, "</inertial>", "</inertia>")) == "arm.urdf:10: XML: <inertial> closed by </inertia>");
+  CHECK(ErrorOf(ReplaceOnce(kGood, "</inertial>", "</inertia>")) ==
+        "arm.urdf:10: XML: <inertial> closed by </inertia>");
   CHECK(ErrorOf("<robot name=\"a\"></robot><robot/>") == "arm.urdf:1: XML: a second root element");
   CHECK(ErrorOf("<robt name=\"a\"/>") == "arm.urdf: root element: <robt> is not <robot>");
 }
@@ -168,15 +166,15 @@ gains: {kp_nm_rad: 60, kd_nm_s_rad: 1.5, damping_kd_nm_s_rad: 2}
     return r.error().message;
   };
   REQUIRE(ParseRobotDescription(good, "q.yaml", *urdf, "quadruped.urdf").ok());
-  CHECK(err(Replace(good, "LF_KFE: -0.8", "LF_KFE: 1.0")) ==
+  CHECK(err(ReplaceOnce(good, "LF_KFE: -0.8", "LF_KFE: 1.0")) ==
         "q.yaml: default_pose.LF_KFE: '1.0' is outside the joint's limits [-2.6, 0.3]");
-  CHECK(err(Replace(good, "RH_HFE, RH_KFE]", "RH_HFE, RH_KNEE]")) ==
+  CHECK(err(ReplaceOnce(good, "RH_HFE, RH_KFE]", "RH_HFE, RH_KNEE]")) ==
         "q.yaml: joints[11]: 'RH_KNEE' is not a joint of quadruped.urdf");
-  CHECK(err(Replace(good, "LF_HAA, LF_HFE, LF_KFE, ", "LF_HAA, LF_HFE, ")) ==
+  CHECK(err(ReplaceOnce(good, "LF_HAA, LF_HFE, LF_KFE, ", "LF_HAA, LF_HFE, ")) ==
         "q.yaml: joints: revolute joint 'LF_KFE' of quadruped.urdf is not listed");
-  CHECK(err(Replace(good, "LF_HFE, LF_KFE, RF_HAA", "LF_FOOT_FIXED, LF_KFE, RF_HAA")) ==
+  CHECK(err(ReplaceOnce(good, "LF_HFE, LF_KFE, RF_HAA", "LF_FOOT_FIXED, LF_KFE, RF_HAA")) ==
         "q.yaml: joints[1]: 'LF_FOOT_FIXED' is not a revolute joint");
-  CHECK(err(Replace(good, "kp_nm_rad: 60", "kp_nm_rad: x")) == "q.yaml: gains.kp_nm_rad: 'x' is not a number");
-  CHECK(err(Replace(good, "stand:", "stands:")) == "q.yaml: stands: unknown field");
-  CHECK(err(Replace(good, "RH_HFE: -0.4, ", "")) == "q.yaml: default_pose: missing field 'RH_HFE'");
+  CHECK(err(ReplaceOnce(good, "kp_nm_rad: 60", "kp_nm_rad: x")) == "q.yaml: gains.kp_nm_rad: 'x' is not a number");
+  CHECK(err(ReplaceOnce(good, "stand:", "stands:")) == "q.yaml: stands: unknown field");
+  CHECK(err(ReplaceOnce(good, "RH_HFE: -0.4, ", "")) == "q.yaml: default_pose: missing field 'RH_HFE'");
 }

@@ -11,6 +11,7 @@
 
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/safety/supervisor.hpp"
+#include "tests/support/auv_supervisor_model.hpp"
 
 using namespace pbppo::safety;
 
@@ -18,17 +19,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// v in [0, 1.5] (degraded: 0.75), 0.1 per tick, safe-stop ramps 0.3 per tick; omega in
-// [-0.5, 0.5], 0.25 per tick, ramps 0.5 per tick; the sample stale after 1 tick, safe-stop after
-// 3, lost after 20; 3 invalid samples in a row stop; overruns 2 / 5.
+// The AUV-like model (tests/support/auv_supervisor_model.hpp); overruns 2 / 5.
 SupervisorModel Model() {
-  SupervisorModel m;
-  m.commands = {{"v", 0.0, 1.5, 0.0, 0.75, 0.1, StopKind::kRamp, 0.3, 0, -1},
-                {"omega", -0.5, 0.5, -0.5, 0.5, 0.25, StopKind::kRamp, 0.5, 0, -1}};
-  m.streams = {{"sensor", 1, 3, 20, 3}};
-  m.input_names = {"surge_mps", "sonar_5_m"};
-  m.transport_names = {"dds"};
-  return m;
+  return pbppo::test::AuvLikeSupervisorModel();
 }
 
 struct In {
