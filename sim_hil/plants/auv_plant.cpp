@@ -338,19 +338,12 @@ struct AuvPlant::Impl {
     const SimTK::Vec3& pos = body.getBodyOriginLocation(state);
     const SimTK::Vec3 w_b = ~R * body.getBodyAngularVelocity(state);
     const SimTK::Vec3 v_b = ~R * body.getBodyOriginVelocity(state);
+    auto put = [](const SimTK::Vec3& v, double* a, double* b, double* c) { *a = v[0], *b = v[1], *c = v[2]; };
     out.time_s = state.getTime();
-    out.x_m = pos[0];
-    out.y_m = pos[1];
-    out.z_m = pos[2];
-    out.yaw_rad = ypr[0];
-    out.pitch_rad = ypr[1];
-    out.roll_rad = ypr[2];
-    out.u_mps = v_b[0];
-    out.v_mps = v_b[1];
-    out.w_mps = v_b[2];
-    out.p_radps = w_b[0];
-    out.q_radps = w_b[1];
-    out.r_radps = w_b[2];
+    put(pos, &out.x_m, &out.y_m, &out.z_m);
+    put(ypr, &out.yaw_rad, &out.pitch_rad, &out.roll_rad);
+    put(v_b, &out.u_mps, &out.v_mps, &out.w_mps);
+    put(w_b, &out.p_radps, &out.q_radps, &out.r_radps);
     out.thrust_n = {thrust.starboard_n, thrust.port_n, thrust.vertical_n};
   }
 

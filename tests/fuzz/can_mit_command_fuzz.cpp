@@ -24,11 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   if (!is_command) return 0;
-  fuzz::Require(fuzz::Within(c.q_rad, r.p_min, r.p_max));
-  fuzz::Require(fuzz::Within(c.dq_rad_s, r.v_min, r.v_max));
-  fuzz::Require(fuzz::Within(c.kp_nm_rad, r.kp_min, r.kp_max));
-  fuzz::Require(fuzz::Within(c.kd_nm_s_rad, r.kd_min, r.kd_max));
-  fuzz::Require(fuzz::Within(c.tau_ff_nm, r.t_min, r.t_max));
+  fuzz::Require(fuzz::InsideRange(r, c));
   std::uint8_t again[8];
   fuzz::Require(can::EncodeMitCommand(r, c, again) == 0);
   fuzz::Require(std::memcmp(again, in.payload, 8) == 0);

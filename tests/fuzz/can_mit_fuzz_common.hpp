@@ -47,4 +47,15 @@ inline bool Within(double x, double lo, double hi) {
   return x >= lo - slack && x <= hi + slack;
 }
 
+// Every value of a decoded command or reply lies inside the range it was decoded with.
+inline bool InsideRange(const can::MitRange& r, const can::MitCommand& c) {
+  return Within(c.q_rad, r.p_min, r.p_max) && Within(c.dq_rad_s, r.v_min, r.v_max) &&
+         Within(c.kp_nm_rad, r.kp_min, r.kp_max) && Within(c.kd_nm_s_rad, r.kd_min, r.kd_max) &&
+         Within(c.tau_ff_nm, r.t_min, r.t_max);
+}
+inline bool InsideRange(const can::MitRange& r, const can::MitReply& c) {
+  return Within(c.q_rad, r.p_min, r.p_max) && Within(c.dq_rad_s, r.v_min, r.v_max) &&
+         Within(c.tau_nm, r.t_min, r.t_max);
+}
+
 }  // namespace pbppo::fuzz

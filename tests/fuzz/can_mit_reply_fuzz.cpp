@@ -16,9 +16,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::Require(ok == (in.len == can::kMitReplyLen));
   if (!ok) return 0;
   fuzz::Require(rep.motor_id == in.payload[0]);
-  fuzz::Require(fuzz::Within(rep.q_rad, r.p_min, r.p_max));
-  fuzz::Require(fuzz::Within(rep.dq_rad_s, r.v_min, r.v_max));
-  fuzz::Require(fuzz::Within(rep.tau_nm, r.t_min, r.t_max));
+  fuzz::Require(fuzz::InsideRange(r, rep));
   std::uint8_t again[6];
   fuzz::Require(can::EncodeMitReply(r, rep, again) == 0);
   fuzz::Require(std::memcmp(again, in.payload, 6) == 0);

@@ -45,13 +45,9 @@ Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const Au
     return Fail("command_queue_capacity " + std::to_string(o.command_queue_capacity) + " is outside 1..65536");
   if (o.command_inbox_capacity < 1 || o.command_inbox_capacity > 65536)
     return Fail("command_inbox_capacity " + std::to_string(o.command_inbox_capacity) + " is outside 1..65536");
-  if (o.topic_prefix.empty()) return Fail("topic_prefix is empty");
-  auto participant = DdsParticipant::Create(o);
-  if (!participant) return std::move(participant).error();
-  auto impl = std::make_unique<Impl>();
-  Impl& m = *impl;
-  m.role = role;
-  m.participant = std::move(*participant);
+  auto impl = NewLink<Impl>(role, o);
+  if (!impl) return std::move(impl).error();
+  Impl& m = **impl;
   DdsParticipant& p = *m.participant;
   const std::string sensor = WireTopic(o.naming, o.topic_prefix + "sensor_state"),
                     command = WireTopic(o.naming, o.topic_prefix + "command"),
@@ -78,7 +74,7 @@ Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const Au
               &m.status_in)))
       return st.error();
   }
-  return std::unique_ptr<AuvDdsLink>(new AuvDdsLink(std::move(impl)));
+  return std::unique_ptr<AuvDdsLink>(new AuvDdsLink(std::move(*impl)));
 }
 
 AuvDdsLink::AuvDdsLink(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

@@ -94,6 +94,19 @@ Status TakeInto(Result<std::unique_ptr<T>> r, std::unique_ptr<T>* out) {
   return {};
 }
 
+// A link's Impl (its members `role` and `participant`, the latter declared first) with a new
+// participant on `options`; an empty topic prefix is refused.
+template <typename Impl, typename Role, typename Options>
+Result<std::unique_ptr<Impl>> NewLink(Role role, const Options& options) {
+  if (options.topic_prefix.empty()) return DdsError("topic_prefix is empty");
+  auto participant = DdsParticipant::Create(options);
+  if (!participant) return std::move(participant).error();
+  auto impl = std::make_unique<Impl>();
+  impl->role = role;
+  impl->participant = std::move(*participant);
+  return impl;
+}
+
 // Polls `ready` every 5 ms: true once it holds, false when timeout_ns has passed first.
 template <typename Ready>
 bool PollUntil(Ready ready, std::int64_t timeout_ns) {
@@ -256,12 +269,9 @@ std::int64_t DdsReader<T>::last_receive_ns() const noexcept {
 template <typename T>
 DdsReaderCounters DdsReader<T>::counters() const noexcept {
   const Impl& m = *impl_;
-  DdsReaderCounters c;
-  c.received = m.received.load(std::memory_order_relaxed);
-  c.invalid = m.invalid.load(std::memory_order_relaxed);
-  c.rejected = m.rejected.load(std::memory_order_relaxed);
-  c.dropped = m.queue ? m.queue->dropped() : 0;
-  return c;
+  constexpr auto relaxed = std::memory_order_relaxed;
+  return {m.received.load(relaxed), m.invalid.load(relaxed), m.rejected.load(relaxed),
+          m.queue ? m.queue->dropped() : 0};
 }
 
 // ---- DdsWriter ---------------------------------------------------------------------------------
@@ -380,11 +390,8 @@ std::int32_t DdsWriter<T>::matched_readers() const noexcept {
 template <typename T>
 DdsWriterCounters DdsWriter<T>::counters() const noexcept {
   const Impl& m = *impl_;
-  DdsWriterCounters c;
-  c.written = m.written.load(std::memory_order_relaxed);
-  c.failed = m.failed.load(std::memory_order_relaxed);
-  c.dropped = m.queue ? m.queue->dropped() : 0;
-  return c;
+  constexpr auto relaxed = std::memory_order_relaxed;
+  return {m.written.load(relaxed), m.failed.load(relaxed), m.queue ? m.queue->dropped() : 0};
 }
 
 }  // namespace pbppo::dds

@@ -27,13 +27,9 @@ struct OperatorDdsLink::Impl {
 };
 
 Result<std::unique_ptr<OperatorDdsLink>> OperatorDdsLink::Create(OperatorDdsRole role, const OperatorDdsOptions& o) {
-  if (o.topic_prefix.empty()) return MakeError(ErrorCode::kInvalidValue, "dds: topic_prefix is empty");
-  auto participant = DdsParticipant::Create(o);
-  if (!participant) return std::move(participant).error();
-  auto impl = std::make_unique<Impl>();
-  Impl& m = *impl;
-  m.role = role;
-  m.participant = std::move(*participant);
+  auto impl = NewLink<Impl>(role, o);
+  if (!impl) return std::move(impl).error();
+  Impl& m = **impl;
   DdsParticipant& p = *m.participant;
   const std::string command = WireTopic(o.naming, o.topic_prefix + "velocity_command"),
                     status = WireTopic(o.naming, o.topic_prefix + "status");
@@ -54,7 +50,7 @@ Result<std::unique_ptr<OperatorDdsLink>> OperatorDdsLink::Create(OperatorDdsRole
         !(st = TakeInto(DdsReader<robot::QuadrupedStatus>::Create(p, status, status_reader), &m.status_in)))
       return st.error();
   }
-  return std::unique_ptr<OperatorDdsLink>(new OperatorDdsLink(std::move(impl)));
+  return std::unique_ptr<OperatorDdsLink>(new OperatorDdsLink(std::move(*impl)));
 }
 
 OperatorDdsLink::OperatorDdsLink(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

@@ -9,6 +9,7 @@
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/policy/reference.hpp"
+#include "tests/support/policy_on_kernel.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo::policy;
@@ -148,10 +149,9 @@ TEST_CASE("leaky_relu is x > 0 ? x : alpha * x exactly, on every kernel") {
     for (Kernel k : AvailableKernels()) {
       CAPTURE(n);
       CAPTURE(ToString(k));
-      auto model = PolicyModel::FromSpec(spec, {.kernel = k});
-      REQUIRE(model.ok());
-      auto data = MakePolicyData(*model);
-      REQUIRE(data.ok());
+      const auto run = pbppo::test::OnKernel(spec, k);
+      const PolicyModel* model = &run->model;
+      PolicyData* data = &*run->data;
       pbppo::Rng rng(n);
       for (int r = 0; r < 20; ++r) {
         auto obs = data->observation();
@@ -206,10 +206,9 @@ TEST_CASE("non-finite observations skip inference and are counted") {
   const PolicySpec spec = MakeRandomSpec({24, 64, 64, 2}, Activation::kTanh, 3);
   for (Kernel k : AvailableKernels()) {
     CAPTURE(ToString(k));
-    auto model = PolicyModel::FromSpec(spec, {.kernel = k});
-    REQUIRE(model.ok());
-    auto data = MakePolicyData(*model);
-    REQUIRE(data.ok());
+    const auto run = pbppo::test::OnKernel(spec, k);
+    const PolicyModel* model = &run->model;
+    PolicyData* data = &*run->data;
     for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                       -std::numeric_limits<float>::infinity()}) {
       std::fill(data->observation().begin(), data->observation().end(), 0.5f);
@@ -233,10 +232,9 @@ TEST_CASE("actions stay inside [low, high]") {
     spec.action_high[j] = 0.5f;
   }
   for (Kernel k : AvailableKernels()) {
-    auto model = PolicyModel::FromSpec(spec, {.kernel = k});
-    REQUIRE(model.ok());
-    auto data = MakePolicyData(*model);
-    REQUIRE(data.ok());
+    const auto run = pbppo::test::OnKernel(spec, k);
+    const PolicyModel* model = &run->model;
+    PolicyData* data = &*run->data;
     pbppo::Rng rng(1);
     bool low = false, high = false;
     for (int r = 0; r < 200; ++r) {

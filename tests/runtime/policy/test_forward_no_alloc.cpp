@@ -5,6 +5,7 @@
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/core/random.hpp"
 #include "runtime/policy/policy_model.hpp"
+#include "tests/support/policy_on_kernel.hpp"
 
 using namespace pbppo::policy;
 
@@ -31,10 +32,9 @@ TEST_CASE("100,000 forward calls allocate nothing") {
     const PolicySpec spec = MakeRandomSpec(net.widths, net.act, 2);
     for (Kernel k : AvailableKernels()) {
       CAPTURE(ToString(k));
-      auto model = PolicyModel::FromSpec(spec, {.kernel = k});
-      REQUIRE(model.ok());
-      auto data = MakePolicyData(*model);
-      REQUIRE(data.ok());
+      const auto run = pbppo::test::OnKernel(spec, k);
+      const PolicyModel* model = &run->model;
+      PolicyData* data = &*run->data;
       pbppo::Rng rng(4);
       std::uint64_t allocations = 0;
       int bad = 0;
