@@ -41,6 +41,7 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--settle-s", o.settle_s, "--schedule: tracking is judged this long after each phase starts")
       ->check(CLI::Range(0.0, 100.0));
   s.add_option("--seed", o.seed, "Seed for the initial states")->check(cli_checks::NonNegativeInteger());
+  s.add_option("--contact-forces", o.env.contact_forces, "ant: computed, or zero (as the policy trained)");
   s.add_option("--models", o.env.models_dir, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
   s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");

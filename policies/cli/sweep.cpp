@@ -147,6 +147,7 @@ std::vector<std::string> EvalEnvFlags(const envs::EnvOptions& e) {
   std::vector<std::string> f = {"--env=" + e.name};
   if (!e.models_dir.empty()) f.push_back("--models=" + e.models_dir);
   if (e.name == "auv-nav") f.push_back("--layout=" + e.layout);
+  if (e.name == "ant") f.push_back("--contact-forces=" + e.contact_forces);
   if (e.name == "quadruped-walk") {
     f.push_back("--terrain=" + e.terrain);
     if (!e.commands.empty()) f.push_back("--commands=" + e.commands);

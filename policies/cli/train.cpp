@@ -116,6 +116,9 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
   s.add_option("--commands", env.commands,
                "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
+  s.add_option("--contact-forces", env.contact_forces,
+               "ant: computed (the standard task) or zero (observed as 0, no contact cost: as the paper's software "
+               "ran)");
   s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
 
   // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default

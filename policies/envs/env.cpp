@@ -38,6 +38,12 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     if (options.terrain != "flat") return only("--terrain", "quadruped-walk", "terrains to choose");
     if (!options.commands.empty()) return only("--commands", "quadruped-walk", "velocity commands");
   }
+  if (options.contact_forces != "computed") {
+    if (name != "ant") return only("--contact-forces", "ant", "contact forces to leave out");
+    if (options.contact_forces != "zero")
+      return MakeError(ErrorCode::kInvalidValue,
+                       "--contact-forces: '" + options.contact_forces + "' is not computed or zero");
+  }
   const std::string dir = options.models_dir.empty() ? DefaultModelsDir() : options.models_dir;
   if (name == "pendulum") {
     auto layout = robot::LoadIoLayout(dir + "/pendulum/io_layout.yaml");
@@ -63,7 +69,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     return std::unique_ptr<Env>(std::move(env).value());
   }
   if (const MujocoTaskSpec* spec = FindMujocoTask(name)) {
-    auto env = MujocoTask::Make(*spec, dir);
+    auto env = MujocoTask::Make(*spec, dir, options.contact_forces == "computed");
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());
   }

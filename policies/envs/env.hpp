@@ -115,6 +115,9 @@ struct EnvOptions {
   // quadruped-walk: resample commands this often (s); 0: walk.yaml's period. pbppo eval sets
   // the test's 10 s (kWalkEvalResampleS).
   double resample_s = 0;
+  // --contact-forces, ant: "computed" (the standard task's observation and contact cost) or "zero"
+  // (left at zero, as the paper's software ran: mujoco-py on MuJoCo 2.x never computed them).
+  std::string contact_forces = "computed";
 };
 
 // The names MakeEnv() knows.

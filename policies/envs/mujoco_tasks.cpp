@@ -42,7 +42,8 @@ struct MujocoTask::Shared {
   const MujocoTaskSpec* spec = nullptr;
   mjModel* model = nullptr;
   robot::IoLayout layout;
-  int torso = -1;  // ant: the body whose x position measures progress
+  int torso = -1;              // ant: the body whose x position measures progress
+  bool contact_forces = true;  // ant: computed (else left at zero)
   ~Shared() {
     if (model != nullptr) mj_deleteModel(model);
   }
@@ -60,7 +61,8 @@ std::vector<std::string> MujocoTaskNames() {
   return out;
 }
 
-Result<std::unique_ptr<MujocoTask>> MujocoTask::Make(const MujocoTaskSpec& spec, const std::string& models_dir) {
+Result<std::unique_ptr<MujocoTask>> MujocoTask::Make(const MujocoTaskSpec& spec, const std::string& models_dir,
+                                                     bool contact_forces) {
   const std::string folder = models_dir + "/" + spec.folder;
   const std::string xml = folder + "/" + spec.folder + ".xml";
   auto layout = robot::LoadIoLayout(folder + "/io_layout.yaml");
@@ -68,6 +70,7 @@ Result<std::unique_ptr<MujocoTask>> MujocoTask::Make(const MujocoTaskSpec& spec,
 
   auto shared = std::make_shared<Shared>();
   shared->spec = &spec;
+  shared->contact_forces = contact_forces;
   shared->layout = std::move(layout).value();
   char error[1000] = "";
   shared->model = mj_loadXML(xml.c_str(), nullptr, error, sizeof error);
@@ -174,6 +177,10 @@ bool MujocoTask::healthy() const noexcept {
   return false;
 }
 
+std::string MujocoTask::provenance() const {
+  return shared_->contact_forces ? name_ : name_ + " (contact forces zero)";
+}
+
 void MujocoTask::Observe(std::span<float> observation) const noexcept {
   const mjModel* m = shared_->model;
   const MujocoTaskSpec& s = *shared_->spec;
@@ -186,7 +193,7 @@ void MujocoTask::Observe(std::span<float> observation) const noexcept {
   }
   if (s.kind == MujocoTaskKind::kAnt)
     for (int i = 0; i < 6 * m->nbody; ++i)
-      observation[k++] = static_cast<float>(std::clamp(d_->cfrc_ext[i], -1.0, 1.0));
+      observation[k++] = shared_->contact_forces ? static_cast<float>(std::clamp(d_->cfrc_ext[i], -1.0, 1.0)) : 0.0f;
 }
 
 void MujocoTask::Reset(Rng& rng, std::span<float> observation) {
@@ -197,7 +204,7 @@ void MujocoTask::Reset(Rng& rng, std::span<float> observation) {
   for (int i = 0; i < m->nv; ++i)
     d_->qvel[i] = s.normal_velocity_noise ? s.reset_noise * rng.Normal() : rng.Uniform(-s.reset_noise, s.reset_noise);
   mj_forward(m, d_);
-  if (s.kind == MujocoTaskKind::kAnt) mj_rnePostConstraint(m, d_);
+  if (s.kind == MujocoTaskKind::kAnt && shared_->contact_forces) mj_rnePostConstraint(m, d_);
   elapsed_ = 0;
   Observe(observation);
 }
@@ -214,7 +221,7 @@ StepResult MujocoTask::Step(std::span<const float> action, std::span<float> obse
   const double before = forward_position();
   for (int i = 0; i < s.frame_skip; ++i) mj_step(m, d_);
   double contact_sq = 0;
-  if (s.kind == MujocoTaskKind::kAnt) {
+  if (s.kind == MujocoTaskKind::kAnt && shared_->contact_forces) {
     // MuJoCo computes the external contact forces only on request.
     mj_rnePostConstraint(m, d_);
     for (int i = 0; i < 6 * m->nbody; ++i) {

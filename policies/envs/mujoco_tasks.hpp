@@ -52,7 +52,10 @@ class MujocoTask final : public Env {
   // Loads models/<folder>/<folder>.xml and io_layout.yaml from `models_dir` and checks that they
   // fit the task (observation and action counts, the action map's [-1, 1] bounds, the bodies and
   // joints the task reads). Errors name the file and what is wrong.
-  static Result<std::unique_ptr<MujocoTask>> Make(const MujocoTaskSpec& spec, const std::string& models_dir);
+  // contact_forces false (ant): the external contact forces are left at zero, observed as 0 and
+  // costing nothing, as the paper's software ran (mujoco-py on MuJoCo 2.x never computed them).
+  static Result<std::unique_ptr<MujocoTask>> Make(const MujocoTaskSpec& spec, const std::string& models_dir,
+                                                  bool contact_forces = true);
 
   ~MujocoTask() override;
   MujocoTask(const MujocoTask&) = delete;
@@ -65,6 +68,8 @@ class MujocoTask final : public Env {
   std::span<const float> action_high() const noexcept override { return high_; }
   std::uint32_t max_episode_steps() const noexcept override { return kEpisodeSteps; }
   const robot::IoLayout& layout() const noexcept override;
+  // The name, and "contact forces zero" when they are left out.
+  std::string provenance() const override;
 
   void Reset(Rng& rng, std::span<float> observation) override;
   StepResult Step(std::span<const float> action, std::span<float> observation) override;

@@ -181,6 +181,34 @@ TEST_CASE("mujoco tasks: observations - root x left out, velocities clipped, ant
     contact += std::fabs(a[i]);
   }
   CHECK(contact > 0.5);
+  CHECK(ant->provenance() == "ant");
+
+  // --contact-forces zero (the paper's software): observed as 0 and no contact cost, the same
+  // motion otherwise; refused on another task or with another value.
+  envs::EnvOptions o;
+  o.name = "ant";
+  o.models_dir = test::SourcePath("models");
+  o.contact_forces = "zero";
+  auto zero = MakeEnv(o);
+  REQUIRE_MESSAGE(zero.ok(), zero.error().message);
+  CHECK((*zero)->provenance() == "ant (contact forces zero)");
+  Rng r1(5), r2(5);
+  std::vector<float> with(a.size()), without(a.size());
+  ant->Reset(r1, with);
+  (*zero)->Reset(r2, without);
+  double reward_with = 0, reward_without = 0;
+  for (int t = 0; t < 40; ++t) {
+    reward_with += ant->Step(act, with).reward;
+    reward_without += (*zero)->Step(act, without).reward;
+  }
+  for (std::size_t i = 0; i < 27; ++i) CHECK(with[i] == without[i]);
+  for (std::size_t i = 27; i < a.size(); ++i) CHECK(without[i] == 0.0f);
+  CHECK(reward_without > reward_with);  // the contact cost is gone, nothing else changed
+  o.contact_forces = "none";
+  CHECK(MakeEnv(o).error().message == "--contact-forces: 'none' is not computed or zero");
+  o.name = "hopper";
+  o.contact_forces = "zero";
+  CHECK(MakeEnv(o).error().message == "--contact-forces: only ant has contact forces to leave out, not 'hopper'");
 }
 
 TEST_CASE("mujoco tasks: a broken model or a layout of the wrong size is refused naming the file") {
