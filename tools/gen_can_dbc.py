@@ -76,32 +76,26 @@ def main():
         classic_id = int(u["id"]) if u["format"] == "classic" else a.classic_imu_id
         fd_id = int(u["id"]) if u["format"] == "fd" else a.fd_imu_id
         q, w, acc = 1.0 / 32767.0, 1.0 / 1000.0, 1.0 / 200.0
-        out.append(f"BO_ {classic_id} IMU_{n}_Q: 8 IMU")
-        for i, c in enumerate("wxyz"):
-            out.append(sig_le16("q" + c, 16 * i, q, ""))
-        out.append("")
-        out.append(f"BO_ {classic_id + 1} IMU_{n}_W: 8 IMU")
-        for i, c in enumerate("xyz"):
-            out.append(sig_le16("w" + c, 16 * i, w, "rad/s"))
-        out.append(sig_u8("seq", 48))
-        out.append(sig_u8("status", 56))
-        out.append("")
-        out.append(f"BO_ {classic_id + 2} IMU_{n}_A: 8 IMU")
-        for i, c in enumerate("xyz"):
-            out.append(sig_le16("a" + c, 16 * i, acc, "m/s^2"))
-        out.append(sig_u8("seq", 48))
-        out.append(sig_u8("status", 56))
-        out.append("")
-        out.append(f"BO_ {fd_id} IMU_{n}_FD: 24 IMU")
-        for i, c in enumerate("wxyz"):
-            out.append(sig_le16("q" + c, 16 * i, q, ""))
-        for i, c in enumerate("xyz"):
-            out.append(sig_le16("w" + c, 64 + 16 * i, w, "rad/s"))
-        for i, c in enumerate("xyz"):
-            out.append(sig_le16("a" + c, 112 + 16 * i, acc, "m/s^2"))
-        out.append(sig_u8("seq", 160))
-        out.append(sig_u8("status", 168))
-        out.append("")
+        # (name, axes, scale, unit) of each vector, in the order the FD frame packs them.
+        vectors = [("q", "wxyz", q, ""), ("w", "xyz", w, "rad/s"), ("a", "xyz", acc, "m/s^2")]
+
+        def message(can_id, suffix, length, parts, seq_bit):
+            out.append(f"BO_ {can_id} IMU_{n}_{suffix}: {length} IMU")
+            bit = 0
+            for name, axes, scale, unit in parts:
+                for c in axes:
+                    out.append(sig_le16(name + c, bit, scale, unit))
+                    bit += 16
+            if seq_bit is not None:
+                out.append(sig_u8("seq", seq_bit))
+                out.append(sig_u8("status", seq_bit + 8))
+            out.append("")
+
+        # Classic: three 8-byte frames, the vectors after the first ending in seq and status.
+        message(classic_id, "Q", 8, vectors[0:1], None)
+        message(classic_id + 1, "W", 8, vectors[1:2], 48)
+        message(classic_id + 2, "A", 8, vectors[2:3], 48)
+        message(fd_id, "FD", 24, vectors, 160)
         fd_ids.append(fd_id)
         comments.append(f'CM_ BO_ {classic_id} "IMU {n}, classic variant frame 0 (orientation)";')
         comments.append(f'CM_ BO_ {fd_id} "IMU {n}, CAN FD variant (whole sample in one frame)";')

@@ -20,7 +20,7 @@ namespace pbppo::trainer {
 
 struct TrainOptions {
   // The environment (--env, --models, --layout and the environment's own flags).
-  envs::EnvOptions env;
+  envs::EnvOptions env{};
 
   // Budget and parallelism.
   std::uint64_t seed = 1;
@@ -37,7 +37,7 @@ struct TrainOptions {
   int minibatch = 64;
   int epochs = 10;
   double learning_rate = 3e-4;  // --lr: the rate, or the first one (anneal, adaptive)
-  LrSchedule lr_schedule;
+  LrSchedule lr_schedule{};
   double gamma = 0.99;
   double gae_lambda = 0.95;
   double ent_coef = 0.0;
@@ -55,7 +55,7 @@ struct TrainOptions {
 
   // Networks.
   std::vector<int> policy_hidden = {64, 64};  // --hidden
-  std::vector<int> value_hidden;              // --value-hidden; empty: as policy_hidden
+  std::vector<int> value_hidden{};            // --value-hidden; empty: as policy_hidden
   policy::Activation activation = policy::Activation::kTanh;
   double log_std_init = 0.0;
   // Running observation normalisation (the actor's is frozen into the blob; a privileged critic
@@ -63,13 +63,13 @@ struct TrainOptions {
   bool normalize_observations = false;
   // --init: the policy network and observation normaliser of this blob (same IO layout, widths and
   // activation; the value network and log-std start fresh). Empty: orthogonal initialisation.
-  std::string init_blob;
+  std::string init_blob{};
   // With init_blob: the first this many iterations update only the value network (which starts
   // fresh), so the policy is not moved by the untrained critic's advantages. 0: none.
   int critic_warmup = 0;
 
   // Outputs.
-  std::string out_dir;  // --out; empty: write nothing
+  std::string out_dir{};  // --out; empty: write nothing
   bool plots = true;
   double checkpoint_seconds = 30.0;
   // Also write best.blob: the policy of the best last-100-episode task success where the

@@ -11,16 +11,18 @@ inline constexpr std::uint32_t kBlobFormatVersion = 1;
 inline constexpr std::uint32_t kBlobHeaderBytes = 48;
 inline constexpr std::uint32_t kLayerRecordBytes = 16;
 
-// Fixed header offsets.
-inline constexpr std::size_t kOffMagic = 0;
-inline constexpr std::size_t kOffVersion = 8;
-inline constexpr std::size_t kOffHeaderBytes = 12;
-inline constexpr std::size_t kOffFileBytes = 16;
-inline constexpr std::size_t kOffInputSize = 24;
-inline constexpr std::size_t kOffOutputSize = 28;
-inline constexpr std::size_t kOffLayerCount = 32;
-inline constexpr std::size_t kOffActionHead = 36;
-inline constexpr std::size_t kOffIoLayoutHash = 40;
+// The fixed header: each field's offset in bytes (its type after it).
+enum BlobHeaderOffset : std::size_t {
+  kOffMagic = 0,          // 8 bytes
+  kOffVersion = 8,        // u32
+  kOffHeaderBytes = 12,   // u32
+  kOffFileBytes = 16,     // u64
+  kOffInputSize = 24,     // u32
+  kOffOutputSize = 28,    // u32
+  kOffLayerCount = 32,    // u32
+  kOffActionHead = 36,    // u32
+  kOffIoLayoutHash = 40,  // u64
+};
 
 // Capacity limits checked before anything is allocated. Callers may tighten them.
 struct BlobLimits {

@@ -141,11 +141,7 @@ struct Loader : detail::Builder {
   }
 
   Status DeclaredStreams(const YAML::Node& root) {
-    YAML::Node list;
-    PBPPO_TRY(f.List(root, "streams", "", false, &list));
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const std::string w = "streams[" + std::to_string(i) + "]";
-      const YAML::Node n = list[i];
+    return f.EachItem(root, "streams", "", false, [&](const YAML::Node& n, const std::string& w) -> Status {
       PBPPO_TRY(
           f.Keys(n, w, {"name", "transport", "period_s", "stale_after", "invalid_safe_stop", "required", "fields"}));
       StreamSpec s;
@@ -156,63 +152,55 @@ struct Loader : detail::Builder {
       PBPPO_TRY(f.Count(n, "invalid_safe_stop", w, 1, 1000000, &s.invalid_safe_stop));
       PBPPO_TRY(f.Bool(n, "required", w, &s.required));
       PBPPO_TRY(StartStream(std::move(s), w));
-      YAML::Node fields;
-      PBPPO_TRY(f.List(n, "fields", w, true, &fields));
-      for (std::size_t k = 0; k < fields.size(); ++k) {
-        const std::string fw = w + ".fields[" + std::to_string(k) + "]";
-        PBPPO_TRY(f.Keys(fields[k], fw, {"name", "min", "max", "count"}));
+      return f.EachItem(n, "fields", w, true, [&](const YAML::Node& field, const std::string& fw) -> Status {
+        PBPPO_TRY(f.Keys(field, fw, {"name", "min", "max", "count"}));
         std::string name;
         double lo = -kInf, hi = kInf;
         std::uint32_t count = 0;
-        PBPPO_TRY(f.Text(fields[k], "name", fw, &name, Rule::kToken));
-        PBPPO_TRY(f.OptionalNumber(fields[k], "min", fw, -kInf, kInf, &lo));
-        PBPPO_TRY(f.OptionalNumber(fields[k], "max", fw, -kInf, kInf, &hi));
-        if (fields[k]["count"]) {
-          PBPPO_TRY(f.Count(fields[k], "count", fw, 1, 4096, &count));
-          if (name.find("{i}") == std::string::npos) return f.Fail(fw + ".name", "'" + name + "' has no {i}");
-          for (std::uint32_t j = 0; j < count; ++j) PBPPO_TRY(AddField(ExpandIndex(name, j), lo, hi, fw));
-        } else {
-          PBPPO_TRY(AddField(name, lo, hi, fw));
-        }
-      }
-    }
-    return {};
+        PBPPO_TRY(f.Text(field, "name", fw, &name, Rule::kToken));
+        PBPPO_TRY(f.OptionalNumber(field, "min", fw, -kInf, kInf, &lo));
+        PBPPO_TRY(f.OptionalNumber(field, "max", fw, -kInf, kInf, &hi));
+        if (!field["count"]) return AddField(name, lo, hi, fw);
+        PBPPO_TRY(f.Count(field, "count", fw, 1, 4096, &count));
+        if (name.find("{i}") == std::string::npos) return f.Fail(fw + ".name", "'" + name + "' has no {i}");
+        for (std::uint32_t j = 0; j < count; ++j) PBPPO_TRY(AddField(ExpandIndex(name, j), lo, hi, fw));
+        return {};
+      });
+    });
   }
 
   Status DeclaredCommands(const YAML::Node& root) {
-    YAML::Node list;
-    PBPPO_TRY(f.List(root, "commands", "", false, &list));
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const std::string w = "commands[" + std::to_string(i) + "]";
-      const YAML::Node n = list[i];
-      PBPPO_TRY(f.Keys(n, w, {"name", "unit", "range", "degraded_range", "rate_per_s", "stop", "neutral"}));
-      CommandSpec c;
-      std::array<double, 2> range{}, degraded{};
-      PBPPO_TRY(f.Text(n, "name", w, &c.name, Rule::kToken));
-      c.unit = "1";
-      PBPPO_TRY(f.OptionalText(n, "unit", w, &c.unit, Rule::kToken));
-      PBPPO_TRY(f.Range(n, "range", w, -kInf, kInf, &range));
-      c.min = range[0];
-      c.max = range[1];
-      degraded = range;
-      if (n["degraded_range"]) PBPPO_TRY(f.Range(n, "degraded_range", w, c.min, c.max, &degraded));
-      c.degraded_min = degraded[0];
-      c.degraded_max = degraded[1];
-      PBPPO_TRY(f.OptionalNumber(n, "rate_per_s", w, 1e-9, kInf, &c.rate_per_s));
-      PBPPO_TRY(f.OptionalNumber(n, "neutral", w, c.min, c.max, &c.neutral));
-      YAML::Node stop;
-      PBPPO_TRY(f.Map(n, "stop", w, &stop));
-      const std::string sw = w + ".stop";
-      PBPPO_TRY(f.Keys(stop, sw, {"ramp_per_s", "value"}));
-      if (stop["ramp_per_s"]) {
-        c.stop = safety::StopKind::kRamp;
-        PBPPO_TRY(f.Number(stop, "ramp_per_s", sw, 1e-9, kInf, &c.stop_ramp_per_s));
-      } else {
-        c.stop = safety::StopKind::kValue;
-        PBPPO_TRY(f.Number(stop, "value", sw, c.min, c.max, &c.stop_value));
-      }
-      PBPPO_TRY(AddCommand(std::move(c), w));
-    }
+    const Status commands =
+        f.EachItem(root, "commands", "", false, [&](const YAML::Node& n, const std::string& w) -> Status {
+          PBPPO_TRY(f.Keys(n, w, {"name", "unit", "range", "degraded_range", "rate_per_s", "stop", "neutral"}));
+          CommandSpec c;
+          std::array<double, 2> range{}, degraded{};
+          PBPPO_TRY(f.Text(n, "name", w, &c.name, Rule::kToken));
+          c.unit = "1";
+          PBPPO_TRY(f.OptionalText(n, "unit", w, &c.unit, Rule::kToken));
+          PBPPO_TRY(f.Range(n, "range", w, -kInf, kInf, &range));
+          c.min = range[0];
+          c.max = range[1];
+          degraded = range;
+          if (n["degraded_range"]) PBPPO_TRY(f.Range(n, "degraded_range", w, c.min, c.max, &degraded));
+          c.degraded_min = degraded[0];
+          c.degraded_max = degraded[1];
+          PBPPO_TRY(f.OptionalNumber(n, "rate_per_s", w, 1e-9, kInf, &c.rate_per_s));
+          PBPPO_TRY(f.OptionalNumber(n, "neutral", w, c.min, c.max, &c.neutral));
+          YAML::Node stop;
+          PBPPO_TRY(f.Map(n, "stop", w, &stop));
+          const std::string sw = w + ".stop";
+          PBPPO_TRY(f.Keys(stop, sw, {"ramp_per_s", "value"}));
+          if (stop["ramp_per_s"]) {
+            c.stop = safety::StopKind::kRamp;
+            PBPPO_TRY(f.Number(stop, "ramp_per_s", sw, 1e-9, kInf, &c.stop_ramp_per_s));
+          } else {
+            c.stop = safety::StopKind::kValue;
+            PBPPO_TRY(f.Number(stop, "value", sw, c.min, c.max, &c.stop_value));
+          }
+          return AddCommand(std::move(c), w);
+        });
+    if (!commands) return commands;
     if (m.commands.empty()) return f.Fail("commands", "the robot has no command (declare some, or a can_map)");
     return {};
   }
@@ -255,20 +243,18 @@ struct Loader : detail::Builder {
     if (s.overrun_safe_stop <= s.overrun_degraded)
       return f.Fail("supervisor.overrun.safe_stop", std::to_string(s.overrun_safe_stop) + " is not above degraded " +
                                                         std::to_string(s.overrun_degraded));
-    YAML::Node limits;
-    PBPPO_TRY(f.List(n, "signal_limits", "supervisor", false, &limits));
-    for (std::size_t i = 0; i < limits.size(); ++i) {
-      const std::string w = "supervisor.signal_limits[" + std::to_string(i) + "]";
-      PBPPO_TRY(f.Keys(limits[i], w, {"signal", "range"}));
-      SignalLimitSpec l;
-      std::array<double, 2> r{};
-      PBPPO_TRY(f.Text(limits[i], "signal", w, &l.signal, Rule::kToken));
-      PBPPO_TRY(f.Range(limits[i], "range", w, -kInf, kInf, &r));
-      l.min = r[0];
-      l.max = r[1];
-      s.signal_limits.push_back(std::move(l));
-    }
-    return {};
+    return f.EachItem(n, "signal_limits", "supervisor", false,
+                      [&](const YAML::Node& e, const std::string& w) -> Status {
+                        PBPPO_TRY(f.Keys(e, w, {"signal", "range"}));
+                        SignalLimitSpec l;
+                        std::array<double, 2> r{};
+                        PBPPO_TRY(f.Text(e, "signal", w, &l.signal, Rule::kToken));
+                        PBPPO_TRY(f.Range(e, "range", w, -kInf, kInf, &r));
+                        l.min = r[0];
+                        l.max = r[1];
+                        s.signal_limits.push_back(std::move(l));
+                        return {};
+                      });
   }
 };
 

@@ -55,6 +55,17 @@ class YamlFields {
   Status List(const YAML::Node& parent, const char* key, const std::string& where, bool required,
               YAML::Node* out) const;
 
+  // Calls each(item, where) on every item of the list `key` (as List), `where` naming the item
+  // ("key[i]" under the parent's place); the first error stops the walk and is returned.
+  template <typename Each>
+  Status EachItem(const YAML::Node& parent, const char* key, const std::string& where, bool required, Each each) const {
+    YAML::Node list;
+    if (auto st = List(parent, key, where, required, &list); !st) return st;
+    for (std::size_t i = 0; i < list.size(); ++i)
+      if (auto st = each(list[i], Join(where, key) + "[" + std::to_string(i) + "]"); !st) return st;
+    return {};
+  }
+
   // A required finite number in [lo, hi].
   Status Number(const YAML::Node& map, const char* key, const std::string& where, double lo, double hi,
                 double* out) const;

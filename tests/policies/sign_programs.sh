@@ -9,10 +9,8 @@
 # usage: sign_programs.sh PBPPO HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 work=$5
-rm -rf "$work"
-mkdir -p "$work"
-cd "$src"
-source "$src/tests/support/checks.sh"  # fail, expect
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+start_in "$src" "$work"
 refused() {  # refused LOG PATTERN CMD...: exits 1, says PATTERN
   local log=$1 pattern=$2 rc=0
   shift 2

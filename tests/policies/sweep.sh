@@ -9,9 +9,8 @@
 # usage: sweep.sh PBPPO MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 mpiexec=$2 src=$3 work=$4
-rm -rf "$work"
-mkdir -p "$work"
-source "$src/tests/support/checks.sh"  # fail, expect
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir
+fresh_dir "$work"
 cd "$work"
 grid=(--grid schedule=fixed:0.2,pbppo --seeds 1-2)
 train=(-- --steps 4096 --rollout 256 --threads 1 --no-plots)

@@ -12,10 +12,8 @@
 # usage: auv_dds_security.sh HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 src=$3 work=$4
-rm -rf "$work"
-mkdir -p "$work"
-cd "$src"
-source "$src/tests/support/checks.sh"  # fail, expect
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+start_in "$src" "$work"
 blob=policies/frozen/auv_nav/auv_nav.blob
 robot=models/auv/robot.yaml
 domain=$((60 + $$ % 100))

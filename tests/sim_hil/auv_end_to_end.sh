@@ -14,15 +14,13 @@
 # usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
-rm -rf "$work"
-mkdir -p "$work"
-cd "$src"
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+start_in "$src" "$work"
 blob=policies/frozen/auv_nav/auv_nav.blob
 robot=models/auv/robot.yaml
 # Missions the shipped policy must complete: "layout:seed ...".
 missions=${PBPPO_AUV_MISSIONS:-$(cat policies/frozen/auv_nav/test_missions.txt)}
 domain=$((100 + $$ % 100))
-source "$src/tests/support/checks.sh"  # fail, expect
 
 echo "== 1: start-up refusals"
 cp "$blob" "$work/corrupt.blob"

@@ -13,12 +13,10 @@
 # usage: operator_programs.sh HIL OPERATOR CYCLONE_OPERATOR SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 op=$2 cyclone=$3 src=$4 work=$5
-rm -rf "$work"
-mkdir -p "$work"
-cd "$src"
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+start_in "$src" "$work"
 blob=policies/frozen/quadruped_walk/flat.blob
 domain=$((30 + $$ % 150))
-source "$src/tests/support/checks.sh"  # fail, expect
 cat > "$work/short.yaml" <<'YAML'
 stream: velocity_command
 phases:

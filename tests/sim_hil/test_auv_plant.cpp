@@ -225,17 +225,18 @@ TEST_CASE("auv plant: reset after a run restarts the same trajectory") {
 }
 
 TEST_CASE("auv plant: bad parameters are refused naming the field") {
-  AuvParams p = Params();
-  p.control_period_s = 0.05;
-  p.physics_step_s = 0.02;
-  auto r = AuvPlant::Create(p);
-  REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message.find("control period (robot.yaml timing.policy_period_s) = 0.05") != std::string::npos);
-  p = Params();
-  p.mass_kg = -1.0;
-  r = AuvPlant::Create(p);
-  REQUIRE_FALSE(r.ok());
-  CHECK(r.error().message.find("hull.mass_kg") != std::string::npos);
+  // The error of the shipped parameters changed by `edit`.
+  auto refused = [](void (*edit)(AuvParams&)) {
+    AuvParams p = Params();
+    edit(p);
+    auto r = AuvPlant::Create(p);
+    REQUIRE_FALSE(r.ok());
+    return r.error().message;
+  };
+  CHECK(refused([](AuvParams& p) {
+          p.control_period_s = 0.05, p.physics_step_s = 0.02;
+        }).find("control period (robot.yaml timing.policy_period_s) = 0.05") != std::string::npos);
+  CHECK(refused([](AuvParams& p) { p.mass_kg = -1.0; }).find("hull.mass_kg") != std::string::npos);
 }
 
 // Step-size check: the 20 ms steps (controller at the same rate) against a converged 2 ms RK2 run over 40 s of changing

@@ -11,12 +11,10 @@
 # usage: import_end_to_end.sh PBPPO HIL CONTROLLER SOURCE_DIR MODELS_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
-rm -rf "$work"
-mkdir -p "$work"
-cd "$src"
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+start_in "$src" "$work"
 quad=models/quadruped/robot.yaml auv=models/auv/robot.yaml
 domain=$((100 + $$ % 100))
-source "$src/tests/support/checks.sh"  # fail, expect
 
 echo "== 1: the good models import"
 import() {  # import NAME ROBOT

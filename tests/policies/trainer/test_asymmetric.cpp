@@ -67,18 +67,16 @@ class HiddenOffset final : public envs::Env {
 };
 
 TrainOptions Options(int threads) {
-  TrainOptions o;
-  o.num_envs = 8;
-  o.rollout_steps = 100;
-  o.total_steps = 16000;
-  o.minibatch = 200;
-  o.epochs = 5;
-  o.learning_rate = 1e-3;
-  o.gamma = 0.95;
-  o.threads = threads;
-  o.normalize_observations = true;
-  o.seed = 5;
-  return o;
+  return {.seed = 5,
+          .total_steps = 16000,
+          .num_envs = 8,
+          .rollout_steps = 100,
+          .threads = threads,
+          .minibatch = 200,
+          .epochs = 5,
+          .learning_rate = 1e-3,
+          .gamma = 0.95,
+          .normalize_observations = true};
 }
 
 double LateExplainedVariance(const TrainResult& r) {

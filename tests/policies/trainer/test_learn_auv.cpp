@@ -11,6 +11,7 @@
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -29,9 +30,8 @@ TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches t
   c.total_steps = 200000;
   c.seed = 1;
   c.plots = false;
-  const auto dir = std::filesystem::temp_directory_path() / "pbppo_test_learn_auv";
-  std::filesystem::remove_all(dir);
-  c.out_dir = dir.string();
+  c.out_dir = test::ScratchDir("learn_auv");
+  const std::filesystem::path dir = c.out_dir;
   auto r = Train(c);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   const double first = r->iterations.front().train_return;

@@ -9,19 +9,14 @@
 #include "policies/trainer/clip_schedule.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/train_options.hpp"
 
 namespace pbppo::trainer {
 namespace {
 
 TEST_CASE("Pb-PPO learns hopper on a short budget with the paper's settings - return up, evaluation steps counted") {
-  TrainOptions c;
-  c.env.name = "hopper";
-  c.env.models_dir = test::SourcePath("models");
-  auto arms = ParseArms("0.02:0.5:6");
-  REQUIRE(arms.ok());
-  auto schedule = ParseSchedule("pbppo-paper:wi-ad", *arms);
-  REQUIRE_MESSAGE(schedule.ok(), schedule.error().message);
-  c.schedule = *schedule;
+  TrainOptions c = test::ForEnv("hopper");
+  c.schedule = test::Schedule("pbppo-paper:wi-ad", "0.02:0.5:6");
   c.threads = 1;
   c.total_steps = 50 * 2048;
   c.seed = 1;

@@ -12,14 +12,13 @@
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/train_options.hpp"
 
 namespace pbppo::trainer {
 namespace {
 
 TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - return up, tracking errors down") {
-  TrainOptions c;
-  c.env.name = "quadruped-walk";
-  c.env.models_dir = test::SourcePath("models");
+  TrainOptions c = test::ForEnv("quadruped-walk");
   c.env.terrain = "flat";
   c.num_envs = 512;
   c.rollout_steps = 24;
@@ -32,11 +31,7 @@ TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - retur
   c.vf_coef = 1.0;
   c.clip_vf = 0.2;
   c.max_grad_norm = 1.0;
-  auto arms = ParseArms("0.1:0.3:5");
-  REQUIRE(arms.ok());
-  auto schedule = ParseSchedule("pbppo", *arms);
-  REQUIRE_MESSAGE(schedule.ok(), schedule.error().message);
-  c.schedule = *schedule;
+  c.schedule = test::Schedule("pbppo", "0.1:0.3:5");
   c.schedule.feedback = FeedbackSource::kRollout;
   c.policy_hidden = {128, 64, 32};
   c.activation = policy::Activation::kElu;
@@ -44,9 +39,8 @@ TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - retur
   c.total_steps = 151 * 12288;  // 151 iterations of 512 x 24 steps, the recipe's first 151
   c.seed = 1;
   c.plots = false;
-  const auto dir = std::filesystem::temp_directory_path() / "pbppo_test_learn_walk";
-  std::filesystem::remove_all(dir);
-  c.out_dir = dir.string();
+  c.out_dir = test::ScratchDir("learn_walk");
+  const std::filesystem::path dir = c.out_dir;
   auto r = Train(c);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
   REQUIRE(r->iterations.size() > 100);

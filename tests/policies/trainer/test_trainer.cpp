@@ -21,14 +21,7 @@ namespace pbppo::trainer {
 namespace {
 
 TrainOptions Small() {
-  TrainOptions c;
-  c.num_envs = 4;
-  c.rollout_steps = 256;
-  c.total_steps = 4096;
-  c.minibatch = 64;
-  c.epochs = 3;
-  c.seed = 3;
-  return c;
+  return {.seed = 3, .total_steps = 4096, .num_envs = 4, .rollout_steps = 256, .minibatch = 64, .epochs = 3};
 }
 
 TEST_CASE("same seed and thread count give a bit-identical run") {
