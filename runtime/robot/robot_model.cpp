@@ -38,6 +38,18 @@ class Files {
 struct Loader : detail::Builder {
   Files& files;
 
+  // Reads `path` (counted) and parses it with parse(text, path) into *out.
+  template <typename T>
+  Status ParseFile(const std::string& path, Result<T> (*parse)(const std::string&, const std::string&),
+                   std::optional<T>* out) {
+    auto text = files.Read(path);
+    if (!text) return std::move(text).error();
+    auto parsed = parse(*text, path);
+    if (!parsed) return std::move(parsed).error();
+    *out = std::move(*parsed);
+    return {};
+  }
+
   Status FilesSection(const YAML::Node& root) {
     YAML::Node n;
     PBPPO_TRY(f.Map(root, "files", "", &n));
@@ -51,17 +63,9 @@ struct Loader : detail::Builder {
       if (!kv.second.IsScalar()) return f.Fail(where, "expected a file name or a mapping of names to files");
       const std::string path = files.PathOf(kv.second.as<std::string>());
       if (role == "io_layout") {
-        auto text = files.Read(path);
-        if (!text) return std::move(text).error();
-        auto io = ParseIoLayout(*text, path);
-        if (!io) return std::move(io).error();
-        m.io = std::move(*io);
+        PBPPO_TRY(ParseFile(path, ParseIoLayout, &m.io));
       } else if (role == "can_map") {
-        auto text = files.Read(path);
-        if (!text) return std::move(text).error();
-        auto can = ParseCanMap(*text, path);
-        if (!can) return std::move(can).error();
-        m.can = std::move(*can);
+        PBPPO_TRY(ParseFile(path, ParseCanMap, &m.can));
       } else if (role == "description") {
         PBPPO_TRY(Description(path));
       } else {

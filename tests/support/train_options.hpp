@@ -8,6 +8,7 @@
 
 #include "policies/trainer/clip_schedule.hpp"
 #include "policies/trainer/options.hpp"
+#include "policies/trainer/trainer.hpp"
 #include "tests/support/test_paths.hpp"
 
 namespace pbppo::test {
@@ -17,6 +18,15 @@ inline trainer::TrainOptions ForEnv(const std::string& env) {
   o.env.name = env;
   o.env.models_dir = SourcePath("models");
   return o;
+}
+
+// Trains `c` into `out_dir` (no plots); the run must succeed.
+inline trainer::TrainResult TrainInto(trainer::TrainOptions c, const std::string& out_dir) {
+  c.out_dir = out_dir;
+  c.plots = false;
+  auto r = trainer::Train(c);
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  return std::move(*r);
 }
 
 inline trainer::ScheduleConfig Schedule(const std::string& schedule, const std::string& arms) {

@@ -118,29 +118,24 @@ TEST_CASE("mujoco tasks: the reward is progress + healthy reward - control cost"
 
 TEST_CASE("mujoco tasks: termination when unhealthy, truncation at 1000 steps") {
   Rng rng(2);
-  SUBCASE("hopper: torso pitched beyond 0.2 rad") {
-    auto env = Make("hopper");
-    std::vector<float> obs(env->observation_size()), act(3, 0.0f);
+  // Each task's unhealthy state: one coordinate moved out of its healthy range.
+  struct Unhealthy {
+    const char* task;
+    int qpos;
+    double value;
+  };
+  for (const Unhealthy& u : {Unhealthy{"hopper", 2, 0.3},    // torso pitched beyond 0.2 rad
+                             Unhealthy{"walker2d", 1, 0.5},  // torso below 0.8 m
+                             Unhealthy{"ant", 2, 1.5}}) {    // torso above 1 m
+    CAPTURE(u.task);
+    auto env = Make(u.task);
+    std::vector<float> obs(env->observation_size()), act(env->action_size(), 0.0f);
     env->Reset(rng, obs);
     CHECK(env->healthy());
-    env->data()->qpos[2] = 0.3;
+    env->data()->qpos[u.qpos] = u.value;
     const auto r = env->Step(act, obs);
     CHECK(r.terminated);
     CHECK(std::isfinite(r.reward));
-  }
-  SUBCASE("walker2d: torso below 0.8 m") {
-    auto env = Make("walker2d");
-    std::vector<float> obs(env->observation_size()), act(6, 0.0f);
-    env->Reset(rng, obs);
-    env->data()->qpos[1] = 0.5;
-    CHECK(env->Step(act, obs).terminated);
-  }
-  SUBCASE("ant: torso above 1 m") {
-    auto env = Make("ant");
-    std::vector<float> obs(env->observation_size()), act(8, 0.0f);
-    env->Reset(rng, obs);
-    env->data()->qpos[2] = 1.5;
-    CHECK(env->Step(act, obs).terminated);
   }
   SUBCASE("half-cheetah: never terminates; truncated after 1000 steps") {
     auto env = Make("half-cheetah");

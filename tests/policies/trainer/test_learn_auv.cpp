@@ -12,6 +12,7 @@
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/train_options.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -29,15 +30,12 @@ TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches t
   c.scale_rewards = true;
   c.total_steps = 200000;
   c.seed = 1;
-  c.plots = false;
-  c.out_dir = test::ScratchDir("learn_auv");
-  const std::filesystem::path dir = c.out_dir;
-  auto r = Train(c);
-  REQUIRE_MESSAGE(r.ok(), r.error().message);
-  const double first = r->iterations.front().train_return;
-  MESSAGE("first rollout return " << first << ", last-100 return " << r->final_return);
-  CHECK(first < -200);              // the initial policy mostly collides
-  CHECK(r->final_return > 1000.0);  // real progress: most episodes now collect target rewards (1000 each)
+  const std::filesystem::path dir = test::ScratchDir("learn_auv");
+  const TrainResult r = test::TrainInto(c, dir);
+  const double first = r.iterations.front().train_return;
+  MESSAGE("first rollout return " << first << ", last-100 return " << r.final_return);
+  CHECK(first < -200);             // the initial policy mostly collides
+  CHECK(r.final_return > 1000.0);  // real progress: most episodes now collect target rewards (1000 each)
 
   // The blob on the runtime side: Forward gives commands; map them back to policy units.
   auto model = policy::PolicyModel::FromFile((dir / "policy.blob").string());

@@ -38,16 +38,13 @@ TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - retur
   c.threads = 2;
   c.total_steps = 151 * 12288;  // 151 iterations of 512 x 24 steps, the recipe's first 151
   c.seed = 1;
-  c.plots = false;
-  c.out_dir = test::ScratchDir("learn_walk");
-  const std::filesystem::path dir = c.out_dir;
-  auto r = Train(c);
-  REQUIRE_MESSAGE(r.ok(), r.error().message);
-  REQUIRE(r->iterations.size() > 100);
+  const std::filesystem::path dir = test::ScratchDir("learn_walk");
+  const TrainResult r = test::TrainInto(c, dir);
+  REQUIRE(r.iterations.size() > 100);
 
   // The first iterations' episodes (those that end early: falls) against the last 100 episodes.
-  const IterationStats& early = r->iterations[10];
-  const IterationStats& last = r->iterations.back();
+  const IterationStats& early = r.iterations[10];
+  const IterationStats& last = r.iterations.back();
   MESSAGE("return (last 100 episodes) " << early.train_return_100 << " -> " << last.train_return_100 << "; |error| vx "
                                         << early.tracking_error_100[0] << " -> " << last.tracking_error_100[0]
                                         << ", vy " << early.tracking_error_100[1] << " -> "
