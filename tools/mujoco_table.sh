@@ -28,7 +28,7 @@ if [ -n "${MPIRUN:-}" ]; then
   read -r -a launcher <<< "$MPIRUN"
   jobs=1
 fi
-# The paper's settings (the released script's; ../PBPPO.md's list is in docs/results/mujoco_table.md).
+# The paper's settings: those of its released script (its text differs in places).
 settings=(--steps "$steps" --envs 1 --rollout 2048 --minibatch 64 --epochs 10 --lr 3e-4 --hidden 64-64
   --activation tanh --gamma 0.99 --gae-lambda 0.95 --ent-coef 0 --vf-coef 0.5 --max-grad-norm 0.5
   --arms 0.02:0.5:6 --feedback eval --eval-episodes 2 --threads 1 --no-plots)
