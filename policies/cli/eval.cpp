@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "policies/cli/eval_walk.hpp"
+#include "policies/cli/train.hpp"
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/envs/walk_eval.hpp"
@@ -24,14 +25,9 @@ namespace pbppo::cli {
 
 void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("blob", o.blob, "Policy blob file")->required();
-  s.add_option("--env", o.env.name,
-               "Environment: pendulum, auv-nav, quadruped-walk, hopper, walker2d, half-cheetah, ant");
-  s.add_option("--layout", o.env.layout,
-               "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
+  AddEnvOptions(s, o.env);
   s.add_option("--episodes", o.episodes, "Episodes (quadruped-walk: robots; default 100, quadruped-walk 50)")
       ->check(CLI::Range(1, 1000000));
-  s.add_option("--terrain", o.env.terrain, "quadruped-walk: flat, or mixed (flat and blocks 1:1)");
-  s.add_option("--commands", o.env.commands, "quadruped-walk: VX:VY:YAW command maxima (default: walk.yaml's ranges)");
   s.add_flag("--randomize", o.env.randomize,
              "quadruped-walk: randomised robots as in training (friction, mass, gains, latency, pushes); default: "
              "the nominal robot");
@@ -41,8 +37,6 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--settle-s", o.settle_s, "--schedule: tracking is judged this long after each phase starts")
       ->check(CLI::Range(0.0, 100.0));
   s.add_option("--seed", o.seed, "Seed for the initial states")->check(cli_checks::NonNegativeInteger());
-  s.add_option("--contact-forces", o.env.contact_forces, "ant: computed, or zero (as the policy trained)");
-  s.add_option("--models", o.env.models_dir, "Models folder (default: the source tree's models/)");
   s.add_option("--plot", o.plot, "auv-nav: write the trajectories over the map to this PNG");
   s.add_option("--trajectories", o.trajectories, "auv-nav: write every episode's trajectory to this CSV");
   s.add_option("--outcomes", o.outcomes,

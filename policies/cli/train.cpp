@@ -11,6 +11,7 @@
 #include <ctime>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "policies/trainer/trainer.hpp"
@@ -88,13 +89,23 @@ std::string Human(double v) {
 
 }  // namespace
 
-void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
-  envs::EnvOptions& env = o.env;
+void AddEnvOptions(CLI::App& s, envs::EnvOptions& env) {
   s.add_option(
       "--env", env.name,
       "Environment: pendulum, auv-nav, quadruped-walk, or the MuJoCo tasks hopper, walker2d, half-cheetah, ant "
       "(docs/mujoco_tasks.md)");
   s.add_option("--layout", env.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
+  s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
+  s.add_option("--commands", env.commands,
+               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
+  s.add_option("--contact-forces", env.contact_forces, "ant: computed, or zero as the paper's software ran (no cost)");
+  s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
+}
+
+void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
+  envs::EnvOptions& env = o.env;
+  AddEnvOptions(s, env);
+  // auv-nav's training options.
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
                "target (success is counted only from the layout's start)");
@@ -113,13 +124,6 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_option("--extra-obstacles", env.extra_obstacles,
                "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
                "so that the policy has to steer by its sonar rather than learn a route");
-  s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
-  s.add_option("--commands", env.commands,
-               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
-  s.add_option("--contact-forces", env.contact_forces,
-               "ant: computed (the standard task) or zero (observed as 0, no contact cost: as the paper's software "
-               "ran)");
-  s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
 
   // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default
   // bandit weights), the bandit flags adjust it; resolved once every flag is read.
@@ -179,17 +183,31 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   o.total_steps = 200000;
   s.add_option("--seed", o.seed, "Seed")->check(cli_checks::NonNegativeInteger());
   s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
-  s.add_option("--threads", o.threads,
-               "Worker threads: the environments' steps and the update (see --chunked-minibatch)");
   s.add_option("--chunked-minibatch", o.chunked_minibatch,
                "Minibatches of at least N samples are computed in column chunks on every thread, summed in a fixed "
                "order (the same result for any --threads); smaller ones run the policy and value network side by "
                "side");
-  s.add_option("--envs", o.num_envs, "Parallel environments");
-  s.add_option("--rollout", o.rollout_steps, "Steps per environment and iteration");
-  s.add_option("--minibatch", o.minibatch, "Minibatch size");
-  s.add_option("--epochs", o.epochs, "Epochs per iteration");
-  s.add_option("--lr", o.learning_rate, "Adam learning rate (the first one with --lr-schedule anneal or adaptive)");
+  // Sizes and PPO's coefficients: (flag, variable, help) each.
+  using IntOption = std::tuple<const char*, int*, const char*>;
+  for (auto [flag, value, help] : {IntOption{"--threads", &o.threads,
+                                             "Worker threads: the environments' steps and the update (see "
+                                             "--chunked-minibatch)"},
+                                   IntOption{"--envs", &o.num_envs, "Parallel environments"},
+                                   IntOption{"--rollout", &o.rollout_steps, "Steps per environment and iteration"},
+                                   IntOption{"--minibatch", &o.minibatch, "Minibatch size"},
+                                   IntOption{"--epochs", &o.epochs, "Epochs per iteration"}})
+    s.add_option(flag, *value, help);
+  using RealOption = std::tuple<const char*, double*, const char*>;
+  for (auto [flag, value, help] :
+       {RealOption{"--lr", &o.learning_rate,
+                   "Adam learning rate (the first one with --lr-schedule anneal or adaptive)"},
+        RealOption{"--gamma", &o.gamma, "Discount"}, RealOption{"--gae-lambda", &o.gae_lambda, "GAE lambda"},
+        RealOption{"--ent-coef", &o.ent_coef, "Entropy coefficient"},
+        RealOption{"--vf-coef", &o.vf_coef, "Value loss coefficient"},
+        RealOption{"--max-grad-norm", &o.max_grad_norm, "Global gradient-norm clip (<= 0: off)"},
+        RealOption{"--clip-vf", &o.clip_vf, "Value clipping range (<= 0: off)"},
+        RealOption{"--log-std-init", &o.log_std_init, "Initial log standard deviation"}})
+    s.add_option(flag, *value, help);
   s.add_option_function<std::string>(
        "--lr-schedule",
        [&o](const std::string& v) {
@@ -204,12 +222,6 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_option("--snapshots", o.snapshots,
                "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by training steps), "
                "to choose among on held-out episodes (tools/select_auv.sh)");
-  s.add_option("--gamma", o.gamma, "Discount");
-  s.add_option("--gae-lambda", o.gae_lambda, "GAE lambda");
-  s.add_option("--ent-coef", o.ent_coef, "Entropy coefficient");
-  s.add_option("--vf-coef", o.vf_coef, "Value loss coefficient");
-  s.add_option("--max-grad-norm", o.max_grad_norm, "Global gradient-norm clip (<= 0: off)");
-  s.add_option("--clip-vf", o.clip_vf, "Value clipping range (<= 0: off)");
   s.add_option_function<std::string>(
        "--hidden", [&o](const std::string& v) { o.policy_hidden = ParseWidths("--hidden", v); },
        "Policy hidden widths, e.g. 64-64")
@@ -227,7 +239,6 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
        },
        "Hidden activation: tanh, elu, relu, identity")
       ->default_str("tanh");
-  s.add_option("--log-std-init", o.log_std_init, "Initial log standard deviation");
   s.add_flag("--normalize-obs", o.normalize_observations,
              "Running observation normalisation (the actor's is frozen into the blob; a privileged critic "
              "observation gets its own)");

@@ -10,6 +10,9 @@ class App;
 
 namespace pbppo::cli {
 
+// The environment's flags, shared by train and eval: --env, --layout, --terrain, --commands,
+// --contact-forces, --models.
+void AddEnvOptions(CLI::App& sub, envs::EnvOptions& env);
 void AddTrainOptions(CLI::App& sub, trainer::TrainOptions& options, bool& quiet);
 int Train(trainer::TrainOptions options, bool quiet);
 
