@@ -175,16 +175,15 @@ struct TickImpl {
     if (supervised) {
       l.limit_signals_.Compute(d.fields, {}, l.limit_values_.data());
       const char* failure = l.source_ != nullptr && l.phase_ == Phase::kRun ? l.source_->failure() : nullptr;
-      safety::SupervisorInput in;
-      in.command = l.desired_;
-      in.inputs = d.fields;
-      in.streams = d.streams;
-      in.signals = l.limit_values_;
-      in.transports = d.transports;
-      in.consecutive_deadline_misses = timing.consecutive_misses;
-      in.inference_failed = failure != nullptr;
-      in.inference_status = failure != nullptr ? failure : "";
-      in.estop_request = ev.estop;
+      const safety::SupervisorInput in{.command = l.desired_,
+                                       .inputs = d.fields,
+                                       .streams = d.streams,
+                                       .signals = l.limit_values_,
+                                       .transports = d.transports,
+                                       .consecutive_deadline_misses = timing.consecutive_misses,
+                                       .inference_failed = failure != nullptr,
+                                       .inference_status = failure != nullptr ? failure : "",
+                                       .estop_request = ev.estop};
       const safety::Decision dec = safety::Supervise(m.supervisor_model, in, d.tick, l.sup_, d.command);
       if (dec.transition) {
         if (l.mode_count_ < LoopData::kMaxChanges) {

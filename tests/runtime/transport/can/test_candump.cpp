@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "runtime/core/alloc_probe.hpp"
-#include "runtime/core/spsc_queue.hpp"
 #include "runtime/transport/can/candump_log.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -71,20 +70,6 @@ TEST_CASE("lines parse back to the same frames") {
         "(1.0) vcan0 12#00", "1.0 vcan0 123#00", "(1.0) vcan0 123#GG"}) {
     CHECK_MESSAGE(!ParseCandumpLine(bad, &r), bad);
   }
-}
-
-TEST_CASE("the SPSC queue drops when full and counts it") {
-  pbppo::SpscQueue<int> q(5);
-  CHECK(q.capacity() == 8);
-  for (int i = 0; i < 8; ++i) CHECK(q.TryPush(i));
-  CHECK_FALSE(q.TryPush(99));
-  CHECK(q.dropped() == 1);
-  int v = -1;
-  for (int i = 0; i < 8; ++i) {
-    REQUIRE(q.TryPop(&v));
-    CHECK(v == i);
-  }
-  CHECK_FALSE(q.TryPop(&v));
 }
 
 TEST_CASE("the logger writes candump lines from its own thread - pushing never allocates") {
