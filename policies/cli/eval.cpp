@@ -14,6 +14,7 @@
 #include "policies/cli/train.hpp"
 #include "policies/envs/auv_nav.hpp"
 #include "policies/envs/env.hpp"
+#include "policies/envs/mujoco_tasks.hpp"
 #include "policies/envs/walk_eval.hpp"
 #include "report/plots.hpp"
 #include "runtime/core/cli_checks.hpp"
@@ -42,6 +43,9 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--outcomes", o.outcomes,
                "auv-nav: write one row per episode to this CSV (outcome, targets, time, return, end pose, clearance, "
                "the nearest obstacle and the random obstacles)");
+  s.add_flag("--through-ends", o.through_ends,
+             "MuJoCo tasks: each episode runs its full 1000 steps, on through terminations (the paper's released "
+             "evaluation; the healthy reward keeps coming, as the v3 tasks give it)");
   s.add_flag("--json", o.json, "Print JSON");
 }
 
@@ -143,6 +147,11 @@ int Eval(const EvalOptions& o_in) {
                  o_in.env.name.c_str());
     return 2;
   }
+  if (o_in.through_ends && envs::FindMujocoTask(o_in.env.name) == nullptr) {
+    std::fprintf(stderr, "pbppo eval: --through-ends: only the MuJoCo tasks step on after an episode ends, not '%s'\n",
+                 o_in.env.name.c_str());
+    return 2;
+  }
   if (walk) return EvalWalk(o_in, *model, dynamic_cast<envs::QuadrupedWalk&>(**env));
   EvalOptions o = o_in;
   if (o.episodes == 0) o.episodes = 100;
@@ -207,7 +216,7 @@ int Eval(const EvalOptions& o_in) {
       ++steps;
       ++k;
       record();
-      if (r.terminated || r.truncated) break;
+      if (o.through_ends ? k >= static_cast<long>(e.max_episode_steps()) : (r.terminated || r.truncated)) break;
     }
     returns.push_back(ret);
     const envs::EpisodeInfo info = e.episode_info();
@@ -255,6 +264,7 @@ int Eval(const EvalOptions& o_in) {
     j["min_return"] = lo;
     j["max_return"] = hi;
     j["steps"] = steps;
+    j["through_ends"] = o.through_ends;
     j["forward_problems"] = bad;
     if (task) {
       j["successes"] = successes;
@@ -268,8 +278,10 @@ int Eval(const EvalOptions& o_in) {
     if (!o.plot.empty()) j["plot"] = plot_note.empty() ? o.plot : "";
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("%s on %s: %d episodes, seed %llu\n", o.blob.c_str(), e.name().c_str(), o.episodes,
-                static_cast<unsigned long long>(o.seed));
+    std::printf(
+        "%s on %s: %d episodes%s, seed %llu\n", o.blob.c_str(), e.name().c_str(), o.episodes,
+        o.through_ends ? (" of " + std::to_string(e.max_episode_steps()) + " steps through episode ends").c_str() : "",
+        static_cast<unsigned long long>(o.seed));
     if (task) {
       std::printf(
           "success %d/%d = %.1f%% (95%% CI %.1f-%.1f%%)  collisions %d  timeouts %d  targets/episode %.2f  "

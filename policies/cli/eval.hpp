@@ -26,6 +26,9 @@ struct EvalOptions {
   double settle_s = 1.0;     // --schedule: tracking is judged this long after each phase starts
   int episodes = 0;          // 0: the environment's test size (100; quadruped-walk: the paper's 50 robots)
   std::uint64_t seed = 7;
+  // MuJoCo tasks: every episode runs the task's full length, stepping on through terminations (the
+  // paper's released evaluation: 1000 deterministic steps, ignoring episode ends).
+  bool through_ends = false;
   bool json = false;
 };
 void AddEvalOptions(CLI::App& sub, EvalOptions& o);

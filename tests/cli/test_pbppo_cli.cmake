@@ -333,4 +333,24 @@ expect_in("${ERR}" "'1:9:1': vy '9' is not a number in [0, 5]")
 run(1 ${PBPPO} eval ${WORK}/run1/policy.blob --env quadruped-walk --episodes 1)
 expect_in("${ERR}" "policy does not fit robot layout 'quadruped'")
 
+# MuJoCo tasks: a tiny hopper run; its evaluation ends episodes at terminations, or with
+# --through-ends runs every episode its 1000 steps (the paper's released evaluation).
+run(0 ${PBPPO} train --env hopper --schedule fixed:0.2 --steps 2048 --rollout 2048 --epochs 1 --no-plots --quiet
+    --out ${WORK}/hopper)
+run(0 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --episodes 2 --json)
+string(JSON steps GET "${OUT}" steps)
+if(NOT steps LESS 2000)
+  message(FATAL_ERROR "an untrained hopper stayed up 2 x 1000 steps (${steps})")
+endif()
+run(0 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --episodes 2 --through-ends --json)
+string(JSON steps GET "${OUT}" steps)
+string(JSON through GET "${OUT}" through_ends)
+if(NOT steps EQUAL 2000 OR NOT through)
+  message(FATAL_ERROR "eval --through-ends: ${steps} steps, through_ends ${through}")
+endif()
+run(2 ${PBPPO} eval ${WORK}/run1/policy.blob --env pendulum --through-ends)
+expect_in("${ERR}" "--through-ends: only the MuJoCo tasks step on after an episode ends, not 'pendulum'")
+run(2 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --contact-forces zero)
+expect_in("${ERR}" "--contact-forces: only ant has contact forces to leave out, not 'hopper'")
+
 message(STATUS "pbppo cli: all checks passed")

@@ -1,7 +1,7 @@
 // The definitions of DdsReader<T> and DdsWriter<T> (dds_endpoint.hpp), with Fast DDS. Included
-// only by a robot's DDS binding (runtime/transport/dds/<robot>_dds_*), which declares how each of
-// its message structs travels (the type fastddsgen generates from the robot's IDL), defines the
-// conversions and instantiates the templates:
+// only by the robots' DDS bindings beside it (auv_dds_*, quadruped_dds_convert, operator_dds_link),
+// which declare how each message struct travels (the type fastddsgen generates from the robot's
+// IDL), define the conversions and instantiate the templates:
 //
 //   PBPPO_DDS_TYPE(robot::AuvCommand, pbppo_idl::auv::Command);              // the header
 //   PBPPO_DDS_FIELD_CONVERSIONS(robot::AuvCommand, PBPPO_AUV_COMMAND_FIELDS)  // a .cpp
