@@ -28,6 +28,7 @@
 #include "policies/cli/train.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/options.hpp"
+#include "runtime/core/cli_checks.hpp"
 #include "runtime/policy/blob.hpp"
 
 #define OMPI_SKIP_MPICXX 1  // the C interface only
@@ -771,7 +772,9 @@ CLI::App* AddSweep(CLI::App& app, SweepOptions& o) {
                 "Deterministic episodes of each final policy (pbppo eval --episodes; quadruped-walk: robots)")
       ->check(CLI::Range(1, 100000))
       ->default_str("10");
-  s->add_option("--eval-seed", o.eval_seed, "Seed of their initial states (pbppo eval --seed)")->default_str("7");
+  s->add_option("--eval-seed", o.eval_seed, "Seed of their initial states (pbppo eval --seed)")
+      ->check(cli_checks::NonNegativeInteger())
+      ->default_str("7");
   s->add_flag("--dry-run", o.dry_run, "Check everything, print each run's state and command, write nothing");
   s->add_option("train_flags", o.train_flags, "After --: pbppo train flags shared by every run (not --out, --seed)");
   return s;

@@ -105,4 +105,5 @@ refused "--grid schedule: empty value" --grid schedule=pbppo,
 refused "grid cell env=nonesuch: --env: 'nonesuch' unknown" --grid env=nonesuch
 refused "grid cell lr=-1: --lr: " --grid lr=0.001,-1
 refused "--seeds: '3-1' is not a range" --seeds 3-1
+refused "--eval-seed: '-3' is not an integer in \[0, 2\^64\)" --eval-seed -3
 echo "pbppo sweep: all checks passed"
