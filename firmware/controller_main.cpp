@@ -39,6 +39,7 @@
 #include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
+#include "runtime/core/cli_checks.hpp"
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
@@ -92,7 +93,8 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");
   app.add_option("--candump", o.candump, "Log every CAN frame (candump -L)");
   app.add_flag("--receive-all", o.receive_all, "CAN: no kernel filter (count strays)");
-  app.add_option("--ticks", o.max_ticks, "Stop after this many ticks (0: no limit)");
+  app.add_option("--ticks", o.max_ticks, "Stop after this many ticks (0: no limit)")
+      ->check(pbppo::cli_checks::NonNegativeInteger());
   app.add_option("--duration", o.duration_s,
                  "Stop after this many seconds of ticks (duration / tick period ticks; lock-step: simulated time)")
       ->check(CLI::Range(0.0, 1e7));

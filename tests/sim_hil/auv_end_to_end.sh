@@ -51,7 +51,11 @@ rc=0
 "$ctl" --robot "$robot" --policy "$blob" --period-ms 0 >"$work/r5.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "--period-ms 0: exit $rc"
 expect "$work/r5.log" "--period-ms: Value 0 not in range"
-cat "$work"/r[1-5].log | sed 's/^/   /'
+rc=0
+"$ctl" --robot "$robot" --policy "$blob" --ticks -1 >"$work/r6.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "--ticks -1: exit $rc"
+expect "$work/r6.log" "--ticks: '-1' is not an integer in \[0, 2\^64\)"
+cat "$work"/r[1-6].log | sed 's/^/   /'
 
 run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to completion
   local name=$1 layout=$2 seed=$3
