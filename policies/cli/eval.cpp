@@ -44,8 +44,7 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
                "auv-nav: write one row per episode to this CSV (outcome, targets, time, return, end pose, clearance, "
                "the nearest obstacle and the random obstacles)");
   s.add_flag("--through-ends", o.through_ends,
-             "MuJoCo tasks: each episode runs its full 1000 steps, on through terminations (the paper's released "
-             "evaluation; the healthy reward keeps coming, as the v3 tasks give it)");
+             "MuJoCo tasks: every episode runs 1000 steps, on through terminations (the paper's script's way)");
   s.add_flag("--json", o.json, "Print JSON");
 }
 

@@ -137,7 +137,7 @@ class DdsReader {
   struct Impl;
 
  private:
-  explicit DdsReader(std::unique_ptr<Impl> impl);
+  explicit DdsReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
   std::unique_ptr<Impl> impl_;
 };
 
@@ -178,7 +178,7 @@ class DdsWriter {
   struct Impl;
 
  private:
-  explicit DdsWriter(std::unique_ptr<Impl> impl);
+  explicit DdsWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
   std::unique_ptr<Impl> impl_;
 };
 

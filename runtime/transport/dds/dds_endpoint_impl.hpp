@@ -182,6 +182,10 @@ struct DdsReader<T>::Impl final : public fdds::DataReaderListener {
   }
 };
 
+// Defined here, where Impl is complete (its destructor deletes the DDS entity).
+template <typename T>
+DdsReader<T>::~DdsReader() = default;
+
 template <typename T>
 Result<std::unique_ptr<DdsReader<T>>> DdsReader<T>::Create(DdsParticipant& participant, const std::string& topic,
                                                            const DdsReaderOptions& o, Check check) {
@@ -202,11 +206,6 @@ Result<std::unique_ptr<DdsReader<T>>> DdsReader<T>::Create(DdsParticipant& parti
   if (impl->reader == nullptr) return DdsError("cannot create a reader of topic '" + topic + "'");
   return std::unique_ptr<DdsReader>(new DdsReader(std::move(impl)));
 }
-
-template <typename T>
-DdsReader<T>::DdsReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-template <typename T>
-DdsReader<T>::~DdsReader() = default;
 
 template <typename T>
 std::uint64_t DdsReader<T>::Read(DdsReceived<T>* out) noexcept {
@@ -325,6 +324,10 @@ struct DdsWriter<T>::Impl final : public fdds::DataWriterListener {
   }
 };
 
+// Defined here, where Impl is complete (its destructor deletes the DDS entity).
+template <typename T>
+DdsWriter<T>::~DdsWriter() = default;
+
 template <typename T>
 Result<std::unique_ptr<DdsWriter<T>>> DdsWriter<T>::Create(DdsParticipant& participant, const std::string& topic,
                                                            const DdsWriterOptions& o) {
@@ -349,11 +352,6 @@ Result<std::unique_ptr<DdsWriter<T>>> DdsWriter<T>::Create(DdsParticipant& parti
   }
   return std::unique_ptr<DdsWriter>(new DdsWriter(std::move(impl)));
 }
-
-template <typename T>
-DdsWriter<T>::DdsWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-template <typename T>
-DdsWriter<T>::~DdsWriter() = default;
 
 template <typename T>
 Status DdsWriter<T>::Write(const T& message) {
