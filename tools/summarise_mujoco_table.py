@@ -145,16 +145,18 @@ def main():
     tasks_ok = sum(1 for t in agree if all(agree[t]))
     md += ["", "Tasks whose three fixed-bound rows all agree: %d of %d measured." % (tasks_ok, len(agree))]
     if zero_runs:
-        zby = {}
-        for t, s_, _, _, r in zero_runs:
+        zby, zte = {}, {}
+        for t, s_, _, d, r in zero_runs:
             zby.setdefault(s_, []).append(r["final_eval"]["mean_return"])
+            zte.setdefault(s_, []).append(through_ends(pbppo, d, r))
         md += ["", "### Ant with its contact forces left at zero", "",
                "The paper's software ran the ant on mujoco-py with MuJoCo 2.x, which never computed the external "
                "contact forces: 84 of the 111 observations were always 0 and the contact cost was 0. "
                "`--contact-forces zero` runs the ant that way (docs/mujoco_tasks.md); the same fixed bounds, "
                "seeds and settings (%d runs):" % len(zero_runs), "",
-               "| bound | contact forces computed: mean [min, max] | left at zero: mean [min, max] | paper | "
-               "zero within our range |", "| --- | --- | --- | ---: | --- |"]
+               "| bound | contact forces computed: mean [min, max] | left at zero | left at zero, evaluated through "
+               "episode ends (the paper's software in both) | paper | paper within the last two ranges |",
+               "| --- | --- | --- | --- | ---: | --- |"]
         for s_ in FIXED:
             xs = zby.get(s_, [])
             ys = [r["final_eval"]["mean_return"] for _, _, r in by.get(("ant", s_), [])]
@@ -162,8 +164,10 @@ def main():
                 continue
             paper = PAPER["ant"][s_]
             fmt = lambda v: "%s [%.0f, %.0f]" % (cell(v), min(v), max(v)) if v else "–"
-            md.append("| %s | %s | %s | %d | %s |" % (s_[6:], fmt(ys), fmt(xs), paper,
-                                                     "yes" if min(xs) <= paper <= max(xs) else "no"))
+            zs = zte.get(s_, [])
+            inside = lambda v: "yes" if v and min(v) <= paper <= max(v) else "no"
+            md.append("| %s | %s | %s | %s | %d | %s, %s |" % (s_[6:], fmt(ys), fmt(xs), fmt(zs), paper, inside(xs),
+                                                              inside(zs)))
 
     md += ["", "## Returns as the paper's script measured them", "",
            "The released script evaluates a policy for 1000 deterministic steps and ignores episode ends; the "
@@ -195,6 +199,10 @@ def main():
                     sum(r["train"]["eval_steps"] for r in rs) / len(rs),
                     sum(r["train"]["wall_seconds"] for r in rs) / len(rs)))
 
+    total = sum(r["train"]["wall_seconds"] for _, _, _, _, r in all_runs)
+    md += ["", "Training wall time of the %d runs (each on one core): %.0f s, %.1f hours of 2 cores running two at "
+           "a time (times measured while the machine also did other work are longer than alone)."
+           % (len(all_runs), total, total / 2 / 3600)]
     md += ["", "## Learning curves and the bandit's choices", ""]
     for t in tasks:
         groups = ["%s=%s" % (s, ",".join(d for _, d, _ in by[(t, s)])) for s in schedules if (t, s) in by]
