@@ -1,17 +1,10 @@
 #include "policies/cli/sweep.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -25,16 +18,13 @@
 #include <sstream>
 #include <thread>
 
+#include "policies/cli/child_jobs.hpp"
+#include "policies/cli/process_group.hpp"
 #include "policies/cli/train.hpp"
 #include "policies/envs/env.hpp"
 #include "policies/trainer/options.hpp"
 #include "runtime/core/cli_checks.hpp"
 #include "runtime/policy/blob.hpp"
-
-#define OMPI_SKIP_MPICXX 1  // the C interface only
-#include <mpi.h>
-
-extern char** environ;
 
 namespace pbppo::cli {
 namespace {
@@ -43,7 +33,6 @@ namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 
 constexpr int kFailed = 1, kUsage = 2, kInterrupted = 130;
-constexpr int kMaxJobs = 256;
 
 void Say(const std::string& msg) {
   std::fprintf(stderr, "pbppo sweep: %s\n", msg.c_str());
@@ -349,75 +338,6 @@ Result<RunResult> ReadResult(const std::string& text, const Plan& p, const Run& 
 }
 
 // ---------------------------------------------------------------------------------------------
-// Child processes, and Ctrl-C.
-
-std::atomic<bool> g_stop{false};
-std::atomic<pid_t> g_children[kMaxJobs];  // the running children, by job slot (0: none)
-static_assert(std::atomic<pid_t>::is_always_lock_free, "used from a signal handler");
-
-// Ctrl-C (SIGINT; SIGTERM from mpirun): no new runs; the running ones are asked to stop with SIGINT
-// (pbppo train takes a second one within a second, as from the terminal's process group, as the same).
-extern "C" void OnSweepSigint(int) {
-  g_stop.store(true);
-  for (auto& c : g_children)
-    if (const pid_t pid = c.load(); pid > 0) ::kill(pid, SIGINT);
-}
-
-// Starts this program again (the file it was started from, even if rebuilt since) with ARGS (argv[0]
-// "pbppo"), stdin from /dev/null, stdout into OUT and stderr into ERR
-// (one file when equal), nothing blocked and SIGINT at its default.
-Result<pid_t> Spawn(const std::vector<std::string>& args, const std::string& out, const std::string& err) {
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (err == out) {
-    posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  } else {
-    posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  }
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  sigset_t none, defaults;
-  sigemptyset(&none);
-  sigemptyset(&defaults);
-  sigaddset(&defaults, SIGINT);
-  sigaddset(&defaults, SIGTERM);
-  posix_spawnattr_setsigmask(&attr, &none);
-  posix_spawnattr_setsigdefault(&attr, &defaults);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
-  std::vector<std::string> argv_s = {"pbppo"};
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : argv_s) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, &attr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&fa);
-  posix_spawnattr_destroy(&attr);
-  if (rc != 0) return MakeError(ErrorCode::kIo, std::string("cannot start /proc/self/exe: ") + std::strerror(rc));
-  return pid;
-}
-
-// Runs pbppo ARGS in job slot `slot` to its end: its exit status (128 + N: killed by signal N; -1
-// with `error` set: not started).
-int RunChild(const std::vector<std::string>& args, const std::string& out, const std::string& err, int slot,
-             std::string* error) {
-  auto pid = Spawn(args, out, err);
-  if (!pid) {
-    *error = pid.error().message;
-    return -1;
-  }
-  g_children[slot].store(*pid);
-  if (g_stop.load()) ::kill(*pid, SIGINT);  // Ctrl-C came between the check and the start
-  int st = 0;
-  while (::waitpid(*pid, &st, 0) < 0 && errno == EINTR) {
-  }
-  g_children[slot].store(0);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-}
-
-// ---------------------------------------------------------------------------------------------
 // One run: train, evaluate the final policy, write result.json last.
 
 struct Outcome {
@@ -438,7 +358,7 @@ Outcome RunOne(const SweepOptions& o, const Plan& p, std::size_t index, int slot
   const std::string train_log = dir + "/train.log";
   int rc = RunChild(r.train_args, train_log, train_log, slot, &error);
   if (rc < 0) return failed(kFailed, error);
-  if (rc == kInterrupted || g_stop.load()) return failed(kInterrupted, "interrupted");
+  if (rc == kInterrupted || Stopped()) return failed(kInterrupted, "interrupted");
   if (rc != 0)
     return failed(rc, "pbppo train exited " + std::to_string(rc) + "; " + train_log + " ends:\n" + Tail(train_log, 6));
   auto summary = ReadJson(dir + "/summary.json");
@@ -446,7 +366,7 @@ Outcome RunOne(const SweepOptions& o, const Plan& p, std::size_t index, int slot
   const std::string eval_log = dir + "/eval.log", eval_json = dir + "/eval.json";
   rc = RunChild(r.eval_args, eval_json, eval_log, slot, &error);
   if (rc < 0) return failed(kFailed, error);
-  if (g_stop.load()) return failed(kInterrupted, "interrupted");
+  if (Stopped()) return failed(kInterrupted, "interrupted");
   if (rc != 0)
     return failed(rc, "pbppo eval exited " + std::to_string(rc) + "; " + eval_log + " ends:\n" + Tail(eval_log, 6));
   auto eval = ReadJson(eval_json);
@@ -508,7 +428,7 @@ std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::ve
     const std::string name = (p.axes.empty() ? "" : CellName(p, r.cell) + " ") + "seed=" + std::to_string(r.seed);
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const std::string eta =
-        done < assigned.size() && !g_stop.load()
+        done < assigned.size() && !Stopped()
             ? ", ETA " + Duration(elapsed / static_cast<double>(done) * static_cast<double>(assigned.size() - done))
             : "";
     char head[64];
@@ -537,7 +457,7 @@ std::vector<Outcome> Execute(const SweepOptions& o, const Plan& p, const std::ve
       std::size_t i = 0;
       {
         std::lock_guard lock(mu);
-        if (next >= assigned.size() || g_stop.load()) return;
+        if (next >= assigned.size() || Stopped()) return;
         i = assigned[next++];
       }
       report(RunOne(o, p, i, slot));
@@ -643,68 +563,6 @@ Result<std::string> WriteTables(const SweepOptions& o, const Plan& p, const std:
   return text;
 }
 
-// ---------------------------------------------------------------------------------------------
-// The process group: this process alone, or the ranks of an mpirun.
-
-class Group {
- public:
-  // mpirun (Open MPI) sets these in every process it starts; plain `pbppo` never initialises MPI.
-  static bool UnderMpirun() {
-    return std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMIX_RANK") != nullptr;
-  }
-
-  Group() {
-    if (!UnderMpirun()) return;
-    MPI_Init(nullptr, nullptr);
-    mpi_ = true;
-    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-    MPI_Comm_size(MPI_COMM_WORLD, &size_);
-  }
-  ~Group() {
-    if (mpi_) MPI_Finalize();
-  }
-  Group(const Group&) = delete;
-  Group& operator=(const Group&) = delete;
-
-  int rank() const { return rank_; }
-  int size() const { return size_; }
-  bool mpi() const { return mpi_; }
-
-  // Rank 0's `v`, on every rank.
-  void Broadcast(std::vector<long>& v) const {
-    if (!mpi_) return;
-    long n = static_cast<long>(v.size());
-    MPI_Bcast(&n, 1, MPI_LONG, 0, MPI_COMM_WORLD);
-    v.resize(static_cast<std::size_t>(n));
-    MPI_Bcast(v.data(), static_cast<int>(n), MPI_LONG, 0, MPI_COMM_WORLD);
-  }
-
-  // On rank 0: every rank's `mine`, by rank; elsewhere: nothing.
-  std::vector<std::string> Gather(const std::string& mine) const {
-    if (!mpi_) return {mine};
-    int len = static_cast<int>(mine.size());
-    std::vector<int> lens(static_cast<std::size_t>(size_)), offsets(static_cast<std::size_t>(size_));
-    MPI_Gather(&len, 1, MPI_INT, lens.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
-    int total = 0;
-    for (int r = 0; r < size_; ++r) {
-      offsets[static_cast<std::size_t>(r)] = total;
-      total += lens[static_cast<std::size_t>(r)];
-    }
-    std::string all(rank_ == 0 ? static_cast<std::size_t>(total) : 0, '\0');
-    MPI_Gatherv(mine.data(), len, MPI_CHAR, all.data(), lens.data(), offsets.data(), MPI_CHAR, 0, MPI_COMM_WORLD);
-    if (rank_ != 0) return {};
-    std::vector<std::string> out;
-    for (int r = 0; r < size_; ++r)
-      out.push_back(all.substr(static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]),
-                               static_cast<std::size_t>(lens[static_cast<std::size_t>(r)])));
-    return out;
-  }
-
- private:
-  bool mpi_ = false;
-  int rank_ = 0, size_ = 1;
-};
-
 // Rank 0's look at DIR: refuses another sweep's folder, writes sweep.json (unless a dry run) and
 // returns the runs without result.json (leftovers included: RunOne clears their folders).
 Result<std::vector<long>> Pending(const SweepOptions& o, const Plan& p) {
@@ -786,7 +644,7 @@ int Sweep(const SweepOptions& options) {
   // A refusal before MPI starts is every rank's; rank 0 says it.
   const char* rank_env = std::getenv("OMPI_COMM_WORLD_RANK");
   const bool speaker = rank_env == nullptr || std::string(rank_env) == "0";
-  if (o.jobs != 1 && Group::UnderMpirun()) {
+  if (o.jobs != 1 && ProcessGroup::UnderMpirun()) {
     if (speaker)
       Say("--jobs " + std::to_string(o.jobs) + ": under mpirun every rank runs one run at a time (start more ranks)");
     return kUsage;
@@ -797,7 +655,7 @@ int Sweep(const SweepOptions& options) {
     return kUsage;
   }
   const Plan& p = plan.value();
-  const Group group;
+  const ProcessGroup group;
 
   // Rank 0 reads the folder; every rank learns the pending runs (a refusal: a lone -1).
   std::vector<long> pending;
@@ -818,19 +676,16 @@ int Sweep(const SweepOptions& options) {
   for (std::size_t i = static_cast<std::size_t>(group.rank()); i < pending.size();
        i += static_cast<std::size_t>(group.size()))
     mine.push_back(static_cast<std::size_t>(pending[i]));
-  g_stop.store(false);
-  struct sigaction sa = {}, previous_int = {}, previous_term = {};
-  sa.sa_handler = OnSweepSigint;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, &previous_int);
-  sigaction(SIGTERM, &sa, &previous_term);  // what mpirun sends its ranks on Ctrl-C
   const std::string tag = group.mpi() ? "rank " + std::to_string(group.rank()) + ": " : "";
   if (group.mpi() && !mine.empty())
     Say(tag + std::to_string(mine.size()) + " of the " + std::to_string(pending.size()) + " runs");
-  const auto outcomes = Execute(o, p, mine, tag);
-  const bool stopped = g_stop.load();
-  sigaction(SIGINT, &previous_int, nullptr);
-  sigaction(SIGTERM, &previous_term, nullptr);
+  std::vector<Outcome> outcomes;
+  bool stopped = false;
+  {
+    const InterruptScope interrupts;
+    outcomes = Execute(o, p, mine, tag);
+    stopped = Stopped();
+  }
 
   // Every rank's outcomes to rank 0, which writes the table from them and the runs finished before.
   Json sent = {{"stopped", stopped}, {"outcomes", Json::array()}};

@@ -91,9 +91,9 @@ DispatchResult DispatchFrame(const CanCodecTable& t, std::uint32_t bus, const Ca
     ++stats.wrong_lengths;
     return DispatchResult::kWrongLength;
   };
-  // A frame taken: counted for its device (`count`, null: none) and the bus.
+  // A frame taken and its device's sample complete: counted for both.
   auto decoded = [&stats](std::uint64_t* count) {
-    if (count != nullptr) ++*count;
+    ++*count;
     ++stats.decoded;
     return DispatchResult::kDecoded;
   };
@@ -127,7 +127,7 @@ DispatchResult DispatchFrame(const CanCodecTable& t, std::uint32_t bus, const Ca
       // Each of the three frames is taken; the third completes a sample.
       if (FeedImuClassic(d.imu_assembler[e.index], e.sub, f.data, f.len, &d.imu[e.index]))
         return decoded(&d.imu_count[e.index]);
-      decoded(nullptr);
+      ++stats.decoded;  // taken; the sample is not complete yet
       return DispatchResult::kPartial;
   }
   ++stats.unknown_ids;

@@ -32,19 +32,11 @@ struct AuvDdsLink::Impl {
   std::unique_ptr<DdsReader<robot::AuvControllerStatus>> status_in;   // vehicle
 };
 
-namespace {
-
-Error Fail(const std::string& what) {
-  return MakeError(ErrorCode::kInvalidValue, "dds: " + what);
-}
-
-}  // namespace
-
 Result<std::unique_ptr<AuvDdsLink>> AuvDdsLink::Create(AuvDdsRole role, const AuvDdsOptions& o) {
   if (o.command_queue_capacity < 1 || o.command_queue_capacity > 65536)
-    return Fail("command_queue_capacity " + std::to_string(o.command_queue_capacity) + " is outside 1..65536");
+    return DdsError("command_queue_capacity " + std::to_string(o.command_queue_capacity) + " is outside 1..65536");
   if (o.command_inbox_capacity < 1 || o.command_inbox_capacity > 65536)
-    return Fail("command_inbox_capacity " + std::to_string(o.command_inbox_capacity) + " is outside 1..65536");
+    return DdsError("command_inbox_capacity " + std::to_string(o.command_inbox_capacity) + " is outside 1..65536");
   auto impl = NewLink<Impl>(role, o);
   if (!impl) return std::move(impl).error();
   Impl& m = **impl;
@@ -101,14 +93,14 @@ bool AuvDdsLink::WaitForSample(std::uint64_t after_version, std::int64_t timeout
 }
 
 Status AuvDdsLink::PublishStatus(const robot::AuvControllerStatus& status) {
-  if (!impl_->status_out) return Fail("PublishStatus: only the controller side publishes status");
+  if (!impl_->status_out) return DdsError("PublishStatus: only the controller side publishes status");
   return impl_->status_out->Write(status);
 }
 
 Status AuvDdsLink::PublishSample(const robot::AuvSensorSample& sample) {
-  if (!impl_->samples_out) return Fail("PublishSample: only the vehicle side publishes samples");
+  if (!impl_->samples_out) return DdsError("PublishSample: only the vehicle side publishes samples");
   if (auto st = impl_->samples_out->Write(sample); !st)
-    return Fail("sensor sample write failed (tick " + std::to_string(sample.tick) + ")");
+    return DdsError("sensor sample write failed (tick " + std::to_string(sample.tick) + ")");
   return {};
 }
 

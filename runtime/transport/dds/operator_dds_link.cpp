@@ -61,8 +61,7 @@ std::uint64_t OperatorDdsLink::ReadCommand(VelocityCommandInput* out) noexcept {
 }
 
 Status OperatorDdsLink::PublishStatus(const robot::QuadrupedStatus& status) {
-  if (!impl_->status_out)
-    return MakeError(ErrorCode::kInvalidValue, "dds: PublishStatus: only the controller side publishes status");
+  if (!impl_->status_out) return DdsError("PublishStatus: only the controller side publishes status");
   return impl_->status_out->Write(status);
 }
 
@@ -71,8 +70,7 @@ DdsReaderCounters OperatorDdsLink::command_counters() const noexcept {
 }
 
 Status OperatorDdsLink::PublishCommand(const robot::VelocityCommand& command) {
-  if (!impl_->commands_out)
-    return MakeError(ErrorCode::kInvalidValue, "dds: PublishCommand: only the operator side publishes commands");
+  if (!impl_->commands_out) return DdsError("PublishCommand: only the operator side publishes commands");
   return impl_->commands_out->Write(command);
 }
 
