@@ -135,7 +135,7 @@ int Eval(const EvalOptions& o_in) {
     return 1;
   }
   envs::EnvOptions env_options = o_in.env;
-  if (walk) env_options.resample_s = envs::kWalkEvalResampleS;  // the paper's test, whatever training used
+  env_options.paper_test = walk;  // the paper's test's commands, whatever training used
   auto env = envs::MakeEnv(env_options);
   if (!env) {
     std::fprintf(stderr, "pbppo eval: %s\n", env.error().message.c_str());

@@ -105,6 +105,10 @@ void AddEnvOptions(CLI::App& s, envs::EnvOptions& env) {
 void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   envs::EnvOptions& env = o.env;
   AddEnvOptions(s, env);
+  s.add_option("--command-shares", env.command_shares,
+               "quadruped-walk, training: HEADING:ZERO_PLANAR, the share of commands whose yaw rate follows a "
+               "heading (the rest draw a yaw rate) and the share with vx = vy = 0 (standing or turning in place); "
+               "default: models/quadruped/walk.yaml's");
   // auv-nav's training options.
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "

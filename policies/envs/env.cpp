@@ -37,6 +37,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
   if (name != "quadruped-walk") {
     if (options.terrain != "flat") return only("--terrain", "quadruped-walk", "terrains to choose");
     if (!options.commands.empty()) return only("--commands", "quadruped-walk", "velocity commands");
+    if (!options.command_shares.empty()) return only("--command-shares", "quadruped-walk", "velocity commands");
   }
   if (options.contact_forces != "computed") {
     if (name != "ant") return only("--contact-forces", "ant", "contact forces to leave out");
@@ -62,8 +63,9 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     o.models_dir = dir;
     o.terrain = options.terrain;
     o.commands = options.commands;
+    o.command_shares = options.command_shares;
     o.randomize = options.randomize;
-    o.resample_s = options.resample_s;
+    o.paper_test = options.paper_test;
     auto env = QuadrupedWalk::Make(o);
     if (!env) return std::move(env).error();
     return std::unique_ptr<Env>(std::move(env).value());

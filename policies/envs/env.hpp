@@ -109,12 +109,15 @@ struct EnvOptions {
   std::string terrain = "flat";
   // --commands, quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's ranges.
   std::string commands;
+  // --command-shares, quadruped-walk, training: "HEADING:ZERO_PLANAR", the share of commands
+  // following a heading and the share with vx = vy = 0; empty: walk.yaml's.
+  std::string command_shares;
   // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes): always in training,
   // in pbppo eval with --randomize.
   bool randomize = true;
-  // quadruped-walk: resample commands this often (s); 0: walk.yaml's period. pbppo eval sets
-  // the test's 10 s (kWalkEvalResampleS).
-  double resample_s = 0;
+  // quadruped-walk: the paper's test's commands (every 10 s, each following a heading) instead
+  // of walk.yaml's training commands; pbppo eval sets it.
+  bool paper_test = false;
   // --contact-forces, ant: "computed" (the standard task's observation and contact cost) or "zero"
   // (left at zero, as the paper's software ran: mujoco-py on MuJoCo 2.x never computed them).
   std::string contact_forces = "computed";

@@ -104,10 +104,13 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   sh->params.kd_nm_s_rad = gains.policy_kd;
   if (auto st = ApplyCommandSpec(options.commands, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
-  if (options.resample_s < 0 || options.resample_s > 3600)
-    return MakeError(ErrorCode::kInvalidValue,
-                     "command resampling: " + std::to_string(options.resample_s) + " s is not in [0, 3600]");
-  if (options.resample_s > 0) sh->params.resample_s = options.resample_s;
+  if (auto st = ApplyCommandShares(options.command_shares, sh->params); !st)
+    return MakeError(ErrorCode::kInvalidValue, "--command-shares: " + st.error().message);
+  if (options.paper_test) {
+    sh->params.resample_s = kWalkEvalResampleS;
+    sh->params.heading_share = 1.0;
+    sh->params.zero_planar_share = 0.0;
+  }
   const robot::CanMap* map = &*robot_model->can;
 
   const robot::RobotDescription& r = sh->robot;
@@ -240,9 +243,11 @@ std::string QuadrupedWalk::provenance() const {
   const QuadrupedWalkParams& p = shared_->params;
   char text[256];
   const int n = std::snprintf(text, sizeof text,
-                              "%s, terrain %s, commands every %g s; noise x%g (ang vel %g, gravity %g, q %g, dq %g)",
-                              name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.noise_level,
-                              p.noise_ang_vel_radps, p.noise_gravity, p.noise_dof_pos_rad, p.noise_dof_vel_radps);
+                              "%s, terrain %s, commands every %g s (%g following a heading, %g standing or "
+                              "turning in place); noise x%g (ang vel %g, gravity %g, q %g, dq %g)",
+                              name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.heading_share,
+                              p.zero_planar_share, p.noise_level, p.noise_ang_vel_radps, p.noise_gravity,
+                              p.noise_dof_pos_rad, p.noise_dof_vel_radps);
   std::string out(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
   if (!shared_->options.randomize) return out + "; nominal robot";
   std::snprintf(text, sizeof text,
@@ -272,6 +277,9 @@ const robot::IoLayout& QuadrupedWalk::layout() const noexcept {
 }
 const QuadrupedWalkParams& QuadrupedWalk::params() const noexcept {
   return shared_->params;
+}
+const QuadrupedWalkOptions& QuadrupedWalk::options() const noexcept {
+  return shared_->options;
 }
 const robot::RobotDescription& QuadrupedWalk::robot() const noexcept {
   return shared_->robot;
@@ -362,14 +370,19 @@ void QuadrupedWalk::HoldCommand(const std::array<double, 3>& c) noexcept {
 void QuadrupedWalk::ResampleCommand() noexcept {
   if (held_) return;
   const QuadrupedWalkParams& p = shared_->params;
+  // A share of 1 or 0 draws nothing for its choice, so the paper's test (all heading, none
+  // zeroed) sees the same commands for a seed whatever the training's shares.
+  auto chance = [&](double share) { return share >= 1.0 || (share > 0.0 && rng_.Uniform() < share); };
   command_[0] = rng_.Uniform(p.vx_mps[0], p.vx_mps[1]);
   command_[1] = rng_.Uniform(p.vy_mps[0], p.vy_mps[1]);
-  if (p.heading_command) {
+  heading_mode_ = chance(p.heading_share);
+  if (heading_mode_) {
     command_[3] = rng_.Uniform(p.heading_rad[0], p.heading_rad[1]);
   } else {
     command_[2] = rng_.Uniform(p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
   }
-  if (std::hypot(command_[0], command_[1]) < p.zero_below_mps) command_[0] = command_[1] = 0.0;
+  if (chance(p.zero_planar_share) || std::hypot(command_[0], command_[1]) < p.zero_below_mps)
+    command_[0] = command_[1] = 0.0;
   ++tel_.command_index;
 }
 
@@ -585,7 +598,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   mjtNum rot[9];
   mju_quat2Mat(rot, d_->qpos + 3);
   const double yaw = std::atan2(rot[3], rot[0]);
-  if (p.heading_command && !held_)
+  if (heading_mode_ && !held_)
     command_[2] = std::clamp(p.heading_gain * Wrap(command_[3] - yaw), p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
   Contacts();
   const double tilt = std::acos(std::clamp(rot[8], -1.0, 1.0));

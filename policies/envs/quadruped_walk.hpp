@@ -41,14 +41,20 @@ struct mjData_;
 
 namespace pbppo::envs {
 
+// The paper's test resamples commands at 10 s (legged_gym's period).
+inline constexpr double kWalkEvalResampleS = 10.0;
+
 struct QuadrupedWalkOptions {
   std::string models_dir;        // holding quadruped/; empty: DefaultModelsDir()
   std::string terrain = "flat";  // flat | mixed
   std::string commands;          // "VX:VY:YAW" maxima; empty: walk.yaml's ranges
+  std::string command_shares;    // "HEADING:ZERO_PLANAR" shares; empty: walk.yaml's
   bool noise = true;             // observation noise
   bool randomize = true;         // friction, mass, gains, latency, pushes (false: the nominal robot)
   double blocks_fraction = 0.5;  // mixed: the fraction of episodes on blocks
-  double resample_s = 0;         // > 0: resample commands this often instead of walk.yaml's period
+  // The paper's test: commands every kWalkEvalResampleS, every one following a heading, none
+  // zeroed by walk.yaml's zero_planar_share, whatever the training used.
+  bool paper_test = false;
 };
 
 // What happened in the last policy step, for evaluation and tests.
@@ -94,6 +100,7 @@ class QuadrupedWalk final : public Env {
   // schedules). Call before Reset for the first observation, before each Step for the next.
   void HoldCommand(const std::array<double, 3>& command) noexcept;
   const QuadrupedWalkParams& params() const noexcept;
+  const QuadrupedWalkOptions& options() const noexcept;
   const robot::RobotDescription& robot() const noexcept;
   // Benchmarks: `steps` MuJoCo steps of a copy of the current state with only the joint PD
   // holding the default pose (no policy, observation or reward); the physics steps per second of
@@ -133,7 +140,7 @@ class QuadrupedWalk final : public Env {
   std::array<double, 4> command_{};    // vx, vy, yaw rate, heading
   std::array<double, 3> error_sum_{};  // sum over the episode's steps of |command - measured|
   int step_ = 0;
-  bool on_blocks_ = false, fell_ = false, done_ = true, held_ = false;
+  bool on_blocks_ = false, fell_ = false, done_ = true, held_ = false, heading_mode_ = true;
   std::vector<sim::TerrainBlock> blocks_;  // this episode's blocks
   std::vector<int> block_slot_;            // per block: its pool geom, or -1
   std::vector<int> slot_block_;            // per pool geom: its block, or -1

@@ -1,7 +1,9 @@
 #include "policies/envs/quadruped_walk_config.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <span>
 
 #include "runtime/robot/yaml_fields.hpp"
 
@@ -26,7 +28,7 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
     if (auto st = f.Map(*root, key, "", n); !st) return st.error();
   if (auto st = f.Map(rew, "scales", "rewards", &sc); !st) return st.error();
   long decimation = 0, blocks = 0, pool = 0;
-  double heading_command = 1, only_positive = 1, base_contact = 1;
+  double only_positive = 1, base_contact = 1;
   auto flag = [&](const YAML::Node& n, const char* key, const std::string& where, double* out) -> Status {
     const YAML::Node v = n[key];
     if (!v) return f.Fail(where, std::string("missing field '") + key + "'");
@@ -48,15 +50,16 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Range(sim, "init_joint_scale", "simulation", 0, 3, &p.init_joint_scale),
            f.Number(sim, "init_base_velocity", "simulation", 0, 10, &p.init_base_velocity),
            f.Keys(cmd, "commands",
-                  {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_command", "heading_gain",
-                   "zero_below_mps"}),
+                  {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_share", "heading_gain",
+                   "zero_planar_share", "zero_below_mps"}),
            f.Number(cmd, "resample_s", "commands", 0.02, 3600, &p.resample_s),
            f.Range(cmd, "vx_mps", "commands", -10, 10, &p.vx_mps),
            f.Range(cmd, "vy_mps", "commands", -10, 10, &p.vy_mps),
            f.Range(cmd, "yaw_rate_radps", "commands", -10, 10, &p.yaw_rate_radps),
            f.Range(cmd, "heading_rad", "commands", -3.1416, 3.1416, &p.heading_rad),
-           flag(cmd, "heading_command", "commands", &heading_command),
+           f.Number(cmd, "heading_share", "commands", 0, 1, &p.heading_share),
            f.Number(cmd, "heading_gain", "commands", 0, 100, &p.heading_gain),
+           f.Number(cmd, "zero_planar_share", "commands", 0, 1, &p.zero_planar_share),
            f.Number(cmd, "zero_below_mps", "commands", 0, 10, &p.zero_below_mps),
            f.Keys(rew, "rewards",
                   {"tracking_sigma", "only_positive", "feet_air_time_target_s", "soft_dof_pos_limit", "contact_force_n",
@@ -118,33 +121,55 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
   p.decimation = static_cast<int>(decimation);
   p.blocks = static_cast<int>(blocks);
   p.pool = static_cast<int>(pool);
-  p.heading_command = heading_command != 0;
   p.only_positive = only_positive != 0;
   p.terminate_on_base_contact = base_contact != 0;
   if (p.episode_steps() < 1) return f.Fail("simulation.episode_s", "is shorter than one policy period");
   return p;
 }
 
-Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p) {
-  if (spec.empty()) return {};
-  double v[3] = {0, 0, 0};
+namespace {
+
+// "A:B[:C]": parts.size() numbers separated by ':', each in [0, max]; errors name the part.
+Status ParseSpec(const std::string& spec, const char* form, double max, std::span<const char* const> names,
+                 std::span<double> out) {
   std::size_t start = 0;
-  const char* names[3] = {"vx", "vy", "yaw rate"};
-  for (int k = 0; k < 3; ++k) {
-    const std::size_t end = k < 2 ? spec.find(':', start) : spec.size();
-    if (end == std::string::npos)
-      return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)");
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const std::size_t end = k + 1 < names.size() ? spec.find(':', start) : spec.size();
+    if (end == std::string::npos) return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not " + form);
     const std::string part = spec.substr(start, end - start);
     char* stop = nullptr;
-    v[k] = std::strtod(part.c_str(), &stop);
-    if (part.empty() || stop != part.c_str() + part.size() || !(v[k] >= 0 && v[k] <= 5))
+    out[k] = std::strtod(part.c_str(), &stop);
+    if (part.empty() || stop != part.c_str() + part.size() || !(out[k] >= 0 && out[k] <= max)) {
+      char range[32];
+      std::snprintf(range, sizeof range, "[0, %g]", max);
       return MakeError(ErrorCode::kInvalidValue,
-                       "'" + spec + "': " + names[k] + " '" + part + "' is not a number in [0, 5]");
+                       "'" + spec + "': " + names[k] + " '" + part + "' is not a number in " + range);
+    }
     start = end + 1;
   }
+  return {};
+}
+
+}  // namespace
+
+Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p) {
+  if (spec.empty()) return {};
+  static constexpr const char* kNames[] = {"vx", "vy", "yaw rate"};
+  double v[3] = {0, 0, 0};
+  if (auto st = ParseSpec(spec, "VX_MAX:VY_MAX:YAW_RATE_MAX (e.g. 1:1:1)", 5, kNames, v); !st) return st;
   p.vx_mps = {-v[0], v[0]};
   p.vy_mps = {-v[1], v[1]};
   p.yaw_rate_radps = {-v[2], v[2]};
+  return {};
+}
+
+Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p) {
+  if (spec.empty()) return {};
+  static constexpr const char* kNames[] = {"heading share", "zero planar share"};
+  double v[2] = {0, 0};
+  if (auto st = ParseSpec(spec, "HEADING_SHARE:ZERO_PLANAR_SHARE (e.g. 0.5:0.2)", 1, kNames, v); !st) return st;
+  p.heading_share = v[0];
+  p.zero_planar_share = v[1];
   return {};
 }
 

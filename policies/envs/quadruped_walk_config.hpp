@@ -33,8 +33,9 @@ struct QuadrupedWalkParams {
   // commands
   double resample_s = 10.0;
   Range vx_mps{-1, 1}, vy_mps{-1, 1}, yaw_rate_radps{-1, 1}, heading_rad{-3.14159, 3.14159};
-  bool heading_command = true;
+  double heading_share = 1.0;  // of the resamples: the yaw rate follows a heading (else drawn)
   double heading_gain = 0.5;
+  double zero_planar_share = 0.0;  // of the resamples: vx = vy = 0 (standing or turning in place)
   double zero_below_mps = 0.2;
   // rewards
   double tracking_sigma = 0.25;
@@ -70,5 +71,9 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& root, con
 // The command ranges of a --commands spec "VX_MAX:VY_MAX:YAW_RATE_MAX" (each range [-max, max]);
 // an empty spec keeps walk.yaml's. Errors name the part of the spec.
 Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p);
+
+// The command mix of a --command-shares spec "HEADING:ZERO_PLANAR" (walk.yaml's heading_share and
+// zero_planar_share, each in [0, 1]); an empty spec keeps walk.yaml's. Errors name the part.
+Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p);
 
 }  // namespace pbppo::envs

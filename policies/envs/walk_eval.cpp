@@ -70,10 +70,9 @@ Result<WalkScheduleResult> EvaluateWalkSchedule(const policy::PolicyModel& model
 Result<WalkEvalResult> EvaluateWalk(const policy::PolicyModel& model, QuadrupedWalk& env, const WalkEvalOptions& o) {
   if (auto st = robot::CheckPolicyMatchesLayout(model.description(), env.layout()); !st) return st.error();
   if (o.robots < 1) return MakeError(ErrorCode::kInvalidValue, "robots: " + std::to_string(o.robots) + " is below 1");
-  if (env.params().resample_s != kWalkEvalResampleS)
-    return MakeError(ErrorCode::kInvalidValue, "the test resamples commands every " +
-                                                   std::to_string(kWalkEvalResampleS) + " s, the environment every " +
-                                                   std::to_string(env.params().resample_s) + " s");
+  if (!env.options().paper_test)
+    return MakeError(ErrorCode::kInvalidValue,
+                     "the environment is not set up for the paper's test (QuadrupedWalkOptions::paper_test)");
   auto data = policy::MakePolicyData(model);
   if (!data) return std::move(data).error();
   WalkEvalResult res;

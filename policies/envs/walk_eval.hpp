@@ -1,7 +1,7 @@
 // The Pb-PPO paper's quadruped test on our robot: N robots (50 in the paper), each one episode
 // of quadruped-walk (20 s, commands drawn from the task's ranges at the start and again at 10 s:
 // legged_gym's resampling period, whatever the training used; the caller builds the environment
-// with QuadrupedWalkOptions::resample_s = kWalkEvalResampleS) driven by a
+// with QuadrupedWalkOptions::paper_test) driven by a
 // frozen policy through the runtime's Forward, the same arithmetic as the controller. Reports
 // the mean absolute tracking error of the body velocity per axis (vx, vy in the base frame, yaw
 // rate), over every step and over the steps at least settle_s after a command change, and the
@@ -18,8 +18,6 @@
 #include "runtime/policy/policy_model.hpp"
 
 namespace pbppo::envs {
-
-inline constexpr double kWalkEvalResampleS = 10.0;
 
 struct WalkEvalOptions {
   int robots = 50;

@@ -161,7 +161,9 @@ UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, do
   // a rate the other is writing.
   double step_lr[2] = {lr_, lr_};
   UpdateStats sum;
-  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
+  // A held policy (--critic-warmup) has KL 0 from the rollout's: adapting to it would raise the rate
+  // to its ceiling before the policy's first step, so the rate waits for the policy.
+  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive && !critic_only;
   // With two threads or more the policy's and the value network's halves of each minibatch run side
   // by side, meeting before the shared gradient clip.
   const bool split = pool.size() >= 2;
@@ -261,7 +263,9 @@ UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, 
   const int d = r.obs_size, a = r.action_size, vd = r.value_input_size();
   const Eigen::Index P = actor_params_.size(), V = critic_params_.size();
   const Mat<float>& value_in = r.value_inputs();
-  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive;
+  // A held policy (--critic-warmup) has KL 0 from the rollout's: adapting to it would raise the rate
+  // to its ceiling before the policy's first step, so the rate waits for the policy.
+  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive && !critic_only;
   std::vector<Vec<float>> actor_grads(static_cast<std::size_t>(K), Vec<float>::Zero(P));
   std::vector<Vec<float>> critic_grads(static_cast<std::size_t>(K), Vec<float>::Zero(V));
   struct ChunkStats {

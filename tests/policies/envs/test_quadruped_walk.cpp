@@ -287,3 +287,60 @@ TEST_CASE("quadruped-walk: bad inputs are refused at start naming the value") {
   o.models_dir = ModelsWith("walk_range", "walk.yaml", "vx_mps: [-1.0, 1.0]", "vx_mps: [1.0, -1.0]");
   CHECK(ErrorOf(o).find("walk.yaml: commands.vx_mps: low 1 is above high -1") != std::string::npos);
 }
+
+TEST_CASE("quadruped-walk: training commands - a share follow a heading, a share stand or turn in place") {
+  // Commands every 0.1 s on a standing robot. A heading command's yaw rate is clip(0.5 * wrap(
+  // heading - yaw), -1, 1): saturated at exactly +-1 for (pi - 2) / pi = 36 % of headings; a drawn
+  // one U(-1, 1) never is. A planar command is zero for zero_planar_share, and for the 3 % of
+  // draws shorter than 0.2 m/s.
+  auto count = [](double heading_share, double zero_share) {
+    QuadrupedWalkOptions o = Nominal();
+    o.models_dir = ModelsWith(
+        "walk_shares_" + std::to_string(heading_share) + "_" + std::to_string(zero_share), "walk.yaml",
+        {"resample_s: 5.0", "resample_s: 0.1", "heading_share: 0.5", "heading_share: " + std::to_string(heading_share),
+         "zero_planar_share: 0.2", "zero_planar_share: " + std::to_string(zero_share)});
+    auto e = MakeWalk(o);
+    CHECK(e->params().heading_share == doctest::Approx(heading_share));
+    CHECK(e->params().zero_planar_share == doctest::Approx(zero_share));
+    Rng rng(5);
+    std::vector<float> obs(45), act(12, 0.f);
+    int commands = 0, saturated = 0, zero = 0;
+    for (int episode = 0; episode < 2; ++episode) {
+      e->Reset(rng, obs);
+      std::uint32_t seen = e->telemetry().command_index;
+      for (int t = 0; t < 1000; ++t) {
+        const StepResult r = e->Step(act, obs);
+        const WalkTelemetry& tel = e->telemetry();
+        if (tel.command_index != seen) {
+          seen = tel.command_index;
+          ++commands;
+          saturated += std::abs(tel.command[2]) == 1.0;
+          zero += tel.command[0] == 0.0 && tel.command[1] == 0.0;
+        }
+        if (r.terminated || r.truncated) break;
+      }
+    }
+    REQUIRE(commands > 300);
+    return std::pair{static_cast<double>(saturated) / commands, static_cast<double>(zero) / commands};
+  };
+  const auto [sat_half, zero_fifth] = count(0.5, 0.2);
+  MESSAGE("shares 0.5 / 0.2: saturated yaw rate " << sat_half << ", planar zero " << zero_fifth);
+  CHECK(sat_half == doctest::Approx(0.18).epsilon(0.4));
+  CHECK(zero_fifth == doctest::Approx(0.22).epsilon(0.35));
+  const auto [sat_all, zero_none] = count(1.0, 0.0);
+  CHECK(sat_all == doctest::Approx(0.36).epsilon(0.3));
+  CHECK(zero_none < 0.08);
+  const auto [sat_none, zero_all] = count(0.0, 1.0);
+  CHECK(sat_none == 0.0);
+  CHECK(zero_all == 1.0);
+  // The paper's test whatever walk.yaml says: commands every 10 s, each following a heading.
+  QuadrupedWalkOptions o = Nominal();
+  o.paper_test = true;
+  auto test = MakeWalk(o);
+  CHECK(test->params().resample_s == 10.0);
+  CHECK(test->params().heading_share == 1.0);
+  CHECK(test->params().zero_planar_share == 0.0);
+  o.models_dir = ModelsWith("walk_share_range", "walk.yaml", "heading_share: 0.5", "heading_share: 1.5");
+  o.paper_test = false;
+  CHECK(ErrorOf(o).find("walk.yaml: commands.heading_share: '1.5' is outside [0, 1]") != std::string::npos);
+}

@@ -28,7 +28,7 @@ envs::WalkEvalResult Test(const std::string& blob, const std::string& terrain, s
   o.models_dir = test::SourcePath("models");
   o.terrain = terrain;
   o.randomize = false;
-  o.resample_s = envs::kWalkEvalResampleS;
+  o.paper_test = true;
   auto env = envs::QuadrupedWalk::Make(o);
   REQUIRE_MESSAGE(env.ok(), env.error().message);
   envs::WalkEvalOptions eo;

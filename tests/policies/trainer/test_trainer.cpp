@@ -377,6 +377,13 @@ TEST_CASE("--init starts from a trained blob's policy and normaliser, mismatches
   REQUIRE(held.ok());
   CHECK(largest_change(held->spec) == 0.0f);
   CHECK(held->iterations.back().value_loss < held->iterations.front().value_loss);
+  // With the KL-adaptive rate the held policy's KL is 0: the rate waits for the policy's first
+  // step instead of rising to its ceiling (1e-2) during the warm-up and wrecking that step.
+  TrainOptions wa = w;
+  wa.lr_schedule = ParseLrSchedule("adaptive:0.01").value();
+  auto held_adaptive = Train(wa);
+  REQUIRE(held_adaptive.ok());
+  for (const auto& it : held_adaptive->iterations) CHECK(it.learning_rate == wa.learning_rate);
   w.critic_warmup = 1;
   auto moved = Train(w);
   REQUIRE(moved.ok());
