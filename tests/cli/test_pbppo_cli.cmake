@@ -300,7 +300,7 @@ run(0 ${PBPPO} inspect ${WORK}/walk/policy.blob)
 expect_in("${OUT}" "quadruped-walk")
 expect_in("${OUT}" "45 -> 16 elu -> 16 elu -> 12 identity")
 # The provenance records the terrain, the noise and the randomisation of the training.
-expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every 5 s (0.5 following a heading, 0.2 standing or")
+expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every 5 s (1 following a heading, 0 standing or")
 expect_in("${OUT}" "; noise x1 (ang vel ")
 expect_in("${OUT}" "; friction ")
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --episodes 2 --seed 3 --json
@@ -328,13 +328,13 @@ expect_same_bytes(${WORK}/walk_det_a/policy.blob ${WORK}/walk_det_b/policy.blob
 run(2 ${PBPPO} train --env quadruped-walk --terrain stairs --steps 384 --envs 8 --rollout 24 --quiet
     --out ${WORK}/walk_bad)
 expect_in("${ERR}" "stairs")
-# --command-shares: legged_gym's heading commands alone, recorded in the provenance; bad shares and
-# environments without commands refused.
-run(0 ${PBPPO} train --env quadruped-walk --command-shares 1:0 --schedule fixed:0.2 --steps 384 --envs 8 --rollout 24
+# --command-shares: half the yaw rates drawn, a fifth of the commands standing or turning in place,
+# recorded in the provenance; bad shares and environments without commands refused.
+run(0 ${PBPPO} train --env quadruped-walk --command-shares 0.5:0.2 --schedule fixed:0.2 --steps 384 --envs 8 --rollout 24
     --minibatch 96 --epochs 1 --hidden 16-16 --activation elu --seed 1 --threads 2 --no-plots --quiet
     --out ${WORK}/walk_heading)
 run(0 ${PBPPO} inspect ${WORK}/walk_heading/policy.blob)
-expect_in("${OUT}" "commands every 5 s (1 following a heading, 0 standing or turning in place)")
+expect_in("${OUT}" "commands every 5 s (0.5 following a heading, 0.2 standing or turning in place)")
 run(2 ${PBPPO} train --env quadruped-walk --command-shares 0.5:2 --steps 192 --quiet --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--command-shares: '0.5:2': zero planar share '2' is not a number in [0, 1]")
 run(2 ${PBPPO} train --env quadruped-walk --command-shares 0.5 --steps 192 --quiet --out ${WORK}/walk_bad)

@@ -297,8 +297,8 @@ TEST_CASE("quadruped-walk: training commands - a share follow a heading, a share
     QuadrupedWalkOptions o = Nominal();
     o.models_dir = ModelsWith(
         "walk_shares_" + std::to_string(heading_share) + "_" + std::to_string(zero_share), "walk.yaml",
-        {"resample_s: 5.0", "resample_s: 0.1", "heading_share: 0.5", "heading_share: " + std::to_string(heading_share),
-         "zero_planar_share: 0.2", "zero_planar_share: " + std::to_string(zero_share)});
+        {"resample_s: 5.0", "resample_s: 0.1", "heading_share: 1.0", "heading_share: " + std::to_string(heading_share),
+         "zero_planar_share: 0.0", "zero_planar_share: " + std::to_string(zero_share)});
     auto e = MakeWalk(o);
     CHECK(e->params().heading_share == doctest::Approx(heading_share));
     CHECK(e->params().zero_planar_share == doctest::Approx(zero_share));
@@ -340,7 +340,7 @@ TEST_CASE("quadruped-walk: training commands - a share follow a heading, a share
   CHECK(test->params().resample_s == 10.0);
   CHECK(test->params().heading_share == 1.0);
   CHECK(test->params().zero_planar_share == 0.0);
-  o.models_dir = ModelsWith("walk_share_range", "walk.yaml", "heading_share: 0.5", "heading_share: 1.5");
+  o.models_dir = ModelsWith("walk_share_range", "walk.yaml", "heading_share: 1.0", "heading_share: 1.5");
   o.paper_test = false;
   CHECK(ErrorOf(o).find("walk.yaml: commands.heading_share: '1.5' is outside [0, 1]") != std::string::npos);
 }

@@ -20,7 +20,6 @@ namespace {
 TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - return up, tracking errors down") {
   TrainOptions c = test::ForEnv("quadruped-walk");
   c.env.terrain = "flat";
-  c.env.command_shares = "1:0";  // the recipe's first stage: every yaw rate follows a heading
   c.num_envs = 512;
   c.rollout_steps = 24;
   c.minibatch = 3072;
