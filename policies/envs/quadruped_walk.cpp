@@ -422,7 +422,7 @@ void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
   step_ = 0;
   fell_ = false;
   done_ = false;
-  tel_ = WalkTelemetry{};
+  tel_ = WalkTelemetry{.physics_overflows = tel_.physics_overflows};
   if (!held_) command_ = {0, 0, 0, 0};
   error_sum_ = {0, 0, 0};
   ResampleCommand();
@@ -441,6 +441,10 @@ void QuadrupedWalk::ApplyTargets(const double* target, int substeps) noexcept {
       d_->ctrl[j] = torque_[j];
     }
     mj_step(m_, d_);
+  }
+  for (const int w : {mjWARN_CONTACTFULL, mjWARN_CNSTRFULL}) {
+    tel_.physics_overflows += static_cast<std::uint32_t>(d_->warning[w].number);
+    d_->warning[w].number = 0;
   }
 }
 

@@ -68,6 +68,9 @@ struct WalkTelemetry {
   bool fell = false;                // the episode ended by base contact or tilt
   bool base_contact = false;        // ... by base contact (else by tilt)
   std::uint32_t command_index = 0;  // incremented at each resample
+  // Steps at which MuJoCo found more contacts or constraint rows than the model has room for
+  // (mjcf.cpp's <size>) and dropped some, since the environment was made: 0 in a sound run.
+  std::uint32_t physics_overflows = 0;
 };
 
 class QuadrupedWalk final : public Env {

@@ -47,7 +47,9 @@ void ApplyActivation(Activation a, Eigen::MatrixBase<Derived>& y) {
     case Activation::kTanh: y.derived().array() = y.derived().array().tanh(); break;
     case Activation::kRelu: y.derived().array() = y.derived().array().max(S(0)); break;
     case Activation::kElu:
-      y.derived().array() = (y.derived().array() > S(0)).select(y.derived().array(), y.derived().array().exp() - S(1));
+      // max(y, 0) + exp(min(y, 0)) - 1: the same function as the select of the two branches, in
+      // packet operations throughout (Eigen's select evaluates the exponential one scalar at a time).
+      y.derived().array() = y.derived().array().max(S(0)) + (y.derived().array().min(S(0)).exp() - S(1));
       break;
     case Activation::kLeakyRelu: break;  // blob and runtime only: Mlp refuses it
   }
@@ -60,7 +62,7 @@ void MultiplyActivationDerivative(Activation a, Eigen::MatrixBase<DerivedD>& d, 
     case Activation::kIdentity: break;
     case Activation::kTanh: d.derived().array() *= S(1) - y.array().square(); break;
     case Activation::kRelu: d.derived().array() *= (y.array() > S(0)).template cast<S>(); break;
-    case Activation::kElu: d.derived().array() *= (y.array() > S(0)).select(S(1), y.array() + S(1)); break;
+    case Activation::kElu: d.derived().array() *= (y.array() + S(1)).min(S(1)); break;  // y > 0: 1
     case Activation::kLeakyRelu: break;  // blob and runtime only: Mlp refuses it
   }
 }

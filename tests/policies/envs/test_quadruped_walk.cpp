@@ -233,6 +233,29 @@ TEST_CASE("quadruped-walk: mixed terrain - half the episodes on blocks 5-15 cm h
   }
 }
 
+TEST_CASE("quadruped-walk: the model has room for every contact - a flailing robot on blocks, none dropped") {
+  // mjcf.cpp sizes the contact and constraint lists (MuJoCo sizes each mjData's memory from them):
+  // random actions, pushes and falls on blocks never fill them.
+  QuadrupedWalkOptions o = Nominal("mixed");
+  o.blocks_fraction = 1.0;
+  o.randomize = true;
+  auto e = MakeWalk(o);
+  Rng rng(5);
+  std::vector<float> obs(45), act(12);
+  e->Reset(rng, obs);
+  int falls = 0;
+  for (int k = 0; k < 3000; ++k) {
+    for (float& a : act) a = static_cast<float>(rng.Uniform(-3.0, 3.0));
+    const auto r = e->Step(act, obs);
+    if (r.terminated || r.truncated) {
+      falls += e->telemetry().fell;
+      e->Reset(rng, obs);
+    }
+  }
+  CHECK(falls > 10);
+  CHECK(e->telemetry().physics_overflows == 0);
+}
+
 TEST_CASE("quadruped-walk: blocks carry the robot - large blocks under the start, it stands on them") {
   QuadrupedWalkOptions o = Nominal("mixed");
   // 300 blocks 4 m a side over 20 m x 20 m, none kept out of the start: the robot starts on one.
