@@ -109,6 +109,9 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
                "quadruped-walk, training: HEADING:ZERO_PLANAR, the share of commands whose yaw rate follows a "
                "heading (the rest draw a yaw rate) and the share with vx = vy = 0 (standing or turning in place); "
                "default: models/quadruped/walk.yaml's");
+  s.add_option("--reward-scales", env.reward_scales,
+               "quadruped-walk, training: NAME=VALUE[,NAME=VALUE...] replaces those reward scales of "
+               "models/quadruped/walk.yaml for this run (e.g. tracking_ang_vel=1.0)");
   // auv-nav's training options.
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "

@@ -38,6 +38,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     if (options.terrain != "flat") return only("--terrain", "quadruped-walk", "terrains to choose");
     if (!options.commands.empty()) return only("--commands", "quadruped-walk", "velocity commands");
     if (!options.command_shares.empty()) return only("--command-shares", "quadruped-walk", "velocity commands");
+    if (!options.reward_scales.empty()) return only("--reward-scales", "quadruped-walk", "reward scales to set");
   }
   if (options.contact_forces != "computed") {
     if (name != "ant") return only("--contact-forces", "ant", "contact forces to leave out");
@@ -64,6 +65,7 @@ Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options) {
     o.terrain = options.terrain;
     o.commands = options.commands;
     o.command_shares = options.command_shares;
+    o.reward_scales = options.reward_scales;
     o.randomize = options.randomize;
     o.paper_test = options.paper_test;
     auto env = QuadrupedWalk::Make(o);

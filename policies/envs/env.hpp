@@ -112,6 +112,9 @@ struct EnvOptions {
   // --command-shares, quadruped-walk, training: "HEADING:ZERO_PLANAR", the share of commands
   // following a heading and the share with vx = vy = 0; empty: walk.yaml's.
   std::string command_shares;
+  // --reward-scales, quadruped-walk, training: "NAME=VALUE,..." replaces those of walk.yaml's reward
+  // scales for the run (recorded in the blob's provenance); empty: walk.yaml's.
+  std::string reward_scales;
   // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes): always in training,
   // in pbppo eval with --randomize.
   bool randomize = true;

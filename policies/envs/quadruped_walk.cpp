@@ -106,6 +106,8 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
   if (auto st = ApplyCommandShares(options.command_shares, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "--command-shares: " + st.error().message);
+  if (auto st = ApplyRewardScales(options.reward_scales, sh->params); !st)
+    return MakeError(ErrorCode::kInvalidValue, "--reward-scales: " + st.error().message);
   if (options.paper_test) {
     sh->params.resample_s = kWalkEvalResampleS;
     sh->params.heading_share = 1.0;
@@ -240,20 +242,22 @@ const std::string& QuadrupedWalk::name() const noexcept {
   return shared_->name;
 }
 std::string QuadrupedWalk::provenance() const {
+  // A blob's provenance holds 256 bytes of this: the run's choices first (terrain, command mix,
+  // reward scales changed for the run), then walk.yaml's noise and randomisation.
   const QuadrupedWalkParams& p = shared_->params;
   char text[256];
-  const int n = std::snprintf(text, sizeof text,
-                              "%s, terrain %s, commands every %g s (%g following a heading, %g standing or "
-                              "turning in place); noise x%g (ang vel %g, gravity %g, q %g, dq %g)",
-                              name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.heading_share,
-                              p.zero_planar_share, p.noise_level, p.noise_ang_vel_radps, p.noise_gravity,
-                              p.noise_dof_pos_rad, p.noise_dof_vel_radps);
+  int n = std::snprintf(text, sizeof text, "%s, terrain %s, commands every %g s (%g heading, %g zero planar)",
+                        name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.heading_share,
+                        p.zero_planar_share);
   std::string out(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
+  if (!shared_->options.reward_scales.empty()) out += "; rewards " + shared_->options.reward_scales;
+  n = std::snprintf(text, sizeof text, "; noise x%g (ang vel %g, gravity %g, q %g, dq %g)", p.noise_level,
+                    p.noise_ang_vel_radps, p.noise_gravity, p.noise_dof_pos_rad, p.noise_dof_vel_radps);
+  out.append(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
   if (!shared_->options.randomize) return out + "; nominal robot";
   std::snprintf(text, sizeof text,
-                "; friction %g..%g, added mass %g..%g kg, gains x%g..%g, latency %g..%g periods, pushes %g m/s "
-                "every %g s",
-                p.friction[0], p.friction[1], p.added_mass_kg[0], p.added_mass_kg[1], p.gain_scale[0], p.gain_scale[1],
+                "; friction %g..%g, mass %+g..%+g kg, gains x%g..%g, latency %g..%g, pushes %g m/s/%g s", p.friction[0],
+                p.friction[1], p.added_mass_kg[0], p.added_mass_kg[1], p.gain_scale[0], p.gain_scale[1],
                 p.latency_periods[0], p.latency_periods[1], p.push_velocity_mps, p.push_interval_s);
   return out + text;
 }

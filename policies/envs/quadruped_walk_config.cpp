@@ -1,13 +1,39 @@
 #include "policies/envs/quadruped_walk_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <span>
+#include <string_view>
+#include <utility>
 
 #include "runtime/robot/yaml_fields.hpp"
 
 namespace pbppo::envs {
+
+namespace {
+
+constexpr double kBig = 1e6;  // the largest reward scale or value walk.yaml takes
+
+// walk.yaml's rewards.scales, by name.
+constexpr std::pair<const char*, double WalkRewardScales::*> kRewardScales[] = {
+    {"tracking_lin_vel", &WalkRewardScales::tracking_lin_vel},
+    {"tracking_ang_vel", &WalkRewardScales::tracking_ang_vel},
+    {"lin_vel_z", &WalkRewardScales::lin_vel_z},
+    {"ang_vel_xy", &WalkRewardScales::ang_vel_xy},
+    {"orientation", &WalkRewardScales::orientation},
+    {"torques", &WalkRewardScales::torques},
+    {"dof_acc", &WalkRewardScales::dof_acc},
+    {"action_rate", &WalkRewardScales::action_rate},
+    {"collision", &WalkRewardScales::collision},
+    {"feet_air_time", &WalkRewardScales::feet_air_time},
+    {"dof_pos_limits", &WalkRewardScales::dof_pos_limits},
+    {"termination", &WalkRewardScales::termination},
+};
+
+}  // namespace
 
 int QuadrupedWalkParams::episode_steps() const noexcept {
   return static_cast<int>(std::lround(episode_s / policy_dt_s()));
@@ -38,7 +64,6 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
     return {};
   };
   WalkRewardScales& s = p.scales;
-  const double kBig = 1e6;
   for (const Status& st : {
            f.Keys(sim, "simulation",
                   {"timestep_s", "decimation", "episode_s", "init_base_height_m", "init_joint_scale",
@@ -104,20 +129,13 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
     if (!st) return st.error();
   }
   // legged_gym's reward scales, each any number (0: the term off); termination may be left out.
-  for (auto [key, out] : {std::pair{"tracking_lin_vel", &s.tracking_lin_vel},
-                          {"tracking_ang_vel", &s.tracking_ang_vel},
-                          {"lin_vel_z", &s.lin_vel_z},
-                          {"ang_vel_xy", &s.ang_vel_xy},
-                          {"orientation", &s.orientation},
-                          {"torques", &s.torques},
-                          {"dof_acc", &s.dof_acc},
-                          {"action_rate", &s.action_rate},
-                          {"collision", &s.collision},
-                          {"feet_air_time", &s.feet_air_time},
-                          {"dof_pos_limits", &s.dof_pos_limits}})
-    if (auto st = f.Number(sc, key, "rewards.scales", -kBig, kBig, out); !st) return st.error();
-  if (auto st = f.OptionalNumber(sc, "termination", "rewards.scales", -kBig, kBig, &s.termination); !st)
-    return st.error();
+  for (const auto& [key, member] : kRewardScales) {
+    const bool optional = std::string_view(key) == "termination";
+    if (auto st = optional ? f.OptionalNumber(sc, key, "rewards.scales", -kBig, kBig, &(s.*member))
+                           : f.Number(sc, key, "rewards.scales", -kBig, kBig, &(s.*member));
+        !st)
+      return st.error();
+  }
   p.decimation = static_cast<int>(decimation);
   p.blocks = static_cast<int>(blocks);
   p.pool = static_cast<int>(pool);
@@ -170,6 +188,32 @@ Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p) {
   if (auto st = ParseSpec(spec, "HEADING_SHARE:ZERO_PLANAR_SHARE (e.g. 0.5:0.2)", 1, kNames, v); !st) return st;
   p.heading_share = v[0];
   p.zero_planar_share = v[1];
+  return {};
+}
+
+Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
+  std::size_t start = 0;
+  while (start < spec.size()) {
+    const std::size_t end = std::min(spec.find(',', start), spec.size());
+    const std::string item = spec.substr(start, end - start);
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos)
+      return MakeError(ErrorCode::kInvalidValue, "'" + item + "' is not NAME=VALUE (e.g. tracking_ang_vel=1.0)");
+    const std::string name = item.substr(0, eq), value = item.substr(eq + 1);
+    const auto* it = std::find_if(std::begin(kRewardScales), std::end(kRewardScales),
+                                  [&](const auto& e) { return name == e.first; });
+    if (it == std::end(kRewardScales)) {
+      std::string known;
+      for (const auto& e : kRewardScales) known += std::string(known.empty() ? "" : ", ") + e.first;
+      return MakeError(ErrorCode::kInvalidValue, "'" + name + "' is not a reward term (" + known + ")");
+    }
+    char* stop = nullptr;
+    const double v = std::strtod(value.c_str(), &stop);
+    if (value.empty() || stop != value.c_str() + value.size() || !std::isfinite(v) || std::fabs(v) > kBig)
+      return MakeError(ErrorCode::kInvalidValue, name + ": '" + value + "' is not a number");
+    p.scales.*(it->second) = v;
+    start = end + 1;
+  }
   return {};
 }
 

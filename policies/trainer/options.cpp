@@ -52,7 +52,7 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
       {"env", e.name}, {"models", e.models_dir}, {"layout", e.layout}, {"exploring_starts", e.exploring_starts},
       {"progress", e.progress}, {"geodesic_margin", e.geodesic_margin}, {"clearance_penalty", e.clearance_penalty},
       {"extra_obstacles", e.extra_obstacles}, {"terrain", e.terrain}, {"commands", e.commands},
-      {"command_shares", e.command_shares}, {"contact_forces", e.contact_forces},
+      {"command_shares", e.command_shares}, {"reward_scales", e.reward_scales}, {"contact_forces", e.contact_forces},
       // Budget and parallelism.
       {"seed", o.seed}, {"steps", o.total_steps}, {"envs", o.num_envs}, {"rollout", o.rollout_steps},
       {"threads", o.threads}, {"chunked_minibatch", o.chunked_minibatch},

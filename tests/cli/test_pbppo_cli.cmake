@@ -300,9 +300,8 @@ run(0 ${PBPPO} inspect ${WORK}/walk/policy.blob)
 expect_in("${OUT}" "quadruped-walk")
 expect_in("${OUT}" "45 -> 16 elu -> 16 elu -> 12 identity")
 # The provenance records the terrain, the noise and the randomisation of the training.
-expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every 5 s (1 following a heading, 0 standing or")
-expect_in("${OUT}" "; noise x1 (ang vel ")
-expect_in("${OUT}" "; friction ")
+expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every 5 s (1 heading, 0 zero planar); noise x1 (ang vel ")
+expect_in("${OUT}" "; friction 0.5..1.25, mass -1..+1 kg, gains x0.9..1.1, latency 0..1, pushes 1 m/s/15 s")
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --episodes 2 --seed 3 --json
     --plot ${WORK}/walk/eval.png)
 string(JSON robots GET "${OUT}" robots)
@@ -333,8 +332,23 @@ expect_in("${ERR}" "stairs")
 run(0 ${PBPPO} train --env quadruped-walk --command-shares 0.5:0.2 --schedule fixed:0.2 --steps 384 --envs 8 --rollout 24
     --minibatch 96 --epochs 1 --hidden 16-16 --activation elu --seed 1 --threads 2 --no-plots --quiet
     --out ${WORK}/walk_heading)
+# --reward-scales: the yaw-rate tracking weighed 1.0 and a cost for a fall, recorded in the
+# provenance and summary.json; an unknown term, a bad value and other environments refused.
+run(0 ${PBPPO} train --env quadruped-walk --command-shares 0.5:0.2 --reward-scales tracking_ang_vel=1.0,termination=-2
+    --schedule fixed:0.2 --steps 384 --envs 8 --rollout 24 --minibatch 96 --epochs 1 --hidden 16-16 --activation elu
+    --seed 1 --threads 2 --no-plots --quiet --out ${WORK}/walk_heading)
 run(0 ${PBPPO} inspect ${WORK}/walk_heading/policy.blob)
-expect_in("${OUT}" "commands every 5 s (0.5 following a heading, 0.2 standing or turning in place)")
+expect_in("${OUT}" "commands every 5 s (0.5 heading, 0.2 zero planar); rewards tracking_ang_vel=1.0,termination=-2; noise")
+expect_json(${WORK}/walk_heading/summary.json reward_scales "tracking_ang_vel=1.0,termination=-2")
+run(2 ${PBPPO} train --env quadruped-walk --reward-scales tracking_yaw=1 --steps 192 --quiet --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--reward-scales: 'tracking_yaw' is not a reward term (tracking_lin_vel, tracking_ang_vel, ")
+run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques=-2e-4,collision=x --steps 192 --quiet
+    --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--reward-scales: collision: 'x' is not a number")
+run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques --steps 192 --quiet --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--reward-scales: 'torques' is not NAME=VALUE (e.g. tracking_ang_vel=1.0)")
+run(2 ${PBPPO} train --env hopper --reward-scales torques=0 --steps 192 --quiet --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--reward-scales: only quadruped-walk has reward scales to set, not 'hopper'")
 run(2 ${PBPPO} train --env quadruped-walk --command-shares 0.5:2 --steps 192 --quiet --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--command-shares: '0.5:2': zero planar share '2' is not a number in [0, 1]")
 run(2 ${PBPPO} train --env quadruped-walk --command-shares 0.5 --steps 192 --quiet --out ${WORK}/walk_bad)

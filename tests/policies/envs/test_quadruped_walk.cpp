@@ -367,3 +367,38 @@ TEST_CASE("quadruped-walk: training commands - a share follow a heading, a share
   o.paper_test = false;
   CHECK(ErrorOf(o).find("walk.yaml: commands.heading_share: '1.5' is outside [0, 1]") != std::string::npos);
 }
+
+TEST_CASE("quadruped-walk: --reward-scales replaces walk.yaml's scales for a run - the reward follows them") {
+  QuadrupedWalkOptions o = Nominal();
+  auto base = MakeWalk(o);
+  o.reward_scales = "tracking_ang_vel=1.0,termination=-50";
+  auto changed = MakeWalk(o);
+  CHECK(changed->params().scales.tracking_ang_vel == 1.0);
+  CHECK(changed->params().scales.termination == -50.0);
+  CHECK(changed->params().scales.tracking_lin_vel == base->params().scales.tracking_lin_vel);
+  CHECK(base->params().scales.termination == 0.0);
+  CHECK(changed->provenance().find("; rewards tracking_ang_vel=1.0,termination=-50; noise") != std::string::npos);
+  // The same robot, commands and actions: the yaw-rate tracking pays twice as much, so every
+  // step's reward is higher until the fall, which then costs 50 x 0.02.
+  Rng ra(9), rb(9), noise(4);
+  std::vector<float> oa(45), ob(45), act(12);
+  base->Reset(ra, oa);
+  changed->Reset(rb, ob);
+  bool fell = false;
+  for (int t = 0; t < 1000 && !fell; ++t) {
+    for (float& a : act) a = static_cast<float>(noise.Uniform(-4.0, 4.0));
+    const StepResult a = base->Step(act, oa), b = changed->Step(act, ob);
+    REQUIRE(a.terminated == b.terminated);
+    fell = a.terminated;
+    if (fell) {
+      CHECK(b.reward == doctest::Approx(a.reward - 50 * 0.02));
+    } else if (a.reward > 0) {
+      CHECK(b.reward > a.reward);
+    }
+  }
+  CHECK(fell);
+  o.reward_scales = "tracking_ang_vel=1.0,feet_air=2";
+  CHECK(ErrorOf(o).find("--reward-scales: 'feet_air' is not a reward term (tracking_lin_vel, ") != std::string::npos);
+  o.reward_scales = "torques=1e9";
+  CHECK(ErrorOf(o).find("--reward-scales: torques: '1e9' is not a number") != std::string::npos);
+}
