@@ -99,21 +99,21 @@ TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes 
       "stream: velocity_command\n"
       "phases:\n"
       "  - {name: stand, duration_s: 2.0}\n"
-      "  - {name: forward, duration_s: 3.5, command_vx: 0.4}\n",
+      "  - {name: forward, duration_s: 3.5, command_vx: 0.5}\n",
       ctl.op.get());
   std::atomic<bool> done{false};
   std::uint64_t published = 0;
   bool ran = false;
   {
     quadruped::StatusPublisher status(*ctl.link, rig->loop(), ctl.op.get(), 50'000'000);
-    // The operator: stand for 2 s of its clock, then 0.4 m/s forward, at 20 Hz until the rig is done.
+    // The operator: stand for 2 s of its clock, then 0.5 m/s forward, at 20 Hz until the rig is done.
     std::thread oper_thread([&] {
       const auto t0 = std::chrono::steady_clock::now();
       auto next = t0;
       while (!done.load()) {
         robot::VelocityCommand c;
         c.seq = ++published;
-        c.vx_mps = std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2) ? 0.0 : 0.4;
+        c.vx_mps = std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2) ? 0.0 : 0.5;
         (void)oper.PublishCommand(c);
         next += std::chrono::milliseconds(50);
         std::this_thread::sleep_until(next);
@@ -138,7 +138,7 @@ TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes 
   CHECK(st.phase == static_cast<std::uint8_t>(loop::Phase::kRun));
   CHECK(st.mode == static_cast<std::uint8_t>(safety::Mode::kNominal));
   CHECK(st.commands_received == ctl.op->commands());
-  CHECK(st.command_vx_mps == doctest::Approx(0.4));
+  CHECK(st.command_vx_mps == doctest::Approx(0.5));
   CHECK(st.tick >= 5000);
 }
 
@@ -152,7 +152,7 @@ TEST_CASE(
          "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
          "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
          1);
-  const std::string cmd = std::string(PBPPO_CYCLONE_OPERATOR) + " " + std::to_string(domain) + " 0.4 5.0 3.0 2>&1";
+  const std::string cmd = std::string(PBPPO_CYCLONE_OPERATOR) + " " + std::to_string(domain) + " 0.5 5.0 3.0 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   REQUIRE(child != nullptr);
   const bool matched = ctl.link->WaitForPeer(30 * kSecond);  // its writer and reader discovered
@@ -171,14 +171,14 @@ TEST_CASE(
     CHECK(ran);
     // While commanded: the robot walks at the command, no fall.
     std::uint64_t n = 0;
-    const double err = TrackingError(rig->trace(), 0.4f, 1.0, &n);
+    const double err = TrackingError(rig->trace(), 0.5f, 1.0, &n);
     CAPTURE(n);
     CHECK(n >= 1500);  // >= 1.5 s of settled walking
     CHECK(n <= 4500);  // ... and not after the commands stopped
     CHECK(err <= 0.2);
     bool contact_while_commanded = false;
     for (const sim::RigSample& s : rig->trace())
-      if (s.cmd_vx == 0.4f && s.mode == 0 && s.body_contact) contact_while_commanded = true;
+      if (s.cmd_vx == 0.5f && s.mode == 0 && s.body_contact) contact_while_commanded = true;
     CHECK_FALSE(contact_while_commanded);
     // Silent: the stale velocity command stream takes the controller to safe-stop.
     bool safe_stop = false;
@@ -210,7 +210,7 @@ TEST_CASE(
   CHECK(phase == static_cast<unsigned>(loop::Phase::kRun));
   CHECK(mode == 0);
   CHECK(commands > 0);
-  CHECK(vx == doctest::Approx(0.4));
+  CHECK(vx == doctest::Approx(0.5));
   const auto after = out.find("after ");
   REQUIRE(after != std::string::npos);
   REQUIRE(std::sscanf(out.c_str() + after, "after tick=%llu phase=%u mode=%u", &tick, &phase, &mode) == 3);

@@ -1,8 +1,8 @@
 // Pb-PPO learns quadruped-walk on flat ground on a short budget with the shipped recipe's settings
 // (tools/train_quadruped.sh: 512 robots x 24 steps, 5 epochs of 3072-sample minibatches, the
 // KL-adaptive rate, 128-64-32 ELU, the privileged critic, clip bounds 0.1..0.3): from robots that
-// stand or fall to robots that start to follow their commands. The full recipe trains the same run
-// 13 times longer; this is its beginning, step for step (same seed, same thread count).
+// stand or fall to robots that start to follow their commands. The recipe's first stage trains the
+// same run 11 times longer; this is its beginning, step for step (same seed, same thread count).
 // Label `learning` (not `unit`): 1.9 M environment steps, too long for the sanitizer builds.
 #include <doctest/doctest.h>
 
