@@ -70,7 +70,8 @@ TEST_CASE("shipped walking policies: golden vectors reproduce through the runtim
   }
 }
 
-TEST_CASE("shipped flat policy: the paper's test on flat ground - tracking within 0.15, no fall, on blocks <= 2 of 50") {
+TEST_CASE(
+    "shipped flat policy: the paper's test on flat ground - tracking within 0.15, no fall, on blocks <= 2 of 50") {
   const auto r = Test("flat.blob", "flat", 7);
   CheckTracking(r);
   CHECK(r.falls == 0);
