@@ -147,6 +147,13 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
 
 namespace {
 
+// `text` as a finite number, all of it (the command-line specs' numbers).
+bool WholeNumber(const std::string& text, double& out) {
+  char* stop = nullptr;
+  out = std::strtod(text.c_str(), &stop);
+  return !text.empty() && stop == text.c_str() + text.size() && std::isfinite(out);
+}
+
 // "A:B[:C]": parts.size() numbers separated by ':', each in [0, max]; errors name the part.
 Status ParseSpec(const std::string& spec, const char* form, double max, std::span<const char* const> names,
                  std::span<double> out) {
@@ -155,9 +162,7 @@ Status ParseSpec(const std::string& spec, const char* form, double max, std::spa
     const std::size_t end = k + 1 < names.size() ? spec.find(':', start) : spec.size();
     if (end == std::string::npos) return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not " + form);
     const std::string part = spec.substr(start, end - start);
-    char* stop = nullptr;
-    out[k] = std::strtod(part.c_str(), &stop);
-    if (part.empty() || stop != part.c_str() + part.size() || !(out[k] >= 0 && out[k] <= max)) {
+    if (!WholeNumber(part, out[k]) || !(out[k] >= 0 && out[k] <= max)) {
       char range[32];
       std::snprintf(range, sizeof range, "[0, %g]", max);
       return MakeError(ErrorCode::kInvalidValue,
@@ -207,9 +212,8 @@ Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
       for (const auto& e : kRewardScales) known += std::string(known.empty() ? "" : ", ") + e.first;
       return MakeError(ErrorCode::kInvalidValue, "'" + name + "' is not a reward term (" + known + ")");
     }
-    char* stop = nullptr;
-    const double v = std::strtod(value.c_str(), &stop);
-    if (value.empty() || stop != value.c_str() + value.size() || !std::isfinite(v) || std::fabs(v) > kBig)
+    double v = 0;
+    if (!WholeNumber(value, v) || std::fabs(v) > kBig)
       return MakeError(ErrorCode::kInvalidValue, name + ": '" + value + "' is not a number");
     p.scales.*(it->second) = v;
     start = end + 1;
