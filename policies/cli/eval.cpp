@@ -45,6 +45,11 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
                "the nearest obstacle and the random obstacles)");
   s.add_flag("--through-ends", o.through_ends,
              "MuJoCo tasks: every episode runs 1000 steps, on through terminations (the paper's script's way)");
+  s.add_option("--kernel", o.kernel,
+               "Forward kernel: auto (AVX-512 where the CPU has it), portable (the same figures on every machine that "
+               "runs this build) "
+               "or avx512")
+      ->check(CLI::IsMember({"auto", "portable", "avx512"}));
   s.add_flag("--json", o.json, "Print JSON");
 }
 
@@ -129,7 +134,11 @@ int Eval(const EvalOptions& o_in) {
                  o_in.env.name.c_str());
     return 2;
   }
-  auto model = policy::PolicyModel::FromFile(o_in.blob);
+  policy::LoadOptions load;
+  for (policy::Kernel k : {policy::Kernel::kAuto, policy::Kernel::kPortable, policy::Kernel::kAvx512}) {
+    if (o_in.kernel == policy::ToString(k)) load.kernel = k;
+  }
+  auto model = policy::PolicyModel::FromFile(o_in.blob, load);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());
     return 1;
@@ -264,6 +273,7 @@ int Eval(const EvalOptions& o_in) {
     j["max_return"] = hi;
     j["steps"] = steps;
     j["through_ends"] = o.through_ends;
+    j["kernel"] = policy::ToString(model->kernel());
     j["forward_problems"] = bad;
     if (task) {
       j["successes"] = successes;
@@ -278,9 +288,9 @@ int Eval(const EvalOptions& o_in) {
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf(
-        "%s on %s: %d episodes%s, seed %llu\n", o.blob.c_str(), e.name().c_str(), o.episodes,
+        "%s on %s: %d episodes%s, seed %llu, %s kernel\n", o.blob.c_str(), e.name().c_str(), o.episodes,
         o.through_ends ? (" of " + std::to_string(e.max_episode_steps()) + " steps through episode ends").c_str() : "",
-        static_cast<unsigned long long>(o.seed));
+        static_cast<unsigned long long>(o.seed), policy::ToString(model->kernel()));
     if (task) {
       std::printf(
           "success %d/%d = %.1f%% (95%% CI %.1f-%.1f%%)  collisions %d  timeouts %d  targets/episode %.2f  "

@@ -29,6 +29,10 @@ struct EvalOptions {
   // MuJoCo tasks: every episode runs the task's full length, stepping on through terminations (the
   // paper's released evaluation: 1000 deterministic steps, ignoring episode ends).
   bool through_ends = false;
+  // The forward kernel: auto (AVX-512 where the CPU has it), portable or avx512. The kernels round
+  // differently, so a chaotic task's deterministic episodes can differ between machines; portable
+  // gives every machine the same figures.
+  std::string kernel = "auto";
   bool json = false;
 };
 void AddEvalOptions(CLI::App& sub, EvalOptions& o);
