@@ -111,7 +111,8 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
                "default: models/quadruped/walk.yaml's");
   s.add_option("--reward-scales", env.reward_scales,
                "quadruped-walk, training: NAME=VALUE[,NAME=VALUE...] replaces those reward scales of "
-               "models/quadruped/walk.yaml for this run (e.g. tracking_ang_vel=1.0)");
+               "models/quadruped/walk.yaml for this run (e.g. tracking_ang_vel=1.0; also tracking_sigma, the "
+               "tracking terms' width)");
   // auv-nav's training options.
   s.add_option("--exploring-starts", env.exploring_starts,
                "auv-nav: probability that a training episode starts anywhere in the arena with a random current "

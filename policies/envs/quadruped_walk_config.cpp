@@ -207,15 +207,23 @@ Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
     const std::string name = item.substr(0, eq), value = item.substr(eq + 1);
     const auto* it = std::find_if(std::begin(kRewardScales), std::end(kRewardScales),
                                   [&](const auto& e) { return name == e.first; });
-    if (it == std::end(kRewardScales)) {
+    const bool sigma = name == "tracking_sigma";  // the tracking terms' width, beside the scales
+    if (it == std::end(kRewardScales) && !sigma) {
       std::string known;
       for (const auto& e : kRewardScales) known += std::string(known.empty() ? "" : ", ") + e.first;
-      return MakeError(ErrorCode::kInvalidValue, "'" + name + "' is not a reward term (" + known + ")");
+      return MakeError(ErrorCode::kInvalidValue,
+                       "'" + name + "' is not a reward term (" + known + ") or tracking_sigma");
     }
     double v = 0;
     if (!WholeNumber(value, v) || std::fabs(v) > kBig)
       return MakeError(ErrorCode::kInvalidValue, name + ": '" + value + "' is not a number");
-    p.scales.*(it->second) = v;
+    if (sigma) {
+      if (!(v >= 1e-6 && v <= 100))  // walk.yaml's range
+        return MakeError(ErrorCode::kInvalidValue, "tracking_sigma: '" + value + "' is not in [1e-06, 100]");
+      p.tracking_sigma = v;
+    } else {
+      p.scales.*(it->second) = v;
+    }
     start = end + 1;
   }
   return {};

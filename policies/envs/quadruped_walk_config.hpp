@@ -77,8 +77,8 @@ Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p);
 Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p);
 
 // The reward scales of a --reward-scales spec "NAME=VALUE[,NAME=VALUE...]" (walk.yaml's
-// rewards.scales names, e.g. tracking_ang_vel=1.0), the others kept; an empty spec keeps
-// walk.yaml's. Errors name the term or the value.
+// rewards.scales names, e.g. tracking_ang_vel=1.0, and tracking_sigma, the tracking terms'
+// width), the others kept; an empty spec keeps walk.yaml's. Errors name the term or the value.
 Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p);
 
 }  // namespace pbppo::envs

@@ -345,6 +345,8 @@ expect_in("${ERR}" "--reward-scales: 'tracking_yaw' is not a reward term (tracki
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques=-2e-4,collision=x --steps 192 --quiet
     --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--reward-scales: collision: 'x' is not a number")
+run(2 ${PBPPO} train --env quadruped-walk --reward-scales tracking_sigma=0 --steps 192 --quiet --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--reward-scales: tracking_sigma: '0' is not in [1e-06, 100]")
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques --steps 192 --quiet --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--reward-scales: 'torques' is not NAME=VALUE (e.g. tracking_ang_vel=1.0)")
 run(2 ${PBPPO} train --env hopper --reward-scales torques=0 --steps 192 --quiet --out ${WORK}/walk_bad)

@@ -401,4 +401,10 @@ TEST_CASE("quadruped-walk: --reward-scales replaces walk.yaml's scales for a run
   CHECK(ErrorOf(o).find("--reward-scales: 'feet_air' is not a reward term (tracking_lin_vel, ") != std::string::npos);
   o.reward_scales = "torques=1e9";
   CHECK(ErrorOf(o).find("--reward-scales: torques: '1e9' is not a number") != std::string::npos);
+  // tracking_sigma, the tracking terms' width, is set the same way and kept to walk.yaml's range.
+  o.reward_scales = "tracking_sigma=0.15";
+  CHECK(MakeWalk(o)->params().tracking_sigma == 0.15);
+  CHECK(base->params().tracking_sigma == 0.25);
+  o.reward_scales = "tracking_sigma=-1";
+  CHECK(ErrorOf(o).find("--reward-scales: tracking_sigma: '-1' is not in [1e-06, 100]") != std::string::npos);
 }
