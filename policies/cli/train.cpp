@@ -106,9 +106,10 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   envs::EnvOptions& env = o.env;
   AddEnvOptions(s, env);
   s.add_option("--command-shares", env.command_shares,
-               "quadruped-walk, training: HEADING:ZERO_PLANAR, the share of commands whose yaw rate follows a "
-               "heading (the rest draw a yaw rate) and the share with vx = vy = 0 (standing or turning in place); "
-               "default: models/quadruped/walk.yaml's");
+               "quadruped-walk, training: HEADING:ZERO_PLANAR[:SINGLE_AXIS], the share of commands whose yaw rate "
+               "follows a heading (the rest draw a yaw rate), the share with vx = vy = 0 (standing or turning in "
+               "place) and the share along one axis alone (vx, vy or a yaw rate); default: "
+               "models/quadruped/walk.yaml's");
   s.add_option("--reward-scales", env.reward_scales,
                "quadruped-walk, training: NAME=VALUE[,NAME=VALUE...] replaces those reward scales of "
                "models/quadruped/walk.yaml for this run (e.g. tracking_ang_vel=1.0; also tracking_sigma, the "

@@ -109,8 +109,9 @@ struct EnvOptions {
   std::string terrain = "flat";
   // --commands, quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's ranges.
   std::string commands;
-  // --command-shares, quadruped-walk, training: "HEADING:ZERO_PLANAR", the share of commands
-  // following a heading and the share with vx = vy = 0; empty: walk.yaml's.
+  // --command-shares, quadruped-walk, training: "HEADING:ZERO_PLANAR[:SINGLE_AXIS]", the share of
+  // commands following a heading, the share with vx = vy = 0 and the share along one axis alone;
+  // empty: walk.yaml's.
   std::string command_shares;
   // --reward-scales, quadruped-walk, training: "NAME=VALUE,..." replaces those of walk.yaml's reward
   // scales for the run (recorded in the blob's provenance); empty: walk.yaml's.

@@ -112,6 +112,7 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     sh->params.resample_s = kWalkEvalResampleS;
     sh->params.heading_share = 1.0;
     sh->params.zero_planar_share = 0.0;
+    sh->params.single_axis_share = 0.0;
   }
   const robot::CanMap* map = &*robot_model->can;
 
@@ -246,10 +247,15 @@ std::string QuadrupedWalk::provenance() const {
   // reward scales changed for the run), then walk.yaml's noise and randomisation.
   const QuadrupedWalkParams& p = shared_->params;
   char text[256];
-  int n = std::snprintf(text, sizeof text, "%s, terrain %s, commands every %g s (%g heading, %g zero planar)",
+  int n = std::snprintf(text, sizeof text, "%s, terrain %s, commands every %g s (%g heading, %g zero planar",
                         name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.heading_share,
                         p.zero_planar_share);
   std::string out(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
+  if (p.single_axis_share > 0) {
+    n = std::snprintf(text, sizeof text, ", %g single axis", p.single_axis_share);
+    out.append(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
+  }
+  out += ")";
   if (!shared_->options.reward_scales.empty()) out += "; rewards " + shared_->options.reward_scales;
   n = std::snprintf(text, sizeof text, "; noise x%g (ang vel %g, gravity %g, q %g, dq %g)", p.noise_level,
                     p.noise_ang_vel_radps, p.noise_gravity, p.noise_dof_pos_rad, p.noise_dof_vel_radps);
@@ -384,6 +390,14 @@ void QuadrupedWalk::ResampleCommand() noexcept {
     command_[3] = rng_.Uniform(p.heading_rad[0], p.heading_rad[1]);
   } else {
     command_[2] = rng_.Uniform(p.yaw_rate_radps[0], p.yaw_rate_radps[1]);
+  }
+  if (chance(p.single_axis_share)) {
+    // One axis alone, the others 0 and no heading (a single-axis share of 0 draws nothing here).
+    const int axis = std::min(2, static_cast<int>(rng_.Uniform() * 3.0));
+    heading_mode_ = false;
+    if (axis != 0) command_[0] = 0.0;
+    if (axis != 1) command_[1] = 0.0;
+    command_[2] = axis == 2 ? rng_.Uniform(p.yaw_rate_radps[0], p.yaw_rate_radps[1]) : 0.0;
   }
   if (chance(p.zero_planar_share) || std::hypot(command_[0], command_[1]) < p.zero_below_mps)
     command_[0] = command_[1] = 0.0;

@@ -76,7 +76,7 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Number(sim, "init_base_velocity", "simulation", 0, 10, &p.init_base_velocity),
            f.Keys(cmd, "commands",
                   {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_share", "heading_gain",
-                   "zero_planar_share", "zero_below_mps"}),
+                   "zero_planar_share", "single_axis_share", "zero_below_mps"}),
            f.Number(cmd, "resample_s", "commands", 0.02, 3600, &p.resample_s),
            f.Range(cmd, "vx_mps", "commands", -10, 10, &p.vx_mps),
            f.Range(cmd, "vy_mps", "commands", -10, 10, &p.vy_mps),
@@ -85,6 +85,7 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Number(cmd, "heading_share", "commands", 0, 1, &p.heading_share),
            f.Number(cmd, "heading_gain", "commands", 0, 100, &p.heading_gain),
            f.Number(cmd, "zero_planar_share", "commands", 0, 1, &p.zero_planar_share),
+           f.Number(cmd, "single_axis_share", "commands", 0, 1, &p.single_axis_share),
            f.Number(cmd, "zero_below_mps", "commands", 0, 10, &p.zero_below_mps),
            f.Keys(rew, "rewards",
                   {"tracking_sigma", "only_positive", "feet_air_time_target_s", "soft_dof_pos_limit", "contact_force_n",
@@ -188,11 +189,17 @@ Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p) {
 
 Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p) {
   if (spec.empty()) return {};
-  static constexpr const char* kNames[] = {"heading share", "zero planar share"};
-  double v[2] = {0, 0};
-  if (auto st = ParseSpec(spec, "HEADING_SHARE:ZERO_PLANAR_SHARE (e.g. 0.5:0.2)", 1, kNames, v); !st) return st;
+  static constexpr const char* kNames[] = {"heading share", "zero planar share", "single axis share"};
+  double v[3] = {0, 0, 0};
+  // The third share is optional: HEADING:ZERO_PLANAR keeps walk.yaml's single-axis share.
+  const std::size_t parts = std::count(spec.begin(), spec.end(), ':') >= 2 ? 3 : 2;
+  if (auto st = ParseSpec(spec, "HEADING_SHARE:ZERO_PLANAR_SHARE[:SINGLE_AXIS_SHARE] (e.g. 0.5:0.2)", 1,
+                          std::span(kNames, parts), std::span(v, parts));
+      !st)
+    return st;
   p.heading_share = v[0];
   p.zero_planar_share = v[1];
+  if (parts == 3) p.single_axis_share = v[2];
   return {};
 }
 

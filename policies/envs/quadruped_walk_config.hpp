@@ -36,6 +36,9 @@ struct QuadrupedWalkParams {
   double heading_share = 1.0;  // of the resamples: the yaw rate follows a heading (else drawn)
   double heading_gain = 0.5;
   double zero_planar_share = 0.0;  // of the resamples: vx = vy = 0 (standing or turning in place)
+  // of the resamples: one axis only, as a joystick's single stick sends: vx alone, vy alone, or a
+  // yaw rate alone (each a third), the others 0 and no heading
+  double single_axis_share = 0.0;
   double zero_below_mps = 0.2;
   // rewards
   double tracking_sigma = 0.25;
@@ -72,8 +75,9 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& root, con
 // an empty spec keeps walk.yaml's. Errors name the part of the spec.
 Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p);
 
-// The command mix of a --command-shares spec "HEADING:ZERO_PLANAR" (walk.yaml's heading_share and
-// zero_planar_share, each in [0, 1]); an empty spec keeps walk.yaml's. Errors name the part.
+// The command mix of a --command-shares spec "HEADING:ZERO_PLANAR[:SINGLE_AXIS]" (walk.yaml's
+// heading_share, zero_planar_share and single_axis_share, each in [0, 1]; without the third part
+// walk.yaml's single_axis_share is kept); an empty spec keeps walk.yaml's. Errors name the part.
 Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p);
 
 // The reward scales of a --reward-scales spec "NAME=VALUE[,NAME=VALUE...]" (walk.yaml's

@@ -368,6 +368,61 @@ TEST_CASE("quadruped-walk: training commands - a share follow a heading, a share
   CHECK(ErrorOf(o).find("walk.yaml: commands.heading_share: '1.5' is outside [0, 1]") != std::string::npos);
 }
 
+TEST_CASE("quadruped-walk: single-axis commands - vx, vy or a yaw rate alone, a third each, no heading") {
+  // --command-shares 1:0:1: every command along one axis (the heading share gives way to it);
+  // 1:0 keeps walk.yaml's single-axis share (0) and mixes the axes.
+  auto run = [](const std::string& shares) {
+    QuadrupedWalkOptions o = Nominal();
+    o.models_dir = ModelsWith("walk_single_axis", "walk.yaml", "resample_s: 5.0", "resample_s: 0.1");
+    o.command_shares = shares;
+    auto e = MakeWalk(o);
+    Rng rng(6);
+    std::vector<float> obs(45), act(12, 0.f);
+    std::array<int, 4> alone{};  // commands with only vx, only vy, only a yaw rate, more than one axis
+    int commands = 0;
+    for (int episode = 0; episode < 6; ++episode) {
+      e->Reset(rng, obs);
+      std::uint32_t seen = e->telemetry().command_index;
+      for (int t = 0; t < 1000; ++t) {
+        const StepResult r = e->Step(act, obs);
+        const auto& c = e->telemetry().command;
+        if (e->telemetry().command_index != seen) {
+          seen = e->telemetry().command_index;
+          ++commands;
+          const int nonzero = (c[0] != 0) + (c[1] != 0) + (c[2] != 0);
+          if (nonzero > 1)
+            ++alone[3];
+          else if (nonzero == 1)
+            ++alone[c[0] != 0 ? 0 : c[1] != 0 ? 1 : 2];
+        }
+        if (r.terminated || r.truncated) break;
+      }
+    }
+    REQUIRE(commands > 300);
+    return std::pair{alone, commands};
+  };
+  const auto [single, n] = run("1:0:1");
+  MESSAGE("single axis: vx " << single[0] << ", vy " << single[1] << ", yaw " << single[2] << ", mixed " << single[3]
+                             << " of " << n);
+  CHECK(single[3] == 0);
+  // A third each; a planar one below 0.2 m/s (a fifth of U(-1, 1)) is sent as 0.
+  CHECK(single[0] == doctest::Approx(0.8 * n / 3.0).epsilon(0.25));
+  CHECK(single[1] == doctest::Approx(0.8 * n / 3.0).epsilon(0.25));
+  CHECK(single[2] == doctest::Approx(n / 3.0).epsilon(0.25));
+  const auto [mixed, m] = run("1:0");
+  CHECK(mixed[3] > m * 0.9);
+  QuadrupedWalkOptions o = Nominal();
+  o.command_shares = "1:0:1.5";
+  CHECK(ErrorOf(o).find("--command-shares: '1:0:1.5': single axis share '1.5' is not a number in [0, 1]") !=
+        std::string::npos);
+  o.command_shares = "0.5:0.2";
+  auto kept = MakeWalk(o);
+  CHECK(kept->params().single_axis_share == 0.0);
+  CHECK(kept->provenance().find("(0.5 heading, 0.2 zero planar)") != std::string::npos);
+  o.command_shares = "0.5:0.2:0.3";
+  CHECK(MakeWalk(o)->provenance().find("(0.5 heading, 0.2 zero planar, 0.3 single axis)") != std::string::npos);
+}
+
 TEST_CASE("quadruped-walk: --reward-scales replaces walk.yaml's scales for a run - the reward follows them") {
   QuadrupedWalkOptions o = Nominal();
   auto base = MakeWalk(o);
