@@ -16,12 +16,12 @@
 # pi]; `pbppo eval --env quadruped-walk`) on flat and mixed terrain on two seeds with the velocity
 # plots, the same test with 500 robots (fall rates that 50 robots cannot separate), and the demo
 # schedule (stand, forward, sideways, turn in place, stop) in MuJoCo and in the Simbody HIL
-# (`pbppo-hil quadruped --in-process`; there from 12 starts too, counting falls); copies the blob, its golden vectors and the report to
-# policies/frozen/quadruped_walk/. Same build, same seed and thread count on the same machine: the
-# same blob (another machine's CPU or libraries can change the rounding, and a run then drifts
-# apart: docs/results/README.md saw it on the MuJoCo tasks). A stage whose folder holds a finished
-# run (summary.json, not interrupted) is kept, so a stopped recipe resumes; delete OUT_DIR to train
-# afresh.
+# (`pbppo-hil quadruped --in-process`; there from 12 starts too, counting falls); copies the blob,
+# its golden vectors and the report to policies/frozen/quadruped_walk/. Same build, same seed and
+# thread count on the same machine: the same blob (another machine's CPU or libraries can change
+# the rounding, and a run then drifts apart: docs/results/README.md saw it on the MuJoCo tasks). A
+# stage whose folder holds a finished run (summary.json, not interrupted) is kept, so a stopped
+# recipe resumes; delete OUT_DIR to train afresh.
 # Usage: tools/train_quadruped.sh [OUT_DIR=runs/train_quadruped]
 #   PBPPO=path/to/pbppo  HIL=path/to/pbppo-hil  THREADS=2  SEED=1  START_STEPS=2e7  FLAT_STEPS=2e7
 #   SHARES=0.3:0.4  REWARD_SCALES=tracking_lin_vel=2.0,tracking_ang_vel=1.0,termination=-150
