@@ -106,7 +106,7 @@ TEST_CASE("quadruped HIL: the demo schedule from other starts (height 0.46-0.49 
       for (const auto& p : r.phases) {
         CAPTURE(p.name);
         // The shipped policy's worst over these starts: forward 0.189 m/s, sideways 0.216 m/s,
-        // turn 0.149 rad/s (the sideways step is its weak phase, as from the scenario's start).
+        // turn 0.148 rad/s (the sideways step is its weak phase, as from the scenario's start).
         CHECK(p.mean_abs_error[0] <= 0.2);
         CHECK(p.mean_abs_error[1] <= (p.name == "sideways" ? 0.22 : 0.2));
         CHECK(p.mean_abs_error[2] <= 0.2);
