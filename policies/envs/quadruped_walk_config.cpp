@@ -15,7 +15,8 @@ namespace pbppo::envs {
 
 namespace {
 
-constexpr double kBig = 1e6;  // the largest reward scale or value walk.yaml takes
+constexpr double kBig = 1e6;                         // the largest reward scale or value walk.yaml takes
+constexpr double kSigmaMin = 1e-6, kSigmaMax = 100;  // rewards.tracking_sigma, walk.yaml's and the flag's
 
 // walk.yaml's rewards.scales, by name.
 constexpr std::pair<const char*, double WalkRewardScales::*> kRewardScales[] = {
@@ -90,7 +91,7 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Keys(rew, "rewards",
                   {"tracking_sigma", "only_positive", "feet_air_time_target_s", "soft_dof_pos_limit", "contact_force_n",
                    "scales"}),
-           f.Number(rew, "tracking_sigma", "rewards", 1e-6, 100, &p.tracking_sigma),
+           f.Number(rew, "tracking_sigma", "rewards", kSigmaMin, kSigmaMax, &p.tracking_sigma),
            flag(rew, "only_positive", "rewards", &only_positive),
            f.Number(rew, "feet_air_time_target_s", "rewards", 0, 10, &p.feet_air_time_target_s),
            f.Number(rew, "soft_dof_pos_limit", "rewards", 0.1, 1, &p.soft_dof_pos_limit),
@@ -225,8 +226,11 @@ Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
     if (!WholeNumber(value, v) || std::fabs(v) > kBig)
       return MakeError(ErrorCode::kInvalidValue, name + ": '" + value + "' is not a number");
     if (sigma) {
-      if (!(v >= 1e-6 && v <= 100))  // walk.yaml's range
-        return MakeError(ErrorCode::kInvalidValue, "tracking_sigma: '" + value + "' is not in [1e-06, 100]");
+      if (!(v >= kSigmaMin && v <= kSigmaMax)) {
+        char range[48];
+        std::snprintf(range, sizeof range, "[%g, %g]", kSigmaMin, kSigmaMax);
+        return MakeError(ErrorCode::kInvalidValue, "tracking_sigma: '" + value + "' is not in " + range);
+      }
       p.tracking_sigma = v;
     } else {
       p.scales.*(it->second) = v;
