@@ -50,6 +50,10 @@ std::vector<int> Widths(int in, const std::vector<int>& hidden, int out) {
 
 }  // namespace
 
+void PinEigenBlocking() {
+  Eigen::setCpuCacheSizes(kEigenCacheSizes[0], kEigenCacheSizes[1], kEigenCacheSizes[2]);
+}
+
 Ppo::Ppo(const TrainOptions& o, int obs_size, int value_input_size, int action_size)
     : o_(o),
       actor_{Mlp<float>(
@@ -58,6 +62,7 @@ Ppo::Ppo(const TrainOptions& o, int obs_size, int value_input_size, int action_s
       critic_(MlpShape{Widths(value_input_size, o.critic_hidden(), 1), o.activation, policy::Activation::kIdentity}),
       lr_(o.learning_rate),
       rng_(Mix(o.seed, 0)) {
+  PinEigenBlocking();
   actor_params_ = Vec<float>::Zero(static_cast<Eigen::Index>(actor_.size()));
   critic_params_ = Vec<float>::Zero(static_cast<Eigen::Index>(critic_.size()));
   actor_grad_ = Vec<float>::Zero(static_cast<Eigen::Index>(actor_.size()));

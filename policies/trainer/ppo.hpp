@@ -4,9 +4,11 @@
 // the clip bound the clip schedule chose (clip_schedule.hpp) and the learning rate the
 // learning-rate schedule sets (lr_schedule.hpp). Losses and gradients: ppo_loss.hpp.
 //
-// Deterministic: the same rollout, bound and thread count give bit-identical parameters.
+// Deterministic: the same rollout, bound and thread count give bit-identical parameters, on every
+// machine the build runs on (PinEigenBlocking).
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "policies/trainer/adam.hpp"
@@ -25,6 +27,15 @@ struct UpdateStats {
   double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;
   double kl = 0;  // the Gaussian KL divergence from the rollout's policy (SumGaussianKl), before each step
 };
+
+// Eigen cuts a matrix product into blocks sized from the CPU's cache sizes, which it reads at run
+// time, and a product that sums over more than about 256 columns (the weight gradient of a
+// minibatch chunk of 768 samples, for example) then adds in another order on a CPU with another L1
+// size: the same build trained another policy on another machine. This pins Eigen's cache sizes
+// to kEigenCacheSizes, the ones it read on the machine that trained the shipped policies, so that
+// the blocking, and every sum, is the same everywhere. Ppo's constructor calls it.
+inline constexpr std::ptrdiff_t kEigenCacheSizes[3] = {48 * 1024, 1024 * 1024, 384 * 1024 * 1024};
+void PinEigenBlocking();
 
 class Ppo {
  public:

@@ -141,6 +141,35 @@ TEST_CASE("chunked update: the same parameters for 1, 2 and 3 threads (the split
   }
 }
 
+TEST_CASE("the same parameters whatever cache sizes the CPU reports (Eigen's blocking is pinned)") {
+  // The recipe's shape: minibatches of 3072 in chunks of 768 columns, so that each weight gradient
+  // sums over 768 samples, where Eigen's blocking follows the L1 size. Each pass plays another CPU
+  // (Eigen reads the sizes once; setCpuCacheSizes stands in for that read) before the trainer starts.
+  TrainOptions o;
+  o.policy_hidden = {128, 64, 32};
+  o.activation = policy::Activation::kElu;
+  o.minibatch = 3072;
+  o.epochs = 1;
+  const std::ptrdiff_t cpus[][3] = {
+      {32 * 1024, 512 * 1024, 16 << 20}, {48 * 1024, 2 << 20, 32 << 20}, {32 * 1024, 1 << 20, 32 << 20}};
+  std::vector<std::vector<float>> actor;
+  for (const auto& c : cpus) {
+    Eigen::setCpuCacheSizes(c[0], c[1], c[2]);
+    Ppo ppo(o, 48, 48, 12);
+    std::ptrdiff_t l1 = 0, l2 = 0, l3 = 0;
+    Eigen::internal::manage_caching_sizes(Eigen::GetAction, &l1, &l2, &l3);
+    CHECK(l1 == kEigenCacheSizes[0]);
+    CHECK(l2 == kEigenCacheSizes[1]);
+    CHECK(l3 == kEigenCacheSizes[2]);
+    RolloutStorage r = RandomRollout(ppo, 24, 128, 48, 48, 12);  // one minibatch of 3072
+    WorkerPool pool(2);
+    ppo.Update(r, 0.2, false, pool);
+    actor.emplace_back(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
+  }
+  CHECK(actor[1] == actor[0]);
+  CHECK(actor[2] == actor[0]);
+}
+
 TEST_CASE("--lr-schedule adaptive: the KL divergence steers the learning rate within [1e-5, 1e-2], logged") {
   auto run = [](double desired_kl) {
     TrainOptions c = RlZoo();
