@@ -18,7 +18,8 @@
 # schedule (stand, forward, sideways, turn in place, stop) in MuJoCo and in the Simbody HIL
 # (`pbppo-hil quadruped --in-process`; there from 12 starts too, counting falls); copies the blob,
 # its golden vectors and the report to policies/frozen/quadruped_walk/. Same build, same seed and
-# thread count on the same machine: the same blob (another machine's CPU or libraries can change
+# thread count: the same blob (the trainer pins Eigen's cache-dependent blocking, which gave other
+# weights on a CPU with another L1 size; another machine's MuJoCo or C library can still change
 # the rounding, and a run then drifts apart: docs/results/README.md saw it on the MuJoCo tasks). A
 # stage whose folder holds a finished run (summary.json, not interrupted) is kept, so a stopped
 # recipe resumes; delete OUT_DIR to train afresh.
