@@ -39,3 +39,16 @@ schedule_runs() {
     done
   done
 }
+
+# run_candidates RUN_DIR FIRST: sets the array `candidates` to RUN_DIR/FIRST (when it exists) and
+# every RUN_DIR/snapshots/*.blob (pbppo train --snapshots), the blobs a selection script chooses
+# among; fails naming both when there is none.
+run_candidates() {
+  local b
+  candidates=()
+  [ -f "$1/$2" ] && candidates+=("$1/$2")
+  for b in "$1"/snapshots/*.blob; do [ -f "$b" ] && candidates+=("$b"); done
+  if [ ${#candidates[@]} -eq 0 ]; then
+    fail "$1 holds no $2 and no snapshots/*.blob"
+  fi
+}

@@ -28,12 +28,7 @@ case "$confirm" in *[!0-9]*) fail "CONFIRM_SEED: '$confirm' is not a non-negativ
 if [ -n "$confirm" ] && [ "$confirm" = "$seed" ]; then
   fail "CONFIRM_SEED must differ from DEV_SEED ($seed)"
 fi
-candidates=()
-[ -f "$run/best.blob" ] && candidates+=("$run/best.blob")
-for b in "$run"/snapshots/*.blob; do [ -f "$b" ] && candidates+=("$b"); done
-if [ ${#candidates[@]} -eq 0 ]; then
-  fail "$run holds no best.blob and no snapshots/*.blob"
-fi
+run_candidates "$run" best.blob
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 # One job per (candidate, layout); each writes one line "index layout success collisions timeouts".
@@ -46,8 +41,10 @@ export pbppo episodes seed work
 xargs -P "$jobs" -L 1 bash -c '
   "$pbppo" eval "$2" --env auv-nav --layout "$1" --episodes "$episodes" --seed "$seed" --json > "$work/$0.$1.json"
 ' < "$work/jobs"
-python3 - "$work" "$run" "${candidates[@]}" <<'PY'
-import csv, json, os, shutil, sys
+python3 - "$root/tools" "$work" "$run" "${candidates[@]}" <<'PY'
+import json, os, sys
+sys.path.insert(0, sys.argv.pop(1))
+from selection import write_choice
 work, run, cands = sys.argv[1], sys.argv[2], sys.argv[3:]
 targets = {"easy": 95.0, "medium": 95.0, "hard": 90.0}
 rows = []
@@ -66,22 +63,11 @@ for i, blob in enumerate(cands):
     row["total"] = total
     rows.append(row)
 best = min(range(len(rows)), key=lambda i: (rows[i]["shortfall"], -rows[i]["total"], i))
-with open(os.path.join(run, "select.csv.tmp"), "w", newline="") as f:
-    w = csv.DictWriter(f, fieldnames=list(rows[0].keys()) + ["selected"])
-    w.writeheader()
-    for i, r in enumerate(rows):
-        w.writerow(dict(r, selected=int(i == best)))
-os.replace(os.path.join(run, "select.csv.tmp"), os.path.join(run, "select.csv"))
+write_choice(run, rows, best, cands)
 print("%-28s %7s %7s %7s  %s" % ("candidate", "easy", "medium", "hard", "shortfall"))
 for i, r in enumerate(rows):
     print("%-28s %6.1f%% %6.1f%% %6.1f%%  %5.1f%s" % (r["candidate"], r["easy"], r["medium"], r["hard"], r["shortfall"],
                                                     "  <- selected" if i == best else ""))
-src = cands[best]
-for ext in (".blob", ".golden"):
-    a = src[: -len(".blob")] + ext
-    tmp = os.path.join(run, "selected" + ext + ".tmp")
-    shutil.copyfile(a, tmp)
-    os.replace(tmp, os.path.join(run, "selected" + ext))
 print("select_auv: %s -> %s/selected.blob" % (rows[best]["candidate"], run))
 PY
 if [ -n "$confirm" ]; then

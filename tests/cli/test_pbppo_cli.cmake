@@ -315,6 +315,47 @@ endif()
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --terrain mixed --episodes 2)
 expect_in("${OUT}" "mean |error|  vx")
 expect_in("${OUT}" "falls ")
+# tools/select_quadruped.sh: a run's last policy and its two snapshots walk the demo schedule in
+# MuJoCo and take the paper's test; one row per candidate, the choice copied with its golden
+# vectors (two iterations cannot walk: none qualifies, and the script says so); bad input refused.
+run(0 ${PBPPO} train --env quadruped-walk --schedule fixed:0.2 --steps 384 --envs 8 --rollout 24 --minibatch 96
+    --epochs 1 --hidden 16-16 --activation elu --seed 1 --threads 2 --no-plots --quiet --snapshots 2
+    --out ${WORK}/walk_select)
+set(select_q ${SOURCE_DIR}/tools/select_quadruped.sh)
+run(0 env PBPPO=${PBPPO} FLAT_ROBOTS=2 MIXED_ROBOTS=2 DEMO_SEEDS=1 bash ${select_q} ${WORK}/walk_select)
+expect_in("${OUT}" "snapshots/000000000192.blob")
+expect_in("${OUT}" "<- selected")
+expect_in("${OUT}" "no candidate met the limits (no demo fall, flat <= 0 of 2, mixed <= 4 of 2 falls)")
+file(STRINGS ${WORK}/walk_select/select.csv rows)
+list(LENGTH rows n)
+if(NOT n EQUAL 4)
+  message(FATAL_ERROR "select.csv: ${n} lines for 3 candidates:\n${rows}")
+endif()
+expect_in("${rows}" "candidate,stand_vx,stand_vy,stand_yaw,forward_vx")
+if(NOT EXISTS ${WORK}/walk_select/selected.blob OR NOT EXISTS ${WORK}/walk_select/selected.golden)
+  message(FATAL_ERROR "select_quadruped wrote no selected.blob and .golden")
+endif()
+run(0 ${PBPPO} inspect ${WORK}/walk_select/selected.blob)
+run(2 env PBPPO=${PBPPO} bash ${select_q} ${WORK}/no-such-run)
+expect_in("${ERR}" "usage: tools/select_quadruped.sh RUN_DIR")
+run(2 env PBPPO=${PBPPO} MIXED_ROBOTS=0 bash ${select_q} ${WORK}/walk_select)
+expect_in("${ERR}" "MIXED_ROBOTS: '0' is not a positive integer")
+run(2 env PBPPO=${PBPPO} "DEMO_SEEDS=1 x2" bash ${select_q} ${WORK}/walk_select)
+expect_in("${ERR}" "DEMO_SEEDS: 'x2' is not a non-negative integer")
+run(2 env PBPPO=${PBPPO} SCHEDULE=${WORK}/no-such.yaml bash ${select_q} ${WORK}/walk_select)
+expect_in("${ERR}" "SCHEDULE: '${WORK}/no-such.yaml' is not a file")
+file(MAKE_DIRECTORY ${WORK}/walk_empty)
+run(2 env PBPPO=${PBPPO} bash ${select_q} ${WORK}/walk_empty)
+expect_in("${ERR}" "holds no policy.blob and no snapshots/*.blob")
+# A candidate that is not a walking policy (the pendulum's blob): its evaluation fails, and so does
+# the choice, writing nothing.
+file(COPY ${WORK}/run1/policy.blob DESTINATION ${WORK}/walk_empty)
+run(2 env PBPPO=${PBPPO} FLAT_ROBOTS=2 MIXED_ROBOTS=2 DEMO_SEEDS=1 bash ${select_q} ${WORK}/walk_empty)
+expect_in("${ERR}" "select_quadruped: pbppo eval ${WORK}/walk_empty/policy.blob --schedule")
+expect_in("${ERR}" "an evaluation failed (above)")
+if(EXISTS ${WORK}/walk_empty/selected.blob OR EXISTS ${WORK}/walk_empty/select.csv)
+  message(FATAL_ERROR "select_quadruped wrote a choice after a failed evaluation")
+endif()
 # Same seed and thread count: byte-identical quadruped blobs (Pb-PPO, the adaptive rate, minibatches
 # in column chunks over both threads, as the shipped recipe trains).
 foreach(k a b)
