@@ -43,6 +43,7 @@ xargs -P "$jobs" -L 1 bash -c '
 ' < "$work/jobs"
 python3 - "$root/tools" "$work" "$run" "${candidates[@]}" <<'PY'
 import json, os, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, sys.argv.pop(1))
 from selection import write_choice
 work, run, cands = sys.argv[1], sys.argv[2], sys.argv[3:]

@@ -68,6 +68,7 @@ xargs -P "$jobs" -L 1 bash -c '
 python3 - "$root/tools" "$work" "$run" "$max_flat" "$max_mixed" "$demo_seeds" "$flat_robots" "$mixed_robots" \
   "${candidates[@]}" <<'PY'
 import json, os, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, sys.argv.pop(1))
 from selection import write_choice
 work, run, max_flat, max_mixed, seeds = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5].split()
