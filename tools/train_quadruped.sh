@@ -11,9 +11,9 @@
 #          (REWARD_SCALES). Blocks in its training make it steadier on flat ground too. It
 #          writes SNAPSHOTS blobs over the run, and tools/select_quadruped.sh chooses among them and
 #          the last in MuJoCo on development episodes (the demo schedule's worst phase from four
-#          starts, falls in the paper's test): flat.blob is the choice. Near the end of the run the
-#          policies differ by a few hundredths in one phase or another from one million steps to the
-#          next, and MuJoCo's worst phase predicts the Simbody HIL's (docs/results/quadruped_sim2sim.md).
+#          starts, falls in the paper's test): flat.blob is the choice. From one million steps to
+#          the next the policies' worst phase moves by up to 0.13, more than the reward changes did,
+#          and MuJoCo's worst phase predicts the Simbody HIL's (docs/results/quadruped_sim2sim.md).
 # flat.blob is the policy the HIL, the demo and the controller run; the recipe prints its wall time
 # from scratch (the 30-minute target). mixed.blob (for blocks) is not retrained here: its recipe is
 # policies/frozen/quadruped_walk/README.md's.
