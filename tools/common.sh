@@ -52,3 +52,24 @@ run_candidates() {
     fail "$1 holds no $2 and no snapshots/*.blob"
   fi
 }
+
+# paper_mujoco_settings STEPS: sets the array `settings` to the paper's PPO settings for the MuJoCo
+# tasks (those of its released script; its text differs in places) for STEPS training steps: the
+# train flags of tools/mujoco_table.sh and tools/mujoco_budget.sh.
+paper_mujoco_settings() {
+  settings=(--steps "$1" --envs 1 --rollout 2048 --minibatch 64 --epochs 10 --lr 3e-4 --hidden 64-64
+    --activation tanh --gamma 0.99 --gae-lambda 0.95 --ent-coef 0 --vf-coef 0.5 --max-grad-norm 0.5
+    --arms 0.02:0.5:6 --feedback eval --eval-episodes 2 --threads 1 --no-plots)
+}
+
+# sweep_launcher: sets the array `launcher` from MPIRUN (e.g. "mpirun -np 16 --hostfile hosts": the
+# sweep runs across machines; unset: on this one) and `jobs`, the runs at once per process: JOBS
+# (default 2), 1 under MPIRUN.
+sweep_launcher() {
+  launcher=()
+  jobs="${JOBS:-2}"
+  if [ -n "${MPIRUN:-}" ]; then
+    read -r -a launcher <<< "$MPIRUN"
+    jobs=1
+  fi
+}

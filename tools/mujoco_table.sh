@@ -22,16 +22,8 @@ tasks="${TASKS:-hopper walker2d half-cheetah ant}"
 schedules="${SCHEDULES:-fixed:0.02 fixed:0.15 fixed:0.23 pbppo-paper:wi-ad pbppo-reference pbppo}"
 seeds="${SEEDS:-1-5}"
 steps="${STEPS:-1e6}"
-jobs="${JOBS:-2}"
-launcher=()
-if [ -n "${MPIRUN:-}" ]; then
-  read -r -a launcher <<< "$MPIRUN"
-  jobs=1
-fi
-# The paper's settings: those of its released script (its text differs in places).
-settings=(--steps "$steps" --envs 1 --rollout 2048 --minibatch 64 --epochs 10 --lr 3e-4 --hidden 64-64
-  --activation tanh --gamma 0.99 --gae-lambda 0.95 --ent-coef 0 --vf-coef 0.5 --max-grad-norm 0.5
-  --arms 0.02:0.5:6 --feedback eval --eval-episodes 2 --threads 1 --no-plots)
+sweep_launcher
+paper_mujoco_settings "$steps"
 "${launcher[@]}" "$pbppo" sweep --out "$out" --grid "env=${tasks// /,}" --grid "schedule=${schedules// /,}" \
   --seeds "$seeds" --jobs "$jobs" --final-episodes 10 -- "${settings[@]}"
 python3 "$root/tools/summarise_mujoco_table.py" "$out" "$root/docs/results/mujoco_table.md"

@@ -43,15 +43,21 @@ def runs(sweeps):
     return sorted(out, key=key), sorted(zero, key=key)
 
 
-def through_ends(pbppo, d, r):
-    """The run's final policy evaluated as the paper's released script did (every episode 1000 steps,
-    on through terminations: `pbppo eval --through-ends`), with the final evaluation's episodes and
-    seed; cached in the run's folder as eval_through_ends.json."""
-    path = os.path.join(d, "eval_through_ends.json")
+def evaluation(pbppo, d, r, blob, through):
+    """The mean return of BLOB (a path in the run's folder d) on the run's final-evaluation episodes and
+    seed, as episodes end or, with through, as the paper's released script measured (every episode 1000
+    steps, on through terminations: `pbppo eval --through-ends`); cached beside the blob as
+    <blob>.eval.json or <blob>.eval_through_ends.json (the final policy's plain figure is the run's own
+    result)."""
+    if blob == "policy.blob" and not through:
+        return r["final_eval"]["mean_return"]
+    stem = "eval" if blob == "policy.blob" else blob + ".eval"  # the final policy's cache keeps its old name
+    path = os.path.join(d, stem + ("_through_ends" if through else "") + ".json")
     if not os.path.exists(path):
-        args = [pbppo, "eval", os.path.join(d, "policy.blob"), "--env", r["grid"]["env"],
-                "--episodes", str(r["final_eval"]["episodes"]), "--seed", str(r["final_eval"]["seed"]),
-                "--through-ends", "--json"]
+        args = [pbppo, "eval", os.path.join(d, blob), "--env", r["grid"]["env"],
+                "--episodes", str(r["final_eval"]["episodes"]), "--seed", str(r["final_eval"]["seed"]), "--json"]
+        if through:
+            args.append("--through-ends")
         if r["grid"].get("contact-forces"):
             args += ["--contact-forces", r["grid"]["contact-forces"]]
         out = subprocess.run(args, check=True, stdout=subprocess.PIPE, text=True).stdout
@@ -59,6 +65,11 @@ def through_ends(pbppo, d, r):
         open(tmp, "w").write(out)
         os.replace(tmp, path)
     return json.load(open(path))["mean_return"]
+
+
+def through_ends(pbppo, d, r):
+    """The run's final policy evaluated as the paper's released script did (evaluation above)."""
+    return evaluation(pbppo, d, r, "policy.blob", True)
 
 
 def cell(xs, p=0):
@@ -84,13 +95,20 @@ def arms_by_quarter(log):
     return shares
 
 
-def main():
+def arguments(usage, figures):
+    """SWEEP_DIR... OUT.md from the command line (else exits with usage): (the sweep folders, OUT.md,
+    the pbppo binary: PBPPO or the default build's, the plots' folder FIGURES beside OUT.md, made)."""
     if len(sys.argv) < 3:
-        sys.exit(__doc__)
+        sys.exit(usage)
     sweeps, out_md = sys.argv[1:-1], sys.argv[-1]
     pbppo = os.environ.get("PBPPO", os.path.join(os.path.dirname(__file__), "..", "build/default/policies/pbppo"))
-    figdir = os.path.join(os.path.dirname(out_md), "mujoco_table")
+    figdir = os.path.join(os.path.dirname(out_md), figures)
     os.makedirs(figdir, exist_ok=True)
+    return sweeps, out_md, pbppo, figdir
+
+
+def main():
+    sweeps, out_md, pbppo, figdir = arguments(__doc__, "mujoco_table")
     all_runs, zero_runs = runs(sweeps)
     by = {}
     for t, s, seed, d, r in all_runs:

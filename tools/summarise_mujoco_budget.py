@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""Writes the fixed clip bounds of the paper's table at every snapshot of longer runs
+(tools/mujoco_budget.sh): per task and bound, each snapshot's deterministic evaluation return over
+the seeds (mean ± 95 % Student-t interval, min and max), read as episodes end and as the paper's
+released script read it (1000 steps through episode ends), beside the paper's figure; which rows
+hold the paper's figure within our seeds' range, at which budget; and a plot of every seed's return
+by bound and budget (gnuplot). Snapshots are evaluated with the runs' final-evaluation episodes and
+seed and cached beside each snapshot (PBPPO names the binary, default build/default/policies/pbppo).
+Usage: summarise_mujoco_budget.py SWEEP_DIR... OUT.md (the runs of every folder together; the ant's
+runs say whether its contact forces were computed or left at zero)"""
+import glob
+import os
+import subprocess
+import sys
+
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree from the import below
+from summarise_mujoco_table import FIXED, NAMES, PAPER, TASKS, arguments, cell, evaluation, runs
+
+READINGS = [(False, "as episodes end (`pbppo eval`)"),
+            (True, "through episode ends, the paper's script's way (`pbppo eval --through-ends`)")]
+
+
+def budget(steps):
+    """A step count's name: 1001472 -> '1.0e6'; below 10^5 the count itself."""
+    return "%.1fe6" % (steps / 1e6) if steps >= 100000 else str(steps)
+
+
+def plot(rows, order, tasks, budgets, png, title):
+    """Every seed's return by bound (x) and budget (colour), one panel per task label in order, the
+    paper's figure as a black bar; rows: {(label, bound, steps): [returns]}, tasks: {label: task}."""
+    data = png[:-4] + ".dat"
+    with open(data, "w") as f:
+        for label in order:
+            for bi, steps in enumerate(budgets):
+                for si, s in enumerate(FIXED):
+                    for x in rows.get((label, s, steps), []):
+                        f.write("%.4f %.2f\n" % (si + (bi - (len(budgets) - 1) / 2) * 0.18, x))
+                f.write("\n\n")
+            for si, s in enumerate(FIXED):
+                f.write("%.4f %.2f\n" % (si - 0.2, PAPER[tasks[label]][s]))
+            f.write("\n\n")
+    colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"]
+    side = 1 if len(order) == 1 else 2
+    gp = ["set terminal pngcairo size 1200,%d font ',11'" % (450 * ((len(order) + 1) // 2) + 50),
+          "set output '%s'" % png, "set multiplot layout %d,%d title \"%s\"" % ((len(order) + 1) // 2, side, title),
+          "set xrange [-0.5:2.5]", "set xtics ('0.02' 0, '0.15' 1, '0.23' 2)", "set xlabel 'clip bound'",
+          "set ylabel 'return'", "set key below horizontal", "set grid ytics"]
+    block = 0
+    for label in order:
+        parts = []
+        for bi, steps in enumerate(budgets):
+            parts.append("'%s' index %d using 1:2 with points pt 7 ps 1.1 lc rgb '%s' title '%s steps'"
+                         % (data, block, colours[bi % len(colours)], budget(steps)))
+            block += 1
+        parts.append("'%s' index %d using 1:2:(0.4):(0) with vectors nohead lw 3 lc rgb 'black' title 'paper'"
+                     % (data, block))
+        block += 1
+        gp += ["set title \"%s\"" % label, "plot " + ", ".join(parts)]
+    gp.append("unset multiplot")
+    script = png[:-4] + ".gp"
+    open(script, "w").write("\n".join(gp) + "\n")
+    subprocess.run(["gnuplot", script], check=True)
+    os.remove(script)
+    os.remove(data)
+
+
+def main():
+    sweeps, out_md, pbppo, figdir = arguments(__doc__, "mujoco_budget")
+    computed, zero = runs(sweeps)
+    # {(reading, task label, bound, steps): [returns over seeds]}; the ant's label says its contact forces.
+    vals, labels, n_runs, budgets = {}, {}, 0, set()
+    for group, forces in ((computed, "computed"), (zero, "zero")):
+        for t, s, _, d, r in group:
+            if s not in FIXED:
+                continue
+            snaps = sorted(glob.glob(os.path.join(d, "snapshots", "*.blob")))
+            if not snaps:
+                sys.exit("%s: no snapshots/*.blob (train with --snapshots)" % d)
+            n_runs += 1
+            label = NAMES[t] if t != "ant" else "Ant (contact forces %s)" % forces
+            labels[label] = t
+            for blob in snaps:
+                steps = int(os.path.basename(blob)[:-5])
+                budgets.add(steps)
+                for through, _ in READINGS:
+                    x = evaluation(pbppo, d, r, os.path.relpath(blob, d), through)
+                    vals.setdefault((through, label, s, steps), []).append(x)
+    if not n_runs:
+        sys.exit("no finished runs of fixed:0.02, fixed:0.15 or fixed:0.23 in " + " ".join(sweeps))
+    budgets = sorted(budgets)
+    order = [l for t in TASKS for l in sorted(labels) if labels[l] == t]
+    some = next(r for g in (computed, zero) for _, s, _, _, r in g if s in FIXED)
+    md = ["# The paper's fixed clip bounds at %s steps" % " and ".join(budget(b) for b in budgets), "",
+          "Generated by `tools/mujoco_budget.sh` (`pbppo sweep`, then `tools/summarise_mujoco_budget.py`) from "
+          "%d finished runs: the paper's PPO settings as in docs/results/mujoco_table.md, %s training steps "
+          "with a snapshot at each budget (a snapshot is the policy a run of that budget ends with: the "
+          "learning rate and every other setting are constant over the run). Each snapshot: %s deterministic "
+          "episodes (seed %s), the mean over seeds ± the half-width of the 95 %% Student-t interval, "
+          "[min, max] over seeds." % (n_runs, budget(budgets[-1]), some["final_eval"]["episodes"],
+                                      some["final_eval"]["seed"]), "",
+          "The released script's default budget is 2 × 10^6 steps; the paper's table says 10^6. A row holds "
+          "the paper's figure when it lies within our seeds' range at that budget.", ""]
+    for through, how in READINGS:
+        md += ["## Returns %s" % how, "",
+               "| task | bound | " + " | ".join(budget(b) for b in budgets) + " | paper | paper within our range |",
+               "| --- | --- |" + " --- |" * len(budgets) + " ---: | --- |"]
+        holds = {}  # {(label, steps): [the paper's figure within the range, per measured bound]}
+        for label in order:
+            for s in FIXED:
+                cols, said = [], []
+                for b in budgets:
+                    xs = vals.get((through, label, s, b), [])
+                    cols.append("%s [%.0f, %.0f]" % (cell(xs), min(xs), max(xs)) if xs else "–")
+                    if xs:
+                        inside = min(xs) <= PAPER[labels[label]][s] <= max(xs)
+                        holds.setdefault((label, b), []).append(inside)
+                        said.append("%s at %s" % ("yes" if inside else "no", budget(b)))
+                md.append("| %s | %s | %s | %d | %s |" % (label, s[6:], " | ".join(cols), PAPER[labels[label]][s],
+                                                          ", ".join(said) or "not run"))
+        md += [""]
+        for b in budgets:
+            measured = [l for l in order if len(holds.get((l, b), [])) == len(FIXED)]
+            ok = [l for l in measured if all(holds[(l, b)])]
+            md.append("- At %s steps the three rows hold the paper's figure on %d of the %d tasks with all three "
+                      "measured%s." % (budget(b), len(ok), len(measured), (": " + ", ".join(ok)) if ok else ""))
+        png = os.path.join(figdir, "returns%s.png" % ("_through_ends" if through else ""))
+        rows = {(l, s, b): xs for (th, l, s, b), xs in vals.items() if th == through}
+        plot(rows, order, labels, budgets, png, "Fixed clip bounds: every seed's return %s"
+             % ("through episode ends" if through else "as episodes end"))
+        md += ["", "![returns](mujoco_budget/%s)" % os.path.basename(png), ""]
+    open(out_md, "w").write("\n".join(md) + "\n")
+    print("wrote %s (%d runs) and %s/" % (out_md, n_runs, figdir))
+
+
+if __name__ == "__main__":
+    main()
