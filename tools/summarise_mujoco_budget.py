@@ -128,7 +128,8 @@ def main():
         plot(rows, order, labels, budgets, png, "Fixed clip bounds: every seed's return %s"
              % ("through episode ends" if through else "as episodes end"))
         md += ["", "![returns](mujoco_budget/%s)" % os.path.basename(png), ""]
-    open(out_md, "w").write("\n".join(md) + "\n")
+    open(out_md + ".part", "w").write("\n".join(md) + "\n")
+    os.replace(out_md + ".part", out_md)  # never a half-written report
     print("wrote %s (%d runs) and %s/" % (out_md, n_runs, figdir))
 
 

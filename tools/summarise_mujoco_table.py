@@ -255,7 +255,8 @@ def main():
     for f in os.listdir(figdir):  # the drawing's gnuplot script and log: not results
         if f.endswith((".gp", ".log")):
             os.remove(os.path.join(figdir, f))
-    open(out_md, "w").write("\n".join(md) + "\n")
+    open(out_md + ".part", "w").write("\n".join(md) + "\n")
+    os.replace(out_md + ".part", out_md)  # never a half-written report
     print("wrote %s (%d runs) and %s/" % (out_md, len(all_runs), figdir))
 
 
