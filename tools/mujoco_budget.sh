@@ -12,7 +12,8 @@
 #   TASKS="hopper walker2d half-cheetah"   the tasks without contact forces
 #   ANT=zero       the ant's contact forces: zero, computed, or none (no ant)
 #   STEPS=2e6, SNAPSHOTS=2, SEEDS=1-5, JOBS=2, MPIRUN=..., PBPPO=...: as tools/mujoco_table.sh
-# All of it: 60 runs, about 12,500 CPU seconds (1 h 45 min on this 2-core machine), the ant 60 %.
+# All of it: 60 runs, 11,349 CPU seconds of training (about 95 minutes on this 2-core machine), the
+# ant half of it.
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/mujoco_budget}"

@@ -43,7 +43,7 @@ def plot(rows, order, tasks, budgets, png, title):
     side = 1 if len(order) == 1 else 2
     gp = ["set terminal pngcairo size 1200,%d font ',11'" % (450 * ((len(order) + 1) // 2) + 50),
           "set output '%s'" % png, "set multiplot layout %d,%d title \"%s\"" % ((len(order) + 1) // 2, side, title),
-          "set xrange [-0.5:2.5]", "set xtics ('0.02' 0, '0.15' 1, '0.23' 2)", "set xlabel 'clip bound'",
+          "set xrange [-0.5:2.5]", "set xtics ('ε = 0.02' 0, 'ε = 0.15' 1, 'ε = 0.23' 2)",
           "set ylabel 'return'", "set key below horizontal", "set grid ytics"]
     block = 0
     for label in order:
