@@ -20,6 +20,15 @@ fail() {
   exit 2
 }
 
+# positive_int NAME VALUE, non_negative_int NAME VALUE: fail naming the setting and its value unless
+# VALUE is such an integer (digits only).
+positive_int() {
+  case "$2" in '' | *[!0-9]* | 0) fail "$1: '$2' is not a positive integer" ;; esac
+}
+non_negative_int() {
+  case "$2" in '' | *[!0-9]*) fail "$1: '$2' is not a non-negative integer" ;; esac
+}
+
 # schedule_runs OUT_DIR STEPS "SEEDS" SCHEDULE...: for every seed and schedule calls the script's
 # own `train_and_eval RUN SCHEDULE SEED`, RUN being OUT_DIR/<schedule>_seed<seed> (':' as '_'),
 # except where RUN already holds eval.json: a finished run is kept, so a stopped script resumes.

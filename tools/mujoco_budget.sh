@@ -25,7 +25,7 @@ snapshots="${SNAPSHOTS:-2}"
 seeds="${SEEDS:-1-5}"
 report="${REPORT:-$root/docs/results/mujoco_budget.md}"
 case "$ant" in zero | computed | none) ;; *) fail "ANT: '$ant' is not zero, computed or none" ;; esac
-[[ "$snapshots" =~ ^[1-9][0-9]*$ ]] || fail "SNAPSHOTS: '$snapshots' is not a positive integer"
+positive_int SNAPSHOTS "$snapshots"
 read -r -a task_list <<< "$tasks"
 for t in "${task_list[@]}"; do
   case "$t" in hopper | walker2d | half-cheetah) ;; *) fail "TASKS: '$t' is not hopper, walker2d or half-cheetah (the ant: ANT)" ;; esac

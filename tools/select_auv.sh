@@ -21,9 +21,9 @@ episodes="${EPISODES:-100}"
 seed="${DEV_SEED:-777}"
 confirm="${CONFIRM_SEED-888}"
 jobs="${JOBS:-2}"
-case "$episodes" in '' | *[!0-9]* | 0) fail "EPISODES: '$episodes' is not a positive integer" ;; esac
-case "$seed" in '' | *[!0-9]*) fail "DEV_SEED: '$seed' is not a non-negative integer" ;; esac
-case "$jobs" in '' | *[!0-9]* | 0) fail "JOBS: '$jobs' is not a positive integer" ;; esac
+positive_int EPISODES "$episodes"
+non_negative_int DEV_SEED "$seed"
+positive_int JOBS "$jobs"
 case "$confirm" in *[!0-9]*) fail "CONFIRM_SEED: '$confirm' is not a non-negative integer (or empty: skip)" ;; esac
 if [ -n "$confirm" ] && [ "$confirm" = "$seed" ]; then
   fail "CONFIRM_SEED must differ from DEV_SEED ($seed)"

@@ -35,14 +35,14 @@ schedule="${SCHEDULE:-$root/models/quadruped/schedules/demo.yaml}"
 jobs="${JOBS:-2}"
 [ -n "${demo_seeds// /}" ] || fail "DEMO_SEEDS: empty (one or more non-negative integers)"
 for s in $demo_seeds; do
-  case "$s" in *[!0-9]*) fail "DEMO_SEEDS: '$s' is not a non-negative integer" ;; esac
+  non_negative_int DEMO_SEEDS "$s"
 done
-case "$seed" in '' | *[!0-9]*) fail "DEV_SEED: '$seed' is not a non-negative integer" ;; esac
-case "$flat_robots" in '' | *[!0-9]* | 0) fail "FLAT_ROBOTS: '$flat_robots' is not a positive integer" ;; esac
-case "$mixed_robots" in '' | *[!0-9]* | 0) fail "MIXED_ROBOTS: '$mixed_robots' is not a positive integer" ;; esac
-case "$max_flat" in '' | *[!0-9]*) fail "MAX_FALLS_FLAT: '$max_flat' is not a non-negative integer" ;; esac
-case "$max_mixed" in '' | *[!0-9]*) fail "MAX_FALLS_MIXED: '$max_mixed' is not a non-negative integer" ;; esac
-case "$jobs" in '' | *[!0-9]* | 0) fail "JOBS: '$jobs' is not a positive integer" ;; esac
+non_negative_int DEV_SEED "$seed"
+positive_int FLAT_ROBOTS "$flat_robots"
+positive_int MIXED_ROBOTS "$mixed_robots"
+non_negative_int MAX_FALLS_FLAT "$max_flat"
+non_negative_int MAX_FALLS_MIXED "$max_mixed"
+positive_int JOBS "$jobs"
 [ -f "$schedule" ] || fail "SCHEDULE: '$schedule' is not a file"
 run_candidates "$run" policy.blob
 work="$(mktemp -d)"

@@ -45,7 +45,7 @@ flat_steps="${FLAT_STEPS:-2e7}"
 shares="${SHARES:-0.3:0.4}"
 reward_scales="${REWARD_SCALES:-tracking_lin_vel=2.5,tracking_ang_vel=1.0,termination=-150}"
 snapshots="${SNAPSHOTS:-20}"
-case "$snapshots" in '' | *[!0-9]*) fail "SNAPSHOTS: '$snapshots' is not a non-negative integer" ;; esac
+non_negative_int SNAPSHOTS "$snapshots"
 warmup="${CRITIC_WARMUP:-20}"
 schedule="${SCHEDULE:-pbppo}"
 ship="${SHIP:-1}"
