@@ -1,42 +1,39 @@
 // pbppo-controller: the controller program of every robot, over runtime/loop.
 //
-//   pbppo-controller --robot models/auv/robot.yaml --policy policies/frozen/auv_nav/auv_nav.blob
-//       [--lockstep] [--period-ms MS] [--domain D] [--dds-profile FILE] [--lost-after-s S]
-//       [--peer-timeout-s S] [--writer-poll-us N] [--status-every-s S]
-//   pbppo-controller --robot models/quadruped/robot.yaml [--policy BLOB [--commands SCHEDULE] |
-//       --trajectory FILE] [--can IF0,IF1]
-//       [--lockstep-wait-ms N] [--candump FILE] [--receive-all]
-//       (with a policy and no --commands: velocity commands over DDS on --domain, status published)
-//   both: [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]] [--ticks N] [--duration S] [--record
-//   LOG] [--profile out.json]
-//       [--profile-plot out.png] [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
+//   pbppo-controller --robot models/<robot>/robot.yaml [--policy BLOB [--commands SCHEDULE] | --trajectory FILE]
+//       [--lockstep [--lockstep-timeout-ms MS]] [--lockstep-wait-ms MS] [--period-ms MS]
+//       DDS:  [--domain D] [--dds-profile FILE] [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]
+//             [--peer-timeout-s S] [--lost-after-s S] [--writer-poll-us N] [--status-every-s S]
+//       CAN:  [--can IF0,IF1] [--candump FILE] [--receive-all]
+//       [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
+//       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it
 // was trained for another layout, naming the first difference) and runs the blob's golden vectors
 // through the engine (the self-test; a mismatch refuses to arm, naming the row); opens the
-// robot's transports; applies the real-time set-up where permitted; arms and ticks read -> check
-// -> observe -> infer -> supervise -> write with no allocation. The command source is the policy,
-// or a joint trajectory (--trajectory, the robot's stand_trajectory.yaml or another), or none
-// (hold the default pose). Ticks come from absolute deadlines at the robot's tick period, or in
-// lock-step with a simulator: over DDS one tick per sample (--lockstep), over CAN each tick waits
-// for the replies it is owed (--lockstep-wait-ms). SIGINT/SIGTERM, --ticks or --duration (seconds
-// of ticks: in lock-step, simulated time) stop: motors are damped and switched off; a robot without
-// motors sends its stop command.
+// robot's transports through the transport table (runtime/transport/bindings.hpp: every
+// transport robot.yaml declares; a schedule file given with --commands stands in for the transport
+// of its stream) and waits for the peers the robot file says must be there; applies the real-time
+// set-up where permitted; arms and ticks read -> check -> observe -> infer -> supervise -> write
+// with no allocation. Ticks come from absolute deadlines at the robot's tick period, or in
+// lock-step with a simulator: one tick per sample of the robot's timing.lockstep stream
+// (--lockstep; the stream's end field ends the run), or each tick waiting for what the CAN
+// transport is owed (--lockstep-wait-ms). A status thread publishes the robot's status messages.
+// SIGINT/SIGTERM, --ticks or --duration (seconds of ticks: in lock-step, simulated time) stop:
+// motors are damped and switched off; a robot without motors sends its stop command.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "firmware/auv/auv_transport.hpp"
-#include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/core/cli_checks.hpp"
@@ -46,7 +43,7 @@
 #include "runtime/loop/source_files.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/rt/tick_profiler.hpp"
-#include "runtime/transport/can/can_transport.hpp"
+#include "runtime/transport/bindings.hpp"
 
 namespace {
 
@@ -57,7 +54,7 @@ struct Options {
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
-  double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 2.0;
+  double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
   std::int64_t writer_poll_us = -1;
   std::uint64_t max_ticks = 0;
@@ -73,9 +70,10 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--policy", o.policy, "Frozen policy blob (its golden vectors beside it)");
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
   app.add_option("--commands", o.commands,
-                 "A schedule file as the operator (its stream's transport), e.g. the quadruped's velocity commands");
-  app.add_flag("--lockstep", o.lockstep, "DDS: one tick per sensor sample (a simulator in lock-step)");
-  app.add_option("--lockstep-timeout-ms", o.lockstep_timeout_ms, "DDS lock-step: tick anyway after this long")
+                 "A schedule file in place of the transport of its stream (an operator's commands, played)");
+  app.add_flag("--lockstep", o.lockstep,
+               "One tick per sample of the robot's timing.lockstep stream (a simulator in lock-step)");
+  app.add_option("--lockstep-timeout-ms", o.lockstep_timeout_ms, "--lockstep: tick anyway after this long")
       ->check(CLI::Range(1, 600000));
   app.add_option("--lockstep-wait-ms", o.lockstep_wait_ms, "CAN lock-step: each tick waits this long for replies")
       ->check(CLI::Range(0, 600000));
@@ -98,9 +96,11 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--duration", o.duration_s,
                  "Stop after this many seconds of ticks (duration / tick period ticks; lock-step: simulated time)")
       ->check(CLI::Range(0.0, 1e7));
-  app.add_option("--peer-timeout-s", o.peer_timeout_s, "DDS: how long to wait for the vehicle at start-up")
+  app.add_option("--peer-timeout-s", o.peer_timeout_s,
+                 "DDS: how long to wait at start-up for the peers of transports that wait for theirs")
       ->check(CLI::Range(0.1, 3600.0));
-  app.add_option("--lost-after-s", o.lost_after_s, "DDS: the vehicle is lost after this long without a sample")
+  app.add_option("--lost-after-s", o.lost_after_s,
+                 "DDS: a peer is lost after this long without a sample (default: the robot file's lost_after_s)")
       ->check(CLI::Range(0.001, 3600.0));
   app.add_option("--record", o.record, "Record every input and command to a log (pbppo replay)");
   app.add_option("--profile", o.profile_json, "Write the latency profile as JSON");
@@ -114,9 +114,124 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_flag("--quiet", o.quiet, "No progress line");
   app.add_flag("--skip-self-test", o.skip_self_test, "Arm without running the blob's golden vectors");
   app.add_option("--writer-poll-us", o.writer_poll_us,
-                 "DDS writer thread polls for commands every N us, so the tick makes no system call (0: the "
-                 "tick wakes it; default: 200 free-running, 0 in lock-step)")
+                 "DDS writer threads poll for samples every N us, so the tick makes no system call (0: the "
+                 "tick wakes them; default: 200 free-running, 0 in lock-step)")
       ->check(CLI::Range(-1, 1000000));
+}
+
+// The robot's transports, opened through the transport table; a schedule file stands in for the
+// transport of its stream.
+struct Transports {
+  std::vector<std::unique_ptr<robot::Transport>> owned;
+  std::unique_ptr<loop::ScheduleTransport> schedule;
+  std::vector<robot::Transport*> all;  // in robot.yaml's order
+  std::vector<const robot::TransportSpec*> specs;
+};
+
+Result<Transports> OpenTransports(const robot::RobotModel& robot, const Options& o, const loop::LoadedSource& source) {
+  Transports ts;
+  std::string schedule_transport;
+  if (!o.commands.empty()) {
+    auto s = loop::LoadSchedule(o.commands, robot);
+    if (!s) return std::move(s).error();
+    schedule_transport = robot.streams[s->stream_index].transport;
+    auto st = loop::ScheduleTransport::Create(robot, std::move(*s));
+    if (!st) return std::move(st).error();
+    ts.schedule = std::move(*st);
+  }
+  transport::Settings settings;
+  auto interfaces = can::ParseInterfaceList(o.can);
+  if (!interfaces) return MakeError(interfaces.error().code, "--can: " + interfaces.error().message);
+  settings.can.interfaces = std::move(*interfaces);
+  settings.can.receive_all = o.receive_all;
+  settings.can.candump_path = o.candump;
+  settings.can_lockstep_wait_ns = static_cast<std::int64_t>(o.lockstep_wait_ms) * 1'000'000;
+  auto naming = dds::ParseDdsNaming(o.dds_naming);
+  if (!naming) return MakeError(naming.error().code, "--dds-naming: " + naming.error().message);
+  dds::DdsLinkOptions& d = settings.dds;
+  d.naming = *naming;
+  d.domain_id = o.domain;
+  d.profile_file = o.dds_profile;
+  d.security = {o.dds_security, o.dds_identity};
+  d.writer_poll_us = o.writer_poll_us >= 0 ? o.writer_poll_us : (o.lockstep ? 0 : 200);
+  d.lost_after_s = o.lost_after_s;
+  for (const robot::TransportSpec& t : robot.transports) {
+    if (t.name == schedule_transport) {
+      ts.all.push_back(ts.schedule.get());
+      ts.specs.push_back(&t);
+      continue;
+    }
+    // A transport only a policy reads (an operator's velocity commands) waits for no one otherwise.
+    if (t.policy_only && source.kind != loop::SourceKind::kPolicy) {
+      if (!o.quiet) std::fprintf(stderr, "pbppo-controller: transport '%s' unbound (no policy)\n", t.name.c_str());
+      continue;
+    }
+    auto opened = transport::Open(robot, t, settings);
+    if (!opened) return std::move(opened).error();
+    if (!o.quiet && !t.dds.messages.empty())
+      std::fprintf(stderr, "pbppo-controller: transport '%s' on DDS domain %d (%s naming)%s\n", t.name.c_str(),
+                   o.domain, dds::ToString(*naming), t.dds.wait_for_peer ? ", waiting for its peer" : "");
+    if (auto st = (*opened)->Connect(static_cast<std::int64_t>(o.peer_timeout_s * 1e9)); !st)
+      return MakeError(st.error().code, st.error().message + " (--peer-timeout-s)");
+    ts.all.push_back(opened->get());
+    ts.specs.push_back(&t);
+    ts.owned.push_back(std::move(*opened));
+  }
+  return ts;
+}
+
+// The tick clock: one tick per sample of the robot's lock-step stream (a pacing thread), each
+// tick paced by a transport that waits (CAN lock-step), or absolute deadlines.
+struct Clock {
+  std::unique_ptr<rt::TickClock> clock;
+  std::thread pacer;
+  const char* name = "free-running";
+};
+
+Result<Clock> MakeClock(const robot::RobotModel& robot, const Options& o, const Transports& ts,
+                        const std::atomic<bool>& done) {
+  Clock c;
+  if (o.lockstep) {
+    if (robot.lockstep_stream < 0)
+      return MakeError(ErrorCode::kInvalidValue, "--lockstep: " + robot.path + " declares no timing.lockstep stream");
+    const auto stream = static_cast<std::uint32_t>(robot.lockstep_stream);
+    const auto pacer =
+        std::find_if(ts.all.begin(), ts.all.end(), [&](robot::Transport* t) { return t->Paces(stream); });
+    if (pacer == ts.all.end())
+      return MakeError(ErrorCode::kInvalidValue, "--lockstep: no open transport waits for samples of stream '" +
+                                                     robot.streams[stream].name + "'");
+    auto ls = std::make_unique<rt::LockStepClock>();
+    c.pacer =
+        loop::PaceBySamples(**pacer, stream, *ls, done, static_cast<std::int64_t>(o.lockstep_timeout_ms) * 1'000'000);
+    c.clock = std::move(ls);
+    c.name = "lock-step";
+  } else if (o.lockstep_wait_ms > 0) {
+    c.clock = std::make_unique<rt::PacedClock>();  // the CAN transport waits for each tick's replies
+    c.name = "lock-step";
+  } else {
+    auto fr =
+        std::make_unique<rt::FreeRunningClock>(static_cast<std::int64_t>(std::llround(robot.tick_period_s * 1e9)));
+    fr->Start();
+    c.clock = std::move(fr);
+  }
+  return c;
+}
+
+// The phase as it changes (robots with phases) or a progress line every status period (others).
+loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o) {
+  return [&robot, &o, phase = loop::Phase::kDisarmed](const loop::LoopStatus& st, bool published) mutable {
+    if (st.phase != phase && robot.phases.enable_motors) {
+      std::printf("pbppo-controller: tick %llu: now %s\n", static_cast<unsigned long long>(st.tick),
+                  loop::ToString(st.phase));
+      std::fflush(stdout);
+      phase = st.phase;
+    }
+    if (!published || o.quiet || robot.phases.enable_motors) return;
+    std::fprintf(stderr, "\rtick %llu  mode %s  stale %llu  invalid %llu   ", static_cast<unsigned long long>(st.tick),
+                 safety::ToString(st.mode), static_cast<unsigned long long>(st.counts[safety::Cause::kStaleSample]),
+                 static_cast<unsigned long long>(st.counts[safety::Cause::kInvalidSample]));
+    std::fflush(stderr);
+  };
 }
 
 void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const loop::RunResult& r,
@@ -139,6 +254,110 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
                   loop::ToString(p.to));
   for (const auto& m : l.mode_changes())
     std::printf("mode change: tick %llu: %s\n", static_cast<unsigned long long>(m.tick), m.reason);
+  const char* end = r.ended ? nullptr : r.stopped ? "a signal" : "--ticks or --duration";
+  std::printf("stopped by %s%s\n", end != nullptr ? end : "the end field ",
+              end != nullptr ? "" : robot.fields[static_cast<std::size_t>(robot.lockstep_end_field)].name.c_str());
+}
+
+// --ticks and --duration, whichever comes first (control time: in lock-step the simulator's); a
+// schedule's end stops too.
+std::uint64_t MaxTicks(const robot::RobotModel& robot, const Options& o, const Transports& ts) {
+  std::uint64_t max_ticks = o.max_ticks;
+  double duration_s = o.duration_s;
+  if (duration_s <= 0 && ts.schedule) duration_s = ts.schedule->schedule().duration_s();
+  if (duration_s > 0) {
+    const auto d = static_cast<std::uint64_t>(std::max(1.0, std::round(duration_s / robot.tick_period_s)));
+    max_ticks = max_ticks == 0 ? d : std::min(max_ticks, d);
+  }
+  return max_ticks;
+}
+
+// Everything is loaded and checked before anything moves: the robot once, its source, its transports.
+int Run(const Options& o) {
+  auto loaded = robot::LoadRobotModel(o.robot);
+  if (!loaded) return Fail(loaded.error().message);
+  // Per-tick limits follow the tick period (a faster free-running tick than the robot's).
+  auto ticking =
+      robot::WithTickPeriod(*loaded, o.period_ms > 0 && !o.lockstep ? o.period_ms * 1e-3 : loaded->tick_period_s);
+  if (!ticking) return Fail(ticking.error().message);
+  const robot::RobotModel& robot = *ticking;
+  auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test});
+  if (!source) return Fail(source.error().message);
+  auto opened = OpenTransports(robot, o, *source);
+  if (!opened) return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
+  Transports& ts = *opened;
+
+  loop::LoopOptions lopt;
+  lopt.shutdown_after_source = false;
+  lopt.stop_at_end_field = o.lockstep && robot.lockstep_end_field >= 0;
+  robot::RobotData data = robot::MakeRobotData(robot);
+  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
+  std::unique_ptr<loop::Recorder> recorder;
+  if (!o.record.empty()) {
+    auto r = loop::Recorder::Open(o.record, robot, loop::MakeLogHeader(robot, source->kind, source->hash, lopt));
+    if (!r) return Fail(r.error().message, 1);
+    recorder = std::move(*r);
+    loop->recorder = recorder.get();
+  }
+  rt::RtOptions ro;
+  ro.lock_memory = !o.no_mlock;
+  ro.fifo_priority = o.rt_priority;
+  ro.cpu = o.cpu;
+  const rt::RtSetupResult rs = rt::SetUpRealTime(ro);
+  for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-controller: warning: %s\n", w.c_str());
+  loop::InstallStopSignals();
+  std::atomic<bool> done{false};
+  auto clock = MakeClock(robot, o, ts, done);
+  if (!clock) return Fail(clock.error().message);
+  if (!o.quiet && robot.phases.enable_motors)
+    std::printf("pbppo-controller: %s, %s\n", robot.name.c_str(),
+                source->kind == loop::SourceKind::kTrajectory ? "with a trajectory"
+                : source->kind == loop::SourceKind::kPolicy   ? "with a policy"
+                                                              : "holding the default pose");
+  std::fflush(stdout);
+  std::optional<loop::StatusPublisher> status;
+  status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9), Progress(robot, o));
+
+  // Every heap allocation of this (the control) thread while the loop runs is counted.
+  std::uint64_t allocations = 0;
+  loop::RunResult r;
+  {
+    AllocationScope scope;
+    r = loop::Run(robot, data, *loop, ts.all, *clock->clock, {MaxTicks(robot, o, ts), true});
+    allocations = scope.count();
+  }
+  done.store(true);
+  clock->clock->Stop();
+  if (clock->pacer.joinable()) clock->pacer.join();
+  status.reset();
+  const robot::ControllerStatus final_status = loop::StatusOf(*loop);
+  for (robot::Transport* t : ts.all) t->Finish(final_status);
+  if (recorder)
+    if (auto st = recorder->Stop(); !st) return Fail(st.error().message, 1);
+  if (!o.quiet && !robot.phases.enable_motors) std::fprintf(stderr, "\n");
+
+  const rt::ProfileReport report = rt::TakeReport(loop->profiler());
+  PrintSummary(robot, *loop, r, clock->name);
+  std::printf("control thread heap allocations during the loop: %llu\n", static_cast<unsigned long long>(allocations));
+  for (const robot::Transport* t : ts.all)
+    if (const std::string s = t->Summary(); !s.empty()) std::printf("%s\n", s.c_str());
+  if (source->trajectory != nullptr && source->trajectory->ticks() > 0)
+    std::printf("trajectory tracking RMS %.4f rad over %llu ticks\n", source->trajectory->rms_tracking_error_rad(),
+                static_cast<unsigned long long>(source->trajectory->ticks()));
+  if (recorder)
+    std::printf("log: %s, %llu records, %llu dropped\n", o.record.c_str(),
+                static_cast<unsigned long long>(recorder->records()),
+                static_cast<unsigned long long>(recorder->dropped()));
+  std::printf("%s\n%s", rs.Summary().c_str(), rt::FormatText(report).c_str());
+  if (!o.profile_json.empty()) {
+    std::ofstream f(o.profile_json);
+    f << rt::FormatJson(report);
+    if (!f) return Fail("--profile: cannot write '" + o.profile_json + "'", 1);
+  }
+  if (!o.profile_png.empty())
+    if (auto s = pbppo::report::PlotLatency(report, o.profile_png, "pbppo-controller tick latency"); !s)
+      std::fprintf(stderr, "pbppo-controller: --profile-plot: %s\n", s.error().message.c_str());
+  return r.status == loop::TickStatus::kFailed ? 1 : 0;
 }
 
 }  // namespace
@@ -152,245 +371,5 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;  // usage errors exit 2, after CLI11 printed the reason
   }
-  // Everything is loaded and checked before anything moves: the robot once, then the source.
-  auto loaded = robot::LoadRobotModel(o.robot);
-  if (!loaded) return Fail(loaded.error().message);
-  // Per-tick limits follow the tick period (a faster free-running tick than the robot's).
-  auto ticking =
-      robot::WithTickPeriod(*loaded, o.period_ms > 0 && !o.lockstep ? o.period_ms * 1e-3 : loaded->tick_period_s);
-  if (!ticking) return Fail(ticking.error().message);
-  const robot::RobotModel& robot = *ticking;
-  auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test});
-  if (!source) return Fail(source.error().message);
-
-  // The transports.
-  auto naming = dds::ParseDdsNaming(o.dds_naming);
-  if (!naming) return Fail("--dds-naming: " + naming.error().message);
-  // A DDS transport's participant: the robot's profiles (or --dds-profile's file), the
-  // transport's participant_profile, --domain.
-  auto participant_options = [&](const robot::TransportSpec& t) -> Result<dds::DdsOptions> {
-    dds::DdsOptions d;
-    d.domain_id = o.domain;
-    if (t.options.count("participant_profile") != 0) d.participant_profile = t.options.at("participant_profile");
-    d.profile_file = o.dds_profile;
-    d.security = {o.dds_security, o.dds_identity};
-    if (o.dds_profile.empty()) {
-      auto doc = robot.Document("dds_profile");  // read with the robot
-      if (!doc) return std::move(doc).error();
-      d.profile_xml = (*doc)->text;
-    }
-    return d;
-  };
-  std::unique_ptr<dds::AuvDdsLink> link;
-  std::unique_ptr<auv::AuvTransport> auv;
-  std::unique_ptr<dds::OperatorDdsLink> operator_link;
-  std::unique_ptr<quadruped::OperatorTransport> op;
-  std::unique_ptr<can::CanTransport> can;
-  std::unique_ptr<loop::ScheduleTransport> schedule;
-  std::vector<robot::Transport*> transports;
-  std::string schedule_transport;
-  if (!o.commands.empty()) {
-    auto s = loop::LoadSchedule(o.commands, robot);
-    if (!s) return Fail(s.error().message);
-    schedule_transport = robot.streams[s->stream_index].transport;
-    auto st = loop::ScheduleTransport::Create(robot, std::move(*s));
-    if (!st) return Fail(st.error().message);
-    schedule = std::move(*st);
-  }
-  for (const robot::TransportSpec& t : robot.transports) {
-    if (t.name == schedule_transport) {
-      transports.push_back(schedule.get());
-      continue;
-    }
-    const std::string messages = t.options.count("messages") != 0 ? t.options.at("messages") : "";
-    if (t.kind == "can") {
-      can::CanTransportOptions co;
-      auto interfaces = can::ParseInterfaceList(o.can);
-      if (!interfaces) return Fail("--can: " + interfaces.error().message, 2);
-      co.interfaces = std::move(*interfaces);
-      co.receive_all = o.receive_all;
-      co.candump_path = o.candump;
-      auto c = can::CanTransport::Open(robot, t.name, co);
-      if (!c) return Fail(c.error().message, 1);
-      can = std::move(*c);
-      can->SetLockStep(static_cast<std::int64_t>(o.lockstep_wait_ms) * 1'000'000);
-      transports.push_back(can.get());
-    } else if (t.kind == "dds" && messages == "auv") {
-      auto participant = participant_options(t);
-      if (!participant) return Fail(participant.error().message);
-      dds::AuvDdsOptions d;
-      static_cast<dds::DdsOptions&>(d) = *participant;
-      d.naming = *naming;
-      d.writer_poll_us = o.writer_poll_us >= 0 ? o.writer_poll_us : (o.lockstep ? 0 : 200);
-      auto l = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, d);
-      if (!l) return Fail(l.error().message);
-      link = std::move(*l);
-      if (!o.quiet) std::fprintf(stderr, "pbppo-controller: waiting for the vehicle on DDS domain %d\n", o.domain);
-      if (!link->WaitForPeer(static_cast<std::int64_t>(o.peer_timeout_s * 1e9)))
-        return Fail("no vehicle on DDS domain " + std::to_string(o.domain) + " within " +
-                        std::to_string(o.peer_timeout_s) + " s (--peer-timeout-s)",
-                    1);
-      auto a = auv::AuvTransport::Create(robot, t.name, *link, static_cast<std::int64_t>(o.lost_after_s * 1e9));
-      if (!a) return Fail(a.error().message);
-      auv = std::move(*a);
-      transports.push_back(auv.get());
-    } else if (t.kind == "dds" && messages == "velocity_command") {
-      // Velocity commands feed the walking policy: with a trajectory (or no source) nobody listens.
-      if (source->kind != loop::SourceKind::kPolicy) {
-        if (!o.quiet)
-          std::fprintf(stderr, "pbppo-controller: transport '%s' unbound (no policy to command)\n", t.name.c_str());
-        continue;
-      }
-      auto participant = participant_options(t);
-      if (!participant) return Fail(participant.error().message);
-      dds::OperatorDdsOptions d;
-      static_cast<dds::DdsOptions&>(d) = *participant;
-      d.naming = *naming;
-      auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, d);
-      if (!l) return Fail(l.error().message);
-      operator_link = std::move(*l);
-      auto ot = quadruped::OperatorTransport::Create(robot, *operator_link);
-      if (!ot) return Fail(ot.error().message);
-      op = std::move(*ot);
-      transports.push_back(op.get());
-      if (!o.quiet)
-        std::fprintf(stderr, "pbppo-controller: velocity commands on DDS domain %d (%s naming)\n", o.domain,
-                     dds::ToString(*naming));
-    } else {
-      return Fail(robot.path + ": transport '" + t.name + "' (" + t.kind + (messages.empty() ? "" : ", " + messages) +
-                  "): no binding in this program");
-    }
-  }
-
-  loop::LoopOptions lopt;
-  lopt.shutdown_after_source = false;
-  robot::RobotData data = robot::MakeRobotData(robot);
-  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
-  std::unique_ptr<loop::Recorder> recorder;
-  if (!o.record.empty()) {
-    const loop::LogHeader h = loop::MakeLogHeader(robot, source->kind, source->hash, lopt);
-    auto r = loop::Recorder::Open(o.record, robot, h);
-    if (!r) return Fail(r.error().message, 1);
-    recorder = std::move(*r);
-    loop->recorder = recorder.get();
-  }
-
-  rt::RtOptions ro;
-  ro.lock_memory = !o.no_mlock;
-  ro.fifo_priority = o.rt_priority;
-  ro.cpu = o.cpu;
-  const rt::RtSetupResult rs = rt::SetUpRealTime(ro);
-  for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-controller: warning: %s\n", w.c_str());
-
-  loop::InstallStopSignals();
-  std::atomic<bool> done{false}, episode_end{false};
-  std::unique_ptr<rt::TickClock> clock;
-  std::thread pacer;
-  const char* clock_name = "free-running";
-  if (o.lockstep && link) {
-    auto ls = std::make_unique<rt::LockStepClock>();
-    pacer =
-        auv::PaceLockStep(*link, *ls, done, static_cast<std::int64_t>(o.lockstep_timeout_ms) * 1'000'000, &episode_end);
-    clock = std::move(ls);
-    clock_name = "lock-step";
-  } else if (o.lockstep_wait_ms > 0) {
-    clock = std::make_unique<rt::PacedClock>();  // the CAN transport waits for each tick's replies
-    clock_name = "lock-step";
-  } else {
-    auto fr =
-        std::make_unique<rt::FreeRunningClock>(static_cast<std::int64_t>(std::llround(robot.tick_period_s * 1e9)));
-    fr->Start();
-    clock = std::move(fr);
-  }
-  if (!o.quiet && can)
-    std::printf("pbppo-controller: %s on %s, %s\n", robot.name.c_str(),
-                o.can.empty() ? "its CAN map's buses" : o.can.c_str(),
-                source->kind == loop::SourceKind::kTrajectory ? "with a trajectory"
-                : source->kind == loop::SourceKind::kPolicy   ? "with a policy"
-                                                              : "holding the default pose");
-  std::fflush(stdout);
-
-  // Status publication, the phase as it changes, progress line: another thread.
-  std::thread status([&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto next = t0;
-    loop::Phase phase = loop::Phase::kDisarmed;
-    while (!done.load()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      const loop::LoopStatus st = loop->Status();
-      if (st.phase != phase && robot.phases.enable_motors) {
-        std::printf("pbppo-controller: tick %llu: now %s\n", static_cast<unsigned long long>(st.tick),
-                    loop::ToString(st.phase));
-        std::fflush(stdout);
-        phase = st.phase;
-      }
-      if (std::chrono::steady_clock::now() < next) continue;
-      next += std::chrono::milliseconds(static_cast<long>(o.status_every_s * 1000));
-      if (link) (void)link->PublishStatus(auv::StatusOf(*loop));
-      if (operator_link) (void)operator_link->PublishStatus(quadruped::StatusOf(*loop, op.get()));
-      if (!o.quiet && !can) {
-        std::fprintf(stderr, "\rtick %llu  mode %s  stale %llu  invalid %llu   ",
-                     static_cast<unsigned long long>(st.tick), safety::ToString(st.mode),
-                     static_cast<unsigned long long>(st.counts[safety::Cause::kStaleSample]),
-                     static_cast<unsigned long long>(st.counts[safety::Cause::kInvalidSample]));
-        std::fflush(stderr);
-      }
-    }
-  });
-
-  // --ticks and --duration: whichever comes first (control time: in lock-step the simulator's).
-  std::uint64_t max_ticks = o.max_ticks;
-  double duration_s = o.duration_s;
-  if (duration_s <= 0 && schedule) duration_s = schedule->schedule().duration_s();  // the schedule's end stops
-  if (duration_s > 0) {
-    const auto d = static_cast<std::uint64_t>(std::max(1.0, std::round(duration_s / robot.tick_period_s)));
-    max_ticks = max_ticks == 0 ? d : std::min(max_ticks, d);
-  }
-  // Every heap allocation of this (the control) thread while the loop runs is counted.
-  std::uint64_t allocations = 0;
-  loop::RunResult r;
-  {
-    AllocationScope scope;
-    r = loop::Run(robot, data, *loop, transports, *clock, {max_ticks, true});
-    allocations = scope.count();
-  }
-  done.store(true);
-  clock->Stop();
-  if (pacer.joinable()) pacer.join();
-  status.join();
-  if (link) (void)link->Flush(1000000000);
-  if (operator_link) {
-    (void)operator_link->PublishStatus(quadruped::StatusOf(*loop, op.get()));  // the final state
-    (void)operator_link->Flush(1000000000);
-  }
-  if (can) can->Stop();
-  if (recorder)
-    if (auto st = recorder->Stop(); !st) return Fail(st.error().message, 1);
-  if (!o.quiet && !can) std::fprintf(stderr, "\n");
-
-  const rt::ProfileReport report = rt::TakeReport(loop->profiler());
-  PrintSummary(robot, *loop, r, clock_name);
-  std::printf("control thread heap allocations during the loop: %llu\n", static_cast<unsigned long long>(allocations));
-  if (auv)
-    std::printf("link: send failures %llu, stopped by %s\n", static_cast<unsigned long long>(auv->send_failures()),
-                episode_end.load() ? "the vehicle's episode end" : (r.stopped ? "a signal" : "--ticks or --duration"));
-  if (source->trajectory != nullptr && source->trajectory->ticks() > 0)
-    std::printf("trajectory tracking RMS %.4f rad over %llu ticks\n", source->trajectory->rms_tracking_error_rad(),
-                static_cast<unsigned long long>(source->trajectory->ticks()));
-  if (recorder)
-    std::printf("log: %s, %llu records, %llu dropped\n", o.record.c_str(),
-                static_cast<unsigned long long>(recorder->records()),
-                static_cast<unsigned long long>(recorder->dropped()));
-  std::printf("%s\n", rs.Summary().c_str());
-  std::printf("%s", rt::FormatText(report).c_str());
-  if (!o.profile_json.empty()) {
-    std::ofstream f(o.profile_json);
-    f << rt::FormatJson(report);
-    if (!f) return Fail("--profile: cannot write '" + o.profile_json + "'", 1);
-  }
-  if (!o.profile_png.empty()) {
-    if (auto s = pbppo::report::PlotLatency(report, o.profile_png, "pbppo-controller tick latency"); !s)
-      std::fprintf(stderr, "pbppo-controller: --profile-plot: %s\n", s.error().message.c_str());
-  }
-  return r.status == loop::TickStatus::kFailed ? 1 : 0;
+  return Run(o);
 }

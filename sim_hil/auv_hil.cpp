@@ -8,12 +8,12 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <thread>
 
 #include "report/plots.hpp"
-#include "runtime/robot/auv_messages.hpp"
-#include "runtime/transport/dds/auv_dds_link.hpp"
+#include "runtime/transport/dds/dds_link.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace pbppo::sim {
@@ -40,23 +40,28 @@ struct Recorder {
   std::vector<Row> rows;
   std::vector<TargetEvent> targets;
   std::vector<CollisionEvent> collisions;
+  std::vector<double> fields;  // the sample as the robot model's fields
 
   void Record(const AuvNavTask& task, double v_cmd, double w_cmd) {
     const AuvState& s = task.vehicle();
-    robot::AuvSensorSample m;
-    task.FillSensorSample(m);
-    rows.push_back(
-        Row{s.time_s, s.x_m, s.y_m, m.yaw_rad, v_cmd, w_cmd, s.u_mps, s.r_radps, task.target_index(), m.clearance_m});
+    const AuvFieldIndex& i = task.config().fields;
+    task.FillSensorFields(fields);
+    rows.push_back(Row{s.time_s, s.x_m, s.y_m, fields[i.yaw], v_cmd, w_cmd, s.u_mps, s.r_radps, task.target_index(),
+                       fields[i.clearance]});
   }
   void Events(const AuvNavTask& task, const AuvStepResult& r) {
     const AuvState& s = task.vehicle();
     if (r.events.target_reached >= 0) targets.push_back(TargetEvent{r.events.target_reached, s.time_s, s.x_m, s.y_m});
     if (r.events.collision) {
-      robot::AuvSensorSample m;
-      task.FillSensorSample(m);
-      collisions.push_back(CollisionEvent{s.time_s, s.x_m, s.y_m, m.clearance_m});
+      task.FillSensorFields(fields);
+      collisions.push_back(CollisionEvent{s.time_s, s.x_m, s.y_m, fields[task.config().fields.clearance]});
     }
   }
+};
+
+// What the vehicle counts of the commands it takes.
+struct CommandCounters {
+  std::uint64_t received = 0, invalid = 0, dropped_full = 0, written = 0;
 };
 
 Status WriteTrajectory(const std::string& path, const std::vector<Row>& rows) {
@@ -73,7 +78,7 @@ Status WriteTrajectory(const std::string& path, const std::vector<Row>& rows) {
 struct RunSummary {
   AuvHilOutcome outcome = AuvHilOutcome::kError;
   std::uint64_t ticks = 0, applied = 0, ignored = 0, overruns = 0, faulty_samples = 0;
-  dds::AuvLinkCounters link;
+  CommandCounters link;
   double wall_s = 0;
 };
 
@@ -149,6 +154,92 @@ const char* ToString(AuvHilOutcome o) noexcept {
   return "?";
 }
 
+namespace {
+
+// The vehicle's side of the robot's DDS transport (the robot file's messages, as the peer): the
+// sensor sample out, the controller's commands in (every one, in order) and its status.
+class VehicleLink {
+ public:
+  static Result<VehicleLink> Open(const robot::RobotModel& model, const AuvHilOptions& o) {
+    VehicleLink v;
+    const int stream = model.StreamIndex("sensor");
+    if (stream < 0) return MakeError(ErrorCode::kMismatch, model.path + ": no stream 'sensor' for the vehicle");
+    const std::string& transport = model.streams[static_cast<std::size_t>(stream)].transport;
+    dds::DdsLinkOptions lo;
+    lo.domain_id = o.domain_id;
+    auto naming = dds::ParseDdsNaming(o.dds_naming);
+    if (!naming) return std::move(naming).error();
+    lo.naming = *naming;
+    lo.security = {o.dds_security, o.dds_identity};
+    auto link = dds::DdsLink::Open(model, transport, dds::DdsSide::kPeer, lo);
+    if (!link) return std::move(link).error();
+    v.link_ = std::move(*link);
+    for (std::size_t i = 0; i < v.link_->message_count(); ++i) {
+      const robot::DdsMessageSpec& m = v.link_->message(i);
+      if (m.direction == robot::MessageDirection::kIn && m.stream == static_cast<std::uint32_t>(stream)) v.sensor_ = i;
+      if (m.direction == robot::MessageDirection::kOut) v.command_ = i;
+    }
+    const robot::DdsMessageSpec& cmd = v.link_->message(v.command_);
+    using K = robot::ValueTerm::Kind;
+    const int tick = model.FieldIndex("tick"), surge = model.CommandIndex("surge_speed"),
+              yaw = model.CommandIndex("yaw_rate");
+    v.answers_ = tick < 0 ? -1 : v.link_->LeafOf(v.command_, K::kField, static_cast<std::uint32_t>(tick));
+    v.surge_ = surge < 0 ? -1 : v.link_->LeafOf(v.command_, K::kCommand, static_cast<std::uint32_t>(surge));
+    v.yaw_rate_ = yaw < 0 ? -1 : v.link_->LeafOf(v.command_, K::kCommand, static_cast<std::uint32_t>(yaw));
+    v.mode_ = v.link_->LeafOf(v.command_, K::kMode);
+    if (v.link_->message(v.command_).direction != robot::MessageDirection::kOut || v.answers_ < 0 || v.surge_ < 0 ||
+        v.yaw_rate_ < 0)
+      return MakeError(ErrorCode::kMismatch, model.path + ": transport '" + transport +
+                                                 "' has no command message carrying field.tick, command.surge_speed "
+                                                 "and command.yaw_rate");
+    v.stamp_ = v.link_->message(v.sensor_).type.LeafIndex("stamp_ns");
+    v.sample_.emplace(v.link_->message(v.sensor_).type);
+    v.command_sample_.emplace(cmd.type);
+    return v;
+  }
+
+  bool WaitForPeer(std::int64_t timeout_ns) { return link_->WaitForPeer(timeout_ns); }
+  Status Publish(std::span<const double> fields, double time_s) {
+    link_->FillFromFields(sensor_, fields, &*sample_);
+    if (stamp_ >= 0) sample_->Set(static_cast<std::uint32_t>(stamp_), std::round(time_s * 1e9));
+    return link_->writer(sensor_)->Write(sample_->bytes());
+  }
+  // The next command (false: none within timeout_ns); checked: non-finite set-points, a mode
+  // above e-stop or set-points no vehicle takes are counted as invalid.
+  bool NextCommand(std::int64_t timeout_ns, std::uint64_t* answers, double* v, double* w) {
+    dds::DdsReader& r = *link_->reader(command_);
+    const bool got = timeout_ns > 0 ? r.WaitPop(command_sample_->bytes(), nullptr, timeout_ns)
+                                    : r.Pop(command_sample_->bytes(), nullptr);
+    if (!got) return false;
+    const dds::DdsSample& c = *command_sample_;
+    *answers = static_cast<std::uint64_t>(c.Get(static_cast<std::uint32_t>(answers_)));
+    *v = c.Get(static_cast<std::uint32_t>(surge_));
+    *w = c.Get(static_cast<std::uint32_t>(yaw_rate_));
+    const double mode = mode_ >= 0 ? c.Get(static_cast<std::uint32_t>(mode_)) : 0.0;
+    if (!std::isfinite(*v) || !std::isfinite(*w) || mode > 3 || std::abs(*v) > 20 || std::abs(*w) > 20) ++invalid_;
+    return true;
+  }
+  void Flush(std::int64_t timeout_ns) { (void)link_->Flush(timeout_ns); }
+  CommandCounters counters() const {
+    CommandCounters c;
+    const dds::DdsReaderCounters in = link_->reader(command_)->counters();
+    c.received = in.received;
+    c.invalid = invalid_;
+    c.dropped_full = in.dropped;
+    c.written = link_->writer(sensor_)->counters().written;
+    return c;
+  }
+
+ private:
+  std::unique_ptr<dds::DdsLink> link_;
+  std::size_t sensor_ = 0, command_ = 0;
+  int answers_ = -1, surge_ = -1, yaw_rate_ = -1, mode_ = -1, stamp_ = -1;
+  std::optional<dds::DdsSample> sample_, command_sample_;
+  std::uint64_t invalid_ = 0;
+};
+
+}  // namespace
+
 int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   auto fail = [](const std::string& why) {
     std::fflush(stdout);
@@ -159,26 +250,15 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
   if (!model) return fail(model.error().message);
   auto cfg = MakeAuvTaskConfig(*model, o.layout);
   if (!cfg) return fail(cfg.error().message);
-  if (cfg->sonar.beams > static_cast<int>(robot::kAuvMaxSonarBeams))
-    return fail(o.robot + ": sonar.beams " + std::to_string(cfg->sonar.beams) + " exceeds the DDS sample's " +
-                std::to_string(robot::kAuvMaxSonarBeams));
-  auto profile = model->Document("dds_profile");
-  if (!profile) return fail(profile.error().message);
   auto task_r = AuvNavTask::Create(*cfg);
   if (!task_r) return fail(task_r.error().message);
   AuvNavTask& task = *task_r;
   // The plot needs the trajectory file; write it beside the picture when none was asked for.
   AuvHilOptions opt = o;
   if (!opt.plot_png.empty() && opt.trajectory_csv.empty()) opt.trajectory_csv = opt.plot_png + ".csv";
-
-  dds::AuvDdsOptions lo;
-  lo.profile_xml = (*profile)->text;
-  lo.domain_id = o.domain_id;
-  lo.naming = dds::ParseDdsNaming(o.dds_naming).value();
-  lo.security = {o.dds_security, o.dds_identity};
-  auto link_r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kVehicle, lo);
+  auto link_r = VehicleLink::Open(*model, o);
   if (!link_r) return fail(link_r.error().message);
-  dds::AuvDdsLink& link = **link_r;
+  VehicleLink& link = *link_r;
 
   std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
   task.Reset(o.seed, obs.data());
@@ -194,6 +274,7 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
 
   RunSummary sum;
   Recorder rec;
+  rec.fields.assign(model->fields.size(), 0.0);
   rec.rows.reserve(static_cast<std::size_t>(std::min<long>(max_ticks, task.max_episode_steps())) + 1);
   const auto t0 = std::chrono::steady_clock::now();
   // Wait for the controller: its sensor reader matched to our writer and its command writer to our reader.
@@ -207,24 +288,27 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
                   std::to_string(o.peer_timeout_s) + " s");
   }
 
-  robot::AuvSensorSample sample;
+  const AuvFieldIndex& fi = cfg->fields;
+  std::vector<double> fields(model->fields.size(), 0.0);
   double v_cmd = 0, w_cmd = 0;
   std::uint64_t tick = 0;
   auto publish = [&](bool last) -> bool {
-    task.FillSensorSample(sample);
-    sample.tick = tick;
-    if (last) sample.episode_end = true;
+    task.FillSensorFields(fields);
+    fields[fi.tick] = static_cast<double>(tick);
+    if (last) fields[fi.episode_end] = 1.0;
     if (!o.fault.empty() && task.vehicle().time_s >= o.fault_time_s) {
       ++sum.faulty_samples;
       if (o.fault == "nan") {
-        sample.yaw_rad = std::nan("");
-        sample.surge_mps = std::nan("");
+        fields[fi.yaw] = std::nan("");
+        fields[fi.surge] = std::nan("");
       } else {
-        sample.surge_mps = 99.0;
+        fields[fi.surge] = 99.0;
       }
     }
-    auto st = link.PublishSample(sample);
-    if (!st) std::fprintf(stderr, "pbppo-hil auv: %s\n", st.error().message.c_str());
+    auto st = link.Publish(fields, task.vehicle().time_s);
+    if (!st)
+      std::fprintf(stderr, "pbppo-hil auv: sensor sample write failed (tick %llu): %s\n",
+                   static_cast<unsigned long long>(tick), st.error().message.c_str());
     return st.ok();
   };
   bool io_ok = true;
@@ -238,14 +322,15 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
         sum.outcome = AuvHilOutcome::kStopped;
         break;
       }
-      dds::AuvCommandInput in;
       bool have = false;
+      std::uint64_t answers = 0;
+      double v = 0, w = 0;
       if (o.lockstep) {
         // The command answering the sample of `tick`; others are counted and ignored.
         const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.command_timeout_s);
         while (!have && !stop.load() && std::chrono::steady_clock::now() < deadline) {
-          if (!link.WaitForCommand(&in, kNsPerS / 10)) continue;
-          if (in.value.answers == tick)
+          if (!link.NextCommand(kNsPerS / 10, &answers, &v, &w)) continue;
+          if (answers == tick)
             have = true;
           else
             ++sum.ignored;
@@ -255,18 +340,18 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
           sum.outcome = AuvHilOutcome::kControllerLost;
           break;
         }
-        v_cmd = in.value.surge_speed_mps;
-        w_cmd = in.value.yaw_rate_radps;
+        v_cmd = v;
+        w_cmd = w;
       } else {
         AddNs(&next, period_ns);
         timespec now{};
         clock_gettime(CLOCK_MONOTONIC, &now);
         if (now.tv_sec > next.tv_sec || (now.tv_sec == next.tv_sec && now.tv_nsec > next.tv_nsec)) ++sum.overruns;
         clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
-        while (link.PopCommand(&in)) {
+        while (link.NextCommand(0, &answers, &v, &w)) {
           have = true;
-          v_cmd = in.value.surge_speed_mps;
-          w_cmd = in.value.yaw_rate_radps;
+          v_cmd = v;
+          w_cmd = w;
         }
       }
       if (have) ++sum.applied;

@@ -1,6 +1,7 @@
-// The AUV HIL simulator over DDS: sim::AuvNavTask (Simbody plant, sonar, targets) as the vehicle
-// side of dds::AuvDdsLink. It publishes a sensor sample per control period and applies the
-// physical commands ([v, omega]) the controller sends back.
+// The AUV HIL simulator over DDS: sim::AuvNavTask (Simbody plant, sonar, targets) as the vehicle,
+// the peer of the robot's DDS transport (its messages as models/auv/robot.yaml declares them). It
+// publishes a sensor sample per control period and applies the physical commands ([v, omega])
+// the controller sends back.
 //
 //  lock-step: sample 0 after reset (once the controller has matched); then for each command
 //    whose `answers` equals the tick of the last sample: apply it, advance one control period,

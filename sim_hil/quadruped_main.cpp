@@ -5,17 +5,19 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "firmware/quadruped/operator_transport.hpp"
 #include "report/plots.hpp"
 #include "runtime/core/cli_checks.hpp"
+#include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/rt/rt_setup.hpp"
+#include "runtime/transport/bindings.hpp"
 #include "runtime/transport/can/can_transport.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
@@ -132,24 +134,19 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
                                                 std::to_string(o.duration_s) + "}]\n",
                                             "--duration", model);
   if (!schedule) return Fail(schedule.error().message, 2);
-  std::unique_ptr<dds::OperatorDdsLink> link;
-  std::unique_ptr<quadruped::OperatorTransport> op;
+  // Over DDS, the robot's own transport of the schedule's stream, opened as pbppo-controller does.
+  std::unique_ptr<robot::Transport> op;
   if (dds_operator) {
+    transport::Settings s;
     auto naming = dds::ParseDdsNaming(o.dds_naming);
     if (!naming) return Fail("--dds-naming: " + naming.error().message, 2);
-    auto doc = model.Document("dds_profile");
-    if (!doc) return Fail(doc.error().message, 2);
-    dds::OperatorDdsOptions d;
-    d.profile_xml = (*doc)->text;
-    d.domain_id = o.domain;
-    d.naming = *naming;
-    d.security = {o.dds_security, o.dds_identity};
-    auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, d);
-    if (!l) return Fail(l.error().message, 2);
-    link = std::move(*l);
-    auto t = quadruped::OperatorTransport::Create(model, *link);
-    if (!t) return Fail(t.error().message, 2);
-    op = std::move(*t);
+    s.dds.domain_id = o.domain;
+    s.dds.naming = *naming;
+    s.dds.security = {o.dds_security, o.dds_identity};
+    const int t = model.TransportIndex(model.streams[schedule->stream_index].transport);
+    auto opened = transport::Open(model, model.transports[static_cast<std::size_t>(t)], s);
+    if (!opened) return Fail(opened.error().message, 2);
+    op = std::move(*opened);
   }
   RigOptions ro;
   ro.policy = o.policy;
@@ -175,13 +172,14 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
     for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-hil quadruped: warning: %s\n", w.c_str());
     std::printf("%s\n", rs.Summary().c_str());
   }
-  std::unique_ptr<quadruped::StatusPublisher> status;
-  if (link) status = std::make_unique<quadruped::StatusPublisher>(*link, (*rig)->loop(), op.get(), 200'000'000);
+  robot::Transport* published[] = {op.get()};
+  std::optional<loop::StatusPublisher> status;
+  if (op) status.emplace(published, (*rig)->loop(), 200'000'000);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
   const bool ok = (*rig)->RunSchedule();
-  status.reset();  // the final status out
-  if (link) (void)link->Flush(1'000'000'000);
+  status.reset();
+  if (op) op->Finish(loop::StatusOf((*rig)->loop()));  // the final status out, delivered
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
   const RigReport rep = (*rig)->Report(o.settle_s, dds_operator);

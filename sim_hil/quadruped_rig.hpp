@@ -32,9 +32,9 @@ struct RigOptions {
   std::vector<std::string> interfaces;      // SocketCAN interfaces; empty: the in-process network
   std::int64_t wait_ns = 2'000'000'000;     // SocketCAN lock-step: the longest wait for a tick's frames
   std::size_t command_record_capacity = 0;  // commands kept by the CAN transport (tests)
-  // The operator instead of the schedule (velocity commands over DDS: firmware/quadruped/
-  // operator_transport.hpp); the schedule then only names the phases of the report. Must outlive
-  // the rig.
+  // The operator instead of the schedule (the robot's DDS transport of velocity commands, opened
+  // through the transport table); the schedule then only names the phases of the report. Must
+  // outlive the rig.
   robot::Transport* operator_transport = nullptr;
   // RunSchedule ticks at the robot's tick period on the controller's own clock (rt::FreeRunningClock,
   // as pbppo-controller free-running): the loop's profile then holds wake-up jitter and deadline

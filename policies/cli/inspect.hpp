@@ -10,7 +10,8 @@ namespace pbppo::cli {
 int Inspect(const std::string& path, bool json, bool weights = false);
 
 struct SynthOptions {
-  std::string widths = "48-512-256-128-12";
+  std::string widths;  // default: 48-512-256-128-12, or with a robot its layout's IN-64-64-OUT
+  std::string robot;   // a robot.yaml: the blob takes its IO layout (names, hash, action map)
   std::string activation = "elu";
   std::uint64_t seed = 1;
   std::string out;

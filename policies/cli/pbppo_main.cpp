@@ -26,7 +26,11 @@ int main(int argc, char** argv) {
 
   pbppo::cli::SynthOptions synth_opts;
   auto* synth = app.add_subcommand("synth", "Write a random-weight blob of a given shape, with golden vectors");
-  synth->add_option("--widths", synth_opts.widths, "Layer widths, input first, e.g. 48-512-256-128-12");
+  synth->add_option(
+      "--widths", synth_opts.widths,
+      "Layer widths, input first, e.g. 48-512-256-128-12 (default; with --robot: its layout's IN-64-64-OUT)");
+  synth->add_option("--robot", synth_opts.robot,
+                    "A robot.yaml whose IO layout the blob takes (names, hash, action map): a test policy for a robot");
   synth->add_option("--activation", synth_opts.activation,
                     "Hidden activation: identity, tanh, elu, relu, leaky_relu (alpha 0.01)");
   synth->add_option("--seed", synth_opts.seed, "Seed for the weights")->check(pbppo::cli_checks::NonNegativeInteger());

@@ -58,7 +58,7 @@ LogHeader MakeLogHeader(const robot::RobotModel& m, SourceKind source, std::uint
   h.source_hash = source_hash;
   h.tick_period_s = m.tick_period_s;
   h.source = source;
-  h.options = options.shutdown_after_source ? 1u : 0u;
+  h.options = (options.shutdown_after_source ? 1u : 0u) | (options.stop_at_end_field ? 2u : 0u);
   h.fields = static_cast<std::uint32_t>(m.fields.size());
   h.streams = static_cast<std::uint32_t>(m.streams.size());
   h.links = static_cast<std::uint32_t>(m.supervisor_model.transport_names.size());
@@ -293,6 +293,8 @@ Status ParseHeader(Reader& r, LogHeader& h) {
   const char* names[] = {"options", "fields", "streams", "links", "commands", "motors"};
   for (int i = 0; i < 6; ++i) {
     PBPPO_GET(v, r, std::uint32_t, w, names[i]);
+    if (i == 0 && v > 3)
+      return r.Fail(r.offset() - 4, w, "field 'options': " + std::to_string(v) + " has bits other than 1 and 2");
     if (i > 0 && v > 65536)
       return r.Fail(r.offset() - 4, w,
                     std::string("field '") + names[i] + "': " + std::to_string(v) + " is above 65536");

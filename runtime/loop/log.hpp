@@ -39,7 +39,7 @@ struct LogHeader {
   std::uint64_t source_hash = 0;  // the policy blob's or the trajectory's (LogHash of its bytes)
   double tick_period_s = 0;
   SourceKind source = SourceKind::kNone;
-  std::uint32_t options = 0;  // 1: shutdown after the source
+  std::uint32_t options = 0;  // 1: shutdown after the source; 2: stop at the robot's end field
   std::uint32_t fields = 0, streams = 0, links = 0, commands = 0, motors = 0;
   std::string robot;
 };

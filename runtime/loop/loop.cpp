@@ -132,7 +132,6 @@ struct TickImpl {
         if (l.source_ != nullptr && !l.source_done_ && in_phase >= m.phases.hold_ticks) StartRun(m, d, l);
         break;
       case Phase::kRun:
-        ++l.run_ticks_;
         if (l.source_ != nullptr && !l.source_->Compute(m, d, l, l.desired_)) {
           l.source_done_ = true;
           if (l.options_.shutdown_after_source) {
@@ -307,6 +306,15 @@ TickStatus TickImpl::Tick(const RobotModel& m, RobotData& d, LoopData& l, std::s
   prof.Record(rt::Stage::kSend, t4 - t3);
   prof.Record(rt::Stage::kTick, t4 - timing.wake_ns);
   Publish(l, d);
+  if (l.options_.stop_at_end_field && m.lockstep_end_field >= 0) {
+    const auto f = static_cast<std::size_t>(m.lockstep_end_field);
+    // The run ends: a robot with motors shuts down on its own ticks, one without stops its clock
+    // (the runner sees ended()) and sends its stop command.
+    if (d.fresh[m.fields[f].stream] != 0 && d.fields[f] >= 0.5) {
+      l.ended_ = true;
+      if (m.phases.enable_motors) l.RequestStop();
+    }
+  }
   if (l.phase_ == Phase::kDone) return TickStatus::kDone;
   if (l.phase_ == Phase::kFailed) return TickStatus::kFailed;
   return TickStatus::kRunning;

@@ -64,6 +64,9 @@ class CommandSource {
 
 struct LoopOptions {
   bool shutdown_after_source = false;  // the source finished: shut down (else hold the default pose)
+  // Lock-step with a simulator (robot.yaml timing.lockstep.end_field): a fresh sample whose end
+  // field is 1 stops the run after the tick that took it (the simulator's episode ended).
+  bool stop_at_end_field = false;
 };
 
 // The requests a tick consumed (LoopData::Arm ...), as the log records them.
@@ -104,7 +107,6 @@ class LoopData {
   const rt::TickProfiler& profiler() const noexcept { return profiler_; }
   std::span<const ModeChange> mode_changes() const noexcept { return Changes(modes_, mode_count_); }
   std::span<const PhaseChange> phase_changes() const noexcept { return Changes(phases_, phase_count_); }
-  std::uint64_t run_ticks() const noexcept { return run_ticks_; }
   // Another thread's view (single reader).
   LoopStatus Status() const noexcept;
 
@@ -113,7 +115,8 @@ class LoopData {
   void Disarm() noexcept { disarm_.store(true, std::memory_order_relaxed); }
   void RequestStop() noexcept { stop_.store(true, std::memory_order_relaxed); }
   void RequestEStop() noexcept { estop_.store(true, std::memory_order_relaxed); }
-  bool stop_requested() const noexcept { return stop_.load(std::memory_order_relaxed); }
+  // The run reached the robot's end field (LoopOptions::stop_at_end_field).
+  bool ended() const noexcept { return ended_; }
   // Back to nominal, only while disarmed.
   bool ResetSupervisor() noexcept;
 
@@ -132,7 +135,7 @@ class LoopData {
   Phase phase_ = Phase::kDisarmed;
   std::array<std::uint64_t, kPhaseCount> phase_start_{};
   bool source_done_ = false;
-  std::uint64_t run_ticks_ = 0;
+  bool ended_ = false;
   std::vector<std::uint8_t> answered_;  // per motor: answered since the phase began
   std::vector<double> q0_;              // per motor: the pose the stand-up starts from
   std::vector<double> desired_;         // the source's (or the phase's) command

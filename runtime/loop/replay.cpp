@@ -113,6 +113,7 @@ Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, Comm
   robot::RobotData data = robot::MakeRobotData(m);
   LoopOptions options;
   options.shutdown_after_source = (h.options & 1u) != 0;
+  options.stop_at_end_field = (h.options & 2u) != 0;
   auto loop = MakeLoopData(m, source, options);
   ReplayTransport replay;
   robot::Transport* transports[] = {&replay};

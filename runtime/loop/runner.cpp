@@ -2,7 +2,9 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 
 namespace pbppo::loop {
 namespace {
@@ -51,10 +53,12 @@ RunResult Run(const robot::RobotModel& m, robot::RobotData& d, LoopData& l,
   if (StopRequested()) l.RequestStop();
   if (o.arm) l.Arm();
   rt::TickTiming t;
+  // A robot without phases stops at a signal or at its end field.
+  auto stop = [&] { return !phases && (StopRequested() || l.ended()); };
   while (r.status == TickStatus::kRunning) {
-    if (!phases && StopRequested()) break;
+    if (stop()) break;
     if (!clock.Wait(t)) break;
-    if (!phases && StopRequested()) break;
+    if (stop()) break;
     r.status = Tick(m, d, l, transports, t);
     ++r.ticks;
     if (o.max_ticks != 0 && r.ticks >= o.max_ticks) {
@@ -63,10 +67,65 @@ RunResult Run(const robot::RobotModel& m, robot::RobotData& d, LoopData& l,
     }
   }
   r.stopped = StopRequested();
+  r.ended = l.ended();
   if (r.status == TickStatus::kRunning) Shutdown(m, d, l, transports, r.ticks);
   g_clock.store(nullptr, std::memory_order_relaxed);
   g_loop.store(nullptr, std::memory_order_relaxed);
   return r;
+}
+
+robot::ControllerStatus StatusOf(const LoopData& l) noexcept {
+  const LoopStatus st = l.Status();
+  robot::ControllerStatus s;
+  s.tick = st.tick;
+  s.phase = static_cast<std::uint8_t>(st.phase);
+  s.mode = st.mode;
+  s.cause = st.any_latched ? 1u << static_cast<unsigned>(st.latched) : 0u;
+  s.counts = st.counts;
+  s.deadline_misses = l.profiler().deadline_misses();
+  const rt::LatencyStats t = l.profiler().histogram(rt::Stage::kTick).Snapshot().Stats();
+  s.tick_median_us = static_cast<double>(t.p50_ns) / 1000.0;
+  s.tick_max_us = static_cast<double>(t.max_ns) / 1000.0;
+  return s;
+}
+
+StatusPublisher::StatusPublisher(std::span<robot::Transport* const> transports, const LoopData& loop,
+                                 std::int64_t period_ns, Poll poll)
+    : thread_([this, transports, &loop, period_ns, poll = std::move(poll)] {
+        auto next = std::chrono::steady_clock::now();
+        while (!stop_.load()) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(10));
+          const bool due = std::chrono::steady_clock::now() >= next;
+          if (due) {
+            next += std::chrono::nanoseconds(period_ns);
+            const robot::ControllerStatus status = StatusOf(loop);
+            for (robot::Transport* t : transports) t->PublishStatus(status);
+          }
+          if (poll) poll(loop.Status(), due);
+        }
+      }) {}
+
+StatusPublisher::~StatusPublisher() {
+  stop_.store(true);
+  thread_.join();
+}
+
+std::thread PaceBySamples(robot::Transport& transport, std::uint32_t stream, rt::LockStepClock& clock,
+                          const std::atomic<bool>& done, std::int64_t timeout_ns) {
+  return std::thread([&transport, stream, &clock, &done, timeout_ns] {
+    std::uint64_t version = 0;
+    constexpr std::int64_t kSlice = 50'000'000;  // `done` is seen within 50 ms
+    while (!done.load()) {
+      const std::uint64_t started = clock.started();
+      bool fresh = false;
+      for (std::int64_t waited = 0; !fresh && waited < timeout_ns && !done.load(); waited += kSlice)
+        fresh = transport.WaitForSample(stream, &version, std::min(kSlice, timeout_ns - waited));
+      if (done.load()) break;
+      clock.Advance();
+      // Wait for the loop to take this tick before allowing the next one.
+      while (clock.started() == started && !done.load()) std::this_thread::yield();
+    }
+  });
 }
 
 }  // namespace pbppo::loop

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "runtime/robot/robot_model.hpp"
@@ -38,12 +39,52 @@ struct RobotData {
 
 RobotData MakeRobotData(const RobotModel& model);
 
+// The controller's state as another thread than the tick sees it, for status messages and
+// summaries (runtime/loop fills it from its loop's status).
+struct ControllerStatus {
+  std::uint64_t tick = 0;
+  std::uint8_t phase = 0;  // runtime/loop's Phase
+  safety::Mode mode = safety::Mode::kNominal;
+  std::uint32_t cause = 0;  // 1 << the latched cause of the mode, 0: none
+  safety::CauseCounts counts;
+  std::uint64_t deadline_misses = 0;
+  double tick_median_us = 0, tick_max_us = 0;
+};
+
 class Transport {
  public:
   virtual ~Transport() = default;
   // Real-time safe: no allocation, lock or blocking call (a lock-step transport may wait, bounded).
   virtual void Read(const RobotModel& model, RobotData& data) noexcept = 0;
   virtual void Write(const RobotModel& model, RobotData& data) noexcept = 0;
+
+  // The rest is for set-up and other threads than the tick; each has a default for transports
+  // that have nothing to do there.
+  // Before the loop starts: waits for what the robot file says must be there (a DDS peer);
+  // the error names the transport and what is missing.
+  virtual Status Connect(std::int64_t timeout_ns) {
+    (void)timeout_ns;
+    return {};
+  }
+  // Lock-step pacing: true when this transport delivers `stream` and WaitForSample can wait for it.
+  virtual bool Paces(std::uint32_t stream) const noexcept {
+    (void)stream;
+    return false;
+  }
+  // Waits up to `timeout_ns` for a sample of `stream` newer than *version (0 before the first):
+  // true, and *version the newest, when one came.
+  virtual bool WaitForSample(std::uint32_t stream, std::uint64_t* version, std::int64_t timeout_ns) {
+    (void)stream;
+    (void)version;
+    (void)timeout_ns;
+    return false;
+  }
+  // The controller's status, every status period (status messages, where the robot file declares them).
+  virtual void PublishStatus(const ControllerStatus& status) { (void)status; }
+  // After the loop: the last status published and what was sent delivered (bounded waits), devices released.
+  virtual void Finish(const ControllerStatus& status) { (void)status; }
+  // A line for the run's summary (what was received and sent, failures); empty: none.
+  virtual std::string Summary() const { return {}; }
 };
 
 }  // namespace pbppo::robot

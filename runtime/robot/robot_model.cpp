@@ -114,33 +114,10 @@ struct Loader : detail::Builder {
   Status Timing(const YAML::Node& root) {
     YAML::Node n;
     PBPPO_TRY(f.Map(root, "timing", "", &n));
-    PBPPO_TRY(f.Keys(n, "timing", {"tick_period_s", "policy_period_s", "policy_trigger"}));
+    PBPPO_TRY(f.Keys(n, "timing", {"tick_period_s", "policy_period_s", "policy_trigger", "lockstep"}));
     PBPPO_TRY(f.Number(n, "tick_period_s", "timing", 1e-6, 10.0, &m.tick_period_s));
     m.policy_period_s = m.tick_period_s;
     PBPPO_TRY(f.OptionalNumber(n, "policy_period_s", "timing", 1e-6, 100.0, &m.policy_period_s));
-    return {};
-  }
-
-  Status Transports(const YAML::Node& root) {
-    YAML::Node list;
-    PBPPO_TRY(f.List(root, "transports", "", true, &list));
-    if (list.size() == 0) return f.Fail("transports", "is empty");
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      const std::string w = "transports[" + std::to_string(i) + "]";
-      if (!list[i].IsMap()) return f.Fail(w, "expected a mapping");
-      TransportSpec t;
-      PBPPO_TRY(f.Text(list[i], "name", w, &t.name, Rule::kToken));
-      PBPPO_TRY(f.Text(list[i], "kind", w, &t.kind, Rule::kToken));
-      if (t.kind != "can" && t.kind != "dds") return f.Fail(w + ".kind", "'" + t.kind + "' is not can or dds");
-      if (m.TransportIndex(t.name) >= 0) return f.Fail(w + ".name", "transport '" + t.name + "' appears twice");
-      for (const auto& kv : list[i]) {
-        const std::string k = kv.first.as<std::string>();
-        if (k == "name" || k == "kind") continue;
-        if (!kv.second.IsScalar()) return f.Fail(w + "." + k, "expected a string, got " + YamlFields::Quote(kv.second));
-        t.options[k] = kv.second.as<std::string>();
-      }
-      m.transports.push_back(std::move(t));
-    }
     return {};
   }
 
@@ -412,6 +389,8 @@ Result<RobotModel> LoadRobotModel(const std::string& robot_yaml) {
   PBPPO_TRY(l.CanDevices(root));
   PBPPO_TRY(l.DeclaredCommands(root));
   PBPPO_TRY(l.Signals(root));
+  PBPPO_TRY(l.DdsMessages(root, [&files](const std::string& path) { return files.Read(path); }, m.dir));
+  PBPPO_TRY(l.Lockstep(root));
   PBPPO_TRY(l.Phases(root));
   PBPPO_TRY(l.Supervisor(root));
   for (SignalLimitSpec& limit : m.supervisor.signal_limits) {

@@ -30,6 +30,7 @@
 #include "runtime/core/result.hpp"
 #include "runtime/robot/can_map.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "runtime/robot/transport_spec.hpp"
 #include "runtime/robot/urdf.hpp"
 #include "runtime/robot/yaml_fields.hpp"
 #include "runtime/safety/supervisor.hpp"
@@ -103,13 +104,6 @@ struct SignalSpec {
   double value = 0;                   // kMinus: the parameter subtracted
 };
 
-struct TransportSpec {
-  std::string name, kind;                      // kind: "can" or "dds"
-  std::map<std::string, std::string> options;  // everything else of its robot.yaml entry
-  // Its links, whose health the supervisor watches: one per CAN bus ("can/front"), else itself.
-  std::uint32_t first_link = 0, link_count = 1;
-};
-
 struct PhaseSpec {
   bool enable_motors = false;  // arming switches motors on (the robot has motors)
   double arming_timeout_s = 0, stand_up_s = 0, hold_s = 0, damping_s = 0, motor_off_timeout_s = 0;
@@ -143,6 +137,10 @@ struct RobotModel {
   double tick_period_s = 0, policy_period_s = 0;
   std::uint32_t policy_period_ticks = 1;  // derived
   std::int32_t policy_trigger = -1;       // a stream whose new samples run the policy; -1: every period
+  // Lock-step with a simulator over a stream (timing.lockstep): one tick per new sample of
+  // lockstep_stream (-1: none), and the run ends after the tick that takes a sample whose field
+  // lockstep_end_field is not 0 (-1: none; the simulator's episode end).
+  std::int32_t lockstep_stream = -1, lockstep_end_field = -1;
   std::map<std::string, double> parameters;
   std::optional<IoLayout> io;  // the policy's layout, when the robot has one
   std::optional<RobotDescription> body;

@@ -22,10 +22,23 @@ struct Builder {
   Status CanDevices(const YAML::Node& root);
   // The signals section.
   Status Signals(const YAML::Node& root);
+  // The transports section: names, kinds and settings (before the streams that name them).
+  Status Transports(const YAML::Node& root);
+  // The messages of DDS transports, mapped onto streams, fields and commands (after them); IDL
+  // files (relative to `dir`) read through `read`.
+  Status DdsMessages(const YAML::Node& root, const IdlFileReader& read, const std::string& dir);
+  // timing.lockstep (after the streams).
+  Status Lockstep(const YAML::Node& root);
 
  private:
   Status SignalFields(SignalSpec::Op op, const std::string& arg, const std::string& where,
                       std::vector<std::uint32_t>* out);
+  Status InMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, DdsMessageSpec* out);
+  Status OutMessage(const YAML::Node& n, const std::string& where, DdsMessageSpec* out);
+  Status DdsMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, const IdlFileReader& read,
+                    const std::string& dir);
+  // A value of an outgoing (status: a status) message's leaf: terms joined by " + ".
+  Result<std::vector<ValueTerm>> Value(const std::string& text, bool status, const std::string& where) const;
 };
 
 }  // namespace pbppo::robot::detail

@@ -174,12 +174,18 @@ Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const st
                      model.path + ": the AUV task measures '" + name + "', the robot has no such field");
     *out = k < 0 ? 0 : static_cast<std::uint32_t>(k);
   };
-  const std::pair<const char*, std::uint32_t*> named[] = {{"x_m", &f.x},
+  const std::pair<const char*, std::uint32_t*> named[] = {{"tick", &f.tick},
+                                                          {"x_m", &f.x},
                                                           {"y_m", &f.y},
                                                           {"depth_m", &f.depth},
+                                                          {"roll_rad", &f.roll},
+                                                          {"pitch_rad", &f.pitch},
                                                           {"yaw_rad", &f.yaw},
                                                           {"surge_mps", &f.surge},
                                                           {"sway_mps", &f.sway},
+                                                          {"heave_mps", &f.heave},
+                                                          {"roll_rate_radps", &f.roll_rate},
+                                                          {"pitch_rate_radps", &f.pitch_rate},
                                                           {"yaw_rate_radps", &f.yaw_rate},
                                                           {"target_distance_m", &f.target_distance},
                                                           {"target_bearing_rad", &f.target_bearing},
@@ -188,7 +194,9 @@ Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const st
                                                           {"target_index", &f.target_index},
                                                           {"target_x_m", &f.target_x},
                                                           {"target_y_m", &f.target_y},
-                                                          {"episode_end", &f.episode_end}};
+                                                          {"mission_complete", &f.mission_complete},
+                                                          {"episode_end", &f.episode_end},
+                                                          {"sonar_beams", &f.sonar_beams}};
   for (const auto& [name, out] : named) index(name, out);
   f.sonar.assign(static_cast<std::size_t>(c.sonar.beams), 0);
   for (std::size_t i = 0; i < f.sonar.size(); ++i)
@@ -207,10 +215,6 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   const std::string where = "io layout '" + config.io.robot + "'";
   if (config.io.robot != "auv")
     return MakeError(ErrorCode::kMismatch, where + ": robot is '" + config.io.robot + "', expected 'auv'");
-  if (config.sonar.beams > static_cast<int>(robot::kAuvMaxSonarBeams))
-    return MakeError(ErrorCode::kInvalidValue, "sonar.beams " + std::to_string(config.sonar.beams) +
-                                                   " exceeds the sensor sample's " +
-                                                   std::to_string(robot::kAuvMaxSonarBeams));
   auto builder = robot::ObservationBuilder::Create(config.io, config.signals.names());
   if (!builder) return std::move(builder).error();
   t.observe_ = std::move(*builder);
@@ -510,37 +514,35 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
   return r;
 }
 
-void AuvNavTask::FillSensorSample(robot::AuvSensorSample& out) const {
+void AuvNavTask::FillSensorFields(std::span<double> f) const {
   const AuvState& s = plant_.State();
-  out.tick = static_cast<std::uint64_t>(stats_.steps);
-  out.stamp_ns = std::llround(s.time_s * 1e9);
-  out.x_m = s.x_m;
-  out.y_m = s.y_m;
-  out.depth_m = -s.z_m;
-  out.roll_rad = s.roll_rad;
-  out.pitch_rad = s.pitch_rad;
-  out.yaw_rad = WrapAngle(s.yaw_rad);
-  out.surge_mps = s.u_mps;
-  out.sway_mps = s.v_mps;
-  out.heave_mps = s.w_mps;
-  out.roll_rate_radps = s.p_radps;
-  out.pitch_rate_radps = s.q_radps;
-  out.yaw_rate_radps = s.r_radps;
-  const std::size_t beams = std::min<std::size_t>(sonar_.size(), robot::kAuvMaxSonarBeams);
-  out.sonar_beams = static_cast<std::uint32_t>(beams);
-  out.sonar_m.fill(0.0f);
-  for (std::size_t i = 0; i < beams; ++i) out.sonar_m[i] = static_cast<float>(sonar_[i]);
+  const AuvFieldIndex& i = config_.fields;
+  f[i.tick] = static_cast<double>(stats_.steps);
+  f[i.x] = s.x_m;
+  f[i.y] = s.y_m;
+  f[i.depth] = -s.z_m;
+  f[i.roll] = s.roll_rad;
+  f[i.pitch] = s.pitch_rad;
+  f[i.yaw] = WrapAngle(s.yaw_rad);
+  f[i.surge] = s.u_mps;
+  f[i.sway] = s.v_mps;
+  f[i.heave] = s.w_mps;
+  f[i.roll_rate] = s.p_radps;
+  f[i.pitch_rate] = s.q_radps;
+  f[i.yaw_rate] = s.r_radps;
+  f[i.sonar_beams] = static_cast<double>(sonar_.size());
+  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = sonar_[k];
   const int last = static_cast<int>(config_.layout.targets.size()) - 1;
   const auto& t = config_.layout.targets[static_cast<std::size_t>(std::min(target_, last))];
-  out.target_index = target_;
-  out.target_x_m = t[0];
-  out.target_y_m = t[1];
-  out.target_distance_m = l_at_;
-  out.target_bearing_rad = phi_at_;
-  out.route_bearing_rad = route_phi_;
-  out.clearance_m = clearance_;
-  out.mission_complete = stats_.success;
-  out.episode_end = done_;
+  f[i.target_index] = target_;
+  f[i.target_x] = t[0];
+  f[i.target_y] = t[1];
+  f[i.target_distance] = l_at_;
+  f[i.target_bearing] = phi_at_;
+  f[i.route_bearing] = route_phi_;
+  f[i.clearance] = clearance_;
+  f[i.mission_complete] = stats_.success ? 1.0 : 0.0;
+  f[i.episode_end] = done_ ? 1.0 : 0.0;
 }
 
 long StepRandomly(AuvNavTask& task, Rng& rng, long steps, float* obs, std::uint64_t* next_seed) {

@@ -17,12 +17,12 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "runtime/core/random.hpp"
 #include "runtime/core/result.hpp"
-#include "runtime/robot/auv_messages.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/robot_model.hpp"
@@ -77,11 +77,13 @@ bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noe
 
 // The AUV's sample as the robot model's fields (models/auv/robot.yaml streams[sensor]): where the
 // task writes each quantity it measures, so that the model's signals (runtime/robot/signals.hpp)
-// compute the observation exactly as the controller does from a received sample.
+// compute the observation exactly as the controller does from a received sample, and the HIL
+// publishes the sample the robot file maps onto its DDS message.
 struct AuvFieldIndex {
   std::uint32_t count = 0;  // fields of the robot
-  std::uint32_t x, y, depth, yaw, surge, sway, yaw_rate, target_distance, target_bearing, route_bearing, clearance,
-      target_index, target_x, target_y, episode_end;
+  std::uint32_t tick, x, y, depth, roll, pitch, yaw, surge, sway, heave, roll_rate, pitch_rate, yaw_rate,
+      target_distance, target_bearing, route_bearing, clearance, target_index, target_x, target_y, mission_complete,
+      episode_end, sonar_beams;
   std::vector<std::uint32_t> sonar;  // per beam
 };
 
@@ -164,11 +166,12 @@ class AuvNavTask {
   // to its controller's limits; non-finite values are replaced by 0 and counted in
   // stats().nonfinite_actions. Step(action) maps the action through the IO layout, then calls this.
   AuvStepResult StepCommand(double surge_speed_mps, double yaw_rate_radps, float* obs);
-  // The vehicle's current state as the sensor sample the HIL publishes: pose, body velocities,
-  // sonar (at most robot::kAuvMaxSonarBeams beams), the current target, the route's bearing,
-  // clearance, flags.
-  // tick = control periods since Reset and stamp_ns = simulated time; callers may restamp.
-  void FillSensorSample(robot::AuvSensorSample& out) const;
+  // The vehicle's current state as the sensor sample the HIL publishes, in the robot model's
+  // fields (config().fields; the others are left alone): tick (control periods since Reset),
+  // pose (yaw wrapped to (-pi, pi]), body velocities, sonar ranges, the current target, the
+  // route's bearing, clearance, flags.
+  void FillSensorFields(std::span<double> fields) const;
+  const AuvTaskConfig& config() const noexcept { return config_; }
 
   const AuvEpisodeStats& stats() const noexcept { return stats_; }
   const AuvState& vehicle() const noexcept { return plant_.State(); }

@@ -1,6 +1,6 @@
 // The AUV through runtime/loop, without DDS: the robot model's limits and refusals (errors naming
 // file and field, a blob for another layout refused naming the difference, a corrupted blob),
-// the one sample check on the AUV's sample mapped to the model's fields, observe -> infer ->
+// the one sample check on the AUV's sample (the robot model's fields), observe -> infer ->
 // supervise with no allocation over 100,000 ticks, and the loop on a thread over an in-process
 // link (a kinematic unicycle stands in for the vehicle) through the fresh, stale-sample,
 // lost-peer and shutdown paths.
@@ -14,10 +14,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <thread>
 #include <vector>
 
-#include "firmware/auv/auv_transport.hpp"
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/loop/policy_source.hpp"
 #include "runtime/loop/runner.hpp"
@@ -70,26 +70,36 @@ Result<std::unique_ptr<loop::PolicySource>> SourceFor(const std::string& blob, p
   return loop::PolicySource::Create(Robot(), *keep);
 }
 
-robot::AuvSensorSample Sample(std::uint64_t tick) {
-  robot::AuvSensorSample s;
-  s.tick = tick;
-  s.stamp_ns = static_cast<std::int64_t>(tick) * 100000000;
-  s.sonar_beams = 16;
-  for (std::uint32_t i = 0; i < 16; ++i) s.sonar_m[i] = 5.0f + static_cast<float>((tick + i) % 7);
-  s.depth_m = 5.0;
-  s.x_m = 0.01 * static_cast<double>(tick);
-  s.yaw_rad = 0.3;
-  s.target_distance_m = 20.0;
-  s.target_bearing_rad = 0.2;
-  s.route_bearing_rad = -0.4;
-  s.clearance_m = 5.0;
-  return s;
+// The AUV's sensor sample: the robot model's fields (it has no others), set by name.
+constexpr std::size_t kMaxFields = 64;
+std::uint32_t FieldIndex(const std::string& name) {
+  const int k = Robot().FieldIndex(name);
+  REQUIRE_MESSAGE(k >= 0, name);
+  return static_cast<std::uint32_t>(k);
 }
+struct AuvSample {
+  std::array<double, kMaxFields> f{};
+  double& operator[](const std::string& name) { return f[FieldIndex(name)]; }
+  double operator[](const std::string& name) const { return f[FieldIndex(name)]; }
+  // Into a RobotData's fields.
+  void Write(std::span<double> fields) const { std::copy_n(f.begin(), fields.size(), fields.begin()); }
+};
 
-auv::SampleFields Fields() {
-  auto f = auv::SampleFields::Create(Robot());
-  REQUIRE_MESSAGE(f.ok(), f.error().message);
-  return *f;
+AuvSample Sample(std::uint64_t tick) {
+  REQUIRE(Robot().fields.size() <= kMaxFields);
+  AuvSample s;
+  s["tick"] = static_cast<double>(tick);
+  s["sonar_beams"] = 16;
+  for (std::uint32_t i = 0; i < 16; ++i)
+    s[robot::ExpandIndex("sonar_{i}_m", i)] = 5.0 + static_cast<double>((tick + i) % 7);
+  s["depth_m"] = 5.0;
+  s["x_m"] = 0.01 * static_cast<double>(tick);
+  s["yaw_rad"] = 0.3;
+  s["target_distance_m"] = 20.0;
+  s["target_bearing_rad"] = 0.2;
+  s["route_bearing_rad"] = -0.4;
+  s["clearance_m"] = 5.0;
+  return s;
 }
 
 // The loop in this thread over a scripted transport fed with AUV samples.
@@ -100,13 +110,12 @@ struct Rig {
   std::unique_ptr<loop::LoopData> loop;
   test::ScriptedTransport t{Robot()};
   robot::Transport* ts[1] = {&t};
-  auv::SampleFields fields = Fields();
   std::vector<double> values = std::vector<double>(Robot().fields.size());
 
   explicit Rig(const std::string& dir) : c(MakeController(dir)), loop(loop::MakeLoopData(Robot(), c->source.get())) {}
-  void Tick(const robot::AuvSensorSample* s, std::uint64_t tick) {
+  void Tick(const AuvSample* s, std::uint64_t tick) {
     if (s != nullptr) {
-      fields.Write(*s, values);
+      s->Write(values);
       t.Put(m, 0, values);
     }
     rt::TickTiming timing;
@@ -225,65 +234,58 @@ TEST_CASE("auv controller: a blob for another layout or a corrupted blob is refu
 TEST_CASE("auv controller: the one sample check names the field - the sample's beams and bearings included") {
   const robot::RobotModel& m = Robot();
   robot::RobotData d = robot::MakeRobotData(m);
-  const auv::SampleFields f = Fields();
-  auto check = [&](const robot::AuvSensorSample& s) {
-    f.Write(s, d.fields);
+  auto check = [&](const AuvSample& s) {
+    s.Write(d.fields);
     d.fresh[0] = 1;
     loop::CheckSample(m, d);
     const std::int32_t k = d.streams[0].invalid_input;
     return k < 0 ? std::string("valid") : m.fields[static_cast<std::size_t>(k)].name;
   };
-  robot::AuvSensorSample s = Sample(1);
+  AuvSample s = Sample(1);
   CHECK(check(s) == "valid");
-  s.sonar_beams = 8;
+  s["sonar_beams"] = 8;
   CHECK(check(s) == "sonar_beams");
   CHECK(d.streams[0].invalid_value == 8.0);
   s = Sample(1);
-  s.route_bearing_rad = std::numeric_limits<double>::quiet_NaN();
+  s["route_bearing_rad"] = std::numeric_limits<double>::quiet_NaN();
   CHECK(check(s) == "route_bearing_rad");
   s = Sample(1);
-  s.surge_mps = 9.0;  // beyond 5 m/s
+  s["surge_mps"] = 9.0;  // beyond 5 m/s
   CHECK(check(s) == "surge_mps");
   s = Sample(1);
-  s.sonar_m[5] = std::numeric_limits<float>::infinity();
+  s["sonar_5_m"] = std::numeric_limits<double>::infinity();
   CHECK(check(s) == "sonar_5_m");
   s = Sample(1);
-  s.sonar_m[3] = -1.0f;
+  s["sonar_3_m"] = -1.0;
   CHECK(check(s) == "sonar_3_m");
   s = Sample(1);
-  s.x_m = std::numeric_limits<double>::quiet_NaN();
+  s["x_m"] = std::numeric_limits<double>::quiet_NaN();
   CHECK(check(s) == "x_m");
   // Angles are wrapped to [-pi, pi]: the route bearing like the target bearing and the yaw.
-  struct Angle {
-    const char* field;
-    double robot::AuvSensorSample::* member;
-  };
-  for (const Angle& a : {Angle{"route_bearing_rad", &robot::AuvSensorSample::route_bearing_rad},
-                         Angle{"target_bearing_rad", &robot::AuvSensorSample::target_bearing_rad},
-                         Angle{"yaw_rad", &robot::AuvSensorSample::yaw_rad}}) {
+  for (const char* field : {"route_bearing_rad", "target_bearing_rad", "yaw_rad"}) {
     s = Sample(1);
-    s.*a.member = 3.14159265;
+    s[field] = 3.14159265;
     CHECK(check(s) == "valid");
-    s.*a.member = -3.5;
-    CHECK(check(s) == a.field);
+    s[field] = -3.5;
+    CHECK(check(s) == field);
     CHECK(d.streams[0].invalid_value == -3.5);
   }
 }
 
 TEST_CASE("auv controller: the tick observes the sample through the layout, infers, and stays within limits") {
   Rig r(test::ScratchDir("auv_controller_tick"));
-  const robot::AuvSensorSample s = Sample(1);
+  const AuvSample s = Sample(1);
   r.Tick(&s, 0);  // disarmed: zero
   CHECK(r.v() == 0.0);
   CHECK(r.c->source->runs() == 0);
   r.loop->Arm();
-  const robot::AuvSensorSample s2 = Sample(2);
+  const AuvSample s2 = Sample(2);
   r.Tick(&s2, 2);
   CHECK(r.c->source->runs() == 1);
   // The observation is the layout's: sonar_0 / 15, target distance / 40, the nearest echo / 5
   // (5 m here: clipped at 1), the route bearing / pi and its cos/sin.
   const auto obs = r.c->source->observation();
-  CHECK(obs[0] == doctest::Approx(s2.sonar_m[0] / 15.0));
+  CHECK(obs[0] == doctest::Approx(s2["sonar_0_m"] / 15.0));
   CHECK(obs[16] == doctest::Approx(0.5));
   CHECK(obs[20] == 1.0f);
   CHECK(obs[21] == doctest::Approx(-0.4 / 3.14159265358979));
@@ -294,7 +296,7 @@ TEST_CASE("auv controller: the tick observes the sample through the layout, infe
   CHECK(std::abs(r.v()) <= 0.1 + 1e-12);  // the first step from rest is rate limited
   double v_prev = r.v();
   for (std::uint64_t k = 3; k < 50; ++k) {
-    const robot::AuvSensorSample sk = Sample(k);
+    const AuvSample sk = Sample(k);
     r.Tick(&sk, k);
     CHECK(r.v() >= 0.0);
     CHECK(r.v() <= 1.5);
@@ -326,14 +328,15 @@ TEST_CASE("auv controller: the tick observes the sample through the layout, infe
 TEST_CASE("auv controller: 100,000 ticks allocate nothing - the profiler saw every stage") {
   Rig r(test::ScratchDir("auv_controller_alloc"));
   r.loop->Arm();
-  std::vector<robot::AuvSensorSample> samples;
+  std::vector<AuvSample> samples;
   for (std::uint64_t k = 0; k < 64; ++k) samples.push_back(Sample(k));
+  const std::uint32_t tick = FieldIndex("tick");
   std::uint64_t nominal = 0;
   {
     AllocationScope scope;
     for (std::uint64_t k = 0; k < 100000; ++k) {
-      robot::AuvSensorSample& s = samples[k % 64];
-      s.tick = k;
+      AuvSample& s = samples[k % 64];
+      s.f[tick] = static_cast<double>(k);
       r.Tick(&s, k);
       nominal += r.t.mode == Mode::kNominal;
     }
@@ -391,18 +394,18 @@ struct Sent {
 
 class TestLink final : public robot::Transport {
  public:
-  TestLink() : fields_(Fields()) {}
+  TestLink() : tick_(FieldIndex("tick")) {}
   void Read(const robot::RobotModel&, robot::RobotData& d) noexcept override {
-    if (samples.Get(sample_) && (!have_ || sample_.tick != last_)) {
+    if (samples.Get(sample_) && (!have_ || sample_.f[tick_] != last_)) {
       have_ = true;
-      last_ = sample_.tick;
-      fields_.Write(sample_, d.fields);
-      d.fresh[fields_.stream()] = 1;
+      last_ = sample_.f[tick_];
+      std::copy_n(sample_.f.begin(), d.fields.size(), d.fields.begin());
+      d.fresh[0] = 1;
     }
     d.transports[0].lost = peer_lost.load(std::memory_order_relaxed);
   }
   void Write(const robot::RobotModel&, robot::RobotData& d) noexcept override {
-    const Sent s{d.tick, static_cast<std::uint64_t>(d.fields[fields_.tick_field()]), d.command[0], d.command[1],
+    const Sent s{d.tick, static_cast<std::uint64_t>(d.fields[tick_]), d.command[0], d.command[1],
                  static_cast<std::uint64_t>(d.mode)};
     const std::uint64_t n = sent.load(std::memory_order_relaxed);
     if (n < log.size()) log[n] = s;  // every command kept (lock-step tests), in a preallocated log
@@ -410,17 +413,17 @@ class TestLink final : public robot::Transport {
     sent.store(n + 1, std::memory_order_release);
   }
 
-  SeqBox<robot::AuvSensorSample> samples;
+  SeqBox<AuvSample> samples;
   SeqBox<Sent> commands;
   std::array<Sent, 256> log{};
   std::atomic<std::uint64_t> sent{0};
   std::atomic<bool> peer_lost{false};
 
  private:
-  auv::SampleFields fields_;
-  robot::AuvSensorSample sample_;
+  std::uint32_t tick_;
+  AuvSample sample_;
   bool have_ = false;
-  std::uint64_t last_ = 0;
+  double last_ = 0;
 };
 
 // The vehicle in lock-step: publish the state, let the loop tick, wait for its command, integrate
@@ -434,14 +437,13 @@ struct Vehicle {
   std::uint64_t lose_peer_at = ~std::uint64_t{0};  // from this tick on the link reports the peer lost
 
   void Run() {
-    robot::AuvSensorSample s = Sample(0);
+    AuvSample s = Sample(0);
     for (std::uint64_t k = 0; k < ticks; ++k) {
       if (k < publish_until) {
-        s.tick = k;
-        s.stamp_ns = static_cast<std::int64_t>(k) * 100000000;
-        s.x_m = x;
-        s.y_m = y;
-        s.yaw_rad = robot::WrapAngleRad(yaw);
+        s["tick"] = static_cast<double>(k);
+        s["x_m"] = x;
+        s["y_m"] = y;
+        s["yaw_rad"] = robot::WrapAngleRad(yaw);
         link.samples.Put(s);
       }
       if (k == lose_peer_at) link.peer_lost.store(true);
@@ -533,7 +535,7 @@ TEST_CASE("auv control loop: free-running clock - SIGTERM sends the safe command
   std::thread vehicle([&] {  // publishes every 2 ms on its own, not in lock-step
     std::uint64_t k = 0;
     while (!done.load()) {
-      robot::AuvSensorSample s = Sample(++k);
+      AuvSample s = Sample(++k);
       link.samples.Put(s);
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }

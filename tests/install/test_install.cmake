@@ -33,7 +33,7 @@ set(profile ${WORK}/prefix/share/pbppo-rt/dds_profile.xml)
 if(NOT EXISTS ${profile})
   message(FATAL_ERROR "not installed: share/pbppo-rt/dds_profile.xml")
 endif()
-execute_process(COMMAND ${WORK}/build/consumer_dds ${profile} 231 TIMEOUT 60
+execute_process(COMMAND ${WORK}/build/consumer_dds ${SOURCE_DIR}/models/auv/robot.yaml ${profile} 231 TIMEOUT 60
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "consumer_dds failed (${rc}):\n${out}\n${err}")

@@ -16,6 +16,7 @@ hil=$1 op=$2 cyclone=$3 src=$4 work=$5
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 blob=policies/frozen/quadruped_walk/flat.blob
+robot=models/quadruped/robot.yaml
 domain=$((30 + $$ % 150))
 cat > "$work/short.yaml" <<'YAML'
 stream: velocity_command
@@ -26,20 +27,26 @@ phases:
 YAML
 
 echo "== 1: bad arguments and files"
-rc=0; "$op" >"$work/a1.log" 2>&1 || rc=$?
+rc=0; "$op" --robot "$robot" >"$work/a1.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "no --schedule: exit $rc"
 expect "$work/a1.log" "schedule"
-rc=0; "$op" --schedule "$work/short.yaml" --dds-naming ros >"$work/a2.log" 2>&1 || rc=$?
+rc=0; "$op" --schedule "$work/short.yaml" >"$work/a0.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "no --robot: exit $rc"
+expect "$work/a0.log" "--robot is required"
+rc=0; "$op" --robot models/quadruped/robot.yaml --schedule models/auv/layouts/easy.yaml >"$work/a6.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "a file that is no schedule: exit $rc"
+expect "$work/a6.log" "easy.yaml"
+rc=0; "$op" --robot "$robot" --schedule "$work/short.yaml" --dds-naming ros >"$work/a2.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "--dds-naming ros: exit $rc"
 expect "$work/a2.log" "naming 'ros'"
-rc=0; "$op" --schedule "$work/none.yaml" >"$work/a3.log" 2>&1 || rc=$?
+rc=0; "$op" --robot "$robot" --schedule "$work/none.yaml" >"$work/a3.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "a missing schedule: exit $rc"
 expect "$work/a3.log" "none.yaml"
 sed 's/command_vx: 0.5/command_vx: 5.0/' "$work/short.yaml" > "$work/fast.yaml"
-rc=0; "$op" --schedule "$work/fast.yaml" >"$work/a4.log" 2>&1 || rc=$?
+rc=0; "$op" --robot "$robot" --schedule "$work/fast.yaml" >"$work/a4.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "a command beyond the field's bounds: exit $rc"
 expect "$work/a4.log" "command_vx"
-rc=0; "$op" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 1 >"$work/a5.log" 2>&1 || rc=$?
+rc=0; "$op" --robot "$robot" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 1 >"$work/a5.log" 2>&1 || rc=$?
 [ "$rc" -eq 1 ] || fail "no controller: exit $rc"
 expect "$work/a5.log" "no controller on DDS domain $domain"
 
@@ -48,11 +55,11 @@ echo "== 2: walking on commands sent over DDS (ROS 2 names)"
   --report "$work/walk.json" >"$work/hil.log" 2>&1 &
 hpid=$!
 rc=0
-"$op" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 >"$work/op.log" 2>&1 || rc=$?
+"$op" --robot "$robot" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 >"$work/op.log" 2>&1 || rc=$?
 hrc=0; wait $hpid || hrc=$?
 [ "$rc" -eq 0 ] || { cat "$work/op.log"; fail "pbppo-operator exited $rc"; }
 [ "$hrc" -eq 0 ] || { cat "$work/hil.log"; fail "pbppo-hil exited $hrc"; }
-expect "$work/op.log" "status t=.*run, nominal, commands [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
+expect "$work/op.log" "status t=.*run, nominal, velocity_command [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
 expect "$work/op.log" "status t=.*run, safe-stop"
 expect "$work/op.log" "last status .*(safe-stop|e-stop)"
 python3 - "$work/walk.json" <<'PY'
@@ -70,7 +77,7 @@ echo "== 3: native names do not reach a controller with ROS 2's"
 "$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 4 \
   >"$work/hil3.log" 2>&1 &
 hpid=$!
-rc=0; "$op" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 3 >"$work/op3.log" 2>&1 || rc=$?
+rc=0; "$op" --robot "$robot" --schedule "$work/short.yaml" --domain "$domain" --peer-timeout-s 3 >"$work/op3.log" 2>&1 || rc=$?
 wait $hpid || true
 [ "$rc" -eq 1 ] || { cat "$work/op3.log"; fail "a native operator reached a ROS 2 controller (exit $rc)"; }
 echo "== 4: DDS Security: the operator with a certificate drives the robot, Cyclone without one is not seen"
@@ -81,12 +88,12 @@ tools/security/make_dds_security.sh "$sec" 'controller:rt/pbppo/quadruped/status
   --dds-security "$sec" --report "$work/secure.json" >"$work/hil4.log" 2>&1 &
 hpid=$!
 rc=0
-"$op" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 --dds-security "$sec" \
+"$op" --robot "$robot" --schedule "$work/short.yaml" --domain "$domain" --dds-naming ros2 --linger-s 3 --dds-security "$sec" \
   >"$work/op4.log" 2>&1 || rc=$?
 hrc=0; wait $hpid || hrc=$?
 [ "$rc" -eq 0 ] || { cat "$work/op4.log"; fail "the secured pbppo-operator exited $rc"; }
 [ "$hrc" -eq 0 ] || { cat "$work/hil4.log"; fail "the secured pbppo-hil exited $hrc"; }
-expect "$work/op4.log" "status t=.*run, nominal, commands [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
+expect "$work/op4.log" "status t=.*run, nominal, velocity_command [0-9]+, in force \(0\.50, 0\.00, 0\.00\)"
 "$hil" quadruped --in-process --policy "$blob" --operator dds --domain "$domain" --dds-naming ros2 --duration 6 \
   --dds-security "$sec" --report "$work/intruded.json" >"$work/hil5.log" 2>&1 &
 hpid=$!

@@ -1,6 +1,6 @@
 // The AUV HIL simulator as a separate process (`pbppo-hil auv`) driven over DDS by a scripted
-// controller in this test through dds::AuvDdsLink (controller side), on the loopback profile
-// models/dds_profile.xml and a domain of this test's own.
+// controller in this test through the robot's DDS transport as its robot file declares it
+// (dds::DdsLink, the robot's side), on the robot's loopback profile and a domain of this test's own.
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -12,13 +12,16 @@
 #include <chrono>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "runtime/transport/dds/auv_dds_link.hpp"
+#include "runtime/core/clock.hpp"
+#include "runtime/transport/dds/dds_link.hpp"
 #include "tests/support/dds_domain.hpp"
+#include "tests/support/robot_models.hpp"
 
 extern char** environ;
 
@@ -74,41 +77,55 @@ struct Hil {
   }
 };
 
-std::unique_ptr<dds::AuvDdsLink> Controller(int domain) {
-  dds::AuvDdsOptions o;
-  o.profile_file = test::DdsProfile();
-  o.domain_id = domain;
-  auto r = dds::AuvDdsLink::Create(dds::AuvDdsRole::kController, o);
-  REQUIRE_MESSAGE(r.ok(), r.error().message);
-  return std::move(*r);
-}
+// The robot's side of the AUV's DDS transport: the sensor sample in, commands out (the writer
+// thread), as pbppo-controller opens it.
+struct Controller {
+  std::unique_ptr<dds::DdsLink> link;
+  std::size_t sensor = 0, command = 0;
+  std::optional<dds::DdsSample> sample, out;
+  std::uint64_t version = 0;
+  explicit Controller(int domain) {
+    dds::DdsLinkOptions o;
+    o.domain_id = domain;
+    auto r = dds::DdsLink::Open(test::AuvRobot(), "dds", dds::DdsSide::kRobot, o);
+    REQUIRE_MESSAGE(r.ok(), r.error().message);
+    link = std::move(*r);
+    sensor = link->MessageIndex("sensor_state").value();
+    command = link->MessageIndex("command").value();
+    sample.emplace(link->message(sensor).type);
+    out.emplace(link->message(command).type);
+  }
+  double In(const char* leaf) const { return sample->Get(leaf).value(); }
+  // Waits for a sample newer than the last one read; false on timeout.
+  bool Next(std::int64_t timeout_ns) {
+    dds::DdsReader& r = *link->reader(sensor);
+    if (!r.WaitNewer(version, timeout_ns)) return false;
+    version = r.Read(sample->bytes(), nullptr);
+    return true;
+  }
+  void Send(double tick, double answers, double v, double w) {
+    REQUIRE(out->Set("tick", tick).ok());
+    REQUIRE(out->Set("answers", answers).ok());
+    REQUIRE(out->Set("surge_speed_mps", v).ok());
+    REQUIRE(out->Set("yaw_rate_radps", w).ok());
+    REQUIRE(link->writer(command)->Push(out->bytes()));
+  }
+  std::int32_t matched_writers() const { return link->reader(sensor)->matched_writers(); }
+  std::int32_t matched_readers() const { return link->writer(command)->matched_readers(); }
+  std::int64_t last_receive_age_ns() const { return MonotonicNs() - link->reader(sensor)->last_receive_ns(); }
+};
 
 // Lock-step scripted controller: answers every new sample with 1 m/s and a yaw rate turning
 // towards the target (a pure function of the sample, so runs repeat exactly) until the
-// vehicle's episode ends or `max_ticks` samples were answered. Returns the last sample.
-robot::AuvSensorSample Drive(dds::AuvDdsLink& link, std::uint64_t max_ticks, bool send_stray_first) {
-  REQUIRE(link.WaitForPeer(20 * kSecond));
-  if (send_stray_first) {
-    robot::AuvCommand stray;
-    stray.answers = 999'999;  // answers no sample: the simulator must ignore it
-    stray.surge_speed_mps = 1.5;
-    stray.yaw_rate_radps = -0.5;
-    REQUIRE(link.PushCommand(stray));
-  }
-  std::uint64_t version = 0;
-  dds::AuvSensorInput in;
+// vehicle's episode ends or `max_ticks` samples were answered. The last sample stays in c.sample.
+void Drive(Controller& c, std::uint64_t max_ticks, bool send_stray_first) {
+  REQUIRE(c.link->WaitForPeer(20 * kSecond));
+  if (send_stray_first) c.Send(0, 999'999, 1.5, -0.5);  // answers no sample: the simulator must ignore it
   for (std::uint64_t k = 0;; ++k) {
-    REQUIRE_MESSAGE(link.WaitForSample(version, 10 * kSecond), "no sample after tick ", k);
-    version = link.ReadSample(&in);
-    REQUIRE(in.flags == 0);
-    REQUIRE(in.value.tick == k);  // lock-step: one sample per answered tick, none skipped
-    if (in.value.episode_end || k >= max_ticks) return in.value;
-    robot::AuvCommand c;
-    c.tick = k + 1;
-    c.answers = in.value.tick;
-    c.surge_speed_mps = 1.0;
-    c.yaw_rate_radps = std::clamp(in.value.target_bearing_rad, -0.5, 0.5);
-    REQUIRE(link.PushCommand(c));
+    REQUIRE_MESSAGE(c.Next(10 * kSecond), "no sample after tick ", k);
+    REQUIRE(c.In("tick") == static_cast<double>(k));  // lock-step: one sample per answered tick, none skipped
+    if (c.In("episode_end") != 0 || k >= max_ticks) return;
+    c.Send(static_cast<double>(k + 1), c.In("tick"), 1.0, std::clamp(c.In("target_bearing_rad"), -0.5, 0.5));
   }
 }
 
@@ -124,9 +141,9 @@ TEST_CASE("auv hil: lock-step runs with the same seed give identical trajectorie
     Hil hil({"--layout", "easy", "--seed", "7", "--lockstep", "--domain", std::to_string(domain), "--max-time", "30",
              "--trajectory", csv[run], "--events", events},
             dir + "/hil" + std::to_string(run) + ".log");
-    auto link = Controller(domain);
-    const robot::AuvSensorSample last = Drive(*link, 100000, /*send_stray_first=*/run == 1);
-    CHECK(last.episode_end);
+    Controller c(domain);
+    Drive(c, 100000, /*send_stray_first=*/run == 1);
+    CHECK(c.In("episode_end") == 1);
     REQUIRE_MESSAGE(hil.Wait() == 0, ReadFile(hil.log));
     const std::string log = ReadFile(hil.log);
     INFO(log);
@@ -154,19 +171,17 @@ TEST_CASE("auv hil: a killed simulator is seen by the controller as a lost peer 
   const std::string dir = test::ScratchDir("auv_hil_kill");
   const int domain = test::TestDomain(30);
   Hil hil({"--layout", "easy", "--seed", "1", "--domain", std::to_string(domain)}, dir + "/hil.log");
-  auto link = Controller(domain);
-  Drive(*link, 20, false);
-  CHECK(link->Peer().matched_writers == 1);
+  Controller c(domain);
+  Drive(c, 20, false);
+  CHECK(c.matched_writers() == 1);
   kill(hil.pid, SIGKILL);
   CHECK(hil.Wait() == 128 + SIGKILL);
   // No goodbye from a killed process: the participant's lease (2 s in the profile) runs out.
   const std::int64_t end = MonotonicNs() + 8 * kSecond;
-  while (link->Peer().matched_writers > 0 && MonotonicNs() < end)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  const dds::AuvPeerView p = link->Peer();
-  CHECK(p.matched_writers == 0);
-  CHECK(p.matched_readers == 0);
-  CHECK(p.last_receive_age_ns > kSecond);
+  while (c.matched_writers() > 0 && MonotonicNs() < end) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  CHECK(c.matched_writers() == 0);
+  CHECK(c.matched_readers() == 0);
+  CHECK(c.last_receive_age_ns() > kSecond);
 }
 
 TEST_CASE("auv hil: SIGTERM ends a run cleanly with its outputs written") {
@@ -176,8 +191,8 @@ TEST_CASE("auv hil: SIGTERM ends a run cleanly with its outputs written") {
   Hil hil(
       {"--layout", "hard", "--seed", "3", "--domain", std::to_string(domain), "--trajectory", csv, "--events", events},
       dir + "/hil.log");
-  auto link = Controller(domain);
-  Drive(*link, 15, false);
+  Controller c(domain);
+  Drive(c, 15, false);
   kill(hil.pid, SIGTERM);
   REQUIRE_MESSAGE(hil.Wait() == 0, ReadFile(hil.log));
   CHECK(ReadFile(hil.log).find("stopped") != std::string::npos);
@@ -216,26 +231,21 @@ TEST_CASE("auv hil: real-time mode runs at the control period, applies commands 
   Hil hil({"--layout", "hard", "--seed", "2", "--realtime", "--domain", std::to_string(domain), "--max-time", "1.5",
            "--trajectory", csv, "--plot", png},
           dir + "/hil.log");
-  auto link = Controller(domain);
-  REQUIRE(link->WaitForPeer(20 * kSecond));
-  std::uint64_t version = 0, samples = 0;
-  dds::AuvSensorInput in;
+  Controller c(domain);
+  REQUIRE(c.link->WaitForPeer(20 * kSecond));
+  std::uint64_t samples = 0;
   const std::int64_t t0 = MonotonicNs();
   std::int64_t t_end = t0;
-  while (link->WaitForSample(version, 5 * kSecond)) {
-    version = link->ReadSample(&in);
+  while (c.Next(5 * kSecond)) {
     ++samples;
-    robot::AuvCommand c;
-    c.answers = in.value.tick;
-    c.surge_speed_mps = 0.5;
-    REQUIRE(link->PushCommand(c));
-    if (in.value.episode_end) {
+    c.Send(0, c.In("tick"), 0.5, 0.0);
+    if (c.In("episode_end") != 0) {
       t_end = MonotonicNs();
       break;
     }
   }
-  REQUIRE(in.value.episode_end);
-  CHECK(in.value.tick == 15);
+  REQUIRE(c.In("episode_end") == 1);
+  CHECK(c.In("tick") == 15);
   // Paced by the wall clock: 15 periods of 0.1 s after the first sample.
   const double wall_s = static_cast<double>(t_end - t0) * 1e-9;
   CHECK(wall_s > 1.3);

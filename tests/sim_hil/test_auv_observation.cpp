@@ -1,15 +1,14 @@
-// Training and deployment build the AUV observation by one code path: an AuvSensorSample filled
-// from the task's state (what the HIL publishes), mapped onto the robot's fields as the
-// controller's transport does (firmware/auv) and run through the robot's signals, gives the task's
-// own observation.
+// Training and deployment build the AUV observation by one code path: the robot's sensor fields
+// filled from the task's state as the HIL publishes them (sonar ranges as the wire's floats) and
+// run through the robot's signals give the task's own observation.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include "firmware/auv/auv_transport.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/signals.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
@@ -19,21 +18,28 @@ using namespace pbppo;
 
 namespace {
 
-robot::AuvSensorSample SampleOf(const sim::AuvNavTask& t, bool episode_end) {
+double& Field(std::vector<double>& fields, const std::string& name) {
+  const int k = test::AuvRobot().FieldIndex(name);
+  REQUIRE_MESSAGE(k >= 0, name);
+  return fields[static_cast<std::size_t>(k)];
+}
+
+// The sample of the task's vehicle as the robot's fields, with its sonar as the wire's floats.
+void SampleOf(const sim::AuvNavTask& t, bool episode_end, std::vector<double>& f) {
   const sim::AuvState& s = t.vehicle();
-  robot::AuvSensorSample a;
-  a.x_m = s.x_m;
-  a.y_m = s.y_m;
-  a.depth_m = -s.z_m;
-  a.yaw_rad = robot::WrapAngleRad(s.yaw_rad);
-  a.surge_mps = s.u_mps;
-  a.sway_mps = s.v_mps;
-  a.yaw_rate_radps = s.r_radps;
-  a.sonar_beams = static_cast<std::uint32_t>(t.sonar_ranges().size());
-  for (std::size_t i = 0; i < t.sonar_ranges().size(); ++i) a.sonar_m[i] = static_cast<float>(t.sonar_ranges()[i]);
-  a.target_index = t.target_index();
-  a.episode_end = episode_end;
-  return a;
+  std::fill(f.begin(), f.end(), 0.0);
+  Field(f, "x_m") = s.x_m;
+  Field(f, "y_m") = s.y_m;
+  Field(f, "depth_m") = -s.z_m;
+  Field(f, "yaw_rad") = robot::WrapAngleRad(s.yaw_rad);
+  Field(f, "surge_mps") = s.u_mps;
+  Field(f, "sway_mps") = s.v_mps;
+  Field(f, "yaw_rate_radps") = s.r_radps;
+  Field(f, "sonar_beams") = static_cast<double>(t.sonar_ranges().size());
+  for (std::uint32_t i = 0; i < t.sonar_ranges().size(); ++i)
+    Field(f, robot::ExpandIndex("sonar_{i}_m", i)) = static_cast<float>(t.sonar_ranges()[i]);
+  Field(f, "target_index") = t.target_index();
+  Field(f, "episode_end") = episode_end ? 1.0 : 0.0;
 }
 
 std::uint32_t UlpDistance(float a, float b) {
@@ -68,8 +74,6 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   REQUIRE_MESSAGE(program.ok(), program.error().message);
   auto builder = robot::ObservationBuilder::Create(c->io, program->names());
   REQUIRE_MESSAGE(builder.ok(), builder.error().message);
-  auto sample_fields = auv::SampleFields::Create(m);
-  REQUIRE_MESSAGE(sample_fields.ok(), sample_fields.error().message);
   REQUIRE(builder->observation_size() == n);
   std::vector<std::string> signal_of;  // the signal behind each input
   for (const auto& e : c->io.observations)
@@ -77,21 +81,20 @@ TEST_CASE("auv observation: a sensor sample of the task's state gives the task's
   REQUIRE(signal_of.size() == n);
 
   std::vector<float> task_obs(n), ctrl_obs(n);
-  std::vector<double> fields(m.fields.size(), 0.0), g(program->size());
+  std::vector<double> fields(m.fields.size(), 0.0), planned(m.fields.size(), 0.0), g(program->size());
   task->Reset(5, task_obs.data());
   std::size_t compared = 0, sonar_ulp = 0;
   for (int k = 0; k < 300; ++k) {
-    robot::AuvSensorSample s = SampleOf(*task, false);
+    SampleOf(*task, false, fields);
     const auto& t = c->layout.targets[static_cast<std::size_t>(task->target_index())];
-    s.target_x_m = t[0];
-    s.target_y_m = t[1];
-    s.target_distance_m = std::hypot(t[0] - s.x_m, t[1] - s.y_m);
-    s.target_bearing_rad = robot::WrapAngleRad(std::atan2(t[1] - s.y_m, t[0] - s.x_m) - task->vehicle().yaw_rad);
-    s.clearance_m = sim::Clearance(task->world(), s.x_m, s.y_m);
-    robot::AuvSensorSample planned;  // the route comes from the mission computer (here: the task)
-    task->FillSensorSample(planned);
-    s.route_bearing_rad = planned.route_bearing_rad;
-    sample_fields->Write(s, fields);
+    const double x = Field(fields, "x_m"), y = Field(fields, "y_m");
+    Field(fields, "target_x_m") = t[0];
+    Field(fields, "target_y_m") = t[1];
+    Field(fields, "target_distance_m") = std::hypot(t[0] - x, t[1] - y);
+    Field(fields, "target_bearing_rad") = robot::WrapAngleRad(std::atan2(t[1] - y, t[0] - x) - task->vehicle().yaw_rad);
+    Field(fields, "clearance_m") = sim::Clearance(task->world(), x, y);
+    task->FillSensorFields(planned);  // the route comes from the mission computer (here: the task)
+    Field(fields, "route_bearing_rad") = Field(planned, "route_bearing_rad");
     program->Compute(fields, {}, g.data());
     builder->Build(g.data(), k == 0, ctrl_obs.data());
     for (std::size_t i = 0; i < n; ++i) {

@@ -19,6 +19,40 @@ using namespace pbppo::sim;
 
 namespace {
 
+// The task's sensor sample (FillSensorFields: the robot model's fields), member by member.
+struct SensorSample {
+  double tick = 0, x_m = 0, y_m = 0, depth_m = 0, yaw_rad = 0, surge_mps = 0, yaw_rate_radps = 0, sonar_beams = 0,
+         target_index = 0, target_x_m = 0, target_y_m = 0, target_distance_m = 0, target_bearing_rad = 0,
+         route_bearing_rad = 0, clearance_m = 0, mission_complete = 0, episode_end = 0;
+  std::vector<double> sonar_m;
+};
+
+SensorSample Sensed(const AuvNavTask& task) {
+  const AuvFieldIndex& i = task.config().fields;
+  std::vector<double> f(i.count, 0.0);
+  task.FillSensorFields(f);
+  SensorSample s{f[i.tick],
+                 f[i.x],
+                 f[i.y],
+                 f[i.depth],
+                 f[i.yaw],
+                 f[i.surge],
+                 f[i.yaw_rate],
+                 f[i.sonar_beams],
+                 f[i.target_index],
+                 f[i.target_x],
+                 f[i.target_y],
+                 f[i.target_distance],
+                 f[i.target_bearing],
+                 f[i.route_bearing],
+                 f[i.clearance],
+                 f[i.mission_complete],
+                 f[i.episode_end],
+                 {}};
+  for (const std::uint32_t k : i.sonar) s.sonar_m.push_back(f[k]);
+  return s;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 const std::string kModel = std::string(PBPPO_SOURCE_DIR) + "/models/auv/";
 
@@ -96,9 +130,8 @@ AuvLayout Layout(const std::string& text) {
 void FlyBearing(AuvNavTask& task, std::uint64_t seed, bool by_route) {
   std::vector<float> obs(static_cast<std::size_t>(task.observation_size()));
   task.Reset(seed, obs.data());
-  pbppo::robot::AuvSensorSample s;
   for (long k = 0; k < task.max_episode_steps(); ++k) {
-    task.FillSensorSample(s);
+    const SensorSample s = Sensed(task);
     const double a = by_route ? s.route_bearing_rad : s.target_bearing_rad;
     if (task.StepCommand(1.0, std::clamp(1.5 * a, -0.5, 0.5), obs.data()).terminated) break;
   }
@@ -246,9 +279,7 @@ TEST_CASE("auv task: the clearance term charges each step inside the band, linea
     const AuvStepResult b = without.Step(ahead, o2.data());
     CHECK(o1 == o2);  // the reward only
     CHECK(b.r_clearance == 0.0);
-    pbppo::robot::AuvSensorSample sample;
-    with.FillSensorSample(sample);
-    const double c_m = sample.clearance_m;
+    const double c_m = Sensed(with).clearance_m;
     const double expected = c_m >= 1.2 + 1.5 ? 0.0 : -2.0 * std::min(1.0, 1.0 - (c_m - 1.2) / 1.5);
     CHECK(a.r_clearance == doctest::Approx(expected).epsilon(1e-12));
     CHECK(a.reward == doctest::Approx(b.reward + expected).epsilon(1e-12));
@@ -721,8 +752,7 @@ TEST_CASE("auv task: observations are the signals through the IO layout, history
   CHECK(obs[kYawRate] == doctest::Approx(std::clamp(s.r_radps / 0.6, -1.5, 1.5)).epsilon(1e-5));
   const double nearest = *std::min_element(task.sonar_ranges().begin(), task.sonar_ranges().end());
   CHECK(nearest < 15.0);  // something in range, so the element is not just its clip
-  pbppo::robot::AuvSensorSample sample;
-  task.FillSensorSample(sample);
+  const SensorSample sample = Sensed(task);
   CHECK(nearest >= sample.clearance_m);  // a range never undercuts the exact clearance
   CHECK(obs[kNearestEcho] == doctest::Approx(std::min(nearest / 5.0, 1.0)).epsilon(1e-6));
   const auto& target = c.layout.targets[static_cast<std::size_t>(task.target_index())];
@@ -780,29 +810,27 @@ TEST_CASE("auv task: StepCommand with the mapped physical command is Step bit fo
   CHECK(b.commanded_speed_mps() == 0.0);
 }
 
-TEST_CASE("auv task: FillSensorSample reports the vehicle, sonar and target the task measures") {
+TEST_CASE("auv task: FillSensorFields reports the vehicle, sonar and target the task measures") {
   AuvNavTask task = MakeTask(Config("easy"));
   std::vector<float> obs(kInputs);
   task.Reset(3, obs.data());
   for (int k = 0; k < 20; ++k) task.StepCommand(1.0, 0.2, obs.data());
-  pbppo::robot::AuvSensorSample s;
-  task.FillSensorSample(s);
+  const SensorSample s = Sensed(task);
   CHECK(s.tick == 20);
-  CHECK(s.stamp_ns == 2'000'000'000);
   CHECK(s.x_m == task.vehicle().x_m);
   CHECK(s.y_m == task.vehicle().y_m);
   CHECK(s.depth_m == doctest::Approx(5.0).epsilon(0.01));
   CHECK(s.surge_mps == task.vehicle().u_mps);
   CHECK(s.yaw_rate_radps == task.vehicle().r_radps);
   REQUIRE(s.sonar_beams == 16);
-  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == static_cast<float>(task.sonar_ranges()[i]));
+  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == task.sonar_ranges()[i]);
   CHECK(s.target_index == task.target_index());
   CHECK(s.target_distance_m == doctest::Approx(std::hypot(s.target_x_m - s.x_m, s.target_y_m - s.y_m)));
   CHECK(static_cast<float>(s.target_distance_m / 40.0) == obs[kDist]);
   CHECK(static_cast<float>(s.route_bearing_rad / kPi) == obs[kRoute]);
   CHECK(s.clearance_m > 1.2);
-  CHECK_FALSE(s.mission_complete);
-  CHECK_FALSE(s.episode_end);
+  CHECK(s.mission_complete == 0.0);
+  CHECK(s.episode_end == 0.0);
 }
 
 TEST_CASE("auv task: steering by the route bearing alone reaches every target of every charted layout") {
@@ -858,15 +886,15 @@ TEST_CASE("auv task: the sonar map takes only returns off the chart, and every e
   chart.task.route_map = AuvTaskParams::RouteMap::kChart;
   bare.task.route_map = AuvTaskParams::RouteMap::kChartAndSonar;
   AuvNavTask by_sonar = MakeTask(bare), by_chart = MakeTask(chart);
-  pbppo::robot::AuvSensorSample a, b;
+  SensorSample a, b;
   for (std::uint64_t seed : {3u, 4u}) {
     FlyBearing(by_sonar, seed, true);
     FlyBearing(by_chart, seed, true);
     CHECK(by_sonar.stats().mapped_returns == 0);
     CHECK(by_sonar.stats().steps == by_chart.stats().steps);
     CHECK(by_sonar.stats().success == by_chart.stats().success);
-    by_sonar.FillSensorSample(a);
-    by_chart.FillSensorSample(b);
+    a = Sensed(by_sonar);
+    b = Sensed(by_chart);
     CHECK(a.route_bearing_rad == b.route_bearing_rad);
     CHECK(a.x_m == b.x_m);
   }
@@ -875,7 +903,7 @@ TEST_CASE("auv task: the sonar map takes only returns off the chart, and every e
   AuvNavTask task = MakeTask(Config("hard"));
   const auto fly = [&](std::uint64_t seed) {
     FlyBearing(task, seed, true);
-    task.FillSensorSample(a);
+    a = Sensed(task);
     return std::make_tuple(task.stats().steps, task.stats().mapped_returns, a.x_m, a.y_m, a.route_bearing_rad);
   };
   const auto first = fly(7);

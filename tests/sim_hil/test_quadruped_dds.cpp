@@ -1,5 +1,5 @@
 // The quadruped driven by velocity commands over DDS while it walks in the HIL: the controller's
-// operator transport (firmware/quadruped/operator_transport.hpp) on a real Fast DDS participant,
+// operator transport (the robot file's DDS messages, dds::DdsTransport) on a real Fast DDS participant,
 // the HIL and the controller ticked in lock-step in this process at real time (the operator runs
 // on a wall clock). First an operator on Fast DDS with the project's names; then an operator
 // written against Cyclone DDS with ROS 2's names (tests/interop/cyclone_operator.c, a child
@@ -14,10 +14,11 @@
 #include <cstdlib>
 #include <string>
 #include <thread>
+#include <vector>
 
-#include "firmware/quadruped/operator_transport.hpp"
+#include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
-#include "runtime/transport/dds/operator_dds_link.hpp"
+#include "runtime/transport/dds/dds_transport.hpp"
 #include "sim_hil/quadruped_rig.hpp"
 #include "sim_hil/quadruped_scenario.hpp"
 #include "tests/support/dds_domain.hpp"
@@ -30,24 +31,23 @@ namespace {
 
 constexpr std::int64_t kSecond = 1'000'000'000;
 
-struct Controller {
-  std::unique_ptr<dds::OperatorDdsLink> link;
-  std::unique_ptr<quadruped::OperatorTransport> op;
-};
-
-Controller MakeController(dds::DdsNaming naming, int domain) {
-  dds::OperatorDdsOptions o;
-  o.profile_file = test::DdsProfile();
+dds::DdsLinkOptions Options(dds::DdsNaming naming, int domain) {
+  dds::DdsLinkOptions o;
   o.domain_id = domain;
   o.naming = naming;
-  auto l = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kController, o);
-  REQUIRE_MESSAGE(l.ok(), l.error().message);
-  Controller c;
-  c.link = std::move(*l);
-  auto t = quadruped::OperatorTransport::Create(test::QuadrupedRobot(), *c.link);
+  return o;
+}
+
+// The controller's operator transport, as pbppo-controller opens it from the robot file.
+std::unique_ptr<dds::DdsTransport> MakeController(dds::DdsNaming naming, int domain) {
+  auto t = dds::DdsTransport::Open(test::QuadrupedRobot(), "operator", Options(naming, domain));
   REQUIRE_MESSAGE(t.ok(), t.error().message);
-  c.op = std::move(*t);
-  return c;
+  return std::move(*t);
+}
+
+// Velocity command samples the controller took.
+std::uint64_t Commands(dds::DdsTransport& t) {
+  return t.link().reader(0)->counters().received;
 }
 
 std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, robot::Transport* op) {
@@ -85,14 +85,12 @@ double TrackingError(const std::vector<sim::RigSample>& trace, float command, do
 
 TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes back") {
   const int domain = test::TestDomain(41);
-  Controller ctl = MakeController(dds::DdsNaming::kNative, domain);
-  dds::OperatorDdsOptions oo;
-  oo.profile_file = test::DdsProfile();
-  oo.domain_id = domain;
-  auto opl = dds::OperatorDdsLink::Create(dds::OperatorDdsRole::kOperator, oo);
+  const robot::RobotModel& m = test::QuadrupedRobot();
+  auto ctl = MakeController(dds::DdsNaming::kNative, domain);
+  auto opl = dds::DdsLink::Open(m, "operator", dds::DdsSide::kPeer, Options(dds::DdsNaming::kNative, domain));
   REQUIRE_MESSAGE(opl.ok(), opl.error().message);
-  dds::OperatorDdsLink& oper = **opl;
-  REQUIRE(ctl.link->WaitForPeer(20 * kSecond));
+  dds::DdsLink& oper = **opl;
+  REQUIRE(ctl->link().WaitForPeer(20 * kSecond));
   REQUIRE(oper.WaitForPeer(20 * kSecond));
 
   auto rig = MakeRig(
@@ -100,21 +98,23 @@ TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes 
       "phases:\n"
       "  - {name: stand, duration_s: 2.0}\n"
       "  - {name: forward, duration_s: 3.5, command_vx: 0.5}\n",
-      ctl.op.get());
+      ctl.get());
   std::atomic<bool> done{false};
-  std::uint64_t published = 0;
   bool ran = false;
+  robot::Transport* published[] = {ctl.get()};
   {
-    quadruped::StatusPublisher status(*ctl.link, rig->loop(), ctl.op.get(), 50'000'000);
+    loop::StatusPublisher status(published, rig->loop(), 50'000'000);
     // The operator: stand for 2 s of its clock, then 0.5 m/s forward, at 20 Hz until the rig is done.
     std::thread oper_thread([&] {
       const auto t0 = std::chrono::steady_clock::now();
       auto next = t0;
+      dds::DdsSample c(oper.message(0).type);
+      std::vector<double> fields(m.fields.size(), 0.0);
+      const auto vx = static_cast<std::size_t>(m.FieldIndex("command_vx"));
       while (!done.load()) {
-        robot::VelocityCommand c;
-        c.seq = ++published;
-        c.vx_mps = std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2) ? 0.0 : 0.5;
-        (void)oper.PublishCommand(c);
+        fields[vx] = std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2) ? 0.0 : 0.5;
+        oper.FillFromFields(0, fields, &c);
+        (void)oper.writer(0)->Write(c.bytes());
         next += std::chrono::milliseconds(50);
         std::this_thread::sleep_until(next);
       }
@@ -130,22 +130,22 @@ TEST_CASE("velocity commands over Fast DDS drive the walk, and the status comes 
   CAPTURE(rep.phases[1].mean_measured[0]);
   CHECK_FALSE(rep.fell);
   CHECK(rep.phases[1].mean_abs_error[0] <= 0.2);
-  CHECK(ctl.op->commands() >= 50);  // 20 Hz for 5.5 s, less discovery
-  CHECK(ctl.link->command_counters().invalid == 0);
-
-  robot::QuadrupedStatus st;
-  REQUIRE(oper.ReadStatus(&st) != 0);
-  CHECK(st.phase == static_cast<std::uint8_t>(loop::Phase::kRun));
-  CHECK(st.mode == static_cast<std::uint8_t>(safety::Mode::kNominal));
-  CHECK(st.commands_received == ctl.op->commands());
-  CHECK(st.command_vx_mps == doctest::Approx(0.5));
-  CHECK(st.tick >= 5000);
+  CHECK(Commands(*ctl) >= 50);  // 20 Hz for 5.5 s, less discovery
+  CHECK(ctl->link().counters().malformed == 0);
+  // The status the operator reads back.
+  dds::DdsSample st(oper.message(1).type);
+  REQUIRE(oper.reader(1)->Read(st.bytes(), nullptr) != 0);
+  CHECK(st.Get("phase").value() == static_cast<double>(loop::Phase::kRun));
+  CHECK(st.Get("mode").value() == static_cast<double>(safety::Mode::kNominal));
+  CHECK(st.Get("commands_received").value() == static_cast<double>(Commands(*ctl)));
+  CHECK(st.Get("command_vx_mps").value() == doctest::Approx(0.5));
+  CHECK(st.Get("tick").value() >= 5000);
 }
 
 TEST_CASE(
     "a Cyclone DDS operator with ROS 2 names drives the walk, reads the status, and its silence stops the robot") {
   const int domain = test::TestDomain(42);
-  Controller ctl = MakeController(dds::DdsNaming::kRos2, domain);
+  auto ctl = MakeController(dds::DdsNaming::kRos2, domain);
   // Cyclone on the loopback interface, discovery by unicast to 127.0.0.1 like the Fast DDS profile.
   setenv("CYCLONEDDS_URI",
          "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
@@ -155,17 +155,18 @@ TEST_CASE(
   const std::string cmd = std::string(PBPPO_CYCLONE_OPERATOR) + " " + std::to_string(domain) + " 0.5 5.0 3.0 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   REQUIRE(child != nullptr);
-  const bool matched = ctl.link->WaitForPeer(30 * kSecond);  // its writer and reader discovered
+  const bool matched = ctl->link().WaitForPeer(30 * kSecond);  // its writer discovered
   std::string out;
   if (matched) {
     auto rig = MakeRig(
         "stream: velocity_command\n"
         "phases:\n"
         "  - {name: operator, duration_s: 7.0}\n",
-        ctl.op.get());
+        ctl.get());
     bool ran = false;
+    robot::Transport* published[] = {ctl.get()};
     {
-      quadruped::StatusPublisher status(*ctl.link, rig->loop(), ctl.op.get(), 50'000'000);
+      loop::StatusPublisher status(published, rig->loop(), 50'000'000);
       ran = rig->RunSchedule();
     }
     CHECK(ran);
@@ -190,7 +191,7 @@ TEST_CASE(
         break;
       }
     CHECK(safe_stop);
-    CHECK(ctl.op->commands() >= 40);
+    CHECK(Commands(*ctl) >= 40);
   }
   char line[512];
   while (std::fgets(line, sizeof line, child) != nullptr) out += line;

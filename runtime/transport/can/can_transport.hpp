@@ -63,6 +63,7 @@ class CanTransport final : public robot::Transport {
   // The frames the next Read waits for on each bus, instead (a test driving both sides).
   void Expect(std::span<const std::uint32_t> per_bus) noexcept;
   void Stop();  // flushes the candump log
+  void Finish(const robot::ControllerStatus&) override { Stop(); }
 
   std::size_t bus_count() const noexcept { return buses_.size(); }
   const BusStats& bus_stats(std::size_t bus) const noexcept { return buses_[bus]->stats(); }

@@ -3,7 +3,8 @@
 #include <set>
 #include <sstream>
 
-#include "runtime/transport/dds/dds_endpoint_impl.hpp"
+#include "runtime/transport/dds/cdr_type.hpp"
+#include "runtime/transport/dds/dds_internal.hpp"
 #include "runtime/transport/dds/dds_security.hpp"
 
 namespace pbppo::dds {
@@ -59,8 +60,8 @@ std::string WireTopic(DdsNaming naming, const std::string& topic) {
   return naming == DdsNaming::kRos2 ? "rt/" + topic : topic;
 }
 
-std::string WireTypeName(DdsNaming naming, const std::string& ros2_message) {
-  return naming == DdsNaming::kRos2 ? "pbppo_msgs::msg::dds_::" + ros2_message + "_" : std::string();
+std::string WireTypeName(DdsNaming naming, const std::string& idl_name, const std::string& ros2_message) {
+  return naming == DdsNaming::kRos2 ? "pbppo_msgs::msg::dds_::" + ros2_message + "_" : idl_name;
 }
 
 DdsParticipant::Impl::~Impl() {
@@ -69,11 +70,12 @@ DdsParticipant::Impl::~Impl() {
   fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
 }
 
-fdds::Topic* DdsParticipant::Impl::TopicFor(const std::string& name, fdds::TypeSupport type,
+fdds::Topic* DdsParticipant::Impl::TopicFor(const std::string& name, const robot::IdlMessage& message,
                                             const std::string& type_name) {
   std::lock_guard<std::mutex> lk(topics_mu);
   if (const auto it = topics.find(name); it != topics.end()) return it->second;
-  const std::string registered = type_name.empty() ? type.get_type_name() : type_name;
+  const std::string registered = type_name.empty() ? message.type_name : type_name;
+  fdds::TypeSupport type(new CdrTopicType(registered, message));
   if (type.register_type(participant, registered) != ReturnCode_t::RETCODE_OK) return nullptr;
   fdds::Topic* t = participant->create_topic(name, registered, fdds::TOPIC_QOS_DEFAULT);
   if (t != nullptr) topics[name] = t;

@@ -1,43 +1,54 @@
-// A user's controller project using the installed DDS transport: a controller link and a vehicle
-// link in one process (the installed profile, a domain of its own) exchange a sample and a command.
+// A user's controller project using the installed runtime: a robot loaded from its robot file, its
+// DDS transport opened through the transport table (pbppo::transports) as a controller does, and
+// the robot's peer (a vehicle) in the same process on the installed profile and a domain of its own:
+// a sensor sample in, a command out.
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
-#include "runtime/transport/dds/auv_dds_link.hpp"
+#include "runtime/robot/robot_data.hpp"
+#include "runtime/transport/bindings.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 3) return 2;
-  using namespace pbppo::dds;
-  AuvDdsOptions o;
-  o.profile_file = argv[1];
-  o.domain_id = std::atoi(argv[2]);
-  auto controller = AuvDdsLink::Create(AuvDdsRole::kController, o);
-  auto vehicle = AuvDdsLink::Create(AuvDdsRole::kVehicle, o);
+  if (argc != 4) return 2;
+  using namespace pbppo;
+  auto robot = robot::LoadRobotModel(argv[1]);
+  if (!robot) {
+    std::fprintf(stderr, "consumer_dds: %s\n", robot.error().message.c_str());
+    return 1;
+  }
+  const robot::RobotModel& m = *robot;
+  transport::Settings settings;
+  settings.dds.profile_file = argv[2];
+  settings.dds.domain_id = std::atoi(argv[3]);
+  auto controller = transport::Open(m, m.transports[0], settings);
+  auto vehicle = dds::DdsLink::Open(m, m.transports[0].name, dds::DdsSide::kPeer, settings.dds);
   if (!controller || !vehicle) {
-    std::fprintf(stderr, "consumer_dds: %s\n", (!controller ? controller : vehicle).error().message.c_str());
+    std::fprintf(stderr, "consumer_dds: %s\n", (!controller ? controller.error() : vehicle.error()).message.c_str());
     return 1;
   }
   constexpr std::int64_t kTimeout = 10'000'000'000;
-  if (!(*controller)->WaitForPeer(kTimeout) || !(*vehicle)->WaitForPeer(kTimeout)) {
-    std::fprintf(stderr, "consumer_dds: the links did not discover each other\n");
+  if (!(*controller)->Connect(kTimeout) || !(*vehicle)->WaitForPeer(kTimeout)) {
+    std::fprintf(stderr, "consumer_dds: the two sides did not discover each other\n");
     return 1;
   }
-  pbppo::robot::AuvSensorSample s;
-  s.tick = 7;
-  s.sonar_beams = 16;
-  for (float& r : s.sonar_m) r = 15.0f;
-  if (auto st = (*vehicle)->PublishSample(s); !st) return 1;
-  if (!(*controller)->WaitForSample(0, kTimeout)) return 1;
-  AuvSensorInput in;
-  (*controller)->ReadSample(&in);
-  pbppo::robot::AuvCommand c;
-  c.answers = in.value.tick;
-  c.surge_speed_mps = 0.5;
-  if (!(*controller)->PushCommand(c)) return 1;
-  AuvCommandInput got;
-  if (!(*vehicle)->WaitForCommand(&got, kTimeout)) return 1;
-  std::printf("consumer_dds: sample tick %llu (flags %u) -> command v = %g answering tick %llu\n",
-              static_cast<unsigned long long>(in.value.tick), in.flags, got.value.surge_speed_mps,
-              static_cast<unsigned long long>(got.value.answers));
-  return got.value.answers == 7 && got.value.surge_speed_mps == 0.5 ? 0 : 1;
+  // The vehicle sends its sensor stream's fields (tick 7, 16 sonar beams at 15 m).
+  robot::RobotData data = robot::MakeRobotData(m);
+  std::vector<double> fields(m.fields.size(), 15.0);
+  fields[static_cast<std::size_t>(m.FieldIndex("tick"))] = 7;
+  fields[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
+  dds::DdsSample sample((*vehicle)->message(0).type);
+  (*vehicle)->FillFromFields(0, fields, &sample);
+  if (!(*vehicle)->writer(0)->Write(sample.bytes())) return 1;
+  std::uint64_t version = 0;
+  if (!(*controller)->WaitForSample(0, &version, kTimeout)) return 1;
+  (*controller)->Read(m, data);
+  data.command[static_cast<std::size_t>(m.CommandIndex("surge_speed"))] = 0.5;
+  (*controller)->Write(m, data);
+  dds::DdsSample got((*vehicle)->message(1).type);
+  if (!(*vehicle)->reader(1)->WaitPop(got.bytes(), nullptr, kTimeout)) return 1;
+  const double answers = got.Get("answers").value(), v = got.Get("surge_speed_mps").value();
+  std::printf("consumer_dds: sample tick %g -> command v = %g answering tick %g\n",
+              data.fields[static_cast<std::size_t>(m.FieldIndex("tick"))], v, answers);
+  return answers == 7 && v == 0.5 ? 0 : 1;
 }

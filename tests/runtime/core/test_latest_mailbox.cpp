@@ -1,6 +1,7 @@
-// LatestMailbox (triple buffer) and SpscQueue: single-thread semantics, and two threads hammering
-// them: a reader never sees a value mixed from two writes, versions only grow, the queue delivers
-// every pushed item in order or counts it as dropped.
+// LatestMailbox (triple buffer) and SpscQueue, and their run-time sized forms (ByteMailbox,
+// ByteQueue): single-thread semantics, and two threads hammering them: a reader never sees a value
+// mixed from two writes, versions only grow, the queue delivers every pushed item in order or
+// counts it as dropped.
 #include <doctest/doctest.h>
 
 #include <array>
@@ -146,4 +147,42 @@ TEST_CASE("spsc queue: two threads, every item in order or counted as dropped") 
   CHECK(out_of_order == 0);
   CHECK(popped == pushed);
   CHECK(pushed + q.dropped() == kItems);
+}
+
+TEST_CASE("byte records: a mailbox and a queue of records sized at run time, with their stamps") {
+  // 301 bytes (an odd size, as a message's CDR sample may be): the records never overlap.
+  constexpr std::size_t kBytes = 301;
+  ByteMailbox box(kBytes);
+  CHECK(box.record_size() == kBytes);
+  std::array<std::byte, kBytes> in{}, out{};
+  std::int64_t stamp = -1;
+  CHECK(box.Read(out.data(), &stamp) == 0);
+  CHECK(stamp == -1);
+  std::uint64_t wrong = 0, allocations = 0;
+  {
+    AllocationScope scope;
+    for (std::uint64_t i = 1; i <= 1000; ++i) {
+      in.fill(static_cast<std::byte>(i & 0xff));
+      CHECK(box.Write(in.data(), static_cast<std::int64_t>(i) * 7) == i);
+      if (box.Read(out.data(), &stamp) != i || out != in || stamp != static_cast<std::int64_t>(i) * 7) ++wrong;
+    }
+    allocations = scope.count();
+  }
+  CHECK(wrong == 0);
+  CHECK(allocations == 0);
+
+  ByteQueue q(kBytes, 3);
+  CHECK(q.capacity() == 4);
+  for (std::uint64_t i = 1; i <= 6; ++i) {
+    in.fill(static_cast<std::byte>(i));
+    CHECK(q.TryPush(in.data(), static_cast<std::int64_t>(i)) == (i <= 4));
+  }
+  CHECK(q.dropped() == 2);
+  for (std::uint64_t i = 1; i <= 4; ++i) {
+    REQUIRE(q.TryPop(out.data(), &stamp));
+    CHECK(out[0] == static_cast<std::byte>(i));
+    CHECK(out[kBytes - 1] == static_cast<std::byte>(i));
+    CHECK(stamp == static_cast<std::int64_t>(i));
+  }
+  CHECK_FALSE(q.TryPop(out.data(), &stamp));
 }

@@ -40,11 +40,11 @@ const CommandSpec& Command(const RobotModel& m, const char* name) {
 }  // namespace
 
 TEST_CASE("robot model: loading a robot reads each file it names exactly once") {
-  // robot.yaml, and for the AUV the IO layout, plant, DDS profile and three layouts; for the
-  // quadruped the description, its URDF, the IO layout, the CAN map, the stand trajectory, the DDS
-  // profile and the walking task.
+  // robot.yaml, and for the AUV the IO layout, plant, DDS profile, three layouts and its three
+  // messages' IDL; for the quadruped the description, its URDF, the IO layout, the CAN map, the
+  // stand trajectory, the DDS profile, the walking task and its two messages' IDL.
   for (const auto& [robot, count] :
-       {std::pair{"models/auv/robot.yaml", 7u}, std::pair{"models/quadruped/robot.yaml", 8u}}) {
+       {std::pair{"models/auv/robot.yaml", 10u}, std::pair{"models/quadruped/robot.yaml", 10u}}) {
     CAPTURE(robot);
     const auto before = FileReads();
     const RobotModel m = Load(robot);
@@ -169,4 +169,94 @@ TEST_CASE("robot model: bad robot files are refused naming the file, the field a
         p + ": supervisor.command_limit: 'ignore' is not count or degraded");
   CHECK(err("robot: auv", "robot: auv\nwheels: 4") == p + ": wheels: unknown field");
   CHECK(LoadRobotModel(dir + "/none.yaml").error().message == dir + "/none.yaml: cannot open");
+}
+
+TEST_CASE("robot model: DDS messages - declared once in IDL, mapped onto fields and commands by the robot file") {
+  const RobotModel& auv = test::AuvRobot();
+  REQUIRE(auv.transports.size() == 1);
+  const TransportSpec& t = auv.transports[0];
+  CHECK(t.dds.topic_prefix == "pbppo/auv/");
+  CHECK(t.dds.wait_for_peer);
+  REQUIRE(t.dds.messages.size() == 3);
+  const DdsMessageSpec& sensor = t.dds.messages[0];
+  CHECK(sensor.direction == MessageDirection::kIn);
+  CHECK(sensor.type.type_name == "pbppo_idl::auv::SensorState");
+  CHECK(sensor.type_stem == "AuvSensorState");
+  CHECK(sensor.stream == static_cast<std::uint32_t>(auv.StreamIndex("sensor")));
+  // Every field of the stream from one member: by name, the sonar's by the robot file's pattern.
+  CHECK(sensor.fields.size() == auv.streams[sensor.stream].field_count);
+  for (const FieldLeaf& fl : sensor.fields) {
+    const std::string &field = auv.fields[fl.field].name, &leaf = sensor.type.leaves[fl.leaf].path;
+    if (field.rfind("sonar_", 0) == 0 && field != "sonar_beams")
+      CHECK(leaf == "sonar_m[" + field.substr(6, field.size() - 8) + "]");
+    else
+      CHECK(leaf == field);
+  }
+  CHECK(sensor.lost_after_s == 2.0);
+  const DdsMessageSpec& command = t.dds.messages[1];
+  CHECK(command.direction == MessageDirection::kOut);
+  REQUIRE(command.values.size() == 6);
+  const LeafValue& answers = command.values[2];
+  CHECK(command.type.leaves[answers.leaf].path == "answers");
+  REQUIRE(answers.terms.size() == 1);
+  CHECK(answers.terms[0].kind == ValueTerm::Kind::kField);
+  CHECK(answers.terms[0].index == static_cast<std::uint32_t>(auv.FieldIndex("tick")));
+  const DdsMessageSpec& status = t.dds.messages[2];
+  CHECK(status.direction == MessageDirection::kStatus);
+  const LeafValue& limited = status.values[6];
+  CHECK(status.type.leaves[limited.leaf].path == "limited_commands");
+  REQUIRE(limited.terms.size() == 2);
+  CHECK(limited.terms[0].kind == ValueTerm::Kind::kCount);
+  CHECK(limited.terms[1].index == static_cast<std::uint32_t>(safety::Cause::kRateLimit));
+  CHECK(auv.lockstep_stream == auv.StreamIndex("sensor"));
+  CHECK(auv.lockstep_end_field == auv.FieldIndex("episode_end"));
+  // The quadruped's operator: only for a policy, volatile, what an operator writes besides.
+  const TransportSpec& op = test::QuadrupedRobot().transports[1];
+  CHECK(op.policy_only);
+  CHECK_FALSE(op.dds.messages[0].transient_local);
+  REQUIRE(op.dds.messages[0].peer.size() == 2);
+  CHECK(op.dds.messages[0].peer[0].kind == PeerLeaf::Kind::kSequence);
+}
+
+TEST_CASE("robot model: bad DDS message declarations are refused naming the message, the member and the field") {
+  const test::RobotFileEdits edits("auv", "robot_model_dds");
+  const std::string& p = edits.path();
+  auto err = [&](const std::string& from, const std::string& to) { return edits.Error(from, to); };
+  const std::string m0 = p + ": transports[0].messages[0]", m1 = p + ": transports[0].messages[1]";
+  CHECK(err("\"sonar_m[{i}]\"", "\"sonar[{i}]\"") ==
+        m0 + ".fields.sonar_{i}_m: 'sonar[0]' is not a member of pbppo_idl::auv::SensorState");
+  CHECK(err("{\"sonar_{i}_m\": \"sonar_m[{i}]\"}", "{}") ==
+        m0 + ": field 'sonar_0_m' of stream 'sensor' is filled by no member of pbppo_idl::auv::SensorState (name it "
+             "under fields)");
+  CHECK(err("{\"sonar_{i}_m\": \"sonar_m[{i}]\"}", "{\"sonar_{i}_m\": \"sonar_m[{i}]\", sonar_0_m: x_m}") ==
+        m0 + ".fields.sonar_0_m: field 'sonar_0_m' is filled twice");
+  CHECK(err("stream: sensor                 #", "stream: sonar                 #") ==
+        m0 + ".stream: 'sonar' is not a stream of the robot");
+  CHECK(err("direction: in", "direction: sideways") == m0 + ".direction: 'sideways' is not in, out or status");
+  CHECK(err("idl: idl/AuvSensorState.idl", "idl: idl/Gone.idl") ==
+        m0 + ".idl: " + edits.dir() + "/idl/Gone.idl: cannot open");
+  CHECK(err("idl: idl/AuvSensorState.idl", "idl: idl/AuvSensorState.idl\n        type: pbppo_idl::auv::Nothing")
+            .find(m0 + ".idl: AuvSensorState.idl: no struct 'pbppo_idl::auv::Nothing' (known: ") == 0);
+  CHECK(err("answers: field.tick", "answers: field.tock") ==
+        m1 + ".values.answers: 'field.tock' is not a value (a number, tick, mode, clock_ns, sequence, command.<name>, "
+             "field.<name>, samples.<stream>; in status messages also phase, cause, count.<cause>, deadline_misses, "
+             "tick_median_us, tick_max_us)");
+  CHECK(err("answers: field.tick", "answers: deadline_misses") ==
+        m1 + ".values.answers: 'deadline_misses' is the controller's status: only status messages carry it");
+  CHECK(err("answers: field.tick", "answer: field.tick") ==
+        m1 + ".values.answer: 'answer' is not a member of pbppo_idl::auv::Command");
+  CHECK(err("        lost_after_s: 2.0", "        lost_after_s: 2.0\n        values: {tick: tick}") ==
+        m0 + ".values: only out and status messages have it");
+  CHECK(err("        lost_after_s: 2.0", "        durability: forever") ==
+        m0 + ".durability: 'forever' is not transient_local or volatile");
+  CHECK(err("      - topic: command ", "      - topic: sensor_state ") ==
+        m1 + ".topic: topic 'sensor_state' appears twice");
+  CHECK(err("      - topic: command ",
+            "      - topic: sensor_copy\n        idl: idl/AuvSensorState.idl\n        direction: in\n        stream: "
+            "sensor\n        fields: {\"sonar_{i}_m\": \"sonar_m[{i}]\"}\n      - topic: command ") ==
+        p + ": streams: stream 'sensor' arrives in 2 messages of transport 'dds' (one expected)");
+  CHECK(err("    wait_for_peer: true ", "    wait_for_peer: true\n    ports: 3 ") ==
+        p + ": transports[0].ports: unknown field");
+  CHECK(err("lockstep: {stream: sensor, end_field: episode_end}", "lockstep: {stream: sensor, end_field: x_mm}") ==
+        p + ": timing.lockstep.end_field: 'x_mm' is not a field of stream 'sensor'");
 }

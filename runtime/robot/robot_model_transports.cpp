@@ -1,0 +1,291 @@
+// The transports section of robot.yaml and timing.lockstep (runtime/robot/transport_spec.hpp).
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <span>
+
+#include "runtime/robot/robot_model_parts.hpp"
+
+namespace pbppo::robot {
+
+const char* ToString(MessageDirection d) noexcept {
+  switch (d) {
+    case MessageDirection::kIn: return "in";
+    case MessageDirection::kOut: return "out";
+    case MessageDirection::kStatus: return "status";
+  }
+  return "?";
+}
+
+namespace detail {
+namespace {
+
+using Rule = YamlFields::TextRule;
+using Kind = ValueTerm::Kind;
+
+// "count.stale_sample" names safety::Cause::kStaleSample ("stale sample"): spaces and hyphens as _.
+int CauseIndex(const std::string& name) {
+  for (std::size_t c = 0; c < safety::kCauseCount; ++c) {
+    std::string n = safety::ToString(static_cast<safety::Cause>(c));
+    std::replace_if(n.begin(), n.end(), [](char ch) { return ch == ' ' || ch == '-'; }, '_');
+    if (n == name) return static_cast<int>(c);
+  }
+  return -1;
+}
+
+std::string Trim(const std::string& s) {
+  const std::size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
+  return a == std::string::npos ? "" : s.substr(a, b - a + 1);
+}
+
+}  // namespace
+
+Status Builder::Transports(const YAML::Node& root) {
+  YAML::Node list;
+  PBPPO_TRY(f.List(root, "transports", "", true, &list));
+  if (list.size() == 0) return f.Fail("transports", "is empty");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string w = "transports[" + std::to_string(i) + "]";
+    const YAML::Node& n = list[i];
+    if (!n.IsMap()) return f.Fail(w, "expected a mapping");
+    TransportSpec t;
+    PBPPO_TRY(f.Text(n, "name", w, &t.name, Rule::kToken));
+    PBPPO_TRY(f.Text(n, "kind", w, &t.kind, Rule::kToken));
+    if (m.TransportIndex(t.name) >= 0) return f.Fail(w + ".name", "transport '" + t.name + "' appears twice");
+    std::string when = "always";
+    PBPPO_TRY(f.OptionalText(n, "when", w, &when, Rule::kToken));
+    if (when != "always" && when != "policy") return f.Fail(w + ".when", "'" + when + "' is not always or policy");
+    t.policy_only = when == "policy";
+    if (t.kind == "can") {
+      PBPPO_TRY(f.Keys(n, w, {"name", "kind", "when"}));
+    } else if (t.kind == "dds") {
+      PBPPO_TRY(
+          f.Keys(n, w, {"name", "kind", "when", "participant_profile", "topic_prefix", "wait_for_peer", "messages"}));
+      DdsTransportSpec& d = t.dds;
+      d.topic_prefix = "pbppo/" + m.name + "/";
+      PBPPO_TRY(f.OptionalText(n, "participant_profile", w, &d.participant_profile, Rule::kToken));
+      PBPPO_TRY(f.OptionalText(n, "topic_prefix", w, &d.topic_prefix, Rule::kToken));
+      PBPPO_TRY(f.Bool(n, "wait_for_peer", w, &d.wait_for_peer));
+    } else {
+      return f.Fail(w + ".kind", "'" + t.kind + "' is not can or dds");
+    }
+    m.transports.push_back(std::move(t));
+  }
+  return {};
+}
+
+Result<std::vector<ValueTerm>> Builder::Value(const std::string& text, bool status, const std::string& where) const {
+  std::vector<ValueTerm> terms;
+  std::size_t from = 0;
+  for (;;) {
+    const std::size_t plus = text.find(" + ", from);
+    const std::string term = Trim(text.substr(from, plus == std::string::npos ? plus : plus - from));
+    const std::string head = term.substr(0, term.find('.'));
+    const std::string name = term.find('.') == std::string::npos ? "" : term.substr(term.find('.') + 1);
+    ValueTerm v;
+    char* end = nullptr;
+    v.value = std::strtod(term.c_str(), &end);
+    int index = 0;
+    const std::pair<const char*, Kind> plain[] = {{"tick", Kind::kTick},
+                                                  {"mode", Kind::kMode},
+                                                  {"clock_ns", Kind::kClockNs},
+                                                  {"sequence", Kind::kSequence},
+                                                  {"phase", Kind::kPhase},
+                                                  {"cause", Kind::kCause},
+                                                  {"deadline_misses", Kind::kDeadlineMisses},
+                                                  {"tick_median_us", Kind::kTickMedianUs},
+                                                  {"tick_max_us", Kind::kTickMaxUs}};
+    const auto known = std::find_if(std::begin(plain), std::end(plain), [&](const auto& p) { return term == p.first; });
+    if (!term.empty() && end != nullptr && *end == '\0' && std::isfinite(v.value)) {
+      v.kind = Kind::kConstant;
+    } else if (known != std::end(plain)) {
+      v.kind = known->second;
+    } else if (head == "command" && (index = m.CommandIndex(name)) >= 0) {
+      v.kind = Kind::kCommand;
+    } else if (head == "field" && (index = m.FieldIndex(name)) >= 0) {
+      v.kind = Kind::kField;
+    } else if (head == "samples" && (index = m.StreamIndex(name)) >= 0) {
+      v.kind = Kind::kSamples;
+    } else if (head == "count" && (index = CauseIndex(name)) >= 0) {
+      v.kind = Kind::kCount;
+    } else {
+      return f.Fail(where, "'" + term +
+                               "' is not a value (a number, tick, mode, clock_ns, sequence, command.<name>, "
+                               "field.<name>, samples.<stream>; in status messages also phase, cause, "
+                               "count.<cause>, deadline_misses, tick_median_us, tick_max_us)");
+    }
+    const bool status_only = v.kind == Kind::kPhase || v.kind == Kind::kCause || v.kind == Kind::kCount ||
+                             v.kind == Kind::kDeadlineMisses || v.kind == Kind::kTickMedianUs ||
+                             v.kind == Kind::kTickMaxUs;
+    if (status_only && !status)
+      return f.Fail(where, "'" + term + "' is the controller's status: only status messages carry it");
+    v.index = static_cast<std::uint32_t>(index);
+    terms.push_back(v);
+    if (plus == std::string::npos) break;
+    from = plus + 3;
+  }
+  return terms;
+}
+
+Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32_t transport, DdsMessageSpec* out) {
+  std::string stream;
+  PBPPO_TRY(f.Text(n, "stream", w, &stream, Rule::kToken));
+  const int s = m.StreamIndex(stream);
+  if (s < 0) return f.Fail(w + ".stream", "'" + stream + "' is not a stream of the robot");
+  const StreamSpec& spec = m.streams[static_cast<std::size_t>(s)];
+  if (spec.transport != m.transports[transport].name)
+    return f.Fail(w + ".stream", "stream '" + stream + "' is delivered by transport '" + spec.transport + "'");
+  out->stream = static_cast<std::uint32_t>(s);
+  PBPPO_TRY(f.OptionalNumber(n, "lost_after_s", w, 0.0, 3600.0, &out->lost_after_s));
+  std::string durability = "transient_local";
+  PBPPO_TRY(f.OptionalText(n, "durability", w, &durability, Rule::kToken));
+  if (durability != "transient_local" && durability != "volatile")
+    return f.Fail(w + ".durability", "'" + durability + "' is not transient_local or volatile");
+  out->transient_local = durability == "transient_local";
+  const IdlMessage& type = out->type;
+  std::vector<int> leaf_of(spec.field_count, -1);  // per field of the stream
+  auto bind = [&](const std::string& field, const std::string& leaf, const std::string& fw) -> Status {
+    const int fi = m.FieldIndex(field), li = type.LeafIndex(leaf);
+    if (fi < 0 || m.fields[static_cast<std::size_t>(fi)].stream != out->stream)
+      return f.Fail(fw, "'" + field + "' is not a field of stream '" + stream + "'");
+    if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
+    int& slot = leaf_of[static_cast<std::size_t>(fi) - spec.first_field];
+    if (slot >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
+    slot = li;
+    return {};
+  };
+  if (const YAML::Node map = n["fields"]) {
+    if (!map.IsMap()) return f.Fail(w + ".fields", "expected a mapping of fields to members");
+    for (const auto& kv : map) {
+      const std::string field = kv.first.as<std::string>(), leaf = kv.second.as<std::string>();
+      const std::string fw = w + ".fields." + field;
+      if (field.find("{i}") == std::string::npos) {
+        PBPPO_TRY(bind(field, leaf, fw));
+        continue;
+      }
+      std::uint32_t i = 0;
+      for (; m.FieldIndex(ExpandIndex(field, i)) >= 0; ++i)
+        PBPPO_TRY(bind(ExpandIndex(field, i), ExpandIndex(leaf, i), fw));
+      if (i == 0) return f.Fail(fw, "no field matches '" + field + "'");
+    }
+  }
+  for (std::uint32_t k = 0; k < spec.field_count; ++k) {
+    const std::string& name = m.fields[spec.first_field + k].name;
+    if (leaf_of[k] < 0) leaf_of[k] = type.LeafIndex(name);
+    if (leaf_of[k] < 0)
+      return f.Fail(w, "field '" + name + "' of stream '" + stream + "' is filled by no member of " + type.type_name +
+                           " (name it under fields)");
+    out->fields.push_back({spec.first_field + k, static_cast<std::uint32_t>(leaf_of[k])});
+  }
+  if (const YAML::Node map = n["peer"]) {
+    if (!map.IsMap()) return f.Fail(w + ".peer", "expected a mapping of members to clock_ns or sequence");
+    for (const auto& kv : map) {
+      const std::string leaf = kv.first.as<std::string>(), what = kv.second.as<std::string>();
+      const int li = type.LeafIndex(leaf);
+      if (li < 0) return f.Fail(w + ".peer." + leaf, "'" + leaf + "' is not a member of " + type.type_name);
+      if (what != "clock_ns" && what != "sequence")
+        return f.Fail(w + ".peer." + leaf, "'" + what + "' is not clock_ns or sequence");
+      out->peer.push_back(
+          {static_cast<std::uint32_t>(li), what == "sequence" ? PeerLeaf::Kind::kSequence : PeerLeaf::Kind::kClockNs});
+    }
+  }
+  return {};
+}
+
+Status Builder::OutMessage(const YAML::Node& n, const std::string& w, DdsMessageSpec* out) {
+  YAML::Node map;
+  PBPPO_TRY(f.Map(n, "values", w, &map));
+  for (const auto& kv : map) {
+    const std::string leaf = kv.first.as<std::string>();
+    const std::string vw = w + ".values." + leaf;
+    const int li = out->type.LeafIndex(leaf);
+    if (li < 0) return f.Fail(vw, "'" + leaf + "' is not a member of " + out->type.type_name);
+    if (!kv.second.IsScalar()) return f.Fail(vw, "expected a value, got " + YamlFields::Quote(kv.second));
+    auto terms = Value(kv.second.as<std::string>(), out->direction == MessageDirection::kStatus, vw);
+    if (!terms) return std::move(terms).error();
+    for (const LeafValue& v : out->values)
+      if (v.leaf == static_cast<std::uint32_t>(li)) return f.Fail(vw, "'" + leaf + "' is given twice");
+    out->values.push_back({static_cast<std::uint32_t>(li), std::move(*terms)});
+  }
+  return {};
+}
+
+Status Builder::DdsMessage(const YAML::Node& n, const std::string& w, std::uint32_t t, const IdlFileReader& read,
+                           const std::string& dir) {
+  PBPPO_TRY(f.Keys(
+      n, w, {"topic", "idl", "type", "direction", "stream", "fields", "peer", "lost_after_s", "durability", "values"}));
+  DdsMessageSpec msg;
+  std::string idl, type, direction;
+  PBPPO_TRY(f.Text(n, "topic", w, &msg.topic, Rule::kToken));
+  PBPPO_TRY(f.Text(n, "idl", w, &idl, Rule::kToken));
+  PBPPO_TRY(f.OptionalText(n, "type", w, &type, Rule::kToken));
+  PBPPO_TRY(f.Text(n, "direction", w, &direction, Rule::kToken));
+  DdsTransportSpec& spec = m.transports[t].dds;
+  for (const DdsMessageSpec& other : spec.messages)
+    if (other.topic == msg.topic) return f.Fail(w + ".topic", "topic '" + msg.topic + "' appears twice");
+  const bool in = direction == "in";
+  if (!in && direction != "out" && direction != "status")
+    return f.Fail(w + ".direction", "'" + direction + "' is not in, out or status");
+  msg.direction = in ? MessageDirection::kIn : direction == "out" ? MessageDirection::kOut : MessageDirection::kStatus;
+  static constexpr const char* kInOnly[] = {"stream", "fields", "peer", "lost_after_s", "durability"};
+  static constexpr const char* kOutOnly[] = {"values"};
+  for (const char* key : in ? std::span<const char* const>(kOutOnly) : std::span<const char* const>(kInOnly))
+    if (n[key])
+      return f.Fail(w + "." + key, std::string("only ") + (in ? "out and status" : "in") + " messages have it");
+  const std::string path = (std::filesystem::path(dir) / idl).string();
+  auto text = read(path);
+  if (!text) return f.Fail(w + ".idl", text.error().message);
+  auto parsed = ParseIdlMessage(*text, path, type, read);
+  if (!parsed) return f.Fail(w + ".idl", parsed.error().message);
+  msg.type = std::move(*parsed);
+  msg.type_stem = std::filesystem::path(idl).stem().string();
+  PBPPO_TRY(in ? InMessage(n, w, t, &msg) : OutMessage(n, w, &msg));
+  spec.messages.push_back(std::move(msg));
+  return {};
+}
+
+Status Builder::DdsMessages(const YAML::Node& root, const IdlFileReader& read, const std::string& dir) {
+  const YAML::Node list = root["transports"];
+  for (std::uint32_t t = 0; t < m.transports.size(); ++t) {
+    if (m.transports[t].kind != "dds") continue;
+    const Status st =
+        f.EachItem(list[t], "messages", "transports[" + std::to_string(t) + "]", true,
+                   [&](const YAML::Node& n, const std::string& w) { return DdsMessage(n, w, t, read, dir); });
+    if (!st) return st;
+  }
+  // Every stream of a DDS transport arrives in exactly one of its messages.
+  for (std::uint32_t s = 0; s < m.streams.size(); ++s) {
+    const int t = m.TransportIndex(m.streams[s].transport);
+    if (t < 0 || m.transports[static_cast<std::size_t>(t)].kind != "dds") continue;
+    int carriers = 0;
+    for (const DdsMessageSpec& msg : m.transports[static_cast<std::size_t>(t)].dds.messages)
+      carriers += msg.direction == MessageDirection::kIn && msg.stream == s ? 1 : 0;
+    if (carriers != 1)
+      return f.Fail("streams", "stream '" + m.streams[s].name + "' arrives in " + std::to_string(carriers) +
+                                   " messages of transport '" + m.streams[s].transport + "' (one expected)");
+  }
+  return {};
+}
+
+Status Builder::Lockstep(const YAML::Node& root) {
+  const YAML::Node n = root["timing"]["lockstep"];
+  if (!n) return {};
+  const std::string w = "timing.lockstep";
+  if (!n.IsMap()) return f.Fail(w, "expected a mapping {stream, end_field}");
+  PBPPO_TRY(f.Keys(n, w, {"stream", "end_field"}));
+  std::string stream, end;
+  PBPPO_TRY(f.Text(n, "stream", w, &stream, Rule::kToken));
+  m.lockstep_stream = m.StreamIndex(stream);
+  if (m.lockstep_stream < 0) return f.Fail(w + ".stream", "'" + stream + "' is not a stream of the robot");
+  PBPPO_TRY(f.OptionalText(n, "end_field", w, &end, Rule::kToken));
+  if (end.empty()) return {};
+  m.lockstep_end_field = m.FieldIndex(end);
+  if (m.lockstep_end_field < 0 ||
+      m.fields[static_cast<std::size_t>(m.lockstep_end_field)].stream != static_cast<std::uint32_t>(m.lockstep_stream))
+    return f.Fail(w + ".end_field", "'" + end + "' is not a field of stream '" + stream + "'");
+  return {};
+}
+
+}  // namespace detail
+}  // namespace pbppo::robot

@@ -1,0 +1,36 @@
+// A message's samples in plain CDR (XCDR1, the encoding Fast DDS and Cyclone DDS give final
+// structs), as the robot's IDL lays them out (runtime/robot/idl.hpp): a sample is the 4-byte
+// encapsulation header and the data. Samples are written little-endian; either byte order is
+// read. Pure functions, no DDS header; real-time safe (no allocation).
+//
+// Leaves are read as doubles: integers exactly up to 2^53 (beyond, the nearest double), booleans
+// as 0 or 1. Written from doubles: floats rounded to nearest, integers rounded to nearest and
+// saturated at the type's range (NaN: 0), booleans true when not 0.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "runtime/robot/idl.hpp"
+
+namespace pbppo::dds {
+
+inline constexpr std::size_t kCdrHeaderBytes = 4;
+
+// The bytes of one sample of `type`: header and data.
+inline std::size_t CdrSampleBytes(const robot::IdlMessage& type) noexcept {
+  return kCdrHeaderBytes + type.cdr_size;
+}
+
+// Writes the header of a little-endian plain CDR sample (CDR_LE, no options).
+void WriteCdrHeader(std::byte* sample) noexcept;
+// Reads a header: true for plain CDR (CDR_BE or CDR_LE), with its byte order in *big_endian;
+// false for anything else (parameter lists, XCDR2).
+bool ReadCdrHeader(const std::byte* sample, bool* big_endian) noexcept;
+
+// The leaf's value in `sample` (header included, of the leaf's message).
+double DecodeLeaf(const robot::IdlLeaf& leaf, const std::byte* sample, bool big_endian) noexcept;
+// Writes `value` into the leaf (little-endian).
+void EncodeLeaf(const robot::IdlLeaf& leaf, double value, std::byte* sample) noexcept;
+
+}  // namespace pbppo::dds

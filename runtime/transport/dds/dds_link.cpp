@@ -1,0 +1,196 @@
+#include "runtime/transport/dds/dds_link.hpp"
+
+#include <chrono>
+#include <thread>
+
+#include "runtime/core/clock.hpp"
+#include "runtime/transport/dds/cdr.hpp"
+#include "runtime/transport/dds/dds_internal.hpp"
+
+namespace pbppo::dds {
+
+using robot::MessageDirection;
+
+DdsSample::DdsSample(const robot::IdlMessage& type) : type_(&type), bytes_(CdrSampleBytes(type), std::byte{0}) {
+  WriteCdrHeader(bytes_.data());
+}
+
+double DdsSample::Get(std::uint32_t leaf) const noexcept {
+  bool big_endian = false;
+  if (leaf >= type_->leaves.size() || !ReadCdrHeader(bytes_.data(), &big_endian)) return 0;
+  return DecodeLeaf(type_->leaves[leaf], bytes_.data(), big_endian);
+}
+
+void DdsSample::Set(std::uint32_t leaf, double value) noexcept {
+  bool big_endian = false;
+  if (leaf >= type_->leaves.size()) return;
+  if (!ReadCdrHeader(bytes_.data(), &big_endian) || big_endian) {
+    // A sample read in another byte order is rewritten little-endian, leaf by leaf, first.
+    std::vector<double> values;
+    for (std::uint32_t k = 0; k < type_->leaves.size(); ++k) values.push_back(Get(k));
+    WriteCdrHeader(bytes_.data());
+    for (std::uint32_t k = 0; k < type_->leaves.size(); ++k) EncodeLeaf(type_->leaves[k], values[k], bytes_.data());
+  }
+  EncodeLeaf(type_->leaves[leaf], value, bytes_.data());
+}
+
+Result<double> DdsSample::Get(const std::string& path) const {
+  const int leaf = type_->LeafIndex(path);
+  if (leaf < 0) return DdsError("'" + path + "' is not a member of " + type_->type_name);
+  return Get(static_cast<std::uint32_t>(leaf));
+}
+
+Status DdsSample::Set(const std::string& path, double value) {
+  const int leaf = type_->LeafIndex(path);
+  if (leaf < 0) return DdsError("'" + path + "' is not a member of " + type_->type_name);
+  Set(static_cast<std::uint32_t>(leaf), value);
+  return {};
+}
+
+Result<DdsOptions> ParticipantOptions(const robot::RobotModel& model, const robot::TransportSpec& transport,
+                                      DdsOptions caller) {
+  caller.participant_profile = transport.dds.participant_profile;
+  if (caller.profile_file.empty() && caller.profile_xml.empty()) {
+    auto doc = model.Document("dds_profile");  // read with the robot
+    if (!doc) return std::move(doc).error();
+    caller.profile_xml = (*doc)->text;
+  }
+  return caller;
+}
+
+Result<std::unique_ptr<DdsLink>> DdsLink::Open(const robot::RobotModel& model, const std::string& transport,
+                                               DdsSide side, const DdsLinkOptions& o) {
+  const int t = model.TransportIndex(transport);
+  if (t < 0 || model.transports[static_cast<std::size_t>(t)].kind != "dds")
+    return DdsError(model.path + ": no transport '" + transport + "' of kind dds");
+  if (o.out_queue_capacity < 1 || o.out_queue_capacity > 65536)
+    return DdsError("out_queue_capacity " + std::to_string(o.out_queue_capacity) + " is outside 1..65536");
+  if (o.peer_inbox_capacity < 1 || o.peer_inbox_capacity > 65536)
+    return DdsError("peer_inbox_capacity " + std::to_string(o.peer_inbox_capacity) + " is outside 1..65536");
+  std::unique_ptr<DdsLink> link(new DdsLink());
+  link->spec_ = &model.transports[static_cast<std::size_t>(t)];
+  link->side_ = side;
+  auto options = ParticipantOptions(model, *link->spec_, o);
+  if (!options) return std::move(options).error();
+  auto participant = DdsParticipant::Create(*options);
+  if (!participant) return std::move(participant).error();
+  link->participant_ = std::move(*participant);
+  DdsParticipant& p = *link->participant_;
+  const bool robot_side = side == DdsSide::kRobot;
+  for (const robot::DdsMessageSpec& m : link->spec_->dds.messages) {
+    const std::string topic = WireTopic(o.naming, link->spec_->dds.topic_prefix + m.topic);
+    const std::string type_name = WireTypeName(o.naming, m.type.type_name, m.type_stem);
+    const bool status = m.direction == MessageDirection::kStatus;
+    // This side reads what the other side writes.
+    const bool reads = (m.direction == MessageDirection::kIn) == robot_side;
+    std::unique_ptr<DdsReader> reader;
+    std::unique_ptr<DdsWriter> writer;
+    if (reads) {
+      DdsReaderOptions r;
+      r.type_name = type_name;
+      r.history_depth = status ? 4 : 32;
+      r.transient_local = m.direction != MessageDirection::kIn || m.transient_local;
+      if (!robot_side && m.direction == MessageDirection::kOut) {
+        r.mode = DdsReaderMode::kQueue;
+        r.queue_capacity = o.peer_inbox_capacity;
+      }
+      auto made = DdsReader::Create(p, topic, m.type, r);
+      if (!made) return DdsError(transport + ": topic '" + topic + "': " + made.error().message);
+      reader = std::move(*made);
+    } else {
+      DdsWriterOptions w;
+      w.type_name = type_name;
+      w.history_depth = status ? 4 : 32;
+      if (robot_side && m.direction == MessageDirection::kOut) {
+        w.queue_capacity = o.out_queue_capacity;
+        w.poll_us = o.writer_poll_us;
+      }
+      auto made = DdsWriter::Create(p, topic, m.type, w);
+      if (!made) return DdsError(transport + ": topic '" + topic + "': " + made.error().message);
+      writer = std::move(*made);
+    }
+    link->readers_.push_back(std::move(reader));
+    link->writers_.push_back(std::move(writer));
+    link->topics_.push_back(topic);
+    link->sequence_.push_back(0);
+  }
+  return link;
+}
+
+DdsLink::~DdsLink() {
+  // Readers and writers go before their participant.
+  readers_.clear();
+  writers_.clear();
+}
+
+Result<std::size_t> DdsLink::MessageIndex(const std::string& topic) const {
+  std::string known;
+  for (std::size_t i = 0; i < message_count(); ++i) {
+    if (message(i).topic == topic) return i;
+    known += (known.empty() ? "" : ", ") + message(i).topic;
+  }
+  return DdsError(spec_->name + ": no message on topic '" + topic + "' (topics: " + known + ")");
+}
+
+bool DdsLink::WaitForPeer(std::int64_t timeout_ns) {
+  const std::int64_t deadline = MonotonicNs() + timeout_ns;
+  for (;;) {
+    bool all = true;
+    for (std::size_t i = 0; i < message_count(); ++i) {
+      if (message(i).direction == MessageDirection::kStatus) continue;
+      if (readers_[i] && readers_[i]->matched_writers() == 0) all = false;
+      if (writers_[i] && writers_[i]->matched_readers() == 0) all = false;
+    }
+    if (all) return true;
+    if (MonotonicNs() >= deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+}
+
+bool DdsLink::Flush(std::int64_t timeout_ns) {
+  bool ok = true;
+  for (auto& w : writers_)
+    if (w && !w->Flush(timeout_ns)) ok = false;
+  return ok;
+}
+
+DdsLinkCounters DdsLink::counters() const noexcept {
+  DdsLinkCounters c;
+  for (const auto& r : readers_) {
+    if (!r) continue;
+    const DdsReaderCounters rc = r->counters();
+    c.received += rc.received;
+    c.malformed += rc.malformed;
+    c.dropped += rc.dropped;
+  }
+  for (const auto& w : writers_) {
+    if (!w) continue;
+    const DdsWriterCounters wc = w->counters();
+    c.written += wc.written;
+    c.write_failed += wc.failed;
+    c.push_dropped += wc.dropped;
+  }
+  return c;
+}
+
+int DdsLink::domain_id() const noexcept {
+  return participant_->domain_id();
+}
+
+void DdsLink::FillFromFields(std::size_t message, std::span<const double> fields, DdsSample* sample) noexcept {
+  const robot::DdsMessageSpec& m = spec_->dds.messages[message];
+  for (const robot::FieldLeaf& fl : m.fields) sample->Set(fl.leaf, fields[fl.field]);
+  if (m.peer.empty()) return;
+  const std::uint64_t seq = ++sequence_[message];
+  for (const robot::PeerLeaf& p : m.peer)
+    sample->Set(p.leaf, p.kind == robot::PeerLeaf::Kind::kSequence ? static_cast<double>(seq)
+                                                                   : static_cast<double>(MonotonicNs()));
+}
+
+int DdsLink::LeafOf(std::size_t message, robot::ValueTerm::Kind kind, std::uint32_t index) const noexcept {
+  for (const robot::LeafValue& v : spec_->dds.messages[message].values)
+    if (v.terms.size() == 1 && v.terms[0].kind == kind && v.terms[0].index == index) return static_cast<int>(v.leaf);
+  return -1;
+}
+
+}  // namespace pbppo::dds

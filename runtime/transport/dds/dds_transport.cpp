@@ -1,0 +1,192 @@
+#include "runtime/transport/dds/dds_transport.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "runtime/core/clock.hpp"
+#include "runtime/transport/dds/cdr.hpp"
+#include "runtime/transport/dds/dds_internal.hpp"
+
+namespace pbppo::dds {
+
+using robot::MessageDirection;
+using Kind = robot::ValueTerm::Kind;
+
+namespace {
+
+bool Snapshotted(Kind k) noexcept {
+  return k == Kind::kField || k == Kind::kCommand || k == Kind::kSamples;
+}
+
+// Each member the message's values name, the sum of its terms (term(t) gives one) encoded.
+template <typename TermValue>
+void Encode(const robot::DdsMessageSpec& spec, std::byte* sample, TermValue term) noexcept {
+  for (const robot::LeafValue& v : spec.values) {
+    double sum = 0;
+    for (const robot::ValueTerm& t : v.terms) sum += term(t);
+    EncodeLeaf(spec.type.leaves[v.leaf], sum, sample);
+  }
+}
+
+}  // namespace
+
+Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel& model, const std::string& transport,
+                                                         const DdsLinkOptions& options) {
+  auto link = DdsLink::Open(model, transport, DdsSide::kRobot, options);
+  if (!link) return std::move(link).error();
+  std::unique_ptr<DdsTransport> t(new DdsTransport());
+  t->link_ = std::move(*link);
+  t->link_index_ = t->link_->spec().first_link;
+  t->summary_name_ = transport;
+  for (std::size_t i = 0; i < t->link_->message_count(); ++i) {
+    const robot::DdsMessageSpec& m = t->link_->message(i);
+    std::vector<std::byte> sample(CdrSampleBytes(m.type), std::byte{0});
+    WriteCdrHeader(sample.data());
+    if (m.direction == MessageDirection::kIn) {
+      const double lost_s = m.lost_after_s > 0 && options.lost_after_s > 0 ? options.lost_after_s : m.lost_after_s;
+      t->in_.push_back({i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9)});
+      continue;
+    }
+    (m.direction == MessageDirection::kOut ? t->out_ : t->status_).push_back({i, std::move(sample), 0});
+    if (m.direction != MessageDirection::kStatus) continue;
+    for (const robot::LeafValue& v : m.values)
+      for (const robot::ValueTerm& term : v.terms)
+        if (Snapshotted(term.kind) &&
+            std::none_of(t->snapshot_terms_.begin(), t->snapshot_terms_.end(),
+                         [&](const robot::ValueTerm& s) { return s.kind == term.kind && s.index == term.index; }))
+          t->snapshot_terms_.push_back(term);
+  }
+  t->snapshot_ = std::make_unique<std::atomic<double>[]>(t->snapshot_terms_.size());
+  for (std::size_t k = 0; k < t->snapshot_terms_.size(); ++k) t->snapshot_[k].store(0.0);
+  return t;
+}
+
+DdsTransport::~DdsTransport() = default;
+
+void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept {
+  bool lost = false;
+  const std::int64_t now = MonotonicNs();
+  for (In& in : in_) {
+    DdsReader& r = *link_->reader(in.message);
+    const std::uint64_t v = r.Read(in.sample.data(), nullptr);
+    bool big_endian = false;
+    if (v != 0 && v != in.version && ReadCdrHeader(in.sample.data(), &big_endian)) {
+      in.version = v;
+      const robot::DdsMessageSpec& spec = link_->message(in.message);
+      for (const robot::FieldLeaf& fl : spec.fields)
+        d.fields[fl.field] = DecodeLeaf(spec.type.leaves[fl.leaf], in.sample.data(), big_endian);
+      d.fresh[spec.stream] = 1;
+    }
+    if (in.lost_after_ns > 0) {
+      const std::int64_t last = r.last_receive_ns();
+      lost = lost || (last >= 0 && (r.matched_writers() == 0 || now - last > in.lost_after_ns));
+    }
+  }
+  const DdsLinkCounters c = link_->counters();
+  safety::TransportHealth& h = d.transports[link_index_];
+  h.lost = lost;
+  h.degraded = c.malformed > malformed_ || c.push_dropped > dropped_;
+  h.fault = false;
+  malformed_ = c.malformed;
+  dropped_ = c.push_dropped;
+}
+
+double DdsTransport::Term(const robot::ValueTerm& t, const robot::RobotData& d, std::uint64_t sequence) const noexcept {
+  switch (t.kind) {
+    case Kind::kConstant: return t.value;
+    case Kind::kTick: return static_cast<double>(d.tick);
+    case Kind::kMode: return static_cast<double>(static_cast<std::uint8_t>(d.mode));
+    case Kind::kClockNs: return static_cast<double>(MonotonicNs());
+    case Kind::kSequence: return static_cast<double>(sequence);
+    case Kind::kCommand: return d.command[t.index];
+    case Kind::kField: return d.fields[t.index];
+    case Kind::kSamples: return static_cast<double>(d.samples[t.index]);
+    default: return 0;  // status terms: not in out messages (the robot file's reader refuses them)
+  }
+}
+
+void DdsTransport::Write(const robot::RobotModel&, robot::RobotData& d) noexcept {
+  for (Out& out : out_) {
+    out.sequence += 1;
+    Encode(link_->message(out.message), out.sample.data(),
+           [&](const robot::ValueTerm& t) { return Term(t, d, out.sequence); });
+    if (!link_->writer(out.message)->Push(out.sample.data())) send_failures_.fetch_add(1, std::memory_order_relaxed);
+  }
+  for (std::size_t k = 0; k < snapshot_terms_.size(); ++k)
+    snapshot_[k].store(Term(snapshot_terms_[k], d, 0), std::memory_order_relaxed);
+}
+
+Status DdsTransport::Connect(std::int64_t timeout_ns) {
+  if (!link_->spec().dds.wait_for_peer || link_->WaitForPeer(timeout_ns)) return {};
+  return MakeError(ErrorCode::kIo, "transport '" + link_->spec().name + "': no peer on DDS domain " +
+                                       std::to_string(link_->domain_id()) + " within " +
+                                       std::to_string(static_cast<double>(timeout_ns) * 1e-9) + " s");
+}
+
+bool DdsTransport::Paces(std::uint32_t stream) const noexcept {
+  return std::any_of(in_.begin(), in_.end(), [&](const In& in) { return link_->message(in.message).stream == stream; });
+}
+
+bool DdsTransport::WaitForSample(std::uint32_t stream, std::uint64_t* version, std::int64_t timeout_ns) {
+  for (const In& in : in_) {
+    if (link_->message(in.message).stream != stream) continue;
+    DdsReader& r = *link_->reader(in.message);
+    if (!r.WaitNewer(*version, timeout_ns)) return false;
+    *version = r.version();
+    return true;
+  }
+  return false;
+}
+
+double DdsTransport::StatusTerm(const robot::ValueTerm& t, const robot::ControllerStatus& s,
+                                std::uint64_t sequence) const noexcept {
+  switch (t.kind) {
+    case Kind::kConstant: return t.value;
+    case Kind::kTick: return static_cast<double>(s.tick);
+    case Kind::kMode: return static_cast<double>(static_cast<std::uint8_t>(s.mode));
+    case Kind::kClockNs: return static_cast<double>(MonotonicNs());
+    case Kind::kSequence: return static_cast<double>(sequence);
+    case Kind::kPhase: return s.phase;
+    case Kind::kCause: return s.cause;
+    case Kind::kCount: return static_cast<double>(s.counts.n[t.index]);
+    case Kind::kDeadlineMisses: return static_cast<double>(s.deadline_misses);
+    case Kind::kTickMedianUs: return s.tick_median_us;
+    case Kind::kTickMaxUs: return s.tick_max_us;
+    case Kind::kCommand:
+    case Kind::kField:
+    case Kind::kSamples:
+      for (std::size_t k = 0; k < snapshot_terms_.size(); ++k)
+        if (snapshot_terms_[k].kind == t.kind && snapshot_terms_[k].index == t.index)
+          return snapshot_[k].load(std::memory_order_relaxed);
+      return 0;
+  }
+  return 0;
+}
+
+void DdsTransport::PublishStatus(const robot::ControllerStatus& s) {
+  for (Out& out : status_) {
+    out.sequence += 1;
+    Encode(link_->message(out.message), out.sample.data(),
+           [&](const robot::ValueTerm& t) { return StatusTerm(t, s, out.sequence); });
+    (void)link_->writer(out.message)->Write(out.sample.data());  // counted by the writer
+  }
+}
+
+void DdsTransport::Finish(const robot::ControllerStatus& s) {
+  PublishStatus(s);  // the final state
+  (void)link_->Flush(1'000'000'000);
+}
+
+std::string DdsTransport::Summary() const {
+  const DdsLinkCounters c = link_->counters();
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "transport %s (dds): received %llu (malformed %llu), sent %llu (failed %llu), send failures %llu",
+                summary_name_.c_str(), static_cast<unsigned long long>(c.received),
+                static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.written),
+                static_cast<unsigned long long>(c.write_failed),
+                static_cast<unsigned long long>(send_failures_.load(std::memory_order_relaxed)));
+  return line;
+}
+
+}  // namespace pbppo::dds

@@ -1,0 +1,362 @@
+// A robot's DDS transport as the robot file declares it, between two real Fast DDS participants of
+// one process over loopback (label dds): the controller's side (dds::DdsTransport: samples into
+// the robot's fields, commands and status out by the robot file's values) and the peer's side
+// (dds::DdsLink, as a simulator or an operator uses it). Samples of another size, encoding or
+// byte order, a full queue, a peer that leaves, the tick's calls without allocation, ROS 2 names.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+#include "runtime/core/alloc_probe.hpp"
+#include "runtime/robot/robot_data.hpp"
+#include "runtime/transport/dds/cdr.hpp"
+#include "runtime/transport/dds/dds_transport.hpp"
+#include "tests/support/dds_domain.hpp"
+#include "tests/support/robot_models.hpp"
+#include "tests/support/text_edit.hpp"
+
+using namespace pbppo;
+using dds::DdsLink;
+using dds::DdsSample;
+using dds::DdsSide;
+using dds::DdsTransport;
+
+namespace {
+
+constexpr std::int64_t kSecond = 1'000'000'000;
+
+template <typename Pred>
+bool Eventually(Pred p, std::int64_t ns = 5 * kSecond) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(ns);
+  while (std::chrono::steady_clock::now() < end) {
+    if (p()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return p();
+}
+
+dds::DdsLinkOptions Options(int domain, dds::DdsNaming naming = dds::DdsNaming::kNative) {
+  dds::DdsLinkOptions o;
+  o.domain_id = domain;
+  o.naming = naming;
+  return o;
+}
+
+std::size_t Message(DdsLink& l, const char* topic) {
+  auto i = l.MessageIndex(topic);
+  REQUIRE_MESSAGE(i.ok(), i.error().message);
+  return *i;
+}
+
+std::uint32_t Leaf(const robot::IdlMessage& type, const char* path) {
+  const int k = type.LeafIndex(path);
+  REQUIRE_MESSAGE(k >= 0, path);
+  return static_cast<std::uint32_t>(k);
+}
+
+std::uint32_t FieldOf(const robot::RobotModel& m, const std::string& name) {
+  const int k = m.FieldIndex(name);
+  REQUIRE_MESSAGE(k >= 0, name);
+  return static_cast<std::uint32_t>(k);
+}
+
+// The AUV's controller side and a vehicle (peer) side on one domain, matched.
+struct Pair {
+  const robot::RobotModel& m = test::AuvRobot();
+  std::unique_ptr<DdsTransport> controller;
+  std::unique_ptr<DdsLink> vehicle;
+  robot::RobotData data = robot::MakeRobotData(m);
+  explicit Pair(int domain, dds::DdsLinkOptions o = {}) {
+    o.domain_id = domain;
+    auto c = DdsTransport::Open(m, "dds", o);
+    REQUIRE_MESSAGE(c.ok(), c.error().message);
+    controller = std::move(*c);
+    auto v = DdsLink::Open(m, "dds", DdsSide::kPeer, Options(domain, o.naming));
+    REQUIRE_MESSAGE(v.ok(), v.error().message);
+    vehicle = std::move(*v);
+    REQUIRE(controller->Connect(10 * kSecond).ok());
+    REQUIRE(vehicle->WaitForPeer(10 * kSecond));
+  }
+  // The sensor stream's fields, each its own value; the sample the vehicle sends of them.
+  std::vector<double> Fields(double base) const {
+    std::vector<double> f(m.fields.size(), 0.0);
+    const robot::StreamSpec& s = m.streams[static_cast<std::size_t>(m.StreamIndex("sensor"))];
+    for (std::uint32_t k = 0; k < s.field_count; ++k) f[s.first_field + k] = base + 0.25 * k;
+    // The integer and boolean members, whole.
+    f[FieldOf(m, "tick")] = 7;
+    f[FieldOf(m, "target_index")] = 2;
+    f[FieldOf(m, "sonar_beams")] = 16;
+    f[FieldOf(m, "mission_complete")] = 1;
+    f[FieldOf(m, "episode_end")] = 0;
+    return f;
+  }
+  void Send(const std::vector<double>& fields) {
+    const std::size_t i = Message(*vehicle, "sensor_state");
+    DdsSample s(vehicle->message(i).type);
+    vehicle->FillFromFields(i, fields, &s);
+    REQUIRE(vehicle->writer(i)->Write(s.bytes()).ok());
+  }
+};
+
+}  // namespace
+
+TEST_CASE("dds transport: a sample fills the stream's fields, commands and status carry the robot file's values") {
+  Pair p(test::TestDomain(1));
+  const std::vector<double> sent = p.Fields(3.0);
+  p.Send(sent);
+  std::uint64_t version = 0;
+  const auto sensor = static_cast<std::uint32_t>(p.m.StreamIndex("sensor"));
+  CHECK(p.controller->Paces(sensor));
+  REQUIRE(p.controller->WaitForSample(sensor, &version, 5 * kSecond));
+  CHECK(version == 1);
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.fresh[sensor] == 1);
+  const robot::StreamSpec& s = p.m.streams[sensor];
+  for (std::uint32_t f = s.first_field; f < s.first_field + s.field_count; ++f) {
+    CAPTURE(p.m.fields[f].name);
+    // The IDL's float sonar ranges are the ranges rounded to float; a boolean is 0 or 1.
+    const bool sonar = p.m.fields[f].name.rfind("sonar_", 0) == 0 && p.m.fields[f].name != "sonar_beams";
+    CHECK(p.data.fields[f] == (sonar ? static_cast<double>(static_cast<float>(sent[f])) : sent[f]));
+  }
+  // Read again without a new sample: nothing fresh.
+  p.data.fresh[sensor] = 0;
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.fresh[sensor] == 0);
+
+  p.data.tick = 8;
+  p.data.mode = safety::Mode::kSafeStop;
+  p.data.command[static_cast<std::size_t>(p.m.CommandIndex("surge_speed"))] = 1.125;
+  p.data.command[static_cast<std::size_t>(p.m.CommandIndex("yaw_rate"))] = -0.375;
+  p.controller->Write(p.m, p.data);
+  const std::size_t ci = Message(*p.vehicle, "command");
+  DdsSample got(p.vehicle->message(ci).type);
+  REQUIRE(p.vehicle->reader(ci)->WaitPop(got.bytes(), nullptr, 5 * kSecond));
+  CHECK(got.Get("tick").value() == 8);
+  CHECK(got.Get("answers").value() == 7);  // the tick field of the sample it answers
+  CHECK(got.Get("surge_speed_mps").value() == 1.125);
+  CHECK(got.Get("yaw_rate_radps").value() == -0.375);
+  CHECK(got.Get("mode").value() == 2);
+  CHECK(got.Get("stamp_ns").value() > 0);
+
+  robot::ControllerStatus st;
+  st.tick = 40;
+  st.cause = 0x24;
+  st.deadline_misses = 3;
+  st.counts[safety::Cause::kInvalidSample] = 4;
+  st.counts[safety::Cause::kCommandLimit] = 5;
+  st.counts[safety::Cause::kRateLimit] = 6;
+  st.tick_max_us = 12.5;
+  p.controller->PublishStatus(st);
+  const std::size_t si = Message(*p.vehicle, "controller_status");
+  DdsSample status(p.vehicle->message(si).type);
+  CHECK(Eventually([&] { return p.vehicle->reader(si)->Read(status.bytes(), nullptr) != 0; }));
+  CHECK(status.Get("tick").value() == 40);
+  CHECK(status.Get("cause").value() == 0x24);
+  CHECK(status.Get("deadline_misses").value() == 3);
+  CHECK(status.Get("invalid_samples").value() == 4);
+  CHECK(status.Get("limited_commands").value() == 11);  // command limit + rate limit
+  CHECK(status.Get("tick_max_us").value() == 12.5);
+  CHECK(p.data.transports[0].lost == false);
+  CHECK(p.data.transports[0].degraded == false);
+  const dds::DdsLinkCounters c = p.controller->link().counters();
+  CHECK(c.received == 1);
+  CHECK(c.malformed == 0);
+  CHECK(Eventually([&] { return p.controller->link().counters().written == 2; }));  // the command and the status
+  CHECK(p.controller->Summary().find("transport dds (dds): received 1 (malformed 0), sent 2") == 0);
+}
+
+TEST_CASE("dds transport: samples of another size or encoding are refused and counted, big-endian ones read") {
+  Pair p(test::TestDomain(2));
+  const robot::DdsMessageSpec& spec = p.vehicle->message(Message(*p.vehicle, "sensor_state"));
+  // A writer of the same topic and type name, but a struct of another size: malformed.
+  auto other = robot::ParseIdlMessage("module pbppo_idl { module auv { struct SensorState { double x_m; }; }; };",
+                                      "other.idl", "", nullptr);
+  REQUIRE(other.ok());
+  dds::DdsOptions o;
+  o.profile_file = test::DdsProfile();
+  o.domain_id = test::TestDomain(2);
+  auto participant = dds::DdsParticipant::Create(o);
+  REQUIRE(participant.ok());
+  auto small = dds::DdsWriter::Create(**participant, "pbppo/auv/sensor_state", *other, {});
+  REQUIRE(small.ok());
+  REQUIRE(Eventually([&] { return (*small)->matched_readers() > 0; }));
+  DdsSample tiny(*other);
+  tiny.Set(0, 1.5);
+  REQUIRE((*small)->Write(tiny.bytes()).ok());
+  REQUIRE(Eventually([&] { return p.controller->link().counters().malformed == 1; }));
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.fresh[0] == 0);           // nothing delivered
+  CHECK(p.data.transports[0].degraded);  // and the link says so, once
+  p.controller->Read(p.m, p.data);
+  CHECK_FALSE(p.data.transports[0].degraded);
+
+  // A big-endian sample of the right type (as a big-endian machine writes it) reads the same.
+  const std::vector<double> fields = p.Fields(-7.0);
+  DdsSample le(spec.type);
+  p.vehicle->FillFromFields(Message(*p.vehicle, "sensor_state"), fields, &le);
+  std::vector<std::byte> be(le.bytes(), le.bytes() + dds::CdrSampleBytes(spec.type));
+  be[1] = std::byte{0x00};  // CDR_BE
+  for (const robot::IdlLeaf& l : spec.type.leaves)
+    std::reverse(be.begin() + static_cast<long>(4 + l.cdr_offset),
+                 be.begin() + static_cast<long>(4 + l.cdr_offset + robot::IdlScalarSize(l.type)));
+  REQUIRE(p.vehicle->writer(Message(*p.vehicle, "sensor_state"))->Write(be.data()).ok());
+  std::uint64_t version = 0;
+  REQUIRE(p.controller->WaitForSample(0, &version, 5 * kSecond));
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.fresh[0] == 1);
+  CHECK(p.data.fields[FieldOf(p.m, "x_m")] == fields[FieldOf(p.m, "x_m")]);
+  CHECK(p.data.fields[FieldOf(p.m, "clearance_m")] == fields[FieldOf(p.m, "clearance_m")]);
+  CHECK(p.data.fields[FieldOf(p.m, "sonar_5_m")] ==
+        static_cast<double>(static_cast<float>(fields[FieldOf(p.m, "sonar_5_m")])));
+  CHECK(p.controller->link().counters().malformed == 1);
+}
+
+TEST_CASE("dds transport: ROS 2 naming - both sides on rt/ topics with ROS 2 type names, not heard by native ones") {
+  const int domain = test::TestDomain(7);
+  dds::DdsLinkOptions ros2;
+  ros2.naming = dds::DdsNaming::kRos2;
+  Pair p(domain, ros2);
+  auto native = DdsTransport::Open(p.m, "dds", Options(domain));
+  REQUIRE(native.ok());
+  p.Send(p.Fields(5.0));
+  std::uint64_t version = 0;
+  REQUIRE(p.controller->WaitForSample(0, &version, 10 * kSecond));
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.fields[FieldOf(p.m, "x_m")] == p.Fields(5.0)[FieldOf(p.m, "x_m")]);
+  CHECK(p.vehicle->wire_topic(0) == "rt/pbppo/auv/sensor_state");
+  CHECK_FALSE((*native)->link().WaitForPeer(kSecond / 2));
+  CHECK((*native)->link().counters().received == 0);
+  CHECK(dds::WireTypeName(dds::DdsNaming::kRos2, "pbppo_idl::auv::Command", "AuvCommand") ==
+        "pbppo_msgs::msg::dds_::AuvCommand_");
+  CHECK(dds::WireTypeName(dds::DdsNaming::kNative, "pbppo_idl::auv::Command", "AuvCommand") ==
+        "pbppo_idl::auv::Command");
+  auto bad = dds::ParseDdsNaming("ros");
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("'ros'") != std::string::npos);
+}
+
+TEST_CASE("dds transport: a full command queue drops and counts (the link degraded), the rest arrives in order") {
+  dds::DdsLinkOptions o;
+  o.out_queue_capacity = 2;
+  Pair p(test::TestDomain(3), o);
+  constexpr std::uint64_t kWrites = 20000;
+  for (std::uint64_t i = 1; i <= kWrites; ++i) {
+    p.data.tick = i;
+    p.controller->Write(p.m, p.data);
+  }
+  const std::uint64_t dropped = p.controller->send_failures();
+  REQUIRE(Eventually([&] {
+    const auto c = p.controller->link().counters();
+    return c.written + c.write_failed == kWrites - dropped;
+  }));
+  CHECK(dropped > 0);
+  CHECK(p.controller->link().counters().push_dropped == dropped);
+  p.controller->Read(p.m, p.data);
+  CHECK(p.data.transports[0].degraded);
+  const std::size_t ci = Message(*p.vehicle, "command");
+  DdsSample got(p.vehicle->message(ci).type);
+  double last = 0;
+  std::uint64_t disorder = 0, n = 0;
+  while (p.vehicle->reader(ci)->WaitPop(got.bytes(), nullptr, kSecond / 2)) {
+    if (got.Get("tick").value() <= last) ++disorder;
+    last = got.Get("tick").value();
+    ++n;
+  }
+  CHECK(n > 0);
+  CHECK(disorder == 0);
+}
+
+TEST_CASE("dds transport: a vehicle that leaves is a lost link, one that never came is not") {
+  const robot::RobotModel& m = test::AuvRobot();
+  const int domain = test::TestDomain(4);
+  auto o = Options(domain);
+  o.lost_after_s = 0.2;
+  auto controller = DdsTransport::Open(m, "dds", o);
+  REQUIRE(controller.ok());
+  robot::RobotData d = robot::MakeRobotData(m);
+  (*controller)->Read(m, d);
+  CHECK_FALSE(d.transports[0].lost);  // nothing received yet: the stream's age tells
+  {
+    auto vehicle = DdsLink::Open(m, "dds", DdsSide::kPeer, Options(domain));
+    REQUIRE(vehicle.ok());
+    REQUIRE((*controller)->Connect(10 * kSecond).ok());
+    REQUIRE((*vehicle)->WaitForPeer(10 * kSecond));
+    DdsSample s((*vehicle)->message(0).type);
+    REQUIRE((*vehicle)->writer(0)->Write(s.bytes()).ok());
+    std::uint64_t version = 0;
+    REQUIRE((*controller)->WaitForSample(0, &version, 5 * kSecond));
+    (*controller)->Read(m, d);
+    CHECK_FALSE(d.transports[0].lost);
+  }
+  CHECK(Eventually([&] {
+    (*controller)->Read(m, d);
+    return d.transports[0].lost;
+  }));
+  // Without a peer the robot file's wait_for_peer fails, naming the transport and the domain.
+  auto alone = DdsTransport::Open(m, "dds", Options(test::TestDomain(40)));
+  REQUIRE(alone.ok());
+  const Status st = (*alone)->Connect(kSecond / 5);
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message.find("transport 'dds': no peer on DDS domain " + std::to_string(test::TestDomain(40))) == 0);
+}
+
+TEST_CASE("dds transport: bad options and robot files name the option, the transport and the value") {
+  const robot::RobotModel& m = test::AuvRobot();
+  auto o = Options(300);
+  auto r = DdsTransport::Open(m, "dds", o);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("domain_id 300") != std::string::npos);
+  o.domain_id = test::TestDomain(5);
+  o.out_queue_capacity = 0;
+  r = DdsTransport::Open(m, "dds", o);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("out_queue_capacity 0") != std::string::npos);
+  o.out_queue_capacity = 16;
+  o.profile_file = "/nonexistent/profile.xml";
+  r = DdsTransport::Open(m, "dds", o);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("/nonexistent/profile.xml") != std::string::npos);
+  o.profile_file.clear();
+  r = DdsTransport::Open(m, "can", o);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("no transport 'can' of kind dds") != std::string::npos);
+  // A participant profile the robot's profiles lack.
+  const test::RobotFileEdits edits("auv", "dds_transport_profile");
+  const std::string text = test::ReplaceOnce(test::ReadText(edits.path()), "participant_profile: pbppo_loopback",
+                                             "participant_profile: no_such_profile");
+  std::ofstream(edits.path()) << text;
+  auto edited = robot::LoadRobotModel(edits.path());
+  REQUIRE(edited.ok());
+  r = DdsTransport::Open(*edited, "dds", Options(test::TestDomain(5)));
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.find("no_such_profile") != std::string::npos);
+}
+
+TEST_CASE("dds transport: the tick's calls (Read, Write) do not allocate in the calling thread") {
+  Pair p(test::TestDomain(6));
+  p.Send(p.Fields(1.0));
+  std::uint64_t version = 0;
+  REQUIRE(p.controller->WaitForSample(0, &version, 5 * kSecond));
+  std::uint64_t allocations = 0, fresh = 0;
+  {
+    AllocationScope scope;
+    for (std::uint64_t k = 0; k < 2000; ++k) {
+      p.data.fresh[0] = 0;
+      p.controller->Read(p.m, p.data);
+      fresh += p.data.fresh[0];
+      p.data.tick = k;
+      p.controller->Write(p.m, p.data);
+    }
+    allocations = scope.count();
+  }
+  CHECK(allocations == 0);
+  CHECK(fresh == 1);  // one sample, taken once
+  CHECK(Eventually([&] {
+    const auto c = p.controller->link().counters();
+    return c.written == 2000 - p.controller->send_failures();
+  }));
+}
