@@ -74,7 +74,6 @@ class QuadrupedHil {
   const QuadrupedPlant& plant() const noexcept { return *plant_; }
   std::size_t motor_count() const noexcept { return motors_.size(); }
   const MitMotorState& motor(std::size_t i) const noexcept { return motor_state_[i]; }
-  const MitMotorConfig& motor_config(std::size_t i) const noexcept { return motors_[i]; }
   std::size_t joint_of_motor(std::size_t i) const noexcept { return joint_of_motor_[i]; }
   std::uint64_t imu_samples() const noexcept { return imu_samples_; }
 

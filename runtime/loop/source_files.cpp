@@ -16,16 +16,12 @@ std::span<const std::uint8_t> Bytes(const std::string& s) {
 }  // namespace
 
 Result<std::vector<policy::PublicKey>> TrustedKeys(const robot::RobotModel& robot) {
-  std::vector<std::string> roles;
-  if (robot.documents.count("trusted_keys")) roles.push_back("trusted_keys");
-  for (const std::string& name : robot.DocumentGroup("trusted_keys")) roles.push_back("trusted_keys." + name);
   std::vector<policy::PublicKey> keys;
-  for (const std::string& role : roles) {
-    auto doc = robot.Document(role);
-    if (!doc) return std::move(doc).error();
-    auto key = policy::ParsePublicKey((*doc)->text, "files." + role + " (" + (*doc)->path + ")");
+  for (const robot::TrustedKeyFile& k : robot.trusted_keys) {
+    const std::string role = k.name == "trusted_keys" ? k.name : "trusted_keys." + k.name;
+    auto key = policy::ParsePublicKey(k.file.text, "files." + role + " (" + k.file.path + ")");
     if (!key) return MakeError(key.error().code, robot.path + ": " + key.error().message);
-    key->name = role == "trusted_keys" ? role : role.substr(std::string("trusted_keys.").size());
+    key->name = k.name;
     keys.push_back(std::move(*key));
   }
   return keys;
@@ -65,10 +61,10 @@ Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFile
     s.hash = LogHash(Bytes(*bytes));
   } else if (!files.trajectory.empty()) {
     // The robot's own trajectory was read with the robot; another file is read here.
-    auto doc = robot.Document("stand_trajectory");
+    const std::optional<robot::RobotDocument>& own_file = robot.stand_trajectory;
     std::error_code ec;
-    const bool own = doc && std::filesystem::equivalent((*doc)->path, files.trajectory, ec);
-    auto text = own ? Result<std::string>((*doc)->text) : robot::ReadTextFile(files.trajectory);
+    const bool own = own_file && std::filesystem::equivalent(own_file->path, files.trajectory, ec);
+    auto text = own ? Result<std::string>(own_file->text) : robot::ReadTextFile(files.trajectory);
     if (!text) return std::move(text).error();
     auto t = ParseTrajectory(*text, std::filesystem::path(files.trajectory).filename().string(), robot);
     if (!t) return std::move(t).error();

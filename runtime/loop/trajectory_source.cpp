@@ -61,9 +61,10 @@ Result<Trajectory> ParseTrajectory(const std::string& yaml_text, const std::stri
 }
 
 Result<Trajectory> RobotTrajectory(const robot::RobotModel& robot) {
-  auto doc = robot.Document("stand_trajectory");
-  if (!doc) return std::move(doc).error();
-  return ParseTrajectory((*doc)->text, std::filesystem::path((*doc)->path).filename().string(), robot);
+  if (!robot.stand_trajectory)
+    return MakeError(ErrorCode::kMismatch, robot.path + ": files: no file for 'stand_trajectory'");
+  const robot::RobotDocument& doc = *robot.stand_trajectory;
+  return ParseTrajectory(doc.text, std::filesystem::path(doc.path).filename().string(), robot);
 }
 
 TrajectorySource::TrajectorySource(const robot::RobotModel& robot, Trajectory trajectory)

@@ -57,7 +57,16 @@ struct Loader : detail::Builder {
       const std::string role = kv.first.as<std::string>();
       const std::string where = "files." + role;
       if (kv.second.IsMap()) {
-        for (const auto& sub : kv.second) PBPPO_TRY(Document(role + "." + sub.first.as<std::string>(), sub.second));
+        for (const auto& sub : kv.second) {
+          const std::string name = sub.first.as<std::string>();
+          auto doc = Read(role + "." + name, sub.second);
+          if (!doc) return std::move(doc).error();
+          if (role == "trusted_keys") {
+            m.trusted_keys.push_back({name, std::move(*doc)});
+          } else {
+            m.documents[role + "." + name] = std::move(*doc);
+          }
+        }
         continue;
       }
       if (!kv.second.IsScalar()) return f.Fail(where, "expected a file name or a mapping of names to files");
@@ -69,13 +78,24 @@ struct Loader : detail::Builder {
       } else if (role == "description") {
         PBPPO_TRY(Description(path));
       } else {
-        PBPPO_TRY(Document(role, kv.second));
+        auto doc = Read(role, kv.second);
+        if (!doc) return std::move(doc).error();
+        if (role == "dds_profile") {
+          m.dds_profile = std::move(*doc);
+        } else if (role == "stand_trajectory") {
+          m.stand_trajectory = std::move(*doc);
+        } else if (role == "trusted_keys") {
+          m.trusted_keys.push_back({role, std::move(*doc)});
+        } else {
+          m.documents[role] = std::move(*doc);
+        }
       }
     }
     return {};
   }
 
-  Status Document(const std::string& role, const YAML::Node& name) {
+  // The file `name` names (role: where robot.yaml names it), read and, for .yaml, parsed.
+  Result<RobotDocument> Read(const std::string& role, const YAML::Node& name) {
     if (!name.IsScalar()) return f.Fail("files." + role, "expected a file name, got " + YamlFields::Quote(name));
     RobotDocument d;
     d.path = files.PathOf(name.as<std::string>());
@@ -88,8 +108,7 @@ struct Loader : detail::Builder {
       if (!yaml) return std::move(yaml).error();
       d.yaml = *yaml;
     }
-    m.documents[role] = std::move(d);
-    return {};
+    return d;
   }
 
   Status Description(const std::string& path) {

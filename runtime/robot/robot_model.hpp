@@ -12,8 +12,9 @@
 //              safe-stop does with them;
 //   signals    what an IO layout may observe, computed from fields (runtime/robot/signals.hpp);
 //   motors     actuators that are switched on at arming and off at shutdown (MIT drivers);
-//   documents  the robot-specific files (the AUV's plant, task and layouts; a stand trajectory;
-//              a DDS profile), kept as read for the code that knows them (sim_hil, firmware).
+//   files      the files the runtime itself uses, as read: the DDS profile, the stand trajectory,
+//              the trusted keys; and the robot-specific ones (its plant, task and layouts) as
+//              documents by role, for the code that knows them (sim_hil, the environments).
 // Streams, fields and commands of MIT motors and IMUs are made from the CAN map and the URDF;
 // all others are declared in robot.yaml. Quantities per tick (stale ages, rate limits, the
 // policy period) follow from the tick period; WithTickPeriod gives the same robot at another.
@@ -131,6 +132,12 @@ struct RobotDocument {
   YAML::Node yaml;  // parsed, for .yaml files
 };
 
+// A public key the robot trusts to have signed its policies (files.trusted_keys[.NAME]).
+struct TrustedKeyFile {
+  std::string name;  // "trusted_keys", or NAME
+  RobotDocument file;
+};
+
 struct RobotModel {
   std::string name, description;
   std::string path, dir;  // robot.yaml and its folder
@@ -153,7 +160,10 @@ struct RobotModel {
   std::vector<SignalSpec> signals;
   PhaseSpec phases;
   SupervisorSpec supervisor;
-  std::map<std::string, RobotDocument> documents;  // by role: "plant", "layouts.hard", "stand_trajectory", ...
+  std::optional<RobotDocument> dds_profile;       // files.dds_profile: Fast DDS XML profiles (transports of kind dds)
+  std::optional<RobotDocument> stand_trajectory;  // files.stand_trajectory: the robot's own joint trajectory
+  std::vector<TrustedKeyFile> trusted_keys;       // files.trusted_keys[.NAME] (PEM); none: unsigned blobs run
+  std::map<std::string, RobotDocument> documents;  // the robot-specific files by role: "plant", "layouts.hard", ...
   std::uint64_t hash = 0;                          // FNV-1a over every file read, in order
   // The supervisor's model at this tick period (derived; validated at load).
   safety::SupervisorModel supervisor_model;

@@ -51,9 +51,9 @@ Result<DdsOptions> ParticipantOptions(const robot::RobotModel& model, const robo
                                       DdsOptions caller) {
   caller.participant_profile = transport.dds.participant_profile;
   if (caller.profile_file.empty() && caller.profile_xml.empty()) {
-    auto doc = model.Document("dds_profile");  // read with the robot
-    if (!doc) return std::move(doc).error();
-    caller.profile_xml = (*doc)->text;
+    if (!model.dds_profile)
+      return DdsError(model.path + ": transport '" + transport.name + "' of kind dds, but files names no dds_profile");
+    caller.profile_xml = model.dds_profile->text;  // read with the robot
   }
   return caller;
 }

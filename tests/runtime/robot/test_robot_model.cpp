@@ -127,7 +127,11 @@ TEST_CASE("robot model: the quadruped - motors and IMU from the CAN map and the 
   CHECK(m.phases.enable_motors);
   CHECK(m.phases.arming_timeout_ticks == 1000);
   CHECK(m.phases.damping_ticks == 500);
-  CHECK(m.Document("stand_trajectory").ok());
+  REQUIRE(m.stand_trajectory.has_value());
+  CHECK(m.stand_trajectory->path.find("stand_trajectory.yaml") != std::string::npos);
+  CHECK(m.dds_profile.has_value());
+  CHECK(m.trusted_keys.empty());
+  CHECK_FALSE(m.Document("stand_trajectory").ok());  // a file the runtime reads itself is no document
 }
 
 TEST_CASE("robot model: another tick period - stale ages, rates and the policy period follow") {
