@@ -1,6 +1,6 @@
 // A scripted trajectory as the loop's command source (the stand test): joint sinusoids around the
 // default pose, q = default + A sin(2 pi f t + phi) - A sin(phi), for duration_s, from a file like
-// models/quadruped/stand_trajectory.yaml (the robot's `stand_trajectory` document). It tracks the
+// models/quadruped/stand_trajectory.yaml (the robot's files.stand_trajectory). It tracks the
 // measured positions against it. Works for any robot with motors.
 #pragma once
 
