@@ -1,6 +1,6 @@
 // runtime/loop over an in-memory transport: the quadruped's phases with the stand trajectory
-// (what each motor is sent in each phase, no allocation), a silent motor (safe-stop naming it,
-// then e-stop switching every motor off), a walking policy's observation from generic signal
+// (what each motor is sent in each phase, no allocation), the diffbot's velocity-commanded wheels, a silent motor
+// (safe-stop naming it, then e-stop switching every motor off), a walking policy's observation from generic signal
 // names (IMU gyro, gravity from the orientation, an operator's command, joint q / dq, the last
 // action) run every 20 ticks with its action held between, and the source's failure as a named
 // supervisor cause.
@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,12 @@ struct Bench {
       const robot::MotorSpec& mo = m.motors[k];
       if (t.writes == 0 || t.motors[k] == MotorCommand::kNone) continue;
       if (static_cast<int>(k) == silent && tick >= silent_from) continue;
-      const double q = t.motors[k] == MotorCommand::kCommand ? t.command[mo.q] : data.fields[mo.q_field];
-      const double reply[3] = {q, 0.0, 0.0};
+      // A position-commanded joint is where it was commanded; a velocity-commanded one turns at
+      // the commanded speed.
+      const bool commanded = t.motors[k] == MotorCommand::kCommand;
+      const double dq = commanded && mo.velocity_commanded() ? t.command[mo.dq] : 0.0;
+      const double q = commanded && !mo.velocity_commanded() ? t.command[mo.q] : data.fields[mo.q_field] + dq * 1e-3;
+      const double reply[3] = {q, dq, 0.0};
       t.Put(m, mo.stream, reply);
     }
     const int imu = m.StreamIndex("base_imu");
@@ -113,6 +118,58 @@ TEST_CASE("loop: the quadruped's phases - arming, stand-up, hold, the trajectory
   for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
   CHECK(b.Step() == loop::TickStatus::kDone);  // every motor answered the motor-off frame
   CHECK(b.loop->supervisor().mode == Mode::kNominal);
+}
+
+TEST_CASE("loop: velocity-commanded wheels - zero speed in stand-up and hold, speeds in run, braked in damping") {
+  const robot::RobotModel& m = test::DiffbotRobot();
+  auto trajectory = loop::RobotTrajectory(m);
+  REQUIRE_MESSAGE(trajectory.ok(), trajectory.error().message);
+  loop::TrajectorySource source(m, *trajectory);
+  Bench b(m, &source);
+  const robot::MotorSpec &left = m.motors[0], &right = m.motors[1], &head = m.motors[2];
+  b.loop->Arm();
+  b.Until(Phase::kStandUp, 5);
+  // Stand-up: the head ramps to its default pose; the wheels hold zero speed with their velocity gain.
+  for (int k = 0; k < 50; ++k) b.Step();
+  CHECK(b.t.command[head.q] > 0.0);
+  CHECK(b.t.command[head.q] < 0.3);
+  for (const auto* w : {&left, &right}) {
+    CHECK(b.t.command[w->dq] == 0.0);
+    CHECK(b.t.command[w->kd] == 0.3);
+    CHECK(b.t.command[w->tau] == 0.0);
+  }
+  b.Until(Phase::kHold, 100);
+  b.Step();
+  CHECK(b.t.command[head.q] == 0.3);
+  CHECK(b.t.command[left.dq] == 0.0);
+  b.Until(Phase::kRun, 100);
+  for (int k = 0; k < 300; ++k) b.Step();
+  // Run: the trajectory's speeds (left 12 + 3 sin(4 pi t), right -8); the wheels' angles grow
+  // past any MIT range, unbounded, with no finding.
+  CHECK(b.t.command[left.dq] == doctest::Approx(12.0 + 3.0 * std::sin(4 * std::numbers::pi * 0.3)).epsilon(1e-9));
+  CHECK(b.t.command[right.dq] == -8.0);
+  CHECK(b.data.fields[right.q_field] < -2.0);
+  const double travelled = b.data.fields[left.q_field];
+  b.Until(Phase::kHold, 1000);  // the trajectory ended: zero speed, the head at its default pose
+  CHECK(b.data.fields[left.q_field] > travelled + 5.0);
+  CHECK(b.data.fields[left.q_field] > 3.2);  // beyond the wheel drivers' MIT range [-pi, pi)
+  b.Step();
+  CHECK(b.t.command[left.dq] == 0.0);
+  CHECK(source.rms_speed_error_rad_s() < 0.5);  // the bench's wheels follow exactly, a tick late
+  CHECK(source.rms_tracking_error_rad() < 0.01);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  CHECK(b.loop->supervisor().counts[safety::Cause::kInvalidSample] == 0);
+  // Damping: no stiffness anywhere, dq_des 0 and the damping gain: the wheels brake to a stop.
+  b.loop->RequestStop();
+  b.Step();
+  CHECK(b.loop->phase() == Phase::kDamping);
+  for (const auto& mo : m.motors) {
+    CHECK(b.t.command[mo.dq] == 0.0);
+    CHECK(b.t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
+    CHECK(b.t.command[mo.tau] == 0.0);
+  }
+  CHECK(b.t.command[head.kp] == 0.0);
+  b.Until(Phase::kDone, 200);
 }
 
 TEST_CASE("loop: a silent motor - degraded, safe-stop naming it within 3 ticks, e-stop after 500 switches off") {
@@ -229,6 +286,43 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
   b.Step();
   CHECK(b.loop->supervisor().mode == Mode::kSafeStop);
   CHECK(b.loop->supervisor().entered[2].cause == safety::Cause::kSignalLimit);
+}
+
+TEST_CASE("loop: a policy on velocity-commanded wheels - speeds as actions, a position target refused") {
+  const robot::RobotModel& m = test::DiffbotRobot();
+  policy::PolicySpec spec =
+      policy::MakeRandomSpec({m.io->observation_size(), 16, m.io->action_size()}, policy::Activation::kTanh, 5);
+  robot::ApplyLayoutToSpec(*m.io, spec);
+  auto policy = policy::PolicyModel::FromSpec(spec);
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  Bench b(m, source->get());
+  b.loop->Arm();
+  b.Until(Phase::kRun, 300);
+  for (int k = 0; k < 200; ++k) b.Step();
+  CHECK((*source)->runs() == 20);  // every 10 ticks
+  const robot::MotorSpec& left = m.motors[0];
+  // The action is the wheel's speed (scale 8, clamped to [-15, 15]); its kd stays the velocity gain
+  // (a policy's gains are a position-commanded motor's).
+  CHECK(b.t.command[left.dq] != 0.0);
+  CHECK(std::abs(b.t.command[left.dq]) <= 15.0);
+  CHECK(b.t.command[left.kd] == 0.3);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  // A layout giving a wheel a position target is refused naming the action and the joint.
+  robot::IoLayout layout = *m.io;
+  layout.actions[0].command = "q_des_left_wheel";
+  policy::PolicySpec bad = spec;
+  robot::ApplyLayoutToSpec(layout, bad);
+  robot::RobotModel with = m;
+  with.io = layout;
+  auto bad_policy = policy::PolicyModel::FromSpec(bad);
+  REQUIRE(bad_policy.ok());
+  auto refused = loop::PolicySource::Create(with, *bad_policy);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message ==
+        "io layout 'diffbot': actions[0] 'left_wheel': command 'q_des_left_wheel': joint 'left_wheel' is "
+        "velocity-commanded (continuous): it takes no position target (command dq_des_left_wheel)");
 }
 
 namespace {
