@@ -11,6 +11,7 @@
 #include "runtime/core/crc32.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
+#include "runtime/robot/io_layout.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -149,7 +150,23 @@ int Synth(const SynthOptions& o) {
                  o.activation.c_str());
     return 2;
   }
-  const PolicySpec spec = policy::MakeRandomSpec(widths, act, o.seed);
+  PolicySpec spec = policy::MakeRandomSpec(widths, act, o.seed);
+  if (!o.layout.empty()) {  // the layout's names, hash and action map: a blob a robot's controller takes
+    auto layout = robot::LoadIoLayout(o.layout);
+    if (!layout) {
+      std::fprintf(stderr, "pbppo synth: --layout: %s\n", layout.error().message.c_str());
+      return 2;
+    }
+    if (widths.front() != layout->observation_size() || widths.back() != layout->action_size()) {
+      std::fprintf(stderr,
+                   "pbppo synth: --widths '%s': layout '%s' has %u observations and %u actions: the widths must "
+                   "start with %u and end with %u\n",
+                   o.widths.c_str(), o.layout.c_str(), layout->observation_size(), layout->action_size(),
+                   layout->observation_size(), layout->action_size());
+      return 2;
+    }
+    robot::ApplyLayoutToSpec(*layout, spec);
+  }
   if (auto st = policy::WriteBlobFile(o.out, spec); !st) {
     std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
     return 1;

@@ -15,6 +15,7 @@ struct SynthOptions {
   std::uint64_t seed = 1;
   std::string out;
   std::size_t golden_rows = 32;
+  std::string layout;  // an io_layout.yaml: its names, hash and action map (widths must fit it)
 };
 int Synth(const SynthOptions& o);
 

@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
   synth->add_option("--seed", synth_opts.seed, "Seed for the weights")->check(pbppo::cli_checks::NonNegativeInteger());
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
+  synth->add_option("--layout", synth_opts.layout,
+                    "A robot's IO layout (io_layout.yaml): the blob takes its observations and gives its actions");
 
   pbppo::trainer::TrainOptions train_opts;
   bool train_quiet = false;

@@ -72,6 +72,19 @@ struct Bench {
     for (int k = 0; k < limit && loop->phase() != p; ++k) Step();
     REQUIRE(loop->phase() == p);
   }
+  // A stop request: the next tick damps every motor (kp 0 where it has one, dq_des 0, the damping
+  // gain, no torque).
+  void StopAndCheckDamping() {
+    loop->RequestStop();
+    Step();
+    CHECK(loop->phase() == Phase::kDamping);
+    for (const auto& mo : m.motors) {
+      if (!mo.velocity_commanded()) CHECK(t.command[mo.kp] == 0.0);
+      CHECK(t.command[mo.dq] == 0.0);
+      CHECK(t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
+      CHECK(t.command[mo.tau] == 0.0);
+    }
+  }
 };
 
 }  // namespace
@@ -105,14 +118,7 @@ TEST_CASE("loop: the quadruped's phases - arming, stand-up, hold, the trajectory
   b.Until(Phase::kHold, 2100);  // the trajectory ended: the default pose again
   CHECK(source.ticks() == 2000);
   CHECK(source.rms_tracking_error_rad() < 0.01);  // the bench's joints follow exactly, a tick late
-  b.loop->RequestStop();
-  b.Step();
-  CHECK(b.loop->phase() == Phase::kDamping);
-  for (const auto& mo : m.motors) {
-    CHECK(b.t.command[mo.kp] == 0.0);
-    CHECK(b.t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
-    CHECK(b.t.command[mo.tau] == 0.0);
-  }
+  b.StopAndCheckDamping();
   b.Until(Phase::kMotorOff, 600);
   CHECK(b.loop->phase_start(Phase::kMotorOff) - b.loop->phase_start(Phase::kDamping) == m.phases.damping_ticks);
   for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
@@ -160,15 +166,7 @@ TEST_CASE("loop: velocity-commanded wheels - zero speed in stand-up and hold, sp
   CHECK(b.loop->supervisor().mode == Mode::kNominal);
   CHECK(b.loop->supervisor().counts[safety::Cause::kInvalidSample] == 0);
   // Damping: no stiffness anywhere, dq_des 0 and the damping gain: the wheels brake to a stop.
-  b.loop->RequestStop();
-  b.Step();
-  CHECK(b.loop->phase() == Phase::kDamping);
-  for (const auto& mo : m.motors) {
-    CHECK(b.t.command[mo.dq] == 0.0);
-    CHECK(b.t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
-    CHECK(b.t.command[mo.tau] == 0.0);
-  }
-  CHECK(b.t.command[head.kp] == 0.0);
+  b.StopAndCheckDamping();
   b.Until(Phase::kDone, 200);
 }
 
@@ -224,18 +222,36 @@ std::string WalkingRobot() {
 
 }  // namespace
 
+namespace {
+
+// A policy of random weights for `layout` (one tanh hidden layer) and the loop's source running it
+// on `m` (or the reason it is refused).
+struct RandomPolicy {
+  policy::PolicyModel model;
+  Result<std::unique_ptr<loop::PolicySource>> source;
+
+  RandomPolicy(const robot::RobotModel& m, const robot::IoLayout& layout, std::uint32_t hidden, std::uint64_t seed)
+      : model(Make(layout, hidden, seed)), source(loop::PolicySource::Create(m, model)) {}
+  static policy::PolicyModel Make(const robot::IoLayout& layout, std::uint32_t hidden, std::uint64_t seed) {
+    policy::PolicySpec spec = policy::MakeRandomSpec({layout.observation_size(), hidden, layout.action_size()},
+                                                     policy::Activation::kTanh, seed);
+    robot::ApplyLayoutToSpec(layout, spec);
+    auto model = policy::PolicyModel::FromSpec(spec);
+    REQUIRE(model.ok());
+    return std::move(*model);
+  }
+};
+
+}  // namespace
+
 TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the action held between") {
   auto loaded = robot::LoadRobotModel(WalkingRobot());
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
   const robot::RobotModel& m = *loaded;
   REQUIRE(m.policy_period_ticks == 20);
-  policy::PolicySpec spec =
-      policy::MakeRandomSpec({m.io->observation_size(), 32, m.io->action_size()}, policy::Activation::kTanh, 3);
-  robot::ApplyLayoutToSpec(*m.io, spec);
-  auto policy = policy::PolicyModel::FromSpec(spec);
-  REQUIRE(policy.ok());
-  auto source = loop::PolicySource::Create(m, *policy);
-  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  const RandomPolicy p(m, *m.io, 32, 3);
+  REQUIRE_MESSAGE(p.source.ok(), p.source.error().message);
+  const auto& source = p.source;
   Bench b(m, source->get());
   // A body rolled by 0.2 rad about x: gravity in the base frame (0, -sin 0.2, -cos 0.2).
   b.quat[0] = std::cos(0.1);
@@ -290,13 +306,9 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
 
 TEST_CASE("loop: a policy on velocity-commanded wheels - speeds as actions, a position target refused") {
   const robot::RobotModel& m = test::DiffbotRobot();
-  policy::PolicySpec spec =
-      policy::MakeRandomSpec({m.io->observation_size(), 16, m.io->action_size()}, policy::Activation::kTanh, 5);
-  robot::ApplyLayoutToSpec(*m.io, spec);
-  auto policy = policy::PolicyModel::FromSpec(spec);
-  REQUIRE(policy.ok());
-  auto source = loop::PolicySource::Create(m, *policy);
-  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  const RandomPolicy p(m, *m.io, 16, 5);
+  REQUIRE_MESSAGE(p.source.ok(), p.source.error().message);
+  const auto& source = p.source;
   Bench b(m, source->get());
   b.loop->Arm();
   b.Until(Phase::kRun, 300);
@@ -310,17 +322,11 @@ TEST_CASE("loop: a policy on velocity-commanded wheels - speeds as actions, a po
   CHECK(b.t.command[left.kd] == 0.3);
   CHECK(b.loop->supervisor().mode == Mode::kNominal);
   // A layout giving a wheel a position target is refused naming the action and the joint.
-  robot::IoLayout layout = *m.io;
-  layout.actions[0].command = "q_des_left_wheel";
-  policy::PolicySpec bad = spec;
-  robot::ApplyLayoutToSpec(layout, bad);
   robot::RobotModel with = m;
-  with.io = layout;
-  auto bad_policy = policy::PolicyModel::FromSpec(bad);
-  REQUIRE(bad_policy.ok());
-  auto refused = loop::PolicySource::Create(with, *bad_policy);
-  REQUIRE_FALSE(refused.ok());
-  CHECK(refused.error().message ==
+  with.io->actions[0].command = "q_des_left_wheel";
+  const RandomPolicy refused(with, *with.io, 16, 5);
+  REQUIRE_FALSE(refused.source.ok());
+  CHECK(refused.source.error().message ==
         "io layout 'diffbot': actions[0] 'left_wheel': command 'q_des_left_wheel': joint 'left_wheel' is "
         "velocity-commanded (continuous): it takes no position target (command dq_des_left_wheel)");
 }
