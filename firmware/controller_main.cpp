@@ -375,7 +375,8 @@ int main(int argc, char** argv) {
     std::printf("link: send failures %llu, stopped by %s\n", static_cast<unsigned long long>(auv->send_failures()),
                 episode_end.load() ? "the vehicle's episode end" : (r.stopped ? "a signal" : "--ticks or --duration"));
   if (source->trajectory != nullptr && source->trajectory->ticks() > 0)
-    std::printf("trajectory tracking RMS %.4f rad over %llu ticks\n", source->trajectory->rms_tracking_error_rad(),
+    std::printf("trajectory tracking RMS %.4f rad, %.4f rad/s (velocity-commanded joints) over %llu ticks\n",
+                source->trajectory->rms_tracking_error_rad(), source->trajectory->rms_speed_error_rad_s(),
                 static_cast<unsigned long long>(source->trajectory->ticks()));
   if (recorder)
     std::printf("log: %s, %llu records, %llu dropped\n", o.record.c_str(),

@@ -341,20 +341,16 @@ class UrdfParser {
     const XmlElement* limit = e.Child("limit");
     const std::string w = where + ".limit";
     if (j->type == UrdfJointType::kContinuous) {
-      // No position limits (lower and upper, when given, are ignored); effort and velocity as given.
+      // No position limits: lower and upper, when given, are ignored; <limit> itself is optional.
       j->lower_rad = -HUGE_VAL;
       j->upper_rad = HUGE_VAL;
-      if (limit != nullptr) {
-        if (auto s = Numbers(limit, w, "effort", &j->effort_nm, 1); !s) return s;
-        if (auto s = Numbers(limit, w, "velocity", &j->velocity_rad_s, 1); !s) return s;
-        if (auto s = Positive(j->effort_nm, w + ".effort"); !s) return s;
-        if (auto s = Positive(j->velocity_rad_s, w + ".velocity"); !s) return s;
-      }
     } else {
       if (limit == nullptr)
         return Fail(where, "missing element <limit> (a revolute joint needs lower, upper, effort, velocity)");
       if (auto s = Numbers(limit, w, "lower", &j->lower_rad, 1); !s) return s;
       if (auto s = Numbers(limit, w, "upper", &j->upper_rad, 1); !s) return s;
+    }
+    if (limit != nullptr) {
       if (auto s = Numbers(limit, w, "effort", &j->effort_nm, 1); !s) return s;
       if (auto s = Numbers(limit, w, "velocity", &j->velocity_rad_s, 1); !s) return s;
       if (!(j->lower_rad < j->upper_rad))

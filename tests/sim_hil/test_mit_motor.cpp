@@ -106,7 +106,7 @@ TEST_CASE("MIT driver faults: seeded drops with bounded bursts - silence from a 
   CHECK(t.ignored_silent == 1);
 }
 
-TEST_CASE("MIT driver: a continuous joint's driver wraps its position into the MIT range; a velocity command") {
+TEST_CASE("MIT driver: a continuous joint's driver wraps its position into the MIT range - a velocity command") {
   auto c = Config();
   c.wrap_position = true;
   auto s = sim::MakeMitMotorState(c);
