@@ -44,9 +44,11 @@ const CommandSpec& Command(const RobotModel& m, const char* name) {
 TEST_CASE("robot model: loading a robot reads each file it names exactly once") {
   // robot.yaml, and for the AUV the IO layout, plant, DDS profile and three layouts; for the
   // quadruped the description, its URDF, the IO layout, the CAN map, the stand trajectory, the DDS
-  // profile and the walking task.
+  // profile and the walking task; for the diffbot its description, URDF, IO layout, CAN map and
+  // trajectory.
   for (const auto& [robot, count] :
-       {std::pair{"models/auv/robot.yaml", 7u}, std::pair{"models/quadruped/robot.yaml", 8u}}) {
+       {std::pair{"models/auv/robot.yaml", 7u}, std::pair{"models/quadruped/robot.yaml", 8u},
+        std::pair{"tests/data/diffbot/robot.yaml", 6u}}) {
     CAPTURE(robot);
     const auto before = FileReads();
     const RobotModel m = Load(robot);
