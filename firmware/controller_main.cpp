@@ -342,7 +342,8 @@ int Run(const Options& o) {
   for (const robot::Transport* t : ts.all)
     if (const std::string s = t->Summary(); !s.empty()) std::printf("%s\n", s.c_str());
   if (source->trajectory != nullptr && source->trajectory->ticks() > 0)
-    std::printf("trajectory tracking RMS %.4f rad over %llu ticks\n", source->trajectory->rms_tracking_error_rad(),
+    std::printf("trajectory tracking RMS %.4f rad, %.4f rad/s (velocity-commanded joints) over %llu ticks\n",
+                source->trajectory->rms_tracking_error_rad(), source->trajectory->rms_speed_error_rad_s(),
                 static_cast<unsigned long long>(source->trajectory->ticks()));
   if (recorder)
     std::printf("log: %s, %llu records, %llu dropped\n", o.record.c_str(),

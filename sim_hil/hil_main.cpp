@@ -26,6 +26,12 @@
 // measurement, with per-phase tracking and the real-time factor) or at 1 kHz on the controller's
 // clock (--realtime: its tick latency). --operator dds: the velocity commands come over DDS from
 // another process (pbppo-operator, a ROS 2 node with --dds-naming ros2), at real time.
+//
+//   pbppo-hil rotors --robot ROBOT.yaml [--can IF0[,IF1...]] [--lockstep] [--duration S]
+//
+// Any robot of a CAN map on a stand (sim_hil/rotor_hil.hpp): every actuated joint a free rotor
+// behind its emulated driver, the IMU level and still; for a pbppo-controller in another process,
+// free-running or in lock-step as above.
 #include <signal.h>
 
 #include <CLI/CLI.hpp>
@@ -39,6 +45,7 @@
 #include "runtime/transport/dds/dds_endpoint.hpp"
 #include "sim_hil/auv_hil.hpp"
 #include "sim_hil/quadruped_main.hpp"
+#include "sim_hil/rotor_hil.hpp"
 
 namespace {
 
@@ -93,7 +100,8 @@ void AddAuvOptions(CLI::App& app, pbppo::sim::AuvHilOptions& o) {
 int Usage(const char* why) {
   std::fprintf(stderr,
                "pbppo-hil: %s\nusage: pbppo-hil auv ... (pbppo-hil auv --help)\n"
-               "       pbppo-hil quadruped ... (pbppo-hil quadruped --help)\n",
+               "       pbppo-hil quadruped ... (pbppo-hil quadruped --help)\n"
+               "       pbppo-hil rotors ... (pbppo-hil rotors --help)\n",
                why);
   return 2;
 }
@@ -115,9 +123,10 @@ int main(int argc, char** argv) {
     signal(SIGTERM, OnSignal);
     return sim::RunAuvHil(o, g_stop);
   }
-  if (argc < 2 || std::strcmp(argv[1], "quadruped") != 0)
-    return Usage("the first argument must be 'auv' or 'quadruped'");
+  const bool rotors = argc >= 2 && std::strcmp(argv[1], "rotors") == 0;
+  if (argc < 2 || (!rotors && std::strcmp(argv[1], "quadruped") != 0))
+    return Usage("the first argument must be 'auv', 'quadruped' or 'rotors'");
   signal(SIGINT, OnSignal);
   signal(SIGTERM, OnSignal);
-  return sim::RunQuadrupedHil(argc - 1, argv + 1, g_stop);
+  return rotors ? sim::RunRotorHil(argc - 1, argv + 1, g_stop) : sim::RunQuadrupedHil(argc - 1, argv + 1, g_stop);
 }

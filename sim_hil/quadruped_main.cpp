@@ -1,7 +1,5 @@
 #include "sim_hil/quadruped_main.hpp"
 
-#include <time.h>
-
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -280,55 +278,21 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
               hil.plant.mount == Mount::kStand ? "on a stand" : "on the ground", sim.motor_count(), o.robot.c_str(),
               sim.interface(0).c_str(), o.lockstep ? "lock-step" : "free-running at 1 kHz");
   std::fflush(stdout);
-  std::uint64_t overruns = 0;
-  timespec next{};
-  clock_gettime(CLOCK_MONOTONIC, &next);
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto limit = o.duration_s > 0 ? static_cast<std::uint64_t>(o.duration_s / model->tick_period_s) : UINT64_MAX;
-  const auto period_ns = static_cast<long>(model->tick_period_s * 1e9);
-  bool ok = true;
-  while (!stop.load() && sim.tick() < limit) {
-    if (o.lockstep) {
-      ok = sim.Tick(sim.frames_per_tick().data(), 100'000'000);
-    } else {
-      ok = sim.Tick(nullptr, 0);
-      next.tv_nsec += period_ns;
-      while (next.tv_nsec >= 1'000'000'000) {
-        next.tv_nsec -= 1'000'000'000;
-        ++next.tv_sec;
-      }
-      timespec now{};
-      clock_gettime(CLOCK_MONOTONIC, &now);
-      if (now.tv_sec > next.tv_sec || (now.tv_sec == next.tv_sec && now.tv_nsec > next.tv_nsec)) ++overruns;
-      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
-    }
-    if (!ok) break;
-  }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto limit = o.duration_s > 0 ? static_cast<std::uint64_t>(o.duration_s / model->tick_period_s) : 0;
+  const HilLoopResult r = RunHilLoop(
+      [&] { return o.lockstep ? sim.Tick(sim.frames_per_tick().data(), 100'000'000) : sim.Tick(nullptr, 0); },
+      o.lockstep, static_cast<std::int64_t>(model->tick_period_s * 1e9), limit, stop);
   const double sim_s = static_cast<double>(sim.tick()) * model->tick_period_s;
   std::printf("pbppo-hil: %.3f s simulated in %.3f s wall (%.3f simulated s per wall s), %llu overruns%s\n", sim_s,
-              wall, sim_s / wall, static_cast<unsigned long long>(overruns), ok ? "" : ", PLANT FAILED");
-  const robot::CanMap& map = *model->can;
-  for (std::size_t m = 0; m < sim.motor_count(); ++m) {
-    const auto& s = sim.motor(m);
-    std::printf("  %-7s frames %llu replies %llu dropped %llu watchdog %llu motor_mode %d q %.4f\n",
-                map.motors[m].joint.c_str(), static_cast<unsigned long long>(s.frames),
-                static_cast<unsigned long long>(s.replies), static_cast<unsigned long long>(s.dropped),
-                static_cast<unsigned long long>(s.timeouts), s.motor_mode ? 1 : 0,
-                sim.plant().q_rad(sim.joint_of_motor(m)));
-  }
-  for (std::size_t b = 0; b < sim.bus_count(); ++b) {
-    const auto& s = sim.bus_stats(b);
-    std::printf("  bus %s: rx %llu tx %llu unknown ids %llu wrong lengths %llu error frames %llu\n",
-                sim.interface(b).c_str(), static_cast<unsigned long long>(s.rx_frames),
-                static_cast<unsigned long long>(s.tx_frames), static_cast<unsigned long long>(s.unknown_ids),
-                static_cast<unsigned long long>(s.wrong_lengths), static_cast<unsigned long long>(s.error_frames));
-  }
+              r.wall_s, sim_s / r.wall_s, static_cast<unsigned long long>(r.overruns), r.ok ? "" : ", PLANT FAILED");
+  std::vector<double> q(sim.plant().joint_count());
+  for (std::size_t j = 0; j < q.size(); ++j) q[j] = sim.plant().q_rad(j);
+  PrintDeviceSummary(sim.devices(), *model->can, q.data());
   if (hil.plant.mount == Mount::kGround) {
     const BaseState& b = sim.plant().base();
     std::printf("  base at (%.3f, %.3f, %.3f) m\n", b.position_m[0], b.position_m[1], b.position_m[2]);
   }
-  return ok ? 0 : 1;
+  return r.ok ? 0 : 1;
 }
 
 }  // namespace pbppo::sim

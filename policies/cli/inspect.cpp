@@ -5,14 +5,13 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <sstream>
 #include <vector>
 
 #include "runtime/core/crc32.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/reference.hpp"
-#include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/io_layout.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -127,45 +126,22 @@ int Inspect(const std::string& path, bool json, bool weights) {
 }
 
 int Synth(const SynthOptions& o) {
-  // A robot's layout: the blob fits it (a test policy for a new robot's plumbing).
-  std::optional<robot::RobotModel> robot;
-  if (!o.robot.empty()) {
-    auto m = robot::LoadRobotModel(o.robot);
-    if (!m) {
-      std::fprintf(stderr, "pbppo synth: %s\n", m.error().message.c_str());
-      return 2;
-    }
-    if (!m->io) {
-      std::fprintf(stderr, "pbppo synth: --robot %s: the robot names no io_layout\n", o.robot.c_str());
-      return 2;
-    }
-    robot = std::move(*m);
-  }
-  const std::string shape =
-      !o.widths.empty() ? o.widths
-      : robot ? std::to_string(robot->io->observation_size()) + "-64-64-" + std::to_string(robot->io->action_size())
-              : "48-512-256-128-12";
   std::vector<std::uint32_t> widths;
-  std::stringstream ss(shape);
+  std::stringstream ss(o.widths);
   std::string part;
   while (std::getline(ss, part, '-')) {
     char* end = nullptr;
     const unsigned long v = std::strtoul(part.c_str(), &end, 10);
     if (part.empty() || *end != '\0' || v == 0 || v > 100000) {
       std::fprintf(stderr, "pbppo synth: --widths: '%s' is not a positive width in '%s'\n", part.c_str(),
-                   shape.c_str());
+                   o.widths.c_str());
       return 2;
     }
     widths.push_back(static_cast<std::uint32_t>(v));
   }
   if (widths.size() < 2) {
     std::fprintf(stderr, "pbppo synth: --widths '%s' needs at least input and output, e.g. 24-64-64-2\n",
-                 shape.c_str());
-    return 2;
-  }
-  if (robot && (widths.front() != robot->io->observation_size() || widths.back() != robot->io->action_size())) {
-    std::fprintf(stderr, "pbppo synth: --widths '%s': the layout of %s takes %u inputs and gives %u outputs\n",
-                 shape.c_str(), o.robot.c_str(), robot->io->observation_size(), robot->io->action_size());
+                 o.widths.c_str());
     return 2;
   }
   policy::Activation act{};
@@ -175,7 +151,22 @@ int Synth(const SynthOptions& o) {
     return 2;
   }
   PolicySpec spec = policy::MakeRandomSpec(widths, act, o.seed);
-  if (robot) robot::ApplyLayoutToSpec(*robot->io, spec);
+  if (!o.layout.empty()) {  // the layout's names, hash and action map: a blob a robot's controller takes
+    auto layout = robot::LoadIoLayout(o.layout);
+    if (!layout) {
+      std::fprintf(stderr, "pbppo synth: --layout: %s\n", layout.error().message.c_str());
+      return 2;
+    }
+    if (widths.front() != layout->observation_size() || widths.back() != layout->action_size()) {
+      std::fprintf(stderr,
+                   "pbppo synth: --widths '%s': layout '%s' has %u observations and %u actions: the widths must "
+                   "start with %u and end with %u\n",
+                   o.widths.c_str(), o.layout.c_str(), layout->observation_size(), layout->action_size(),
+                   layout->observation_size(), layout->action_size());
+      return 2;
+    }
+    robot::ApplyLayoutToSpec(*layout, spec);
+  }
   if (auto st = policy::WriteBlobFile(o.out, spec); !st) {
     std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
     return 1;

@@ -10,12 +10,12 @@ namespace pbppo::cli {
 int Inspect(const std::string& path, bool json, bool weights = false);
 
 struct SynthOptions {
-  std::string widths;  // default: 48-512-256-128-12, or with a robot its layout's IN-64-64-OUT
-  std::string robot;   // a robot.yaml: the blob takes its IO layout (names, hash, action map)
+  std::string widths = "48-512-256-128-12";
   std::string activation = "elu";
   std::uint64_t seed = 1;
   std::string out;
   std::size_t golden_rows = 32;
+  std::string layout;  // an io_layout.yaml: its names, hash and action map (widths must fit it)
 };
 int Synth(const SynthOptions& o);
 

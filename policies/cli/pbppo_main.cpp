@@ -26,16 +26,14 @@ int main(int argc, char** argv) {
 
   pbppo::cli::SynthOptions synth_opts;
   auto* synth = app.add_subcommand("synth", "Write a random-weight blob of a given shape, with golden vectors");
-  synth->add_option(
-      "--widths", synth_opts.widths,
-      "Layer widths, input first, e.g. 48-512-256-128-12 (default; with --robot: its layout's IN-64-64-OUT)");
-  synth->add_option("--robot", synth_opts.robot,
-                    "A robot.yaml whose IO layout the blob takes (names, hash, action map): a test policy for a robot");
+  synth->add_option("--widths", synth_opts.widths, "Layer widths, input first, e.g. 48-512-256-128-12");
   synth->add_option("--activation", synth_opts.activation,
                     "Hidden activation: identity, tanh, elu, relu, leaky_relu (alpha 0.01)");
   synth->add_option("--seed", synth_opts.seed, "Seed for the weights")->check(pbppo::cli_checks::NonNegativeInteger());
   synth->add_option("--golden-rows", synth_opts.golden_rows, "Golden vector rows")->check(CLI::Range(1, 100000));
   synth->add_option("--out", synth_opts.out, "Output blob path")->required();
+  synth->add_option("--layout", synth_opts.layout,
+                    "A robot's IO layout (io_layout.yaml): the blob takes its observations and gives its actions");
 
   pbppo::trainer::TrainOptions train_opts;
   bool train_quiet = false;

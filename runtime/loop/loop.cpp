@@ -156,12 +156,14 @@ struct TickImpl {
   }
 
   // The stand-up ramp: a smoothstep from the measured pose to the default pose. True at its end.
+  // Velocity-commanded motors (wheels) hold zero speed throughout (their neutral commands).
   static bool StandUp(const RobotModel& m, LoopData& l, std::uint64_t in_phase) noexcept {
     const double T = static_cast<double>(m.phases.stand_up_ticks) * m.tick_period_s;
     const double x = std::min(1.0, static_cast<double>(in_phase) / static_cast<double>(m.phases.stand_up_ticks));
     const double s = x * x * (3 - 2 * x), ds = 6 * x * (1 - x) / T;
     for (std::size_t k = 0; k < m.motors.size(); ++k) {
       const robot::MotorSpec& mo = m.motors[k];
+      if (mo.velocity_commanded()) continue;
       l.desired_[mo.q] = l.q0_[k] + (mo.default_q_rad - l.q0_[k]) * s;
       l.desired_[mo.dq] = (mo.default_q_rad - l.q0_[k]) * ds;
     }

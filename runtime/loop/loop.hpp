@@ -16,7 +16,8 @@
 // replay reproduces the commands bit for bit.
 //
 // Phases. Arm() starts arming: robots with motors switch each on until it answers, then stand up
-// (a smoothstep from the measured pose to the default pose), hold, and run the command source;
+// (a smoothstep from the measured pose to the default pose; velocity-commanded motors, wheels,
+// hold zero speed), hold, and run the command source;
 // robots without motors run at once. RequestStop() shuts down: motors are damped (the
 // supervisor's safe-stop values), then switched off until each answers; a robot without motors
 // sends its e-stop command once (Shutdown). Every transition and every rise of the supervisor's

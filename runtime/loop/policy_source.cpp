@@ -25,6 +25,13 @@ Result<std::unique_ptr<PolicySource>> PolicySource::Create(const robot::RobotMod
   for (std::size_t i = 0; i < layout.actions.size(); ++i) {
     const robot::ActionElement& a = layout.actions[i];
     const int c = m.CommandIndex(a.command);
+    for (const robot::MotorSpec& mo : m.motors)
+      if (c < 0 && mo.velocity_commanded() && (a.command == "q_des_" + mo.joint || a.command == "kp_" + mo.joint))
+        return MakeError(ErrorCode::kMismatch, "io layout '" + layout.robot + "': actions[" + std::to_string(i) +
+                                                   "] '" + a.name + "': command '" + a.command + "': joint '" +
+                                                   mo.joint + "' is velocity-commanded" +
+                                                   (mo.continuous ? " (continuous)" : "") +
+                                                   ": it takes no position target (command dq_des_" + mo.joint + ")");
     if (c < 0) {
       std::string known;
       for (const auto& k : m.commands) known += (known.empty() ? "" : ", ") + k.name;
@@ -90,7 +97,7 @@ bool PolicySource::Compute(const robot::RobotModel& m, const robot::RobotData& d
   }
   if (have_action_)
     for (std::size_t i = 0; i < action_.size(); ++i) desired[command_of_action_[i]] = static_cast<double>(action_[i]);
-  for (const robot::MotorSpec& mo : m.motors) {  // the gains the policy was trained with
+  for (const robot::MotorSpec& mo : m.motors) {  // the gains the policy was trained with (position motors)
     if (mo.policy_kp >= 0) desired[mo.kp] = mo.policy_kp;
     if (mo.policy_kd >= 0) desired[mo.kd] = mo.policy_kd;
   }

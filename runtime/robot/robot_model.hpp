@@ -83,17 +83,28 @@ struct CommandSpec {
   double stop_rate = 0;     // per tick (derived)
 };
 
+// A command index a motor does not have (a velocity-commanded motor's q_des_ and kp_).
+inline constexpr std::uint32_t kNoCommand = 0xffffffffu;
+
 // An actuator that is switched on at arming and off at shutdown (an MIT driver), answering on
-// its stream.
+// its stream. A position-commanded motor has five commands (q_des_, dq_des_, kp_, kd_, tau_ff_);
+// a velocity-commanded one (a wheel) three (dq_des_, kd_, tau_ff_): its frames carry kp 0 and
+// p_des 0, so nothing can give it a position target.
 struct MotorSpec {
   std::string joint;
   std::uint32_t stream = 0;
   std::uint32_t q_field = 0, dq_field = 0, tau_field = 0;  // its reply
-  std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;    // its commands
-  double default_q_rad = 0;
+  std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;    // its commands (q, kp: kNoCommand when velocity)
+  JointControl control = JointControl::kPosition;
+  // A continuous joint: no position bound anywhere; q_<joint> is the multi-turn angle the transport
+  // unwraps from the driver's position, which wraps in the MIT range [p_min, p_max).
+  bool continuous = false;
+  double default_q_rad = 0;  // position-commanded: the pose stand-up ends in and hold keeps
   // The gains a policy's position targets are tracked with (robot.yaml motors.policy_gains); < 0: the
-  // commands' neutral gains.
+  // commands' neutral gains. Position-commanded motors only.
   double policy_kp = -1, policy_kd = -1;
+
+  bool velocity_commanded() const noexcept { return control == JointControl::kVelocity; }
 };
 
 // A signal declared in robot.yaml (runtime/robot/signals.hpp resolves and computes them).

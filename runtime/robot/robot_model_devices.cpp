@@ -90,6 +90,24 @@ Status Builder::CanDevices(const YAML::Node& root) {
     const MitRange& r = map.range_of(cm);
     const double tau = std::min({uj.effort_nm, r.t_max, -r.t_min});
     const double v = std::min({uj.velocity_rad_s, r.v_max, -r.v_min});
+    const bool velocity = body.velocity_commanded(j);
+    if (velocity && r.kp_min > 0)
+      return f.Fail(where, "actuator '" + map.actuators[cm.actuator].name + "' has kp_min " +
+                               YamlFields::Num(r.kp_min) + ": velocity-commanded joint '" + cm.joint +
+                               "' needs kp 0 exactly");
+    if (uj.continuous()) {
+      // The multi-turn angle is unwrapped from one reply to the next: the joint must turn less than
+      // half the MIT position range between two replies the supervisor still accepts.
+      const double gap_s = (proto.stale_after.lost + 1) * proto.period_s, turn = gap_s * factor * v;
+      if (!(turn < 0.5 * (r.p_max - r.p_min)))
+        return f.Fail("motors.stale_after.lost",
+                      YamlFields::Num(proto.stale_after.lost) + " periods without a reply let continuous joint '" +
+                          cm.joint + "' turn up to " + YamlFields::Num(turn) + " rad (" + YamlFields::Num(factor) +
+                          " x " + YamlFields::Num(v) + " rad/s for " + YamlFields::Num(gap_s) +
+                          " s) between two replies, not less than half its MIT position range [" +
+                          YamlFields::Num(r.p_min) + ", " + YamlFields::Num(r.p_max) +
+                          "]: its multi-turn angle could not be unwrapped");
+    }
     StreamSpec s = proto;
     s.name = cm.joint;
     s.device = static_cast<std::uint32_t>(k);
@@ -97,10 +115,13 @@ Status Builder::CanDevices(const YAML::Node& root) {
     MotorSpec mo;
     mo.joint = cm.joint;
     mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
+    mo.control = body.control[j];
+    mo.continuous = uj.continuous();
     mo.default_q_rad = body.default_q_rad[j];
-    mo.policy_kp = policy_kp;
-    mo.policy_kd = policy_kd;
+    mo.policy_kp = velocity ? -1 : policy_kp;
+    mo.policy_kd = velocity ? -1 : policy_kd;
     mo.q_field = static_cast<std::uint32_t>(m.fields.size());
+    // A continuous joint has no position bound: its field is only checked for being finite.
     PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - margin, uj.upper_rad + margin, where));
     mo.dq_field = mo.q_field + 1;
     PBPPO_TRY(AddField("dq_" + cm.joint, -factor * v, factor * v, where));
@@ -111,6 +132,10 @@ Status Builder::CanDevices(const YAML::Node& root) {
                        double stop_value, std::uint32_t* index) -> Status {
       CommandSpec c;
       c.name = prefix + cm.joint;
+      if (!(neutral >= lo && neutral <= hi))
+        return f.Fail(where, "command '" + c.name + "': its neutral value " + YamlFields::Num(neutral) +
+                                 " (the description's default pose or gains) is outside [" + YamlFields::Num(lo) +
+                                 ", " + YamlFields::Num(hi) + "] (the joint's and the actuator's limits)");
       c.min = c.degraded_min = lo;
       c.max = c.degraded_max = hi;
       c.neutral = neutral;
@@ -121,12 +146,19 @@ Status Builder::CanDevices(const YAML::Node& root) {
       *index = static_cast<std::uint32_t>(m.commands.size());
       return AddCommand(std::move(c), where);
     };
-    // Safe-stop damps: the measured position, no stiffness, the damping gain, no torque.
-    PBPPO_TRY(command("q_des_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
-                      safety::StopKind::kHoldInput, 0.0, &mo.q));
+    // Safe-stop damps: no stiffness, the damping gain, no speed, no torque (a position-commanded
+    // motor's target is the measured position). A velocity-commanded motor has no q_des_ or kp_:
+    // it holds zero speed with its velocity gain (stand-up, hold) or the damping gain (safe-stop).
+    mo.q = mo.kp = kNoCommand;
+    if (!velocity)
+      PBPPO_TRY(command("q_des_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
+                        safety::StopKind::kHoldInput, 0.0, &mo.q));
     PBPPO_TRY(command("dq_des_", -v, v, 0.0, safety::StopKind::kValue, 0.0, &mo.dq));
-    PBPPO_TRY(command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, safety::StopKind::kValue, 0.0, &mo.kp));
-    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max, body.kd_nm_s_rad, safety::StopKind::kValue,
+    if (!velocity)
+      PBPPO_TRY(
+          command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, safety::StopKind::kValue, 0.0, &mo.kp));
+    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max,
+                      velocity ? body.velocity_kd_nm_s_rad[j] : body.kd_nm_s_rad, safety::StopKind::kValue,
                       body.damping_kd_nm_s_rad, &mo.kd));
     PBPPO_TRY(command("tau_ff_", -tau, tau, 0.0, safety::StopKind::kValue, 0.0, &mo.tau));
     m.motors.push_back(mo);

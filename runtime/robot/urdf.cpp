@@ -1,5 +1,6 @@
 #include "runtime/robot/urdf.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -310,10 +311,12 @@ class UrdfParser {
     if (type == nullptr) return Fail(where, "missing attribute 'type'");
     if (*type == "revolute") {
       j->type = UrdfJointType::kRevolute;
+    } else if (*type == "continuous") {
+      j->type = UrdfJointType::kContinuous;
     } else if (*type == "fixed") {
       j->type = UrdfJointType::kFixed;
     } else {
-      return Fail(where + ".type", "'" + *type + "' is not supported (revolute, fixed)");
+      return Fail(where + ".type", "'" + *type + "' is not supported (revolute, continuous, fixed)");
     }
     for (const char* role : {"parent", "child"}) {
       const XmlElement* r = e.Child(role);
@@ -336,17 +339,25 @@ class UrdfParser {
     for (double& a : j->axis) a /= n;
 
     const XmlElement* limit = e.Child("limit");
-    if (limit == nullptr)
-      return Fail(where, "missing element <limit> (a revolute joint needs lower, upper, effort, velocity)");
     const std::string w = where + ".limit";
-    if (auto s = Numbers(limit, w, "lower", &j->lower_rad, 1); !s) return s;
-    if (auto s = Numbers(limit, w, "upper", &j->upper_rad, 1); !s) return s;
-    if (auto s = Numbers(limit, w, "effort", &j->effort_nm, 1); !s) return s;
-    if (auto s = Numbers(limit, w, "velocity", &j->velocity_rad_s, 1); !s) return s;
-    if (!(j->lower_rad < j->upper_rad))
-      return Fail(w + ".lower", "'" + Str(j->lower_rad) + "' is not below upper '" + Str(j->upper_rad) + "'");
-    if (auto s = Positive(j->effort_nm, w + ".effort"); !s) return s;
-    if (auto s = Positive(j->velocity_rad_s, w + ".velocity"); !s) return s;
+    if (j->type == UrdfJointType::kContinuous) {
+      // No position limits: lower and upper, when given, are ignored; <limit> itself is optional.
+      j->lower_rad = -HUGE_VAL;
+      j->upper_rad = HUGE_VAL;
+    } else {
+      if (limit == nullptr)
+        return Fail(where, "missing element <limit> (a revolute joint needs lower, upper, effort, velocity)");
+      if (auto s = Numbers(limit, w, "lower", &j->lower_rad, 1); !s) return s;
+      if (auto s = Numbers(limit, w, "upper", &j->upper_rad, 1); !s) return s;
+    }
+    if (limit != nullptr) {
+      if (auto s = Numbers(limit, w, "effort", &j->effort_nm, 1); !s) return s;
+      if (auto s = Numbers(limit, w, "velocity", &j->velocity_rad_s, 1); !s) return s;
+      if (!(j->lower_rad < j->upper_rad))
+        return Fail(w + ".lower", "'" + Str(j->lower_rad) + "' is not below upper '" + Str(j->upper_rad) + "'");
+      if (auto s = Positive(j->effort_nm, w + ".effort"); !s) return s;
+      if (auto s = Positive(j->velocity_rad_s, w + ".velocity"); !s) return s;
+    }
     if (const XmlElement* dyn = e.Child("dynamics"); dyn != nullptr) {
       if (auto s = Numbers(dyn, where + ".dynamics", "damping", &j->damping_nm_s_rad, 1, false); !s) return s;
       if (auto s = Numbers(dyn, where + ".dynamics", "friction", &j->friction_nm, 1, false); !s) return s;
@@ -425,6 +436,15 @@ std::string Base(const std::string& path) {
 
 }  // namespace
 
+const char* ToString(UrdfJointType type) noexcept {
+  switch (type) {
+    case UrdfJointType::kRevolute: return "revolute";
+    case UrdfJointType::kContinuous: return "continuous";
+    case UrdfJointType::kFixed: return "fixed";
+  }
+  return "?";
+}
+
 int UrdfModel::FindLink(const std::string& n) const noexcept {
   for (std::size_t i = 0; i < links.size(); ++i)
     if (links[i].name == n) return static_cast<int>(i);
@@ -462,11 +482,13 @@ Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, con
   if (!doc) return std::move(doc).error();
   const YAML::Node root = *doc;
   const YamlFields f(origin);
-  if (auto st = f.Keys(root, "", {"urdf", "joints", "default_pose", "stand", "gains"}); !st) return st.error();
+  if (auto st = f.Keys(root, "", {"urdf", "joints", "velocity_control", "default_pose", "stand", "gains"}); !st)
+    return st.error();
   constexpr double kInf = HUGE_VAL;
   RobotDescription d;
   d.urdf = std::move(urdf);
   d.urdf_path = urdf_path;
+  const std::string urdf_name = Base(urdf_path);
   YAML::Node joints;
   if (auto st = f.List(root, "joints", "", true, &joints); !st) return st.error();
   std::set<std::string> seen;
@@ -474,32 +496,79 @@ Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, con
     const std::string name = joints[i].IsScalar() ? joints[i].as<std::string>() : YamlFields::Quote(joints[i]);
     const std::string where = "joints[" + std::to_string(i) + "]";
     const int j = d.urdf.FindJoint(name);
-    if (j < 0) return f.Fail(where, "'" + name + "' is not a joint of " + Base(urdf_path));
-    if (d.urdf.joints[static_cast<std::size_t>(j)].type != UrdfJointType::kRevolute)
-      return f.Fail(where, "'" + name + "' is not a revolute joint");
+    if (j < 0) return f.Fail(where, "'" + name + "' is not a joint of " + urdf_name);
+    if (!d.urdf.joints[static_cast<std::size_t>(j)].moves())
+      return f.Fail(where, "'" + name + "' is not a revolute or continuous joint");
     if (!seen.insert(name).second) return f.Fail(where, "'" + name + "' listed twice");
     d.joint_names.push_back(name);
     d.joint.push_back(static_cast<std::uint32_t>(j));
   }
   for (const auto& j : d.urdf.joints)
-    if (j.type == UrdfJointType::kRevolute && seen.count(j.name) == 0)
-      return f.Fail("joints", "revolute joint '" + j.name + "' of " + Base(urdf_path) + " is not listed");
+    if (j.moves() && seen.count(j.name) == 0)
+      return f.Fail("joints",
+                    std::string(ToString(j.type)) + " joint '" + j.name + "' of " + urdf_name + " is not listed");
 
+  // Velocity-commanded joints: every continuous one, and any other listed here.
+  d.control.assign(d.joint.size(), JointControl::kPosition);
+  d.velocity_kd_nm_s_rad.assign(d.joint.size(), 0.0);
+  if (root["velocity_control"]) {
+    YAML::Node vc;
+    if (auto st = f.Map(root, "velocity_control", "", &vc); !st) return st.error();
+    for (const auto& kv : vc) {
+      const std::string key = kv.first.as<std::string>();
+      const std::string w = "velocity_control." + key;
+      const auto it = std::find(d.joint_names.begin(), d.joint_names.end(), key);
+      if (it == d.joint_names.end()) return f.Fail(w, "is not an actuated joint (joints)");
+      const auto i = static_cast<std::size_t>(it - d.joint_names.begin());
+      if (auto st = f.Keys(kv.second, w, {"kd_nm_s_rad"}); !st) return st.error();
+      if (auto st = f.Number(kv.second, "kd_nm_s_rad", w, 1e-9, kInf, &d.velocity_kd_nm_s_rad[i]); !st)
+        return st.error();
+      if (!(d.joint_at(i).velocity_rad_s > 0))
+        return f.Fail(w, "joint '" + key + "' of " + urdf_name +
+                             " has no velocity limit (<limit velocity=...>): a velocity-commanded joint's speed "
+                             "limit comes from it");
+      d.control[i] = JointControl::kVelocity;
+    }
+  }
+  for (std::size_t i = 0; i < d.joint.size(); ++i) {
+    const UrdfJoint& j = d.joint_at(i);
+    const std::string where = "joints[" + std::to_string(i) + "]";
+    if (j.continuous() && !d.velocity_commanded(i))
+      return f.Fail(where, "'" + j.name + "' is a continuous joint of " + urdf_name +
+                               ": it takes no position target (give it velocity_control." + j.name + ")");
+    if (!(j.effort_nm > 0 && j.velocity_rad_s > 0))
+      return f.Fail(where, "'" + j.name + "' of " + urdf_name +
+                               " has no <limit> (an actuated joint needs effort and velocity limits)");
+  }
+
+  // The default pose: every position-commanded joint, none of the others (a robot of wheels only
+  // may leave it out).
   YAML::Node pose, stand, gains;
-  if (auto st = f.Map(root, "default_pose", "", &pose); !st) return st.error();
+  const bool positions = std::count(d.control.begin(), d.control.end(), JointControl::kPosition) > 0;
+  if (positions || (root["default_pose"] && !root["default_pose"].IsNull()))
+    if (auto st = f.Map(root, "default_pose", "", &pose); !st) return st.error();
   for (const auto& kv : pose) {
     const std::string key = kv.first.as<std::string>();
     if (seen.count(key) == 0) return f.Fail("default_pose." + key, "is not an actuated joint");
   }
-  d.default_q_rad.resize(d.joint.size());
+  d.default_q_rad.assign(d.joint.size(), 0.0);
   for (std::size_t i = 0; i < d.joint.size(); ++i) {
     const UrdfJoint& j = d.joint_at(i);
-    if (auto st = f.Number(pose, d.joint_names[i].c_str(), "default_pose", -kInf, kInf, &d.default_q_rad[i]); !st)
+    const std::string& name = d.joint_names[i];
+    if (d.velocity_commanded(i)) {
+      if (pose[name])
+        return f.Fail("default_pose." + name, YamlFields::Quote(pose[name]) + ": joint '" + name + "' is " +
+                                                  (j.continuous() ? "continuous and " : "") +
+                                                  "velocity-commanded: it takes no position target (it holds zero "
+                                                  "speed where others hold their default pose)");
+      continue;
+    }
+    if (auto st = f.Number(pose, name.c_str(), "default_pose", -kInf, kInf, &d.default_q_rad[i]); !st)
       return st.error();
     if (d.default_q_rad[i] < j.lower_rad || d.default_q_rad[i] > j.upper_rad)
-      return f.Fail("default_pose." + d.joint_names[i],
-                    YamlFields::Quote(pose[d.joint_names[i]]) + " is outside the joint's limits [" +
-                        YamlFields::Num(j.lower_rad) + ", " + YamlFields::Num(j.upper_rad) + "]");
+      return f.Fail("default_pose." + name, YamlFields::Quote(pose[name]) + " is outside the joint's limits [" +
+                                                YamlFields::Num(j.lower_rad) + ", " + YamlFields::Num(j.upper_rad) +
+                                                "]");
   }
   if (auto st = f.Map(root, "stand", "", &stand); !st) return st.error();
   if (auto st = f.Keys(stand, "stand", {"base_height_m"}); !st) return st.error();

@@ -67,6 +67,10 @@ bool MitMotorReceive(const MitMotorConfig& c, MitMotorState& s, const can::CanFr
   can::MitReply r;
   r.motor_id = static_cast<std::uint8_t>(c.motor_id);
   r.q_rad = q_rad - s.zero_offset_rad;
+  if (c.wrap_position) {
+    const double span = c.range.p_max - c.range.p_min;
+    r.q_rad = c.range.p_min + (r.q_rad - c.range.p_min - span * std::floor((r.q_rad - c.range.p_min) / span));
+  }
   r.dq_rad_s = dq_rad_s;
   r.tau_nm = s.tau_nm;
   *reply = can::MakeMitReplyFrame(c.reply_id, c.range, r);

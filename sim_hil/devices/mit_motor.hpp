@@ -10,7 +10,10 @@
 //     evaluated every simulation tick and limited to +-tau_limit (the actuator config: the URDF
 //     effort limit and the MIT torque range, whichever is smaller);
 //   - no command for timeout_ticks: zero torque until the next command (the driver's watchdog);
-//   - commands outside motor mode are answered but not obeyed.
+//   - commands outside motor mode are answered but not obeyed;
+//   - wrap_position (a continuous joint's driver): the reported position wraps into the MIT range
+//     [p_min, p_max) (period p_max - p_min) instead of saturating at its ends; the torque law uses
+//     the joint's own (multi-turn) position.
 //
 // Test hooks (the emulator's own faults): drop a fraction of received frames (no effect, no
 // reply) with a seeded generator and a bound on consecutive drops, or go silent from a tick on
@@ -30,6 +33,7 @@ struct MitMotorConfig {
   can::MitRange range;
   double tau_limit_nm = 0;
   std::uint32_t timeout_ticks = 50;
+  bool wrap_position = false;  // report the position modulo the MIT range (a continuous joint)
   // Faults for tests.
   double drop_probability = 0;       // of each received frame
   std::uint32_t max_drop_burst = 0;  // most consecutive drops (0: unbounded)

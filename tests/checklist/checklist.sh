@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The checklist for a new robot (docs/architecture.md), followed by a robot that exists only as
-# data: the slider (tests/data/robots/slider: robot file, IO layout, two messages' IDL) over DDS,
+# data: the slider (tests/data/slider: robot file, IO layout, two messages' IDL) over DDS,
 # with its tiny plant (slider_plant, the only C++ it has). Label dds.
-#   1. the robot file loads; a test policy for its layout (pbppo synth --robot);
+#   1. a test policy for its layout (pbppo synth --layout);
 #   2. pbppo-controller runs it in lock-step against the plant until the plant's end field, with
 #      no allocation, nominal, recording; run twice, the plant's trajectories are the same;
 #   3. pbppo replay reproduces every command of the recording bit for bit;
@@ -12,11 +12,12 @@ set -euo pipefail
 pbppo=$1 ctl=$2 plant=$3 src=$4 work=$5
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
-robot=tests/data/robots/slider/robot.yaml
+robot=tests/data/slider/robot.yaml
 domain=$((30 + $$ % 150))
 
 echo "== 1: a test policy for the slider's layout"
-"$pbppo" synth --robot "$robot" --widths 3-16-1 --activation tanh --seed 5 --out "$work/slider.blob" >"$work/synth.log"
+"$pbppo" synth --layout tests/data/slider/io_layout.yaml --widths 3-16-1 --activation tanh --seed 5 \
+  --out "$work/slider.blob" >"$work/synth.log"
 "$pbppo" inspect "$work/slider.blob" >"$work/inspect.log"
 expect "$work/inspect.log" "position"
 expect "$work/inspect.log" "force .*range \[-2, 2\]"
@@ -55,8 +56,8 @@ expect "$work/replay.log" "replay: .*run1.log: 301 ticks, [0-9]+ commands compar
 
 echo "== 4: a bad robot file"
 mkdir -p "$work/bad"
-cp -r tests/data/robots/slider/idl tests/data/robots/slider/io_layout.yaml "$work/bad/"
-sed -e 's|force_n: command.force|force_n: command.thrust|' -e 's|\.\./\.\./\.\./\.\./models|'"$src"'/models|' \
+cp -r tests/data/slider/idl tests/data/slider/io_layout.yaml "$work/bad/"
+sed -e 's|force_n: command.force|force_n: command.thrust|' -e 's|\.\./\.\./\.\./models|'"$src"'/models|' \
   "$robot" >"$work/bad/robot.yaml"
 rc=0; "$ctl" --robot "$work/bad/robot.yaml" --policy "$work/slider.blob" >"$work/bad.log" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "a bad robot file: exit $rc"

@@ -1,4 +1,4 @@
-// The plant of the slider (tests/data/robots/slider): a 1 kg cart on a spring (4 N/m) and a
+// The plant of the slider (tests/data/slider): a 1 kg cart on a spring (4 N/m) and a
 // damper (1 N s/m) pushed by the controller's force, integrated (semi-implicit Euler) over the
 // robot's tick. It speaks the robot's own DDS messages as the robot file declares them (the
 // peer's side of its transport), in lock-step: the state of tick k, then the force answering k,

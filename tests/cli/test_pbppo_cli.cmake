@@ -115,6 +115,17 @@ run(1 ${PBPPO} synth --out ${WORK}/no/such/dir/p.blob)
 expect_in("${ERR}" "cannot create")
 run(2 ${PBPPO} inspect)
 expect_in("${ERR}" "blob is required")
+# synth for a robot's IO layout: its names, hash and action map; widths that do not fit are refused.
+run(0 ${PBPPO} synth --layout ${SOURCE_DIR}/tests/data/diffbot/io_layout.yaml --widths 10-16-3 --activation tanh
+    --out ${WORK}/diffbot.blob)
+run(0 ${PBPPO} inspect ${WORK}/diffbot.blob)
+expect_in("${OUT}" "last_action_head_pan")
+expect_in("${OUT}" "range [-15, 15]")
+run(2 ${PBPPO} synth --layout ${SOURCE_DIR}/tests/data/diffbot/io_layout.yaml --widths 12-16-3
+    --out ${WORK}/bad.blob)
+expect_in("${ERR}" "has 10 observations and 3 actions: the widths must start with 10 and end with 3")
+run(2 ${PBPPO} synth --layout ${WORK}/none.yaml --widths 10-3 --out ${WORK}/bad.blob)
+expect_in("${ERR}" "--layout: ${WORK}/none.yaml: cannot open")
 run(2 ${PBPPO} frobnicate)
 
 # pbppo train / eval on Pendulum, small budgets.

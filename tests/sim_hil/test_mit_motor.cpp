@@ -1,4 +1,5 @@
-// The emulated MIT driver's firmware behaviour, frame by frame (pure, host).
+// The emulated MIT driver's firmware behaviour, frame by frame (pure, host), and its position
+// wrapping for a continuous joint.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -103,4 +104,28 @@ TEST_CASE("MIT driver faults: seeded drops with bounded bursts - silence from a 
   CHECK(sim::MitMotorReceive(q, t, cmd, 4, 0, 0, &reply));
   CHECK_FALSE(sim::MitMotorReceive(q, t, cmd, 5, 0, 0, &reply));
   CHECK(t.ignored_silent == 1);
+}
+
+TEST_CASE("MIT driver: a continuous joint's driver wraps its position into the MIT range - a velocity command") {
+  auto c = Config();
+  c.wrap_position = true;
+  auto s = sim::MakeMitMotorState(c);
+  can::CanFrame reply;
+  const auto enter = can::MakeMitSpecialFrame(3, can::MitSpecial::kEnterMotorMode);
+  // 30 rad is 30 - 25 = 5 in [-12.5, 12.5); -13 is 12 (one range up); 12.5 is -12.5.
+  for (const auto& [q, reported] : {std::pair{30.0, 5.0}, std::pair{-13.0, 12.0}, std::pair{12.5, -12.5},
+                                    std::pair{-12.5, -12.5}, std::pair{3.0, 3.0}, std::pair{-62.0, -12.0}}) {
+    CAPTURE(q);
+    REQUIRE(sim::MitMotorReceive(c, s, enter, 0, q, 4.0, &reply));
+    CHECK(Decode(c, reply).q_rad == doctest::Approx(reported).epsilon(1e-3));
+    CHECK(Decode(c, reply).dq_rad_s == doctest::Approx(4.0).epsilon(0.01));
+  }
+  // A velocity command (kp 0): the torque is kd (dq_des - dq) (+ the feed-forward, 0 as quantised:
+  // 6 mNm), wherever the joint has turned to.
+  REQUIRE(sim::MitMotorReceive(c, s, can::MakeMitCommandFrame(3, c.range, {0.0, 6.0, 0.0, 0.5, 0.0}), 1, 100.0, 4.0,
+                               &reply));
+  CHECK(s.command.kp_nm_rad == 0.0);
+  const can::MitCommand& m = s.command;
+  CHECK(sim::MitMotorTorque(c, s, 1, 100.0, 4.0) == doctest::Approx(m.kd_nm_s_rad * (m.dq_rad_s - 4.0) + m.tau_ff_nm));
+  CHECK(sim::MitMotorTorque(c, s, 1, 100.0, 4.0) == doctest::Approx(1.0).epsilon(0.01));
 }

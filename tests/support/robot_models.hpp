@@ -11,11 +11,13 @@
 
 namespace pbppo::test {
 
-// A fresh copy of a shipped robot's folder to edit: <scratch dir `scratch`>/<name>, with the
-// robots' shared files beside it (models/dds_profile.xml). Returns the copy's folder.
-inline std::string CopyRobotFolder(const std::string& name, const std::string& scratch) {
+// A fresh copy of a shipped robot's folder (or of `folder`, relative to the source tree) to edit:
+// <scratch dir `scratch`>/<name>, with the robots' shared files beside it (models/dds_profile.xml).
+// Returns the copy's folder.
+inline std::string CopyRobotFolder(const std::string& name, const std::string& scratch, std::string folder = "") {
+  if (folder.empty()) folder = "models/" + name;
   const std::string root = ScratchDir(scratch), dir = root + "/" + name;
-  std::filesystem::copy(SourcePath("models/" + name), dir, std::filesystem::copy_options::recursive);
+  std::filesystem::copy(SourcePath(folder), dir, std::filesystem::copy_options::recursive);
   std::filesystem::copy_file(SourcePath("models/dds_profile.xml"), root + "/dds_profile.xml");
   return dir;
 }
@@ -36,6 +38,13 @@ inline const robot::RobotModel& AuvRobot() {
 
 inline const robot::RobotModel& QuadrupedRobot() {
   static const robot::RobotModel& m = LoadShipped("quadruped");
+  return m;
+}
+
+// The two-wheeled robot on CAN that exists only as test data (tests/data/diffbot): continuous,
+// velocity-commanded wheels and a position-commanded head.
+inline const robot::RobotModel& DiffbotRobot() {
+  static const robot::RobotModel& m = LoadShipped("../tests/data/diffbot");
   return m;
 }
 

@@ -26,26 +26,31 @@ inline std::string ReplaceOnce(std::string s, const std::string& from, const std
   return s.replace(at, from.size(), to);
 }
 
-// A scratch copy of a shipped robot's folder whose robot.yaml is edited one change at a time.
+// A scratch copy of a shipped robot's folder (or of `folder`, relative to the source tree) whose
+// files are edited one change at a time.
 class RobotFileEdits {
  public:
-  RobotFileEdits(const std::string& robot, const std::string& scratch)
-      : dir_(CopyRobotFolder(robot, scratch)),
-        path_(dir_ + "/robot.yaml"),
-        text_(ReadText(SourcePath("models/" + robot + "/robot.yaml"))) {}
+  RobotFileEdits(const std::string& robot, const std::string& scratch, const std::string& folder = "")
+      : source_(folder.empty() ? "models/" + robot : folder),
+        dir_(CopyRobotFolder(robot, scratch, source_)),
+        path_(dir_ + "/robot.yaml") {}
   const std::string& dir() const { return dir_; }
   const std::string& path() const { return path_; }
   // The shipped robot.yaml with `from` replaced by `to`, written and loaded: the error it is
   // refused with (it must be refused).
-  std::string Error(const std::string& from, const std::string& to) const {
-    std::ofstream(path_) << ReplaceOnce(text_, from, to);
+  std::string Error(const std::string& from, const std::string& to) const { return ErrorIn("robot.yaml", from, to); }
+  // The same for another file of the folder (can_map.yaml, ...), put back afterwards.
+  std::string ErrorIn(const std::string& file, const std::string& from, const std::string& to) const {
+    const std::string original = ReadText(SourcePath(source_ + "/" + file)), path = dir_ + "/" + file;
+    std::ofstream(path) << ReplaceOnce(original, from, to);
     auto m = robot::LoadRobotModel(path_);
+    std::ofstream(path) << original;
     REQUIRE_FALSE(m.ok());
     return m.error().message;
   }
 
  private:
-  std::string dir_, path_, text_;
+  std::string source_, dir_, path_;
 };
 
 }  // namespace pbppo::test

@@ -76,6 +76,9 @@ Result<std::unique_ptr<CanTransport>> CanTransport::Open(const robot::RobotModel
   t->expect_.assign(buses, 0);
   t->seen_replies_.assign(map.motors.size(), 0);
   t->frames_sent_.assign(map.motors.size(), 0);
+  t->have_q_.assign(map.motors.size(), 0);
+  t->last_q_.assign(map.motors.size(), 0.0);
+  t->turns_.assign(map.motors.size(), 0);
   t->seen_imu_.assign(map.imus.size(), 0);
   for (const robot::CanImu& u : map.imus) {
     const int s = m.StreamIndex(u.name);
@@ -106,6 +109,21 @@ void CanTransport::Expect(std::span<const std::uint32_t> per_bus) noexcept {
   expect_set_ = true;
 }
 
+double CanTransport::Unwrap(std::size_t motor, double q) noexcept {
+  // Less than half the range between two replies (the model checks the motors' lost limit): a jump
+  // of more than half the range is a wrap.
+  const MitRange& r = table_.range[motor];
+  const double span = r.p_max - r.p_min;
+  if (have_q_[motor] != 0) {
+    const double step = q - last_q_[motor];
+    if (step > 0.5 * span) --turns_[motor];
+    if (step < -0.5 * span) ++turns_[motor];
+  }
+  have_q_[motor] = 1;
+  last_q_[motor] = q;
+  return q + static_cast<double>(turns_[motor]) * span;
+}
+
 void CanTransport::Read(const robot::RobotModel& m, robot::RobotData& d) noexcept {
   std::uint32_t sent = 0;
   for (std::uint32_t s : sent_last_) sent += s;
@@ -132,7 +150,7 @@ void CanTransport::Read(const robot::RobotModel& m, robot::RobotData& d) noexcep
     if (rx_.reply_count[k] == seen_replies_[k]) continue;
     seen_replies_[k] = rx_.reply_count[k];
     const robot::MotorSpec& mo = m.motors[k];
-    d.fields[mo.q_field] = rx_.reply[k].q_rad;
+    d.fields[mo.q_field] = mo.continuous ? Unwrap(k, rx_.reply[k].q_rad) : rx_.reply[k].q_rad;
     d.fields[mo.dq_field] = rx_.reply[k].dq_rad_s;
     d.fields[mo.tau_field] = rx_.reply[k].tau_nm;
     d.fresh[mo.stream] = 1;
@@ -161,7 +179,10 @@ void CanTransport::Write(const robot::RobotModel& m, robot::RobotData& d) noexce
       case robot::MotorCommand::kDisable: f = MakeMitSpecialFrame(id, MitSpecial::kExitMotorMode); break;
       case robot::MotorCommand::kCommand: {
         const robot::MotorSpec& mo = m.motors[k];
-        const MitCommand c{d.command[mo.q], d.command[mo.dq], d.command[mo.kp], d.command[mo.kd], d.command[mo.tau]};
+        // A velocity-commanded motor has no position target: p_des 0 and kp 0.
+        const bool velocity = mo.velocity_commanded();
+        const MitCommand c{velocity ? 0.0 : d.command[mo.q], d.command[mo.dq], velocity ? 0.0 : d.command[mo.kp],
+                           d.command[mo.kd], d.command[mo.tau]};
         f = MakeMitCommandFrame(id, table_.range[k], c);
         if (records_.size() < record_capacity_) {
           records_.push_back(CommandRecord{d.tick, static_cast<std::uint32_t>(k), c.q_rad, c.dq_rad_s, c.kp_nm_rad,

@@ -4,9 +4,13 @@
 //   Read   drains every bus (with lock-step, first waits, bounded, for the frames the peer owes
 //          this tick), decodes replies and IMU samples into the motors' and IMUs' fields and marks
 //          their streams fresh; each bus's health is a link of the transport: a fault on bus-off
-//          or socket errors, degraded on dropped frames or error-passive.
-//   Write  per motor: enter motor mode, a command frame from its q_des_, dq_des_, kp_, kd_, tau_ff_ commands,
-//          or exit motor mode (RobotData::motors); one sendmmsg per bus.
+//          or socket errors, degraded on dropped frames or error-passive. A continuous joint's
+//          driver wraps its position in the MIT range [p_min, p_max): its q_ field is the
+//          multi-turn angle, unwrapped from one reply to the next (whole turns of the range
+//          counted; the first reply is the start).
+//   Write  per motor: enter motor mode, a command frame from its q_des_, dq_des_, kp_, kd_, tau_ff_ commands
+//          (a velocity-commanded motor: p_des 0, kp 0), or exit motor mode (RobotData::motors); one
+//          sendmmsg per bus.
 //
 // Every frame sent and received can go to a candump log. Nothing is allocated after Open.
 #pragma once
@@ -79,6 +83,7 @@ class CanTransport final : public robot::Transport {
 
  private:
   CanTransport() = default;
+  double Unwrap(std::size_t motor, double q) noexcept;
   std::uint32_t first_link_ = 0;
   std::vector<std::string> interfaces_;
   CanCodecTable table_;
@@ -90,6 +95,9 @@ class CanTransport final : public robot::Transport {
   bool expect_set_ = false;
   std::int64_t wait_ns_ = 0;
   std::vector<std::uint64_t> seen_replies_, seen_imu_, frames_sent_;
+  std::vector<std::uint8_t> have_q_;  // per motor: a reply was seen (continuous joints' unwrapping)
+  std::vector<double> last_q_;        // per motor: the last reply's position, as the driver wraps it
+  std::vector<std::int64_t> turns_;   // per motor: whole MIT ranges turned since the first reply
   std::vector<std::uint32_t> imu_first_field_, imu_stream_;  // per IMU, in the robot model
   std::vector<BusStats> last_stats_;
   std::vector<CommandRecord> records_;

@@ -1,6 +1,6 @@
 // runtime/loop over an in-memory transport: the quadruped's phases with the stand trajectory
-// (what each motor is sent in each phase, no allocation), a silent motor (safe-stop naming it,
-// then e-stop switching every motor off), a walking policy's observation from generic signal
+// (what each motor is sent in each phase, no allocation), the diffbot's velocity-commanded wheels, a silent motor
+// (safe-stop naming it, then e-stop switching every motor off), a walking policy's observation from generic signal
 // names (IMU gyro, gravity from the orientation, an operator's command, joint q / dq, the last
 // action) run every 20 ticks with its action held between, and the source's failure as a named
 // supervisor cause.
@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,12 @@ struct Bench {
       const robot::MotorSpec& mo = m.motors[k];
       if (t.writes == 0 || t.motors[k] == MotorCommand::kNone) continue;
       if (static_cast<int>(k) == silent && tick >= silent_from) continue;
-      const double q = t.motors[k] == MotorCommand::kCommand ? t.command[mo.q] : data.fields[mo.q_field];
-      const double reply[3] = {q, 0.0, 0.0};
+      // A position-commanded joint is where it was commanded; a velocity-commanded one turns at
+      // the commanded speed.
+      const bool commanded = t.motors[k] == MotorCommand::kCommand;
+      const double dq = commanded && mo.velocity_commanded() ? t.command[mo.dq] : 0.0;
+      const double q = commanded && !mo.velocity_commanded() ? t.command[mo.q] : data.fields[mo.q_field] + dq * 1e-3;
+      const double reply[3] = {q, dq, 0.0};
       t.Put(m, mo.stream, reply);
     }
     const int imu = m.StreamIndex("base_imu");
@@ -66,6 +71,19 @@ struct Bench {
   void Until(Phase p, int limit) {
     for (int k = 0; k < limit && loop->phase() != p; ++k) Step();
     REQUIRE(loop->phase() == p);
+  }
+  // A stop request: the next tick damps every motor (kp 0 where it has one, dq_des 0, the damping
+  // gain, no torque).
+  void StopAndCheckDamping() {
+    loop->RequestStop();
+    Step();
+    CHECK(loop->phase() == Phase::kDamping);
+    for (const auto& mo : m.motors) {
+      if (!mo.velocity_commanded()) CHECK(t.command[mo.kp] == 0.0);
+      CHECK(t.command[mo.dq] == 0.0);
+      CHECK(t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
+      CHECK(t.command[mo.tau] == 0.0);
+    }
   }
 };
 
@@ -100,19 +118,56 @@ TEST_CASE("loop: the quadruped's phases - arming, stand-up, hold, the trajectory
   b.Until(Phase::kHold, 2100);  // the trajectory ended: the default pose again
   CHECK(source.ticks() == 2000);
   CHECK(source.rms_tracking_error_rad() < 0.01);  // the bench's joints follow exactly, a tick late
-  b.loop->RequestStop();
-  b.Step();
-  CHECK(b.loop->phase() == Phase::kDamping);
-  for (const auto& mo : m.motors) {
-    CHECK(b.t.command[mo.kp] == 0.0);
-    CHECK(b.t.command[mo.kd] == m.body->damping_kd_nm_s_rad);
-    CHECK(b.t.command[mo.tau] == 0.0);
-  }
+  b.StopAndCheckDamping();
   b.Until(Phase::kMotorOff, 600);
   CHECK(b.loop->phase_start(Phase::kMotorOff) - b.loop->phase_start(Phase::kDamping) == m.phases.damping_ticks);
   for (auto c : b.t.motors) CHECK(c == MotorCommand::kDisable);
   CHECK(b.Step() == loop::TickStatus::kDone);  // every motor answered the motor-off frame
   CHECK(b.loop->supervisor().mode == Mode::kNominal);
+}
+
+TEST_CASE("loop: velocity-commanded wheels - zero speed in stand-up and hold, speeds in run, braked in damping") {
+  const robot::RobotModel& m = test::DiffbotRobot();
+  auto trajectory = loop::RobotTrajectory(m);
+  REQUIRE_MESSAGE(trajectory.ok(), trajectory.error().message);
+  loop::TrajectorySource source(m, *trajectory);
+  Bench b(m, &source);
+  const robot::MotorSpec &left = m.motors[0], &right = m.motors[1], &head = m.motors[2];
+  b.loop->Arm();
+  b.Until(Phase::kStandUp, 5);
+  // Stand-up: the head ramps to its default pose; the wheels hold zero speed with their velocity gain.
+  for (int k = 0; k < 50; ++k) b.Step();
+  CHECK(b.t.command[head.q] > 0.0);
+  CHECK(b.t.command[head.q] < 0.3);
+  for (const auto* w : {&left, &right}) {
+    CHECK(b.t.command[w->dq] == 0.0);
+    CHECK(b.t.command[w->kd] == 0.3);
+    CHECK(b.t.command[w->tau] == 0.0);
+  }
+  b.Until(Phase::kHold, 100);
+  b.Step();
+  CHECK(b.t.command[head.q] == 0.3);
+  CHECK(b.t.command[left.dq] == 0.0);
+  b.Until(Phase::kRun, 100);
+  for (int k = 0; k < 300; ++k) b.Step();
+  // Run: the trajectory's speeds (left 12 + 3 sin(4 pi t), right -8); the wheels' angles grow
+  // past any MIT range, unbounded, with no finding.
+  CHECK(b.t.command[left.dq] == doctest::Approx(12.0 + 3.0 * std::sin(4 * std::numbers::pi * 0.3)).epsilon(1e-9));
+  CHECK(b.t.command[right.dq] == -8.0);
+  CHECK(b.data.fields[right.q_field] < -2.0);
+  const double travelled = b.data.fields[left.q_field];
+  b.Until(Phase::kHold, 1000);  // the trajectory ended: zero speed, the head at its default pose
+  CHECK(b.data.fields[left.q_field] > travelled + 5.0);
+  CHECK(b.data.fields[left.q_field] > 3.2);  // beyond the wheel drivers' MIT range [-pi, pi)
+  b.Step();
+  CHECK(b.t.command[left.dq] == 0.0);
+  CHECK(source.rms_speed_error_rad_s() < 0.5);  // the bench's wheels follow exactly, a tick late
+  CHECK(source.rms_tracking_error_rad() < 0.01);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  CHECK(b.loop->supervisor().counts[safety::Cause::kInvalidSample] == 0);
+  // Damping: no stiffness anywhere, dq_des 0 and the damping gain: the wheels brake to a stop.
+  b.StopAndCheckDamping();
+  b.Until(Phase::kDone, 200);
 }
 
 TEST_CASE("loop: a silent motor - degraded, safe-stop naming it within 3 ticks, e-stop after 500 switches off") {
@@ -167,18 +222,36 @@ std::string WalkingRobot() {
 
 }  // namespace
 
+namespace {
+
+// A policy of random weights for `layout` (one tanh hidden layer) and the loop's source running it
+// on `m` (or the reason it is refused).
+struct RandomPolicy {
+  policy::PolicyModel model;
+  Result<std::unique_ptr<loop::PolicySource>> source;
+
+  RandomPolicy(const robot::RobotModel& m, const robot::IoLayout& layout, std::uint32_t hidden, std::uint64_t seed)
+      : model(Make(layout, hidden, seed)), source(loop::PolicySource::Create(m, model)) {}
+  static policy::PolicyModel Make(const robot::IoLayout& layout, std::uint32_t hidden, std::uint64_t seed) {
+    policy::PolicySpec spec = policy::MakeRandomSpec({layout.observation_size(), hidden, layout.action_size()},
+                                                     policy::Activation::kTanh, seed);
+    robot::ApplyLayoutToSpec(layout, spec);
+    auto model = policy::PolicyModel::FromSpec(spec);
+    REQUIRE(model.ok());
+    return std::move(*model);
+  }
+};
+
+}  // namespace
+
 TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the action held between") {
   auto loaded = robot::LoadRobotModel(WalkingRobot());
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
   const robot::RobotModel& m = *loaded;
   REQUIRE(m.policy_period_ticks == 20);
-  policy::PolicySpec spec =
-      policy::MakeRandomSpec({m.io->observation_size(), 32, m.io->action_size()}, policy::Activation::kTanh, 3);
-  robot::ApplyLayoutToSpec(*m.io, spec);
-  auto policy = policy::PolicyModel::FromSpec(spec);
-  REQUIRE(policy.ok());
-  auto source = loop::PolicySource::Create(m, *policy);
-  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  const RandomPolicy p(m, *m.io, 32, 3);
+  REQUIRE_MESSAGE(p.source.ok(), p.source.error().message);
+  const auto& source = p.source;
   Bench b(m, source->get());
   // A body rolled by 0.2 rad about x: gravity in the base frame (0, -sin 0.2, -cos 0.2).
   b.quat[0] = std::cos(0.1);
@@ -229,6 +302,33 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
   b.Step();
   CHECK(b.loop->supervisor().mode == Mode::kSafeStop);
   CHECK(b.loop->supervisor().entered[2].cause == safety::Cause::kSignalLimit);
+}
+
+TEST_CASE("loop: a policy on velocity-commanded wheels - speeds as actions, a position target refused") {
+  const robot::RobotModel& m = test::DiffbotRobot();
+  const RandomPolicy p(m, *m.io, 16, 5);
+  REQUIRE_MESSAGE(p.source.ok(), p.source.error().message);
+  const auto& source = p.source;
+  Bench b(m, source->get());
+  b.loop->Arm();
+  b.Until(Phase::kRun, 300);
+  for (int k = 0; k < 200; ++k) b.Step();
+  CHECK((*source)->runs() == 20);  // every 10 ticks
+  const robot::MotorSpec& left = m.motors[0];
+  // The action is the wheel's speed (scale 8, clamped to [-15, 15]); its kd stays the velocity gain
+  // (a policy's gains are a position-commanded motor's).
+  CHECK(b.t.command[left.dq] != 0.0);
+  CHECK(std::abs(b.t.command[left.dq]) <= 15.0);
+  CHECK(b.t.command[left.kd] == 0.3);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  // A layout giving a wheel a position target is refused naming the action and the joint.
+  robot::RobotModel with = m;
+  with.io->actions[0].command = "q_des_left_wheel";
+  const RandomPolicy refused(with, *with.io, 16, 5);
+  REQUIRE_FALSE(refused.source.ok());
+  CHECK(refused.source.error().message ==
+        "io layout 'diffbot': actions[0] 'left_wheel': command 'q_des_left_wheel': joint 'left_wheel' is "
+        "velocity-commanded (continuous): it takes no position target (command dq_des_left_wheel)");
 }
 
 namespace {

@@ -1,8 +1,10 @@
 // The robot model: both shipped robots load from robot.yaml with every file it names read once,
-// the pieces made from the CAN map and the URDF, per-tick quantities at another tick period, and
+// the pieces made from the CAN map and the URDF (continuous, velocity-commanded wheels: the diffbot
+// of tests/data), per-tick quantities at another tick period, and
 // bad robot files refused naming the file, the field and the value.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -42,9 +44,11 @@ const CommandSpec& Command(const RobotModel& m, const char* name) {
 TEST_CASE("robot model: loading a robot reads each file it names exactly once") {
   // robot.yaml, and for the AUV the IO layout, plant, DDS profile, three layouts and its three
   // messages' IDL; for the quadruped the description, its URDF, the IO layout, the CAN map, the
-  // stand trajectory, the DDS profile, the walking task and its two messages' IDL.
+  // stand trajectory, the DDS profile, the walking task and its two messages' IDL; for the diffbot
+  // its description, URDF, IO layout, CAN map and trajectory.
   for (const auto& [robot, count] :
-       {std::pair{"models/auv/robot.yaml", 10u}, std::pair{"models/quadruped/robot.yaml", 10u}}) {
+       {std::pair{"models/auv/robot.yaml", 10u}, std::pair{"models/quadruped/robot.yaml", 10u},
+        std::pair{"tests/data/diffbot/robot.yaml", 6u}}) {
     CAPTURE(robot);
     const auto before = FileReads();
     const RobotModel m = Load(robot);
@@ -263,4 +267,66 @@ TEST_CASE("robot model: bad DDS message declarations are refused naming the mess
         p + ": transports[0].ports: unknown field");
   CHECK(err("lockstep: {stream: sensor, end_field: episode_end}", "lockstep: {stream: sensor, end_field: x_mm}") ==
         p + ": timing.lockstep.end_field: 'x_mm' is not a field of stream 'sensor'");
+}
+
+TEST_CASE("robot model: the diffbot - continuous wheels are velocity-commanded motors with no position bound") {
+  const RobotModel m = Load("tests/data/diffbot/robot.yaml");
+  REQUIRE(m.motors.size() == 3);
+  CHECK(m.streams.size() == 4);           // three motors, the IMU
+  CHECK(m.commands.size() == 3 + 3 + 5);  // the wheels: dq_des_, kd_, tau_ff_; the head: all five
+  const MotorSpec& wheel = m.motors[0];
+  const MotorSpec& head = m.motors[2];
+  CHECK(wheel.joint == "left_wheel");
+  CHECK(wheel.velocity_commanded());
+  CHECK(wheel.continuous);
+  CHECK(wheel.q == kNoCommand);
+  CHECK(wheel.kp == kNoCommand);
+  CHECK(wheel.policy_kp < 0);
+  CHECK(m.CommandIndex("q_des_left_wheel") < 0);
+  CHECK(m.CommandIndex("kp_left_wheel") < 0);
+  // No position bound: the sample check only asks for a finite number.
+  CHECK(Field(m, "q_left_wheel").min == -HUGE_VAL);
+  CHECK(Field(m, "q_left_wheel").max == HUGE_VAL);
+  // Speed limits from the URDF's velocity limit (20 rad/s, inside the MIT range of 30).
+  CHECK(Field(m, "dq_left_wheel").max == 1.5 * 20.0);
+  CHECK(Command(m, "dq_des_left_wheel").min == -20.0);
+  CHECK(Command(m, "dq_des_left_wheel").max == 20.0);
+  CHECK(Command(m, "dq_des_left_wheel").neutral == 0.0);  // stand-up and hold: zero speed
+  CHECK(Command(m, "dq_des_left_wheel").stop == StopKind::kValue);
+  CHECK(Command(m, "dq_des_left_wheel").stop_value == 0.0);  // safe-stop: brake to zero speed ...
+  CHECK(Command(m, "kd_left_wheel").neutral == 0.3);         // ... with the velocity gain in force,
+  CHECK(Command(m, "kd_left_wheel").stop_value == 0.1);      // the damping gain in safe-stop
+  CHECK(Command(m, "tau_ff_left_wheel").max == 3.0);         // min(URDF effort 3, MIT 4)
+  // The head keeps its position bound and target.
+  CHECK_FALSE(head.velocity_commanded());
+  CHECK_FALSE(head.continuous);
+  CHECK(Field(m, "q_head_pan").max == doctest::Approx(1.5 + 0.2));
+  CHECK(m.commands[head.q].name == "q_des_head_pan");
+  CHECK(m.commands[head.q].neutral == 0.3);
+  CHECK(m.commands[head.q].stop == StopKind::kHoldInput);
+  CHECK(m.commands[head.kp].neutral == 4.0);
+  CHECK(m.motors[1].velocity_commanded());
+}
+
+TEST_CASE("robot model: continuous joints and velocity-commanded motors - bad data refused naming file, field, value") {
+  const test::RobotFileEdits edits("diffbot", "robot_model_diffbot", "tests/data/diffbot");
+  const std::string& p = edits.path();
+  // The wheels' position must be unwrapped between replies: lost may not let a wheel turn half its range.
+  CHECK(edits.Error("stale_after: {degraded: 1, safe_stop: 2, lost: 50}",
+                    "stale_after: {degraded: 1, safe_stop: 2, lost: 200}") ==
+        p + ": motors.stale_after.lost: 200 periods without a reply let continuous joint 'left_wheel' turn up to 6.03 "
+            "rad (1.5 x 20 rad/s for 0.201 s) between two replies, not less than half its MIT position range "
+            "[-3.14159265, 3.14159265]: its multi-turn angle could not be unwrapped");
+  // A velocity-commanded motor needs kp 0 exactly.
+  CHECK(edits.ErrorIn("can_map.yaml", "kp_min: 0.0      #", "kp_min: 1.0      #") ==
+        p + ": files.can_map: motors[0] 'left_wheel': actuator 'wheel_drive' has kp_min 1: velocity-commanded joint "
+            "'left_wheel' needs kp 0 exactly");
+  // A gain the actuator cannot carry.
+  CHECK(edits.ErrorIn("diffbot.yaml", "left_wheel: {kd_nm_s_rad: 0.3}", "left_wheel: {kd_nm_s_rad: 3}") ==
+        p + ": files.can_map: motors[0] 'left_wheel': command 'kd_left_wheel': its neutral value 3 (the "
+            "description's default pose or gains) is outside [0, 2] (the joint's and the actuator's limits)");
+  // A continuous joint given a position target (the description refuses it, naming its file).
+  CHECK(edits.ErrorIn("diffbot.yaml", "  head_pan: 0.3", "  head_pan: 0.3\n  right_wheel: 0") ==
+        "diffbot.yaml: default_pose.right_wheel: '0': joint 'right_wheel' is continuous and velocity-commanded: it "
+        "takes no position target (it holds zero speed where others hold their default pose)");
 }

@@ -1,12 +1,16 @@
-// URDF loader and robot description: the quadruped loads; bad files are refused with the field named.
+// URDF loader and robot description: the quadruped loads; continuous joints and velocity-commanded
+// joints (the diffbot of tests/data); bad files are refused with the field named.
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <string>
+#include <vector>
 
 #include "runtime/robot/urdf.hpp"
 #include "tests/support/test_paths.hpp"
 #include "tests/support/text_edit.hpp"
 
+using pbppo::test::ReadText;
 using pbppo::test::ReplaceOnce;
 
 using namespace pbppo::robot;
@@ -108,7 +112,7 @@ TEST_CASE("urdf: bad files are refused naming the element and field") {
   CHECK(ErrorOf(ReplaceOnce(kGood, "iyy=\"0.01\"", "iyy=\"nan\"")) ==
         "arm.urdf: link 'upper'.inertial.inertia.iyy: 'nan' is not finite");
   CHECK(ErrorOf(ReplaceOnce(kGood, "type=\"revolute\"", "type=\"prismatic\"")) ==
-        "arm.urdf: joint 'shoulder'.type: 'prismatic' is not supported (revolute, fixed)");
+        "arm.urdf: joint 'shoulder'.type: 'prismatic' is not supported (revolute, continuous, fixed)");
   CHECK(ErrorOf(ReplaceOnce(kGood, "<parent link=\"base\"/>", "<parent link=\"torso\"/>")) ==
         "arm.urdf: joint 'shoulder'.parent.link: 'torso' is not a link of this robot");
   CHECK(ErrorOf(ReplaceOnce(kGood, "axis xyz=\"0 2 0\"", "axis xyz=\"0 0 0\"")) ==
@@ -173,8 +177,97 @@ gains: {kp_nm_rad: 60, kd_nm_s_rad: 1.5, damping_kd_nm_s_rad: 2}
   CHECK(err(ReplaceOnce(good, "LF_HAA, LF_HFE, LF_KFE, ", "LF_HAA, LF_HFE, ")) ==
         "q.yaml: joints: revolute joint 'LF_KFE' of quadruped.urdf is not listed");
   CHECK(err(ReplaceOnce(good, "LF_HFE, LF_KFE, RF_HAA", "LF_FOOT_FIXED, LF_KFE, RF_HAA")) ==
-        "q.yaml: joints[1]: 'LF_FOOT_FIXED' is not a revolute joint");
+        "q.yaml: joints[1]: 'LF_FOOT_FIXED' is not a revolute or continuous joint");
   CHECK(err(ReplaceOnce(good, "kp_nm_rad: 60", "kp_nm_rad: x")) == "q.yaml: gains.kp_nm_rad: 'x' is not a number");
   CHECK(err(ReplaceOnce(good, "stand:", "stands:")) == "q.yaml: stands: unknown field");
   CHECK(err(ReplaceOnce(good, "RH_HFE: -0.4, ", "")) == "q.yaml: default_pose: missing field 'RH_HFE'");
+}
+
+TEST_CASE("urdf: a continuous joint - no position limits (lower and upper ignored), <limit> optional") {
+  const std::string wheel = ReplaceOnce(kGood, "type=\"revolute\"", "type=\"continuous\"");
+  auto r = ParseUrdf(wheel, "arm.urdf");
+  REQUIRE_MESSAGE(r.ok(), r.error().message);
+  const UrdfJoint& j = r->joints[0];
+  CHECK(j.type == UrdfJointType::kContinuous);
+  CHECK(j.continuous());
+  CHECK(j.moves());
+  CHECK(j.lower_rad == -HUGE_VAL);  // lower="-1" upper="1" were ignored
+  CHECK(j.upper_rad == HUGE_VAL);
+  CHECK(j.effort_nm == 10.0);
+  CHECK(j.velocity_rad_s == 5.0);
+  CHECK(std::string(ToString(j.type)) == "continuous");
+  // Without <limit>: no effort or velocity limit (an actuated joint is refused by the description).
+  auto bare =
+      ParseUrdf(ReplaceOnce(wheel, "<limit lower=\"-1\" upper=\"1\" effort=\"10\" velocity=\"5\"/>", ""), "arm.urdf");
+  REQUIRE_MESSAGE(bare.ok(), bare.error().message);
+  CHECK(bare->joints[0].velocity_rad_s == 0.0);
+  CHECK(bare->joints[0].effort_nm == 0.0);
+  // A <limit> given must be complete and positive.
+  CHECK(ErrorOf(ReplaceOnce(wheel, " velocity=\"5\"", "")) ==
+        "arm.urdf: joint 'shoulder'.limit: missing attribute 'velocity'");
+  CHECK(ErrorOf(ReplaceOnce(wheel, "effort=\"10\"", "effort=\"0\"")) ==
+        "arm.urdf: joint 'shoulder'.limit.effort: '0' is not a positive number");
+}
+
+TEST_CASE("robot description: the diffbot - continuous wheels velocity-commanded, the head by position") {
+  auto d = LoadRobotDescription(pbppo::test::SourcePath("tests/data/diffbot/diffbot.yaml"));
+  REQUIRE_MESSAGE(d.ok(), d.error().message);
+  REQUIRE(d->joint_count() == 3);
+  CHECK(d->joint_names == std::vector<std::string>{"left_wheel", "right_wheel", "head_pan"});
+  CHECK(d->velocity_commanded(0));
+  CHECK(d->velocity_commanded(1));
+  CHECK_FALSE(d->velocity_commanded(2));
+  CHECK(d->joint_at(0).continuous());
+  CHECK(d->velocity_kd_nm_s_rad[0] == 0.3);
+  CHECK(d->velocity_kd_nm_s_rad[2] == 0.0);
+  CHECK(d->default_q_rad == std::vector<double>{0.0, 0.0, 0.3});
+}
+
+TEST_CASE("robot description: continuous and velocity-commanded joints - errors name the file, field and value") {
+  const std::string urdf_path = pbppo::test::SourcePath("tests/data/diffbot/diffbot.urdf");
+  auto urdf = LoadUrdf(urdf_path);
+  REQUIRE(urdf.ok());
+  const std::string good = pbppo::test::ReadText(pbppo::test::SourcePath("tests/data/diffbot/diffbot.yaml"));
+  auto parse = [&](const std::string& y, const UrdfModel& u) {
+    return ParseRobotDescription(y, "diffbot.yaml", u, urdf_path);
+  };
+  auto err = [&](const std::string& y) {
+    auto r = parse(y, *urdf);
+    REQUIRE_FALSE(r.ok());
+    return r.error().message;
+  };
+  REQUIRE(parse(good, *urdf).ok());
+  // A continuous joint given a position target, or not velocity-commanded.
+  CHECK(err(ReplaceOnce(good, "  head_pan: 0.3", "  head_pan: 0.3\n  left_wheel: 1.0")) ==
+        "diffbot.yaml: default_pose.left_wheel: '1.0': joint 'left_wheel' is continuous and velocity-commanded: it "
+        "takes no position target (it holds zero speed where others hold their default pose)");
+  CHECK(err(ReplaceOnce(good, "  right_wheel: {kd_nm_s_rad: 0.3}\n", "")) ==
+        "diffbot.yaml: joints[1]: 'right_wheel' is a continuous joint of diffbot.urdf: it takes no position target "
+        "(give it velocity_control.right_wheel)");
+  // A velocity-commanded joint without a velocity limit (a continuous joint without <limit>).
+  auto no_limit =
+      ParseUrdf(ReplaceOnce(ReadText(urdf_path), "<limit effort=\"3.0\" velocity=\"20.0\"/>", ""), "diffbot.urdf");
+  REQUIRE_MESSAGE(no_limit.ok(), no_limit.error().message);
+  auto r = parse(good, *no_limit);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message ==
+        "diffbot.yaml: velocity_control.left_wheel: joint 'left_wheel' of diffbot.urdf has no velocity limit (<limit "
+        "velocity=...>): a velocity-commanded joint's speed limit comes from it");
+  CHECK(err(ReplaceOnce(good, "left_wheel: {kd_nm_s_rad: 0.3}", "left_wheel: {kd_nm_s_rad: -0.3}")) ==
+        "diffbot.yaml: velocity_control.left_wheel.kd_nm_s_rad: '-0.3' is outside [1e-09, inf]");
+  CHECK(err(ReplaceOnce(good, "left_wheel: {kd_nm_s_rad: 0.3}", "left_wheel: {kd: 0.3}")) ==
+        "diffbot.yaml: velocity_control.left_wheel.kd: unknown field");
+  CHECK(err(ReplaceOnce(good, "  left_wheel: {kd_nm_s_rad: 0.3}", "  caster: {kd_nm_s_rad: 0.3}")) ==
+        "diffbot.yaml: velocity_control.caster: is not an actuated joint (joints)");
+  CHECK(err(ReplaceOnce(good, "joints: [left_wheel, right_wheel, head_pan]", "joints: [left_wheel, head_pan]")) ==
+        "diffbot.yaml: joints: continuous joint 'right_wheel' of diffbot.urdf is not listed");
+  // A revolute joint may be velocity-commanded too; it then has no default pose either.
+  auto head = parse(ReplaceOnce(ReplaceOnce(good, "  head_pan: 0.3", ""),
+                                "velocity_control:", "velocity_control:\n  head_pan: {kd_nm_s_rad: 0.05}"),
+                    *urdf);
+  REQUIRE_MESSAGE(head.ok(), head.error().message);
+  CHECK(head->velocity_commanded(2));
+  CHECK(err(ReplaceOnce(good, "velocity_control:", "velocity_control:\n  head_pan: {kd_nm_s_rad: 0.05}")) ==
+        "diffbot.yaml: default_pose.head_pan: '0.3': joint 'head_pan' is velocity-commanded: it takes no position "
+        "target (it holds zero speed where others hold their default pose)");
 }
