@@ -171,9 +171,9 @@ struct RobotModel {
   std::vector<SignalSpec> signals;
   PhaseSpec phases;
   SupervisorSpec supervisor;
-  std::optional<RobotDocument> dds_profile;       // files.dds_profile: Fast DDS XML profiles (transports of kind dds)
-  std::optional<RobotDocument> stand_trajectory;  // files.stand_trajectory: the robot's own joint trajectory
-  std::vector<TrustedKeyFile> trusted_keys;       // files.trusted_keys[.NAME] (PEM); none: unsigned blobs run
+  std::optional<RobotDocument> dds_profile;        // files.dds_profile: Fast DDS XML profiles (transports of kind dds)
+  std::optional<RobotDocument> stand_trajectory;   // files.stand_trajectory: the robot's own joint trajectory
+  std::vector<TrustedKeyFile> trusted_keys;        // files.trusted_keys[.NAME] (PEM); none: unsigned blobs run
   std::map<std::string, RobotDocument> documents;  // the robot-specific files by role: "plant", "layouts.hard", ...
   std::uint64_t hash = 0;                          // FNV-1a over every file read, in order
   // The supervisor's model at this tick period (derived; validated at load).
