@@ -14,6 +14,7 @@
 #include <span>
 #include <thread>
 
+#include "firmware/auv/sample_fields.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/loop/loop.hpp"
 #include "runtime/robot/robot_data.hpp"
@@ -21,26 +22,6 @@
 #include "runtime/transport/dds/auv_dds_link.hpp"
 
 namespace pbppo::auv {
-
-// Where each member of the AUV's sample goes among the robot model's fields (by name: x_m,
-// sonar_3_m, ...); the transport, and tests that build fields from a sample, use it.
-class SampleFields {
- public:
-  // Errors name the member the robot has no field for.
-  static Result<SampleFields> Create(const robot::RobotModel& model);
-  void Write(const robot::AuvSensorSample& sample, std::span<double> fields) const noexcept;
-  std::uint32_t stream() const noexcept { return stream_; }
-  std::uint32_t tick_field() const noexcept { return f_.tick; }
-
- private:
-  struct Map {
-    std::uint32_t tick, x, y, depth, roll, pitch, yaw, surge, sway, heave, roll_rate, pitch_rate, yaw_rate, target_x,
-        target_y, target_distance, target_bearing, route_bearing, clearance, target_index, mission_complete,
-        episode_end, sonar_beams;
-  } f_{};
-  std::array<std::uint32_t, robot::kAuvMaxSonarBeams> sonar_{};
-  std::uint32_t beams_ = 0, stream_ = 0;
-};
 
 // The controller's status for the vehicle (models/auv/idl/AuvControllerStatus.idl), from another
 // thread than the tick.

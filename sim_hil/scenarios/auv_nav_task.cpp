@@ -164,36 +164,10 @@ Result<AuvTaskConfig> MakeAuvTaskConfig(const robot::RobotModel& model, const st
   auto signals = robot::SignalProgram::Create(model, robot::SignalNames(model));
   if (!signals) return std::move(signals).error();
   c.signals = std::move(*signals);
-  AuvFieldIndex& f = c.fields;
-  f.count = static_cast<std::uint32_t>(model.fields.size());
-  Status st;
-  auto index = [&](const std::string& name, std::uint32_t* out) {
-    const int k = model.FieldIndex(name);
-    if (k < 0 && st)
-      st = MakeError(ErrorCode::kMismatch,
-                     model.path + ": the AUV task measures '" + name + "', the robot has no such field");
-    *out = k < 0 ? 0 : static_cast<std::uint32_t>(k);
-  };
-  const std::pair<const char*, std::uint32_t*> named[] = {{"x_m", &f.x},
-                                                          {"y_m", &f.y},
-                                                          {"depth_m", &f.depth},
-                                                          {"yaw_rad", &f.yaw},
-                                                          {"surge_mps", &f.surge},
-                                                          {"sway_mps", &f.sway},
-                                                          {"yaw_rate_radps", &f.yaw_rate},
-                                                          {"target_distance_m", &f.target_distance},
-                                                          {"target_bearing_rad", &f.target_bearing},
-                                                          {"route_bearing_rad", &f.route_bearing},
-                                                          {"clearance_m", &f.clearance},
-                                                          {"target_index", &f.target_index},
-                                                          {"target_x_m", &f.target_x},
-                                                          {"target_y_m", &f.target_y},
-                                                          {"episode_end", &f.episode_end}};
-  for (const auto& [name, out] : named) index(name, out);
-  f.sonar.assign(static_cast<std::size_t>(c.sonar.beams), 0);
-  for (std::size_t i = 0; i < f.sonar.size(); ++i)
-    index(robot::ExpandIndex("sonar_{i}_m", static_cast<std::uint32_t>(i)), &f.sonar[i]);
-  if (!st) return st.error();
+  auto fields = auv::SampleFields::Create(model);
+  if (!fields) return std::move(fields).error();
+  c.fields = *fields;
+  c.field_count = static_cast<std::uint32_t>(model.fields.size());
   return c;
 }
 
@@ -233,7 +207,7 @@ Result<AuvNavTask> AuvNavTask::Create(const AuvTaskConfig& config) {
   t.io_hash_ = config.io.Hash();
   t.obs_size_ = config.io.observation_size();
   t.last_obs_.assign(t.obs_size_, 0.0f);
-  t.fields_.assign(config.fields.count, 0.0);
+  t.fields_.assign(config.field_count, 0.0);
   t.signals_.assign(config.signals.size(), 0.0);
   t.last_action_.assign(config.io.actions.size(), 0.0f);
   t.sonar_.assign(static_cast<std::size_t>(config.sonar.beams), 0.0);
@@ -370,30 +344,13 @@ void AuvNavTask::Measure() {
   }
 }
 
-void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
-  // The controller's path too: the robot model's fields, its signals (runtime/robot/signals.hpp),
-  // the IO layout (robot::ObservationBuilder). The plant's yaw is not wrapped; the yaw signal is.
-  const AuvState& s = plant_.State();
-  const AuvFieldIndex& i = config_.fields;
-  double* f = fields_.data();
-  f[i.x] = s.x_m;
-  f[i.y] = s.y_m;
-  f[i.depth] = -s.z_m;
-  f[i.yaw] = s.yaw_rad;
-  f[i.surge] = s.u_mps;
-  f[i.sway] = s.v_mps;
-  f[i.yaw_rate] = s.r_radps;
-  f[i.target_distance] = l_at_;
-  f[i.target_bearing] = phi_at_;
-  f[i.route_bearing] = route_phi_;
-  f[i.clearance] = clearance_;
-  f[i.target_index] = target_;
-  const auto& tgt = config_.layout.targets[static_cast<std::size_t>(
-      std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
-  f[i.target_x] = tgt[0];
-  f[i.target_y] = tgt[1];
-  f[i.episode_end] = episode_end ? 1.0 : 0.0;
-  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = sonar_[k];
+void AuvNavTask::WriteObservation(bool first, float* obs) {
+  // The controller's path: the task's sensor sample (what the HIL publishes) as the robot model's
+  // fields by the controller's transport's map, the robot's signals (runtime/robot/signals.hpp),
+  // the IO layout (robot::ObservationBuilder).
+  robot::AuvSensorSample sample;
+  FillSensorSample(sample);
+  config_.fields.Write(sample, fields_);
   config_.signals.Compute(fields_, last_action_, signals_.data());
   observe_.Build(signals_.data(), first, last_obs_.data());
   std::copy(last_obs_.begin(), last_obs_.end(), obs);
@@ -431,7 +388,7 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   done_ = terminated_ = truncated_ = false;
   Measure();
   stats_.min_clearance_m = clearance_;
-  WriteObservation(false, true, obs);
+  WriteObservation(true, obs);
 }
 
 AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
@@ -506,7 +463,7 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
   done_ = r.terminated || r.truncated;
   terminated_ = r.terminated;
   truncated_ = r.truncated;
-  WriteObservation(done_, false, obs);
+  WriteObservation(false, obs);
   return r;
 }
 

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "firmware/auv/sample_fields.hpp"
 #include "runtime/core/random.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/robot/auv_messages.hpp"
@@ -75,16 +76,6 @@ struct AuvTaskParams {
 // "euclidean" or "geodesic" -> *out; false for any other name (*out unchanged).
 bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noexcept;
 
-// The AUV's sample as the robot model's fields (models/auv/robot.yaml streams[sensor]): where the
-// task writes each quantity it measures, so that the model's signals (runtime/robot/signals.hpp)
-// compute the observation exactly as the controller does from a received sample.
-struct AuvFieldIndex {
-  std::uint32_t count = 0;  // fields of the robot
-  std::uint32_t x, y, depth, yaw, surge, sway, yaw_rate, target_distance, target_bearing, route_bearing, clearance,
-      target_index, target_x, target_y, episode_end;
-  std::vector<std::uint32_t> sonar;  // per beam
-};
-
 // Everything a task instance needs, loaded once and shared read-only between instances.
 struct AuvTaskConfig {
   AuvParams plant;
@@ -93,7 +84,10 @@ struct AuvTaskConfig {
   AuvLayout layout;
   robot::IoLayout io;
   robot::SignalProgram signals;  // every signal of the robot (robot::SignalNames order)
-  AuvFieldIndex fields;
+  // The task's sensor sample (FillSensorSample, what the HIL publishes) as the robot's fields: the
+  // controller's transport's map, so that the task observes what the controller would.
+  auv::SampleFields fields;
+  std::uint32_t field_count = 0;  // the robot model's fields
 };
 
 // Read the sonar and task sections of the plant file (models/auv/auv.yaml); `path` names it in
@@ -189,7 +183,8 @@ class AuvNavTask {
   void ExploringStart(Rng& rng, AuvPose& pose);
   void Measure();     // sonar, l_AT, phi, clearance, route from the plant's state
   void MapReturns();  // RouteMap::kChartAndSonar: add the sonar's new uncharted returns to the route map
-  void WriteObservation(bool episode_end, bool first, float* obs);
+  // The observation of the current state (episode_end: done_), history restarted when `first`.
+  void WriteObservation(bool first, float* obs);
 
   AuvTaskConfig config_;
   AuvPlant plant_;
@@ -199,7 +194,7 @@ class AuvNavTask {
   robot::ObservationBuilder observe_;
   robot::ActionMapper act_;
   std::array<int, 2> action_of_;  // action index of surge_speed and yaw_rate
-  std::vector<double> fields_;    // the robot model's fields (AuvFieldIndex)
+  std::vector<double> fields_;    // the robot model's fields (AuvTaskConfig::fields)
   std::vector<double> signals_;   // config_.signals order
   std::vector<float> last_action_;
   std::vector<float> last_obs_;
