@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -16,6 +15,7 @@
 
 #include "policies/trainer/trainer.hpp"
 #include "runtime/core/cli_checks.hpp"
+#include "runtime/core/clock.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -24,17 +24,11 @@ std::atomic<bool> g_stop{false};
 std::atomic<std::int64_t> g_first_sigint_ns{0};
 static_assert(std::atomic<std::int64_t>::is_always_lock_free, "used from a signal handler");
 
-std::int64_t MonotonicNs() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);  // async-signal-safe
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 // The first SIGINT asks for a clean stop (log, summary, checkpoint). A second one ends the process at
 // once, but only when it comes more than a second later: `timeout -s INT` and a terminal's job control
 // can deliver the same interrupt twice (to the process and to its group), which must not kill the run.
 extern "C" void OnSigint(int) {
-  const std::int64_t now = MonotonicNs();
+  const std::int64_t now = MonotonicNs();  // clock_gettime only: async-signal-safe
   const std::int64_t first = g_first_sigint_ns.load();
   if (first == 0) {
     g_first_sigint_ns.store(now);
