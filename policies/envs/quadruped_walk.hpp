@@ -36,8 +36,8 @@
 #include <string>
 #include <vector>
 
-#include "policies/envs/env.hpp"
 #include "policies/envs/quadruped_walk_config.hpp"
+#include "policies/envs/registry.hpp"
 #include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/robot/urdf.hpp"
@@ -166,5 +166,9 @@ class QuadrupedWalk final : public Env {
   std::vector<int> slot_block_;            // per pool geom: its block, or -1
   WalkTelemetry tel_;
 };
+
+// `quadruped-walk` for pbppo: its flags, and its pbppo eval (the paper's test, --schedule)
+// (quadruped_walk_registration.cpp).
+EnvSpec QuadrupedWalkEnv();
 
 }  // namespace pbppo::envs
