@@ -109,7 +109,7 @@ int main(int argc, char** argv) {
   if (train_iterations == 0) return 0;
   trainer::TrainOptions o;
   o.env.name = "quadruped-walk";
-  o.env.terrain = "flat";
+  o.env.flags["terrain"] = "flat";
   o.env.models_dir = std::string(PBPPO_SOURCE_DIR) + "/models";
   o.num_envs = 512;
   o.rollout_steps = 24;

@@ -389,7 +389,7 @@ CLI::App* AddSweep(CLI::App& app, SweepOptions& o) {
       ->check(CLI::Range(1, kMaxJobs))
       ->default_str("1");
   s->add_option("--final-episodes", o.final_episodes,
-                "Deterministic episodes of each final policy (pbppo eval --episodes; quadruped-walk: robots)")
+                "Deterministic episodes of each final policy (pbppo eval --episodes: what the environment counts)")
       ->check(CLI::Range(1, 100000))
       ->default_str("10");
   s->add_option("--eval-seed", o.eval_seed, "Seed of their initial states (pbppo eval --seed)")

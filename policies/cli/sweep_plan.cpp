@@ -5,7 +5,7 @@
 #include <string>
 
 #include "policies/cli/train.hpp"
-#include "policies/envs/env.hpp"
+#include "policies/envs/registry.hpp"
 #include "policies/trainer/options.hpp"
 
 namespace pbppo::cli {
@@ -97,15 +97,18 @@ std::string ParseTrain(const std::vector<std::string>& args, trainer::TrainOptio
   return "";
 }
 
-// `pbppo eval`'s flags for the environment a run trained on.
+// `pbppo eval`'s flags for the environment a run trained on: its name, the models folder, and the
+// flags the environment carries to its evaluation (its shape: a layout, a terrain), given or default.
 std::vector<std::string> EvalEnvFlags(const envs::EnvOptions& e) {
   std::vector<std::string> f = {"--env=" + e.name};
   if (!e.models_dir.empty()) f.push_back("--models=" + e.models_dir);
-  if (e.name == "auv-nav") f.push_back("--layout=" + e.layout);
-  if (e.name == "ant") f.push_back("--contact-forces=" + e.contact_forces);
-  if (e.name == "quadruped-walk") {
-    f.push_back("--terrain=" + e.terrain);
-    if (!e.commands.empty()) f.push_back("--commands=" + e.commands);
+  if (const envs::EnvSpec* spec = envs::FindEnv(e.name)) {
+    for (const envs::EnvFlag& flag : spec->flags) {
+      if (!flag.carried_to_eval) continue;
+      const auto given = e.flags.find(flag.name);
+      const std::string& v = given != e.flags.end() ? given->second : flag.default_value;
+      if (!v.empty()) f.push_back("--" + flag.name + "=" + v);
+    }
   }
   return f;
 }

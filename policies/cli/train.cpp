@@ -8,14 +8,15 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
 
+#include "policies/envs/registry.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/core/cli_checks.hpp"
+#include "runtime/core/clock.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -24,17 +25,11 @@ std::atomic<bool> g_stop{false};
 std::atomic<std::int64_t> g_first_sigint_ns{0};
 static_assert(std::atomic<std::int64_t>::is_always_lock_free, "used from a signal handler");
 
-std::int64_t MonotonicNs() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);  // async-signal-safe
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
 // The first SIGINT asks for a clean stop (log, summary, checkpoint). A second one ends the process at
 // once, but only when it comes more than a second later: `timeout -s INT` and a terminal's job control
 // can deliver the same interrupt twice (to the process and to its group), which must not kill the run.
 extern "C" void OnSigint(int) {
-  const std::int64_t now = MonotonicNs();
+  const std::int64_t now = MonotonicNs();  // clock_gettime only: async-signal-safe
   const std::int64_t first = g_first_sigint_ns.load();
   if (first == 0) {
     g_first_sigint_ns.store(now);
@@ -89,50 +84,44 @@ std::string Human(double v) {
 
 }  // namespace
 
-void AddEnvOptions(CLI::App& s, envs::EnvOptions& env) {
-  s.add_option(
-      "--env", env.name,
-      "Environment: pendulum, auv-nav, quadruped-walk, or the MuJoCo tasks hopper, walker2d, half-cheetah, ant "
-      "(docs/mujoco_tasks.md)");
-  s.add_option("--layout", env.layout, "Obstacle layout of auv-nav: easy, medium, hard, mixed (one drawn per episode)");
-  s.add_option("--terrain", env.terrain, "quadruped-walk: flat, or mixed (flat and block episodes 1:1)");
-  s.add_option("--commands", env.commands,
-               "quadruped-walk: VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's");
-  s.add_option("--contact-forces", env.contact_forces, "ant: computed, or zero as the paper's software ran (no cost)");
+void AddEnvOptions(CLI::App& s, envs::EnvOptions& env, envs::EnvFlag::Use use) {
+  std::string names;
+  for (const envs::EnvSpec& e : envs::Environments())
+    names += (names.empty() ? "" : ", ") + e.name + " (" + e.description + ")";
+  s.add_option("--env", env.name, "Environment: " + names)->default_str(env.name);
   s.add_option("--models", env.models_dir, "Models folder (default: the source tree's models/)");
+  // Every environment's own flags, each once; the environment checks them (envs::MakeEnv).
+  for (const envs::SharedFlag& f : envs::FlagsFor(use)) {
+    const std::string name = f.flag->name;
+    std::string help;
+    bool same_help = true, same_default = true;
+    for (const envs::EnvFlag* d : f.declarations) {
+      same_help = same_help && d->help == f.flag->help;
+      same_default = same_default && d->default_value == f.flag->default_value;
+    }
+    for (std::size_t k = 0; k < f.environments.size(); ++k) {
+      if (same_help) {
+        help += (k == 0 ? "" : ", ") + f.environments[k];
+      } else {
+        help += (k == 0 ? "" : "; ") + f.environments[k] + ": " + f.declarations[k]->help;
+      }
+    }
+    if (same_help) help += ": " + f.flag->help;
+    CLI::Option* opt = nullptr;
+    if (f.flag->kind == envs::EnvFlag::Kind::kSwitch) {
+      opt = s.add_flag_callback("--" + name, [&env, name] { env.flags[name] = "true"; }, help);
+    } else {
+      opt = s.add_option_function<std::string>(
+          "--" + name, [&env, name](const std::string& v) { env.flags[name] = v; }, help);
+      if (same_default && !f.flag->default_value.empty()) opt->default_str(f.flag->default_value);
+      if (f.flag->kind == envs::EnvFlag::Kind::kReal) opt->type_name("FLOAT");
+      if (f.flag->kind == envs::EnvFlag::Kind::kInteger) opt->type_name("INT");
+    }
+  }
 }
 
 void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
-  envs::EnvOptions& env = o.env;
-  AddEnvOptions(s, env);
-  s.add_option("--command-shares", env.command_shares,
-               "quadruped-walk, training: HEADING:ZERO_PLANAR[:SINGLE_AXIS], the share of commands whose yaw rate "
-               "follows a heading (the rest draw a yaw rate), the share with vx = vy = 0 (standing or turning in "
-               "place) and the share along one axis alone (vx, vy or a yaw rate); default: "
-               "models/quadruped/walk.yaml's");
-  s.add_option("--reward-scales", env.reward_scales,
-               "quadruped-walk, training: NAME=VALUE[,NAME=VALUE...] replaces those reward scales of "
-               "models/quadruped/walk.yaml for this run (e.g. tracking_ang_vel=1.0; also tracking_sigma, the "
-               "tracking terms' width)");
-  // auv-nav's training options.
-  s.add_option("--exploring-starts", env.exploring_starts,
-               "auv-nav: probability that a training episode starts anywhere in the arena with a random current "
-               "target (success is counted only from the layout's start)");
-  s.add_option(
-      "--progress", env.progress,
-      "auv-nav: the reward's progress term: euclidean (the paper: straight-line distance and bearing to "
-      "the target) or geodesic (shortest path around obstacles), for every layout or per layout as "
-      "LAYOUT=MODE,... (e.g. hard=geodesic; the others keep it); default: models/auv/auv.yaml's task.progress");
-  s.add_option("--geodesic-margin", env.geodesic_margin,
-               "auv-nav: DISTANCE_M:COST, the geodesic path pays up to COST extra per metre within DISTANCE_M beyond "
-               "l_safe of obstacles (keeps the progress term off the collision boundary); default: auv.yaml's "
-               "task.geodesic_margin (none)");
-  s.add_option("--clearance-penalty", env.clearance_penalty,
-               "auv-nav: DISTANCE_M:PER_STEP, each step within DISTANCE_M beyond l_safe of an obstacle costs up to "
-               "PER_STEP (linear, the full cost at l_safe); default: auv.yaml's task.clearance_penalty (none)");
-  s.add_option("--extra-obstacles", env.extra_obstacles,
-               "auv-nav, training: each episode draws N more random obstacles than its layout file says (0-16), "
-               "so that the policy has to steer by its sonar rather than learn a route");
+  AddEnvOptions(s, o.env, envs::EnvFlag::kTrain);
 
   // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default
   // bandit weights), the bandit flags adjust it; resolved once every flag is read.
@@ -230,7 +219,7 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   s.add_flag("--keep-best", o.keep_best, "Also write best.blob: the policy of the best last-100-episode return");
   s.add_option("--snapshots", o.snapshots,
                "Also write N blobs evenly spaced over the run into OUT/snapshots/ (named by training steps), "
-               "to choose among on held-out episodes (tools/select_auv.sh)");
+               "to choose among on held-out episodes (tools/select_*.sh)");
   s.add_option_function<std::string>(
        "--hidden", [&o](const std::string& v) { o.policy_hidden = ParseWidths("--hidden", v); },
        "Policy hidden widths, e.g. 64-64")

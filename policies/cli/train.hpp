@@ -2,6 +2,7 @@
 // the flag and the value), and Train() runs it with a progress line and a clean Ctrl-C.
 #pragma once
 
+#include "policies/envs/registry.hpp"
 #include "policies/trainer/options.hpp"
 
 namespace CLI {
@@ -10,9 +11,9 @@ class App;
 
 namespace pbppo::cli {
 
-// The environment's flags, shared by train and eval: --env, --layout, --terrain, --commands,
-// --contact-forces, --models.
-void AddEnvOptions(CLI::App& sub, envs::EnvOptions& env);
+// --env, --models and every environment's own flags that `use` takes (envs::FlagsFor): pbppo
+// train's or pbppo eval's.
+void AddEnvOptions(CLI::App& sub, envs::EnvOptions& env, envs::EnvFlag::Use use);
 void AddTrainOptions(CLI::App& sub, trainer::TrainOptions& options, bool& quiet);
 int Train(trainer::TrainOptions options, bool quiet);
 

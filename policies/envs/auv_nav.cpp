@@ -75,7 +75,7 @@ Result<std::optional<std::pair<double, double>>> AuvNav::ParseNumberPair(const s
   return result;
 }
 
-Result<std::unique_ptr<AuvNav>> AuvNav::Make(const EnvOptions& o) {
+Result<std::unique_ptr<AuvNav>> AuvNav::Make(const AuvNavOptions& o) {
   auto bad = [](const char* flag, const std::string& why) {
     return MakeError(ErrorCode::kInvalidValue, std::string(flag) + ": " + why);
   };
@@ -102,8 +102,12 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const EnvOptions& o) {
     return bad("--layout", "'" + layout_name + "' unknown (easy, medium, hard, mixed)");
   }
   // The robot is read once; every layout's configuration comes from that one model.
-  auto model = robot::LoadRobotModel((o.models_dir.empty() ? DefaultModelsDir() : o.models_dir) + "/auv/robot.yaml");
-  if (!model) return std::move(model).error();
+  std::shared_ptr<const robot::RobotModel> model = o.robot_model;
+  if (!model) {
+    auto loaded = robot::LoadRobotModel((o.models_dir.empty() ? DefaultModelsDir() : o.models_dir) + "/auv/robot.yaml");
+    if (!loaded) return std::move(loaded).error();
+    model = std::make_shared<const robot::RobotModel>(std::move(loaded).value());
+  }
   std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs;
   for (const auto& n : names) {
     auto cfg = sim::MakeAuvTaskConfig(*model, n);
@@ -115,7 +119,10 @@ Result<std::unique_ptr<AuvNav>> AuvNav::Make(const EnvOptions& o) {
     configs.push_back(std::make_shared<const sim::AuvTaskConfig>(std::move(cfg).value()));
   }
   auto env = Make(std::move(configs), "auv-nav:" + layout_name);
-  if (env) (*env)->set_exploring_starts(o.exploring_starts);
+  if (env) {
+    (*env)->robot_model_ = std::move(model);
+    (*env)->set_exploring_starts(o.exploring_starts);
+  }
   return env;
 }
 
@@ -184,6 +191,7 @@ std::unique_ptr<Env> AuvNav::Clone() const {
   std::vector<sim::AuvNavTask> tasks;
   for (const auto& c : configs_) tasks.push_back(std::move(sim::AuvNavTask::Create(*c)).value());
   auto env = std::unique_ptr<AuvNav>(new AuvNav(configs_, std::move(tasks), name_));
+  env->robot_model_ = robot_model_;
   env->set_exploring_starts(exploring_starts_);
   return env;
 }

@@ -14,17 +14,30 @@
 #include <utility>
 #include <vector>
 
-#include "policies/envs/env.hpp"
+#include "policies/envs/registry.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace pbppo::envs {
 
+// auv-nav's flags (AuvNavEnv() declares them for pbppo).
+struct AuvNavOptions {
+  std::string models_dir;  // holding auv/; empty: DefaultModelsDir()
+  // The robot the controller runs (models/auv/robot.yaml); null: loaded from models_dir. Its
+  // layouts, IO layout, fields and signals make the task and its observation.
+  std::shared_ptr<const robot::RobotModel> robot_model;
+  std::string layout = "hard";    // --layout: easy, medium, hard or mixed (the robot's layouts)
+  double exploring_starts = 0.0;  // --exploring-starts: see set_exploring_starts
+  std::string progress;           // --progress: ProgressFor's spec; empty: auv.yaml's
+  std::string geodesic_margin;    // --geodesic-margin: "D:C" replaces auv.yaml's; empty keeps it
+  std::string clearance_penalty;  // --clearance-penalty: "D:W" replaces auv.yaml's; empty keeps it
+  int extra_obstacles = 0;        // --extra-obstacles: random obstacles beyond each layout's, 0-16
+};
+
 class AuvNav final : public Env {
  public:
-  // From the options (env.hpp's EnvOptions: layout easy, medium, hard or mixed: the
-  // layouts of models/<dir>/auv/robot.yaml, and the task's
-  // overrides), each checked; errors name the flag and the value.
-  static Result<std::unique_ptr<AuvNav>> Make(const EnvOptions& options);
+  // From the options (the layouts of models/<dir>/auv/robot.yaml, and the task's overrides), each
+  // checked; errors name the flag and the value.
+  static Result<std::unique_ptr<AuvNav>> Make(const AuvNavOptions& options);
   // One task per configuration; with several, each episode draws one uniformly.
   static Result<std::unique_ptr<AuvNav>> Make(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs,
                                               const std::string& name);
@@ -58,6 +71,8 @@ class AuvNav final : public Env {
   // (episode_info().available is false): success counts only episodes from the layout's start.
   void set_exploring_starts(double probability) noexcept;
 
+  // The robot model the tasks were made from (null when made from configurations).
+  const robot::RobotModel* robot_model() const noexcept { return robot_model_.get(); }
   // The task of the current episode and its configuration.
   const sim::AuvNavTask& task() const noexcept { return tasks_[current_]; }
   const sim::AuvTaskConfig& config() const noexcept { return *configs_[current_]; }
@@ -71,6 +86,7 @@ class AuvNav final : public Env {
   AuvNav(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs, std::vector<sim::AuvNavTask> tasks,
          std::string name);
 
+  std::shared_ptr<const robot::RobotModel> robot_model_;
   std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs_;
   std::vector<sim::AuvNavTask> tasks_;
   std::size_t current_ = 0;
@@ -79,5 +95,9 @@ class AuvNav final : public Env {
   std::array<float, 2> low_{-1.f, -1.f};
   std::array<float, 2> high_{1.f, 1.f};
 };
+
+// `auv-nav` for pbppo: its flags, and pbppo eval's --plot, --trajectories and --outcomes
+// (auv_nav_registration.cpp).
+EnvSpec AuvNavEnv();
 
 }  // namespace pbppo::envs

@@ -1,9 +1,11 @@
-// Training environments: one interface for every task the trainer learns (Pendulum now; the AUV
-// navigation task on Simbody and MuJoCo tasks later). Float observations and actions, double
-// rewards. Each environment carries the robot IO layout (models/<robot>/io_layout.yaml) it was
-// built for, so blob names, layout hash and action map come from the same file the controller
-// reads. The policy's action (before the layout's action map) is what Step() receives; the
-// environment clips it to its bounds.
+// Training environments: one interface for every task the trainer learns (pendulum, auv-nav,
+// quadruped-walk, the MuJoCo locomotion tasks; registry.hpp lists them and their flags). Float
+// observations and actions, double rewards. Each environment carries the robot IO layout
+// (models/<robot>/io_layout.yaml) it was built for, so blob names, layout hash and action map come
+// from the same file the controller reads; the robots with a controller (auv-nav, quadruped-walk)
+// compute their observation from the robot model's fields through the controller's own signal and
+// observation code. The policy's action (before the layout's action map) is what Step() receives;
+// the environment clips it to its bounds.
 //
 // Asymmetric actor-critic: an environment may give the critic a privileged observation (state the
 // robot cannot measure: true base velocity, height, friction) beside the actor's deployable one:
@@ -16,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -84,55 +87,29 @@ class Env {
   virtual void CriticObservation(std::span<float> out) const noexcept { (void)out; }
 };
 
-// What an environment is built from: the `pbppo train` / `pbppo eval` flags that choose and shape
-// it, passed as they are to MakeEnv(), which checks them (errors name the flag and the value).
+// What an environment is built for: pbppo train, or pbppo eval (quadruped-walk: the nominal robot
+// unless --randomize, the paper's test's commands).
+enum class EnvPurpose : std::uint8_t { kTrain, kEval };
+
+// What an environment is built from: --env, --models and the environment's own flags, as pbppo
+// train or pbppo eval got them; MakeEnv() checks them against the environment's registration
+// (registry.hpp; errors name the flag and the value).
 struct EnvOptions {
   std::string name = "pendulum";  // --env: one of EnvNames()
   // --models: folder holding models/<robot>/...; empty: DefaultModelsDir().
   std::string models_dir;
-  // --layout: obstacle layout of tasks that have several (auv-nav: easy, medium, hard, mixed).
-  std::string layout = "hard";
-  // --exploring-starts, auv-nav, training only: probability of an exploring start
-  // (sim::AuvNavTask::set_exploring_starts).
-  double exploring_starts = 0.0;
-  // --progress, auv-nav: the reward's progress term, "euclidean" or "geodesic", for every layout or
-  // per layout (AuvNav::ProgressFor); empty: as models/auv/auv.yaml says.
-  std::string progress;
-  // --geodesic-margin, auv-nav: "D:C" replaces auv.yaml's task.geodesic_margin; empty keeps it.
-  std::string geodesic_margin;
-  // --clearance-penalty, auv-nav: "D:W" replaces auv.yaml's task.clearance_penalty; empty keeps it.
-  std::string clearance_penalty;
-  // --extra-obstacles, auv-nav, training only: random obstacles per episode beyond each layout's
-  // count, 0-16.
-  int extra_obstacles = 0;
-  // --terrain, quadruped-walk: "flat" or "mixed" (flat and block episodes 1:1).
-  std::string terrain = "flat";
-  // --commands, quadruped-walk: "VX:VY:YAW" command maxima; empty: walk.yaml's ranges.
-  std::string commands;
-  // --command-shares, quadruped-walk, training: "HEADING:ZERO_PLANAR[:SINGLE_AXIS]", the share of
-  // commands following a heading, the share with vx = vy = 0 and the share along one axis alone;
-  // empty: walk.yaml's.
-  std::string command_shares;
-  // --reward-scales, quadruped-walk, training: "NAME=VALUE,..." replaces those of walk.yaml's reward
-  // scales for the run (recorded in the blob's provenance); empty: walk.yaml's.
-  std::string reward_scales;
-  // quadruped-walk: randomised robots (friction, mass, gains, latency, pushes): always in training,
-  // in pbppo eval with --randomize.
-  bool randomize = true;
-  // quadruped-walk: the paper's test's commands (every 10 s, each following a heading) instead
-  // of walk.yaml's training commands; pbppo eval sets it.
-  bool paper_test = false;
-  // --contact-forces, ant: "computed" (the standard task's observation and contact cost) or "zero"
-  // (left at zero, as the paper's software ran: mujoco-py on MuJoCo 2.x never computed them).
-  std::string contact_forces = "computed";
+  EnvPurpose purpose = EnvPurpose::kTrain;
+  // The environment's flags by name without the dashes ("layout" -> "hard", "extra-obstacles" ->
+  // "2"); a switch given holds "true". Flags not given take the environment's defaults.
+  std::map<std::string, std::string> flags;
 };
 
 // The names MakeEnv() knows.
 std::vector<std::string> EnvNames();
 
-// Builds the environment `options.name` and checks every option it was given: an unknown name, a
-// bad value, an option the environment does not have and a bad layout file are errors that name
-// the flag and the value ("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'").
+// Builds the environment `options.name` and checks every flag it was given: an unknown name, a
+// bad value, a flag the environment does not have and a bad layout file are errors that name the
+// flag and the value ("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'").
 Result<std::unique_ptr<Env>> MakeEnv(const EnvOptions& options);
 
 // The default models folder (the source tree's, overridable with PBPPO_MODELS_DIR).

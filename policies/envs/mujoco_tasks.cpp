@@ -36,7 +36,42 @@ std::uint32_t ObservationSize(MujocoTaskKind kind, const mjModel* m) {
   return static_cast<std::uint32_t>((m->nq - 1) + m->nv);
 }
 
+// pbppo eval --through-ends: every episode runs its 1000 steps.
+class ThroughEnds final : public EpisodeHooks {
+ public:
+  bool through_ends() const noexcept override { return true; }
+};
+
 }  // namespace
+
+std::vector<EnvSpec> MujocoTaskEnvs() {
+  std::vector<EnvSpec> out;
+  for (const MujocoTaskSpec& task : kSpecs) {
+    EnvSpec s;
+    s.name = task.name;
+    s.description = std::string("MuJoCo's ") + task.name + ", v3 rules, docs/mujoco_tasks.md";
+    s.flags.push_back(Flag("through-ends", EnvFlag::kEval, EnvFlag::Kind::kSwitch, "", "step on after an episode ends",
+                           "every episode runs 1000 steps, on through terminations (the paper's script's way)"));
+    if (task.kind == MujocoTaskKind::kAnt)
+      s.flags.push_back(Flag(
+          "contact-forces", EnvFlag::kBoth, EnvFlag::Kind::kText, "computed", "has contact forces to leave out",
+          "computed, or zero as the paper's software ran (no cost)",
+          [](const std::string& v) -> Status {
+            if (v == "computed" || v == "zero") return {};
+            return MakeError(ErrorCode::kInvalidValue, "'" + v + "' is not computed or zero");
+          },
+          true));
+    s.make = [&task](const EnvOptions& o) -> Result<std::unique_ptr<Env>> {
+      return AsEnv(MujocoTask::Make(task, ModelsDir(o), FlagText(o, "contact-forces") != "zero"));
+    };
+    s.evaluation.hooks = [](const EvalRequest& r, Env&) -> Result<std::unique_ptr<EpisodeHooks>> {
+      if (!FlagSet(*r.env, "through-ends")) return std::unique_ptr<EpisodeHooks>();
+      return std::unique_ptr<EpisodeHooks>(new ThroughEnds());
+    };
+    out.push_back(std::move(s));
+  }
+  return out;
+}
 
 struct MujocoTask::Shared {
   const MujocoTaskSpec* spec = nullptr;

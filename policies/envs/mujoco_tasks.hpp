@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "policies/envs/env.hpp"
+#include "policies/envs/registry.hpp"
 
 struct mjModel_;
 struct mjData_;
@@ -44,6 +44,8 @@ struct MujocoTaskSpec {
 const MujocoTaskSpec* FindMujocoTask(const std::string& name) noexcept;
 // The --env names of the tasks.
 std::vector<std::string> MujocoTaskNames();
+// The tasks' registrations: pbppo eval's --through-ends for each, and ant's --contact-forces.
+std::vector<EnvSpec> MujocoTaskEnvs();
 
 class MujocoTask final : public Env {
  public:

@@ -14,6 +14,18 @@ Error LayoutError(const robot::IoLayout& layout, const std::string& what) {
 
 }  // namespace
 
+EnvSpec PendulumEnv() {
+  EnvSpec s;
+  s.name = "pendulum";
+  s.description = "Gymnasium's Pendulum-v1";
+  s.make = [](const EnvOptions& o) -> Result<std::unique_ptr<Env>> {
+    auto layout = robot::LoadIoLayout(ModelsDir(o) + "/pendulum/io_layout.yaml");
+    if (!layout) return std::move(layout).error();
+    return AsEnv(Pendulum::Make(std::move(layout).value()));
+  };
+  return s;
+}
+
 Result<std::unique_ptr<Pendulum>> Pendulum::Make(robot::IoLayout layout) {
   if (layout.observation_size() != 3) {
     return LayoutError(layout, "observation size " + std::to_string(layout.observation_size()) + ", expected 3");

@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include "policies/envs/env.hpp"
+#include "policies/envs/registry.hpp"
 
 namespace pbppo::envs {
 
@@ -56,5 +56,8 @@ class Pendulum final : public Env {
   float low_ = -static_cast<float>(kMaxTorque);
   float high_ = static_cast<float>(kMaxTorque);
 };
+
+// `pendulum`: no flags of its own; the layout is models/pendulum/io_layout.yaml.
+EnvSpec PendulumEnv();
 
 }  // namespace pbppo::envs

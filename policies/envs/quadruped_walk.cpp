@@ -10,10 +10,9 @@
 
 #include "policies/envs/mjcf.hpp"
 #include "runtime/robot/can_map.hpp"
-#include "runtime/robot/robot_model.hpp"
+#include "runtime/robot/signals.hpp"
 #include "runtime/transport/can/imu_codec.hpp"
 #include "runtime/transport/can/mit_codec.hpp"
-#include "runtime/transport/can/quantize.hpp"
 
 namespace pbppo::envs {
 namespace {
@@ -27,11 +26,6 @@ double Wrap(double a) noexcept {
   return a - std::numbers::pi;
 }
 
-// What a MIT reply carries for value x of range [lo, hi] with `bits` bits.
-double AsReported(double x, double lo, double hi, unsigned bits) noexcept {
-  return can::CodeToValue(can::ValueToCode(x, lo, hi, bits).code, lo, hi, bits);
-}
-
 enum class GeomKind : std::uint8_t { kGround, kBase, kFoot, kLeg };
 
 }  // namespace
@@ -39,16 +33,32 @@ enum class GeomKind : std::uint8_t { kGround, kBase, kFoot, kLeg };
 struct QuadrupedWalk::Shared {
   std::string name = "quadruped-walk";
   QuadrupedWalkOptions options;
-  robot::RobotDescription robot;
-  robot::IoLayout layout;
+  // The controller's robot: its description, IO layout, CAN map, fields and signals.
+  std::shared_ptr<const robot::RobotModel> robot_model;
+  const robot::RobotDescription& robot() const noexcept { return *robot_model->body; }
+  const robot::IoLayout& layout() const noexcept { return *robot_model->io; }
   QuadrupedWalkParams params;
   robot::ActionMapper mapper;
-  std::vector<std::string> signal_names;
+  // The layout's signals from the robot's fields (the controller's PolicySource computes the same),
+  // the training noise of each (walk.yaml noise; 0: none), and the order the noise is drawn in:
+  // the IMU's signals, then joint by joint its position and velocity (the order the shipped
+  // policies were trained and are tested with).
+  robot::SignalProgram signals;
+  std::vector<double> noise;
+  std::vector<std::size_t> noise_order;
+  // The devices: per motor of the CAN map (robot_model->motors) its joint (robot order), reply
+  // range and id; the base IMU's codec format and first field (qw qx qy qz, gyro, accel); the
+  // operator's command fields (vx, vy, yaw rate).
+  std::vector<std::size_t> motor_joint;
+  std::vector<can::MitRange> motor_range;
+  std::vector<std::uint8_t> motor_id;
+  robot::ImuFormat imu_format = robot::ImuFormat::kClassic;
+  std::uint32_t imu_field = 0;
+  std::array<std::uint32_t, 3> command_field{};
   mjModel* model = nullptr;
   std::vector<int> qpos_adr, dof_adr;  // per actuated joint
   std::vector<GeomKind> geom_kind;     // per geom
   std::vector<int> geom_foot;          // per geom: foot index or -1
-  std::vector<can::MitRange> range;    // per actuated joint: the reply ranges
   std::vector<double> soft_lower, soft_upper, effort;
   std::vector<float> low, high;
   int base_body = 0, floor_geom = -1;
@@ -59,15 +69,6 @@ struct QuadrupedWalk::Shared {
     if (model != nullptr) mj_deleteModel(model);
   }
 };
-
-std::vector<std::string> QuadrupedWalk::SignalNames(const std::vector<std::string>& joints) {
-  std::vector<std::string> n = {"base_ang_vel_x",      "base_ang_vel_y",      "base_ang_vel_z",
-                                "projected_gravity_x", "projected_gravity_y", "projected_gravity_z",
-                                "command_vx",          "command_vy",          "command_yaw_rate"};
-  for (const char* prefix : {"q_", "dq_", "last_action_"})
-    for (const auto& j : joints) n.push_back(prefix + j);
-  return n;
-}
 
 Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOptions& options) {
   auto sh = std::make_shared<Shared>();
@@ -80,14 +81,17 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   // The robot as the controller and the HIL read it (robot.yaml: the URDF description, the IO
   // layout, the CAN map, the policy's PD gains), and the training task it names (walk.yaml).
   const std::string dir = (options.models_dir.empty() ? DefaultModelsDir() : options.models_dir) + "/quadruped/";
-  auto robot_model = robot::LoadRobotModel(dir + "robot.yaml");
-  if (!robot_model) return std::move(robot_model).error();
+  std::shared_ptr<const robot::RobotModel> robot_model = options.robot_model;
+  if (!robot_model) {
+    auto loaded = robot::LoadRobotModel(dir + "robot.yaml");
+    if (!loaded) return std::move(loaded).error();
+    robot_model = std::make_shared<const robot::RobotModel>(std::move(loaded).value());
+  }
   if (!robot_model->body || !robot_model->io || !robot_model->can || robot_model->motors.empty())
     return MakeError(ErrorCode::kMismatch, robot_model->path +
                                                ": quadruped-walk needs files.description, files.io_layout, "
                                                "files.can_map and the motors' policy_gains");
-  sh->robot = std::move(*robot_model->body);
-  sh->layout = std::move(*robot_model->io);
+  sh->robot_model = robot_model;
   auto task = robot_model->Document("walk_task");
   if (!task) return std::move(task).error();
   auto params = ParseQuadrupedWalkParams((*task)->yaml, (*task)->path);
@@ -116,8 +120,8 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
   }
   const robot::CanMap* map = &*robot_model->can;
 
-  const robot::RobotDescription& r = sh->robot;
-  const robot::IoLayout& l = sh->layout;
+  const robot::RobotDescription& r = sh->robot();
+  const robot::IoLayout& l = sh->layout();
   const std::size_t n = r.joint_count();
   if (l.robot != "quadruped")
     return MakeError(ErrorCode::kMismatch, "io_layout.yaml: robot is '" + l.robot + "', expected 'quadruped'");
@@ -142,23 +146,57 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
                                                  "] leaves the URDF limits [" + std::to_string(j.lower_rad) + ", " +
                                                  std::to_string(j.upper_rad) + "]");
   }
-  sh->signal_names = SignalNames(r.joint_names);
-  auto probe = robot::ObservationBuilder::Create(l, sh->signal_names);
-  if (!probe) return std::move(probe).error();
+  // The controller's observation path over the robot's fields; the noise by signal.
+  auto signals = robot::SignalProgram::ForLayout(*robot_model, l);
+  if (!signals) return std::move(signals).error();
+  sh->signals = std::move(signals).value();
+  if (auto probe = robot::ObservationBuilder::Create(l, sh->signals.names()); !probe) return std::move(probe).error();
+  const std::vector<std::string>& names = sh->signals.names();
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const auto starts = [&](const char* prefix) { return names[k].rfind(prefix, 0) == 0; };
+    const QuadrupedWalkParams& p = sh->params;
+    const bool imu = starts("base_ang_vel_") || starts("projected_gravity_");
+    sh->noise.push_back(starts("base_ang_vel_")        ? p.noise_ang_vel_radps
+                        : starts("projected_gravity_") ? p.noise_gravity
+                        : starts("q_")                 ? p.noise_dof_pos_rad
+                        : starts("dq_")                ? p.noise_dof_vel_radps
+                                                       : 0.0);
+    if (imu) sh->noise_order.push_back(k);
+  }
+  for (const std::string& joint : r.joint_names)
+    for (const char* prefix : {"q_", "dq_"}) {
+      const auto it = std::find(names.begin(), names.end(), prefix + joint);
+      if (it != names.end()) sh->noise_order.push_back(static_cast<std::size_t>(it - names.begin()));
+    }
   sh->mapper = robot::ActionMapper::Create(l);
-  // The reply ranges of each joint's motor.
-  sh->range.resize(n);
+  // The motors (the CAN map's, in the robot model's order) and their joints.
   std::vector<bool> have(n, false);
-  for (const auto& m : map->motors) {
-    const auto it = std::find(r.joint_names.begin(), r.joint_names.end(), m.joint);
+  for (std::size_t k = 0; k < robot_model->motors.size(); ++k) {
+    const robot::MotorSpec& mo = robot_model->motors[k];
+    const auto it = std::find(r.joint_names.begin(), r.joint_names.end(), mo.joint);
     if (it == r.joint_names.end())
-      return MakeError(ErrorCode::kMismatch, "can_map.yaml: motor '" + m.joint + "' is not a joint of quadruped.yaml");
+      return MakeError(ErrorCode::kMismatch, "can_map.yaml: motor '" + mo.joint + "' is not a joint of quadruped.yaml");
     const auto j = static_cast<std::size_t>(it - r.joint_names.begin());
-    sh->range[j] = map->range_of(m);
+    sh->motor_joint.push_back(j);
+    sh->motor_range.push_back(map->range_of(map->motors[k]));
+    sh->motor_id.push_back(static_cast<std::uint8_t>(map->motors[k].id));
     have[j] = true;
   }
   for (std::size_t j = 0; j < n; ++j)
     if (!have[j]) return MakeError(ErrorCode::kMismatch, "can_map.yaml: no motor for joint '" + r.joint_names[j] + "'");
+  if (map->imus.empty()) return MakeError(ErrorCode::kMismatch, "can_map.yaml: quadruped-walk needs the base IMU");
+  const int imu_qw = robot_model->FieldIndex(map->imus[0].name + "_qw");
+  if (imu_qw < 0) return MakeError(ErrorCode::kMismatch, robot_model->path + ": no field " + map->imus[0].name + "_qw");
+  sh->imu_field = static_cast<std::uint32_t>(imu_qw);
+  sh->imu_format = map->imus[0].format;
+  const char* command_names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const int f = robot_model->FieldIndex(command_names[k]);
+    if (f < 0)
+      return MakeError(ErrorCode::kMismatch, robot_model->path + ": no field " + command_names[k] +
+                                                 " (the operator's velocity command quadruped-walk draws)");
+    sh->command_field[k] = static_cast<std::uint32_t>(f);
+  }
 
   const QuadrupedWalkParams& p = sh->params;
   sh->block_field = {p.field_half_size_m,
@@ -221,12 +259,14 @@ QuadrupedWalk::QuadrupedWalk(std::shared_ptr<const Shared> shared) : shared_(std
   const Shared& s = *shared_;
   m_ = mj_copyModel(nullptr, s.model);
   d_ = mj_makeData(m_);
-  builder_ = *robot::ObservationBuilder::Create(s.layout, s.signal_names);
-  clean_builder_ = *robot::ObservationBuilder::Create(s.layout, s.signal_names);
-  signals_.assign(s.signal_names.size(), 0.0);
-  clean_signals_.assign(s.signal_names.size(), 0.0);
+  builder_ = *robot::ObservationBuilder::Create(s.layout(), s.signals.names());
+  clean_builder_ = *robot::ObservationBuilder::Create(s.layout(), s.signals.names());
+  fields_.assign(s.robot_model->fields.size(), 0.0);
+  signals_.assign(s.signals.size(), 0.0);
+  clean_signals_.assign(s.signals.size(), 0.0);
   clean_obs_.assign(builder_.observation_size(), 0.0f);
-  const std::size_t n = s.robot.joint_count();
+  const std::size_t n = s.robot().joint_count();
+  observed_action_.assign(n, 0.0f);
   for (auto* v : {&kp_, &kd_, &target_, &prev_target_, &action_, &last_action_, &last_dq_, &torque_}) v->assign(n, 0.0);
   air_time_.assign(kFeet, 0.0);
   blocks_.reserve(static_cast<std::size_t>(s.params.blocks));
@@ -271,7 +311,7 @@ std::uint32_t QuadrupedWalk::observation_size() const noexcept {
   return builder_.observation_size();
 }
 std::uint32_t QuadrupedWalk::action_size() const noexcept {
-  return static_cast<std::uint32_t>(shared_->robot.joint_count());
+  return static_cast<std::uint32_t>(shared_->robot().joint_count());
 }
 std::span<const float> QuadrupedWalk::action_low() const noexcept {
   return shared_->low;
@@ -283,7 +323,7 @@ std::uint32_t QuadrupedWalk::max_episode_steps() const noexcept {
   return static_cast<std::uint32_t>(shared_->params.episode_steps());
 }
 const robot::IoLayout& QuadrupedWalk::layout() const noexcept {
-  return shared_->layout;
+  return shared_->layout();
 }
 const QuadrupedWalkParams& QuadrupedWalk::params() const noexcept {
   return shared_->params;
@@ -292,7 +332,10 @@ const QuadrupedWalkOptions& QuadrupedWalk::options() const noexcept {
   return shared_->options;
 }
 const robot::RobotDescription& QuadrupedWalk::robot() const noexcept {
-  return shared_->robot;
+  return shared_->robot();
+}
+const robot::RobotModel& QuadrupedWalk::robot_model() const noexcept {
+  return *shared_->robot_model;
 }
 // The policy's observation without noise, then: base linear velocity (base frame) x 2, base height
 // over the ground, foot contacts, friction, added base mass, actuation latency in policy periods.
@@ -424,10 +467,10 @@ void QuadrupedWalk::Reset(Rng& rng, std::span<float> observation) {
   mj_resetData(m_, d_);
   d_->qpos[2] = p.init_base_height_m + GroundHeight(0, 0);
   for (std::size_t j = 0; j < kp_.size(); ++j) {
-    const double q = s.robot.default_q_rad[j] * rng_.Uniform(p.init_joint_scale[0], p.init_joint_scale[1]);
-    const robot::UrdfJoint& uj = s.robot.joint_at(j);
+    const double q = s.robot().default_q_rad[j] * rng_.Uniform(p.init_joint_scale[0], p.init_joint_scale[1]);
+    const robot::UrdfJoint& uj = s.robot().joint_at(j);
     d_->qpos[s.qpos_adr[j]] = std::clamp(q, uj.lower_rad, uj.upper_rad);
-    target_[j] = prev_target_[j] = s.robot.default_q_rad[j];
+    target_[j] = prev_target_[j] = s.robot().default_q_rad[j];
     action_[j] = last_action_[j] = 0.0;
     last_dq_[j] = torque_[j] = 0.0;
   }
@@ -491,40 +534,68 @@ void QuadrupedWalk::Contacts() noexcept {
   }
 }
 
-void QuadrupedWalk::FillSignals(bool with_noise, double* sig) noexcept {
+// The robot model's fields as the devices report them: each motor's MIT reply and the base IMU's
+// sample through their codecs (what the CAN transport decodes), the operator's command as sent.
+void QuadrupedWalk::WriteFields() noexcept {
   const Shared& s = *shared_;
-  const QuadrupedWalkParams& p = s.params;
-  const double level = with_noise && s.options.noise ? p.noise_level : 0.0;
-  auto noise = [&](double n) { return level > 0 ? (2 * rng_.Uniform() - 1) * n * level : 0.0; };
+  const robot::RobotModel& m = *s.robot_model;
+  double* f = fields_.data();
+  for (std::size_t k = 0; k < m.motors.size(); ++k) {
+    const robot::MotorSpec& mo = m.motors[k];
+    const std::size_t j = s.motor_joint[k];
+    const can::MitReply sent{s.motor_id[k], d_->qpos[s.qpos_adr[j]], d_->qvel[s.dof_adr[j]], torque_[j]};
+    std::uint8_t frame[can::kMitReplyLen];
+    (void)can::EncodeMitReply(s.motor_range[k], sent, frame);
+    can::MitReply got;
+    (void)can::DecodeMitReply(s.motor_range[k], frame, can::kMitReplyLen, &got);
+    f[mo.q_field] = got.q_rad;
+    f[mo.dq_field] = got.dq_rad_s;
+    f[mo.tau_field] = got.tau_nm;
+  }
+  // The base IMU: orientation (base to world), angular velocity in the base frame, and the
+  // specific force in the base frame, R^T (a - g), from the last step's acceleration.
+  can::ImuSample imu;
   const mjtNum* q = d_->qpos + 3;  // w x y z
-  const double gx = -2 * (q[1] * q[3] - q[0] * q[2]), gy = -2 * (q[2] * q[3] + q[0] * q[1]),
-               gz = -(1 - 2 * (q[1] * q[1] + q[2] * q[2]));
+  mjtNum rot[9], a_world[3], a_body[3];
+  mju_quat2Mat(rot, q);
+  for (int k = 0; k < 3; ++k) a_world[k] = d_->qacc[k] - m_->opt.gravity[k];
+  mju_mulMatTVec(a_body, rot, a_world, 3, 3);
+  for (int k = 0; k < 4; ++k) imu.quat_wxyz[k] = q[k];
   for (int k = 0; k < 3; ++k) {
-    // The IMU reports its gyro in steps of its LSB.
-    const double w = std::round(d_->qvel[3 + k] / can::kImuGyroScale) * can::kImuGyroScale;
-    sig[k] = w + noise(p.noise_ang_vel_radps);
+    imu.gyro_rad_s[k] = d_->qvel[3 + k];
+    imu.accel_m_s2[k] = a_body[k];
   }
-  sig[3] = gx + noise(p.noise_gravity);
-  sig[4] = gy + noise(p.noise_gravity);
-  sig[5] = gz + noise(p.noise_gravity);
-  sig[6] = command_[0];
-  sig[7] = command_[1];
-  sig[8] = command_[2];
-  const std::size_t n = kp_.size();
-  for (std::size_t j = 0; j < n; ++j) {
-    const can::MitRange& r = s.range[j];
-    const double qj = AsReported(d_->qpos[s.qpos_adr[j]], r.p_min, r.p_max, can::kMitPositionBits);
-    const double dqj = AsReported(d_->qvel[s.dof_adr[j]], r.v_min, r.v_max, can::kMitVelocityBits);
-    sig[9 + j] = qj + noise(p.noise_dof_pos_rad);
-    sig[9 + n + j] = dqj + noise(p.noise_dof_vel_radps);
-    sig[9 + 2 * n + j] = action_[j];
+  imu.status = can::kImuOrientationValid;
+  can::ImuSample got;
+  if (s.imu_format == robot::ImuFormat::kFd) {
+    std::uint8_t frame[can::kImuFdLen];
+    can::EncodeImuFd(imu, frame);
+    (void)can::DecodeImuFd(frame, can::kImuFdLen, &got);
+  } else {
+    std::uint8_t frames[3][can::kImuClassicLen];
+    can::EncodeImuClassic(imu, frames[0], frames[1], frames[2]);
+    for (unsigned k = 0; k < 3; ++k) (void)can::DecodeImuClassicFrame(k, frames[k], can::kImuClassicLen, &got);
   }
+  double* i = f + s.imu_field;  // qw qx qy qz, gyro x y z, accel x y z (the robot model's IMU stream)
+  for (int k = 0; k < 4; ++k) i[k] = got.quat_wxyz[k];
+  for (int k = 0; k < 3; ++k) i[4 + k] = got.gyro_rad_s[k];
+  for (int k = 0; k < 3; ++k) i[7 + k] = got.accel_m_s2[k];
+  for (std::size_t k = 0; k < 3; ++k) f[s.command_field[k]] = command_[k];
 }
 
+// The controller's observation of the fields (SignalProgram, ObservationBuilder). Training noise is
+// added to the signals between the two (uniform, walk.yaml's amplitudes, drawn in noise_order);
+// the critic's copy has none.
 void QuadrupedWalk::Observe(std::span<float> observation, bool first) noexcept {
-  FillSignals(true, signals_.data());
+  const Shared& s = *shared_;
+  WriteFields();
+  for (std::size_t j = 0; j < action_.size(); ++j) observed_action_[j] = static_cast<float>(action_[j]);
+  s.signals.Compute(fields_, observed_action_, clean_signals_.data());
+  const double level = s.options.noise ? s.params.noise_level : 0.0;
+  std::copy(clean_signals_.begin(), clean_signals_.end(), signals_.begin());  // (-0.0 stays -0.0)
+  if (level > 0)
+    for (const std::size_t k : s.noise_order) signals_[k] += (2 * rng_.Uniform() - 1) * s.noise[k] * level;
   builder_.Build(signals_.data(), first, observation.data());
-  FillSignals(false, clean_signals_.data());
   clean_builder_.Build(clean_signals_.data(), first, clean_obs_.data());
 }
 
@@ -598,7 +669,7 @@ StepResult QuadrupedWalk::Step(std::span<const float> action, std::span<float> o
   // The action as the controller knows it: from the blob's output, the joint target after the
   // layout's clamp (the same as the policy's output unless the target hit a joint limit).
   for (std::size_t j = 0; j < n; ++j) {
-    const robot::ActionElement& e = s.layout.actions[j];
+    const robot::ActionElement& e = s.layout().actions[j];
     last_action_[j] = action_[j];
     action_[j] = (target_[j] - e.offset) / e.scale;
     last_dq_[j] = d_->qvel[s.dof_adr[j]];
@@ -657,7 +728,7 @@ double QuadrupedWalk::BarePhysicsRate(int steps) const {
   const double t0 = cpu();
   for (int k = 0; k < steps; ++k) {
     for (std::size_t j = 0; j < kp_.size(); ++j)
-      d->ctrl[j] = kp_[j] * (s.robot.default_q_rad[j] - d->qpos[s.qpos_adr[j]]) - kd_[j] * d->qvel[s.dof_adr[j]];
+      d->ctrl[j] = kp_[j] * (s.robot().default_q_rad[j] - d->qpos[s.qpos_adr[j]]) - kd_[j] * d->qvel[s.dof_adr[j]];
     mj_step(m, d);
   }
   const double seconds = cpu() - t0;

@@ -7,9 +7,15 @@
 //               every physics step, the policy every `decimation` steps (50 Hz)
 //   action      policy units; the IO layout's action map gives the joint targets
 //               (default + 0.25 a, clamped to the URDF limits), exactly as the controller does
-//   observation what the robot's devices give, through the IO layout: IMU gyro and gravity
-//               direction, the command, joint positions and velocities quantised like the MIT
-//               replies, the previous action; uniform noise
+//   observation the controller's: the environment writes the robot model's fields as the robot's
+//               devices report them (each motor's MIT reply: q, dq, tau through the reply codec
+//               with the CAN map's ranges; the base IMU's sample through the IMU codec: the
+//               quantised orientation, gyro and specific force; the operator's velocity command),
+//               and the controller's robot::SignalProgram (the IO layout's signals: gyro, gravity
+//               from the normalised orientation, command, q, dq, last action) and
+//               robot::ObservationBuilder make the observation from them. Training noise
+//               (walk.yaml noise, uniform) is added to the signals between the two, so that with
+//               noise off the observation is the one the controller builds from the same replies
 //   critic      the same without noise, plus privileged state: base linear velocity, base height
 //               over the ground, foot contacts, friction, added mass, actuation latency
 //   commands    vx, vy, heading (-> yaw rate) resampled every resample_s
@@ -30,9 +36,10 @@
 #include <string>
 #include <vector>
 
-#include "policies/envs/env.hpp"
 #include "policies/envs/quadruped_walk_config.hpp"
+#include "policies/envs/registry.hpp"
 #include "runtime/robot/observation_builder.hpp"
+#include "runtime/robot/robot_model.hpp"
 #include "runtime/robot/urdf.hpp"
 #include "sim_hil/scenarios/quadruped_terrain.hpp"
 
@@ -45,7 +52,10 @@ namespace pbppo::envs {
 inline constexpr double kWalkEvalResampleS = 10.0;
 
 struct QuadrupedWalkOptions {
-  std::string models_dir;        // holding quadruped/; empty: DefaultModelsDir()
+  std::string models_dir;  // holding quadruped/; empty: DefaultModelsDir()
+  // The robot the controller runs (robot::LoadRobotModel of models/quadruped/robot.yaml); null:
+  // loaded from models_dir. Its fields, signals and IO layout make the observation.
+  std::shared_ptr<const robot::RobotModel> robot_model;
   std::string terrain = "flat";  // flat | mixed
   std::string commands;          // "VX:VY:YAW" maxima; empty: walk.yaml's ranges
   std::string command_shares;    // "HEADING:ZERO_PLANAR[:SINGLE_AXIS]" shares; empty: walk.yaml's
@@ -106,13 +116,17 @@ class QuadrupedWalk final : public Env {
   const QuadrupedWalkParams& params() const noexcept;
   const QuadrupedWalkOptions& options() const noexcept;
   const robot::RobotDescription& robot() const noexcept;
+  // The robot model the observation is computed over, and its fields as the devices last
+  // reported them (after the last Reset or Step): what the controller's transports would write.
+  const robot::RobotModel& robot_model() const noexcept;
+  std::span<const double> fields() const noexcept { return fields_; }
+  // For tests: this copy's MuJoCo model and data (the state its devices report).
+  const mjModel_* mujoco_model() const noexcept { return m_; }
+  const mjData_* mujoco_data() const noexcept { return d_; }
   // Benchmarks: `steps` MuJoCo steps of a copy of the current state with only the joint PD
   // holding the default pose (no policy, observation or reward); the physics steps per second of
   // this thread's CPU time.
   double BarePhysicsRate(int steps) const;
-  // The signal names the environment provides, in table order (set-up; allocates).
-  static std::vector<std::string> SignalNames(const std::vector<std::string>& joint_names);
-
   struct Shared;
 
  private:
@@ -123,7 +137,7 @@ class QuadrupedWalk final : public Env {
   void ResampleCommand() noexcept;
   void ApplyTargets(const double* target_rad, int substeps) noexcept;
   void Contacts() noexcept;
-  void FillSignals(bool with_noise, double* signals) noexcept;
+  void WriteFields() noexcept;
   void Observe(std::span<float> observation, bool first) noexcept;
   double Reward() noexcept;
 
@@ -132,7 +146,9 @@ class QuadrupedWalk final : public Env {
   mjData_* d_ = nullptr;
   Rng rng_;
   robot::ObservationBuilder builder_, clean_builder_;
-  std::vector<double> signals_, clean_signals_;
+  std::vector<double> fields_;                   // the robot model's fields, as the devices report them
+  std::vector<double> signals_, clean_signals_;  // the layout's signals, with and without noise
+  std::vector<float> observed_action_;           // last_action_<joint>: the action in policy units, as float
   std::vector<float> clean_obs_;
   // Per joint (robot order).
   std::vector<double> kp_, kd_, target_, prev_target_, action_, last_action_, last_dq_, torque_, air_time_;
@@ -150,5 +166,9 @@ class QuadrupedWalk final : public Env {
   std::vector<int> slot_block_;            // per pool geom: its block, or -1
   WalkTelemetry tel_;
 };
+
+// `quadruped-walk` for pbppo: its flags, and its pbppo eval (the paper's test, --schedule)
+// (quadruped_walk_registration.cpp).
+EnvSpec QuadrupedWalkEnv();
 
 }  // namespace pbppo::envs

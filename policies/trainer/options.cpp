@@ -1,5 +1,7 @@
 #include "policies/trainer/options.hpp"
 
+#include "policies/envs/registry.hpp"
+
 namespace pbppo::trainer {
 namespace {
 
@@ -47,12 +49,9 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
   const envs::EnvOptions& e = o.env;
   const ScheduleConfig& c = o.schedule;
   // clang-format off: a table, one group of flags per line or two
-  return {
-      // The environment.
-      {"env", e.name}, {"models", e.models_dir}, {"layout", e.layout}, {"exploring_starts", e.exploring_starts},
-      {"progress", e.progress}, {"geodesic_margin", e.geodesic_margin}, {"clearance_penalty", e.clearance_penalty},
-      {"extra_obstacles", e.extra_obstacles}, {"terrain", e.terrain}, {"commands", e.commands},
-      {"command_shares", e.command_shares}, {"reward_scales", e.reward_scales}, {"contact_forces", e.contact_forces},
+  nlohmann::json j = {
+      // The environment (its own flags below).
+      {"env", e.name}, {"models", e.models_dir},
       // Budget and parallelism.
       {"seed", o.seed}, {"steps", o.total_steps}, {"envs", o.num_envs}, {"rollout", o.rollout_steps},
       {"threads", o.threads}, {"chunked_minibatch", o.chunked_minibatch},
@@ -72,6 +71,10 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
       {"out", o.out_dir}, {"no_plots", !o.plots}, {"checkpoint_seconds", o.checkpoint_seconds},
       {"keep_best", o.keep_best}, {"snapshots", o.snapshots}};
   // clang-format on
+  // The environment's flags, each by its key: as given, else the environment's default.
+  auto resolved = envs::ResolveEnvOptions(e);
+  j.update(envs::FlagsJson(resolved ? *resolved : e, envs::EnvFlag::kTrain));
+  return j;
 }
 
 }  // namespace pbppo::trainer

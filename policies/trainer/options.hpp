@@ -19,7 +19,7 @@
 namespace pbppo::trainer {
 
 struct TrainOptions {
-  // The environment (--env, --models, --layout and the environment's own flags).
+  // The environment (--env, --models and the environment's own flags).
   envs::EnvOptions env{};
 
   // Budget and parallelism.

@@ -374,30 +374,10 @@ void AuvNavTask::Measure() {
   }
 }
 
-void AuvNavTask::WriteObservation(bool episode_end, bool first, float* obs) {
-  // The controller's path too: the robot model's fields, its signals (runtime/robot/signals.hpp),
-  // the IO layout (robot::ObservationBuilder). The plant's yaw is not wrapped; the yaw signal is.
-  const AuvState& s = plant_.State();
-  const AuvFieldIndex& i = config_.fields;
-  double* f = fields_.data();
-  f[i.x] = s.x_m;
-  f[i.y] = s.y_m;
-  f[i.depth] = -s.z_m;
-  f[i.yaw] = s.yaw_rad;
-  f[i.surge] = s.u_mps;
-  f[i.sway] = s.v_mps;
-  f[i.yaw_rate] = s.r_radps;
-  f[i.target_distance] = l_at_;
-  f[i.target_bearing] = phi_at_;
-  f[i.route_bearing] = route_phi_;
-  f[i.clearance] = clearance_;
-  f[i.target_index] = target_;
-  const auto& tgt = config_.layout.targets[static_cast<std::size_t>(
-      std::min<int>(target_, static_cast<int>(config_.layout.targets.size()) - 1))];
-  f[i.target_x] = tgt[0];
-  f[i.target_y] = tgt[1];
-  f[i.episode_end] = episode_end ? 1.0 : 0.0;
-  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = sonar_[k];
+void AuvNavTask::WriteObservation(bool first, float* obs) {
+  // The controller's path: the task's sensor sample (what the HIL publishes) as the robot model's
+  // fields, the robot's signals (runtime/robot/signals.hpp), the IO layout (robot::ObservationBuilder).
+  FillSensorFields(fields_);
   config_.signals.Compute(fields_, last_action_, signals_.data());
   observe_.Build(signals_.data(), first, last_obs_.data());
   std::copy(last_obs_.begin(), last_obs_.end(), obs);
@@ -435,7 +415,7 @@ void AuvNavTask::Reset(std::uint64_t seed, float* obs) {
   done_ = terminated_ = truncated_ = false;
   Measure();
   stats_.min_clearance_m = clearance_;
-  WriteObservation(false, true, obs);
+  WriteObservation(true, obs);
 }
 
 AuvStepResult AuvNavTask::Step(const float* action, float* obs) {
@@ -510,7 +490,7 @@ AuvStepResult AuvNavTask::StepCommand(double surge_speed_mps, double yaw_rate_ra
   done_ = r.terminated || r.truncated;
   terminated_ = r.terminated;
   truncated_ = r.truncated;
-  WriteObservation(done_, false, obs);
+  WriteObservation(false, obs);
   return r;
 }
 
@@ -531,7 +511,7 @@ void AuvNavTask::FillSensorFields(std::span<double> f) const {
   f[i.pitch_rate] = s.q_radps;
   f[i.yaw_rate] = s.r_radps;
   f[i.sonar_beams] = static_cast<double>(sonar_.size());
-  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = sonar_[k];
+  for (std::size_t k = 0; k < i.sonar.size(); ++k) f[i.sonar[k]] = static_cast<float>(sonar_[k]);
   const int last = static_cast<int>(config_.layout.targets.size()) - 1;
   const auto& t = config_.layout.targets[static_cast<std::size_t>(std::min(target_, last))];
   f[i.target_index] = target_;

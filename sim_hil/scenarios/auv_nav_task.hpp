@@ -76,9 +76,9 @@ struct AuvTaskParams {
 bool ParseAuvProgress(const std::string& name, AuvTaskParams::Progress* out) noexcept;
 
 // The AUV's sample as the robot model's fields (models/auv/robot.yaml streams[sensor]): where the
-// task writes each quantity it measures, so that the model's signals (runtime/robot/signals.hpp)
-// compute the observation exactly as the controller does from a received sample, and the HIL
-// publishes the sample the robot file maps onto its DDS message.
+// task writes each quantity it measures (AuvNavTask::FillSensorFields). The HIL publishes them
+// (the robot file maps them onto its DDS message), and the task observes them through the model's
+// signals (runtime/robot/signals.hpp): what the controller computes from the received sample.
 struct AuvFieldIndex {
   std::uint32_t count = 0;  // fields of the robot
   std::uint32_t tick, x, y, depth, roll, pitch, yaw, surge, sway, heave, roll_rate, pitch_rate, yaw_rate,
@@ -167,9 +167,10 @@ class AuvNavTask {
   // stats().nonfinite_actions. Step(action) maps the action through the IO layout, then calls this.
   AuvStepResult StepCommand(double surge_speed_mps, double yaw_rate_radps, float* obs);
   // The vehicle's current state as the sensor sample the HIL publishes, in the robot model's
-  // fields (config().fields; the others are left alone): tick (control periods since Reset),
-  // pose (yaw wrapped to (-pi, pi]), body velocities, sonar ranges, the current target, the
-  // route's bearing, clearance, flags.
+  // fields (config().fields; the others are left alone), as the vehicle reports them: tick
+  // (control periods since Reset), pose (yaw wrapped to (-pi, pi]), body velocities, sonar ranges
+  // (in single precision, as its sample carries them), the current target, the route's bearing,
+  // clearance, flags (episode_end: the episode has ended).
   void FillSensorFields(std::span<double> fields) const;
   const AuvTaskConfig& config() const noexcept { return config_; }
 
@@ -192,7 +193,8 @@ class AuvNavTask {
   void ExploringStart(Rng& rng, AuvPose& pose);
   void Measure();     // sonar, l_AT, phi, clearance, route from the plant's state
   void MapReturns();  // RouteMap::kChartAndSonar: add the sonar's new uncharted returns to the route map
-  void WriteObservation(bool episode_end, bool first, float* obs);
+  // The observation of the current state (episode_end: done_), history restarted when `first`.
+  void WriteObservation(bool first, float* obs);
 
   AuvTaskConfig config_;
   AuvPlant plant_;
@@ -202,7 +204,7 @@ class AuvNavTask {
   robot::ObservationBuilder observe_;
   robot::ActionMapper act_;
   std::array<int, 2> action_of_;  // action index of surge_speed and yaw_rate
-  std::vector<double> fields_;    // the robot model's fields (AuvFieldIndex)
+  std::vector<double> fields_;    // the robot model's fields (AuvTaskConfig::fields)
   std::vector<double> signals_;   // config_.signals order
   std::vector<float> last_action_;
   std::vector<float> last_obs_;

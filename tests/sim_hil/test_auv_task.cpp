@@ -823,7 +823,7 @@ TEST_CASE("auv task: FillSensorFields reports the vehicle, sonar and target the 
   CHECK(s.surge_mps == task.vehicle().u_mps);
   CHECK(s.yaw_rate_radps == task.vehicle().r_radps);
   REQUIRE(s.sonar_beams == 16);
-  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == task.sonar_ranges()[i]);
+  for (std::size_t i = 0; i < 16; ++i) CHECK(s.sonar_m[i] == static_cast<float>(task.sonar_ranges()[i]));
   CHECK(s.target_index == task.target_index());
   CHECK(s.target_distance_m == doctest::Approx(std::hypot(s.target_x_m - s.x_m, s.target_y_m - s.y_m)));
   CHECK(static_cast<float>(s.target_distance_m / 40.0) == obs[kDist]);

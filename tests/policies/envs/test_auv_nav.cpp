@@ -24,7 +24,7 @@ Result<std::unique_ptr<Env>> MakeNamed(const std::string& name, EnvOptions o) {
 
 std::unique_ptr<Env> Make(const std::string& layout) {
   EnvOptions o;
-  o.layout = layout;
+  o.flags["layout"] = layout;
   auto env = MakeNamed("auv-nav", o);
   REQUIRE_MESSAGE(env.ok(), env.error().message);
   return std::move(env).value();
@@ -175,7 +175,7 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
   }
   CHECK(seen.size() == 3);
   EnvOptions o;
-  o.layout = "labyrinth";
+  o.flags["layout"] = "labyrinth";
   auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("--layout: 'labyrinth' unknown") != std::string::npos);
@@ -183,18 +183,18 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
 
 TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad values are refused naming the part") {
   EnvOptions o;
-  o.layout = "mixed";
-  o.progress = "geodesic";
-  o.geodesic_margin = "2:4";
+  o.flags["layout"] = "mixed";
+  o.flags["progress"] = "geodesic";
+  o.flags["geodesic-margin"] = "2:4";
   CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.geodesic_margin_m == 2.0);
           CHECK(cfg.task.geodesic_margin_cost == 4.0);
         }).size() == 3);
   // The same episode earns a different progress reward with the margin (the path and its length
   // change) and the same observations (the reward only).
-  o.layout = "hard";
+  o.flags["layout"] = "hard";
   EnvOptions without = o;
-  without.geodesic_margin = "";
+  without.flags.erase("geodesic-margin");
   const auto [sum_with, sum_without] = SameEpisodeReturns(o, without, 30);
   CHECK(sum_with != sum_without);
   for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
@@ -205,33 +205,33 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
            {"2:4:1", "'2:4:1': cost '4:1' is not a number in [0, 100]"},
            {"nan:4", "'nan:4': distance 'nan' is not a number in [0, 100]"}}) {
     CAPTURE(spec);
-    o.geodesic_margin = spec;
+    o.flags["geodesic-margin"] = spec;
     auto bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
     CHECK(bad.error().message == "--geodesic-margin: " + message);
   }
-  o.geodesic_margin = "2:4";
+  o.flags["geodesic-margin"] = "2:4";
   auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
 }
 
 TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout, bad values are refused") {
   EnvOptions o;
-  o.layout = "mixed";
-  o.clearance_penalty = "1.5:0.75";
+  o.flags["layout"] = "mixed";
+  o.flags["clearance-penalty"] = "1.5:0.75";
   CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.clearance_penalty_m == 1.5);
           CHECK(cfg.task.clearance_penalty_per_step == 0.75);
         }).size() == 3);
   // Straight ahead from the hard start runs along the bottom wall or into the first circle: the
   // same observations, less reward once inside the band.
-  o.layout = "hard";
+  o.flags["layout"] = "hard";
   EnvOptions without = o;
-  without.clearance_penalty = "";
+  without.flags.erase("clearance-penalty");
   const auto [sum_with, sum_without] =
       SameEpisodeReturns(o, without, 200, [](double with, double plain) { CHECK(with <= plain); });
   CHECK(sum_with < sum_without);
-  o.clearance_penalty = "1.5:1";
+  o.flags["clearance-penalty"] = "1.5:1";
   auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
   CHECK(pendulum.error().message == "--clearance-penalty: only auv-nav has one, not 'pendulum'");
@@ -241,7 +241,7 @@ TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout,
            {"-1:1", "'-1:1': distance '-1' is not a number in [0, 100]"},
            {"1.5:inf", "'1.5:inf': per-step cost 'inf' is not a number in [0, 100]"}}) {
     CAPTURE(spec);
-    o.clearance_penalty = spec;
+    o.flags["clearance-penalty"] = spec;
     auto bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
     CHECK(bad.error().message == "--clearance-penalty: " + message);
@@ -252,8 +252,8 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
   // Mean random obstacles placed over 40 episodes per layout, without and with 3 extra.
   auto placed = [](int extra) {
     EnvOptions o;
-    o.layout = "mixed";
-    o.extra_obstacles = extra;
+    o.flags["layout"] = "mixed";
+    o.flags["extra-obstacles"] = std::to_string(extra);
     auto made = MakeNamed("auv-nav", o);
     REQUIRE_MESSAGE(made.ok(), made.error().message);
     auto* auv = dynamic_cast<AuvNav*>(made->get());
@@ -282,11 +282,11 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
     CHECK(more.at(layout) > plain.at(layout) + 2.0);  // 3 more asked; a crowded layout may fit fewer
   }
   EnvOptions o;
-  o.extra_obstacles = 17;
+  o.flags["extra-obstacles"] = "17";
   auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message == "--extra-obstacles: 17 is not in [0, 16]");
-  o.extra_obstacles = 1;
+  o.flags["extra-obstacles"] = "1";
   auto pendulum = MakeNamed("pendulum", o);
   REQUIRE_FALSE(pendulum.ok());
   CHECK(pendulum.error().message == "--extra-obstacles: only auv-nav has obstacles, not 'pendulum'");
@@ -294,21 +294,21 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
 
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
   EnvOptions o;
-  o.layout = "mixed";
-  o.progress = "geodesic";
+  o.flags["layout"] = "mixed";
+  o.flags["progress"] = "geodesic";
   CHECK(CheckEpisodeConfigs(o, 3, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.progress == sim::AuvTaskParams::Progress::kGeodesic);
         }).size() == 3);
-  o.progress = "";
+  o.flags.erase("progress");
   auto plain = MakeNamed("auv-nav", o);
   REQUIRE(plain.ok());
   CHECK(dynamic_cast<AuvNav*>(plain->get())->config().task.progress == sim::AuvTaskParams::Progress::kEuclidean);
-  o.progress = "manhattan";
+  o.flags["progress"] = "manhattan";
   auto bad = MakeNamed("auv-nav", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message == "--progress: 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
   // Per layout: the named layouts take the mode, the others keep auv.yaml's.
-  o.progress = "hard=geodesic";
+  o.flags["progress"] = "hard=geodesic";
   CHECK(CheckEpisodeConfigs(o, 4, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.progress == (cfg.layout.name == "hard" ? sim::AuvTaskParams::Progress::kGeodesic
                                                                 : sim::AuvTaskParams::Progress::kEuclidean));
@@ -320,7 +320,7 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
            {"hard=geodesic,", "'hard=geodesic,': '' is not LAYOUT=MODE"},
            {"medium=euclidean,geodesic", "'medium=euclidean,geodesic': 'geodesic' is not LAYOUT=MODE"}}) {
     CAPTURE(spec);
-    o.progress = spec;
+    o.flags["progress"] = spec;
     bad = MakeNamed("auv-nav", o);
     REQUIRE_FALSE(bad.ok());
     CHECK(bad.error().message == "--progress: " + message);
@@ -331,7 +331,8 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   CHECK(*AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "medium").value() ==
         sim::AuvTaskParams::Progress::kEuclidean);
   CHECK_FALSE(AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "hard").value().has_value());
-  o.progress = "geodesic";
+  o.flags["progress"] = "geodesic";
+  o.flags.erase("layout");
   bad = MakeNamed("pendulum", o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("only auv-nav has a progress term") != std::string::npos);
@@ -339,8 +340,8 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
 
 TEST_CASE("exploring starts: anywhere free, any current target - success counted only from the layout's start") {
   EnvOptions o;
-  o.layout = "hard";
-  o.exploring_starts = 1.0;
+  o.flags["layout"] = "hard";
+  o.flags["exploring-starts"] = "1";
   auto made = MakeNamed("auv-nav", o);
   REQUIRE(made.ok());
   auto env = std::move(made).value();

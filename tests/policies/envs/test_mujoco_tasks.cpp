@@ -183,7 +183,7 @@ TEST_CASE("mujoco tasks: observations - root x left out, velocities clipped, ant
   envs::EnvOptions o;
   o.name = "ant";
   o.models_dir = test::SourcePath("models");
-  o.contact_forces = "zero";
+  o.flags["contact-forces"] = "zero";
   auto zero = MakeEnv(o);
   REQUIRE_MESSAGE(zero.ok(), zero.error().message);
   CHECK((*zero)->provenance() == "ant (contact forces zero)");
@@ -199,10 +199,10 @@ TEST_CASE("mujoco tasks: observations - root x left out, velocities clipped, ant
   for (std::size_t i = 0; i < 27; ++i) CHECK(with[i] == without[i]);
   for (std::size_t i = 27; i < a.size(); ++i) CHECK(without[i] == 0.0f);
   CHECK(reward_without > reward_with);  // the contact cost is gone, nothing else changed
-  o.contact_forces = "none";
+  o.flags["contact-forces"] = "none";
   CHECK(MakeEnv(o).error().message == "--contact-forces: 'none' is not computed or zero");
   o.name = "hopper";
-  o.contact_forces = "zero";
+  o.flags["contact-forces"] = "zero";
   CHECK(MakeEnv(o).error().message == "--contact-forces: only ant has contact forces to leave out, not 'hopper'");
 }
 
@@ -244,7 +244,7 @@ TEST_CASE("mujoco tasks: MakeEnv builds them and refuses other environments' fla
   auto env = MakeEnv(o);
   REQUIRE(env.ok());
   CHECK((*env)->name() == "walker2d");
-  o.terrain = "mixed";
+  o.flags["terrain"] = "mixed";
   auto bad = MakeEnv(o);
   REQUIRE_FALSE(bad.ok());
   CHECK(bad.error().message.find("--terrain") != std::string::npos);

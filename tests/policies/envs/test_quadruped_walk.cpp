@@ -16,6 +16,7 @@
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/transport/can/mit_codec.hpp"
 #include "runtime/transport/can/quantize.hpp"
+#include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo;
@@ -47,11 +48,7 @@ std::string Read(const std::string& path) {
 
 // A copy of models/quadruped with texts of one file replaced (from, to, from, to, ...).
 std::string ModelsWith(const std::string& name, const std::string& file, const std::vector<std::string>& edits) {
-  const std::string dir = test::ScratchDir(name);
-  std::filesystem::create_directories(dir + "/quadruped");
-  for (const auto& f : std::filesystem::directory_iterator(test::SourcePath("models/quadruped")))
-    if (f.is_regular_file()) std::filesystem::copy_file(f.path(), dir + "/quadruped/" + f.path().filename().string());
-  std::filesystem::copy_file(test::SourcePath("models/dds_profile.xml"), dir + "/dds_profile.xml");  // robot.yaml's
+  const std::string dir = std::filesystem::path(test::CopyRobotFolder("quadruped", name)).parent_path().string();
   std::string text = Read(dir + "/quadruped/" + file);
   for (std::size_t k = 0; k + 1 < edits.size(); k += 2) {
     const auto at = text.find(edits[k]);

@@ -39,8 +39,8 @@ const std::string kModels = PBPPO_ONNX_MODELS_DIR;
 std::vector<std::vector<float>> Recorded(const std::string& env_name, const std::string& blob, int steps) {
   envs::EnvOptions o;
   o.name = env_name;
-  if (env_name == "quadruped-walk") o.randomize = false;
-  if (env_name == "auv-nav") o.layout = "hard";
+  o.purpose = envs::EnvPurpose::kEval;  // quadruped-walk: the nominal robot
+  if (env_name == "auv-nav") o.flags["layout"] = "hard";
   auto env = envs::MakeEnv(o);
   REQUIRE_MESSAGE(env.ok(), env.error().message);
   auto pm = policy::PolicyModel::FromFile(test::SourcePath(blob));

@@ -20,7 +20,7 @@ namespace {
 TEST_CASE("PPO learns auv-nav easy on a small budget - the frozen blob reaches targets") {
   TrainOptions c;
   c.env.name = "auv-nav";
-  c.env.layout = "easy";
+  c.env.flags["layout"] = "easy";
   c.num_envs = 16;
   c.rollout_steps = 256;
   c.minibatch = 512;

@@ -19,7 +19,7 @@ namespace {
 
 TEST_CASE("Pb-PPO learns quadruped-walk on flat ground on a short budget - return up, tracking errors down") {
   TrainOptions c = test::ForEnv("quadruped-walk");
-  c.env.terrain = "flat";
+  c.env.flags["terrain"] = "flat";
   c.num_envs = 512;
   c.rollout_steps = 24;
   c.minibatch = 3072;

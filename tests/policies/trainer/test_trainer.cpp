@@ -300,34 +300,34 @@ TEST_CASE("trainer errors name the field and value") {
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);
   c = Small();
-  c.env.progress = "geodesic";  // Small() is pendulum
+  c.env.flags["progress"] = "geodesic";  // Small() is pendulum
   CHECK(Train(c).error().message.find("--progress: only auv-nav has a progress term to choose, not 'pendulum'") !=
         std::string::npos);
   c.env.name = "auv-nav";
-  c.env.progress = "crow-flies";
+  c.env.flags["progress"] = "crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'crow-flies': unknown (euclidean, geodesic, or LAYOUT=MODE,...)") !=
         std::string::npos);
-  c.env.progress = "hard=crow-flies";
+  c.env.flags["progress"] = "hard=crow-flies";
   CHECK(Train(c).error().message.find("--progress: 'hard=crow-flies': 'crow-flies' for hard is not euclidean or "
                                       "geodesic") != std::string::npos);
-  c.env.progress = "";
-  c.env.geodesic_margin = "2:four";
+  c.env.flags.erase("progress");
+  c.env.flags["geodesic-margin"] = "2:four";
   CHECK(Train(c).error().message.find("--geodesic-margin: '2:four': cost 'four' is not a number in [0, 100]") !=
         std::string::npos);
   c = Small();
-  c.env.geodesic_margin = "2:4";  // pendulum
+  c.env.flags["geodesic-margin"] = "2:4";  // pendulum
   CHECK(Train(c).error().message.find("--geodesic-margin: only auv-nav has one, not 'pendulum'") != std::string::npos);
-  c.env.geodesic_margin = "";
-  c.env.clearance_penalty = "1.5:1";  // pendulum
+  c.env.flags.erase("geodesic-margin");
+  c.env.flags["clearance-penalty"] = "1.5:1";  // pendulum
   CHECK(Train(c).error().message.find("--clearance-penalty: only auv-nav has one, not 'pendulum'") !=
         std::string::npos);
-  c.env.clearance_penalty = "";
-  c.env.extra_obstacles = 2;  // pendulum
+  c.env.flags.erase("clearance-penalty");
+  c.env.flags["extra-obstacles"] = "2";  // pendulum
   CHECK(Train(c).error().message.find("--extra-obstacles: only auv-nav has obstacles, not 'pendulum'") !=
         std::string::npos);
-  c.env.extra_obstacles = 0;
+  c.env.flags.erase("extra-obstacles");
   c.env.name = "auv-nav";
-  c.env.clearance_penalty = "1.5:1:2";
+  c.env.flags["clearance-penalty"] = "1.5:1:2";
   CHECK(Train(c).error().message.find("--clearance-penalty: '1.5:1:2': per-step cost '1:2' is not a number in "
                                       "[0, 100]") != std::string::npos);
   c = Small();

@@ -1,20 +1,22 @@
-#include "policies/cli/eval_walk.hpp"
-
+// quadruped-walk as pbppo knows it: its flags, how they build it, and its pbppo eval: the paper's
+// test (policies/envs/walk_eval.hpp: tracking errors per axis, falls, a plot of commanded against
+// measured velocities), or one robot on a velocity schedule (--schedule, the HIL's).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "policies/envs/quadruped_walk.hpp"
 #include "policies/envs/walk_eval.hpp"
 #include "report/plots.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/robot/robot_model.hpp"
 
-namespace pbppo::cli {
+namespace pbppo::envs {
 namespace {
 
 // Commanded (dashed) against measured (solid) vx, vy and yaw rate of the traced robots over time.
-Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::string& title) {
+Status Plot(const std::string& png, const WalkEvalResult& r, const std::string& title) {
   report::TimeSeriesPlot p;
   p.title = title;
   const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
@@ -42,28 +44,24 @@ Status Plot(const std::string& png, const envs::WalkEvalResult& r, const std::st
 }
 
 // --schedule: the HIL's velocity schedule played to one robot in MuJoCo, per-phase tracking.
-int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
-  const std::string models = o.env.models_dir.empty() ? envs::DefaultModelsDir() : o.env.models_dir;
-  auto robot = robot::LoadRobotModel(models + "/quadruped/robot.yaml");
-  if (!robot) {
-    std::fprintf(stderr, "pbppo eval: %s\n", robot.error().message.c_str());
-    return 2;
-  }
-  auto schedule = loop::LoadSchedule(o.schedule, *robot);
+int EvalWalkSchedule(const EvalRequest& o, const policy::PolicyModel& model, QuadrupedWalk& env) {
+  const robot::RobotModel& robot = env.robot_model();
+  const std::string schedule_path = FlagText(*o.env, "schedule");
+  auto schedule = loop::LoadSchedule(schedule_path, robot);
   if (!schedule) {
     std::fprintf(stderr, "pbppo eval: --schedule: %s\n", schedule.error().message.c_str());
     return 2;
   }
-  auto columns = schedule->Columns(*robot, {"command_vx", "command_vy", "command_yaw_rate"});
+  auto columns = schedule->Columns(robot, {"command_vx", "command_vy", "command_yaw_rate"});
   if (!columns) {
     std::fprintf(stderr, "pbppo eval: --schedule: %s\n", columns.error().message.c_str());
     return 2;
   }
   const std::vector<std::size_t>& field = *columns;
-  std::vector<envs::WalkSchedulePhase> phases;
+  std::vector<WalkSchedulePhase> phases;
   for (const loop::SchedulePhase& p : schedule->phases)
     phases.push_back({p.name, p.start_s, p.duration_s, {p.values[field[0]], p.values[field[1]], p.values[field[2]]}});
-  auto r = envs::EvaluateWalkSchedule(model, env, phases, o.settle_s, o.seed);
+  auto r = EvaluateWalkSchedule(model, env, phases, FlagReal(*o.env, "settle-s"), o.seed);
   if (!r) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
     return 1;
@@ -71,10 +69,10 @@ int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, env
   if (o.json) {
     nlohmann::json j = {{"blob", o.blob},
                         {"env", "quadruped-walk"},
-                        {"terrain", o.env.terrain},
-                        {"schedule", o.schedule},
+                        {"terrain", FlagText(*o.env, "terrain")},
+                        {"schedule", schedule_path},
                         {"seed", o.seed},
-                        {"settle_s", o.settle_s},
+                        {"settle_s", FlagReal(*o.env, "settle-s")},
                         {"fell", r->fell},
                         {"fell_at_s", r->fell_at_s},
                         {"distance_m", r->distance_m},
@@ -92,8 +90,8 @@ int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, env
     return r->fell ? 1 : 0;
   }
   std::printf("%s on quadruped-walk (MuJoCo), %s terrain%s, schedule %s, seed %llu\n", o.blob.c_str(),
-              o.env.terrain.c_str(), o.env.randomize ? " (randomised robot)" : "", o.schedule.c_str(),
-              static_cast<unsigned long long>(o.seed));
+              FlagText(*o.env, "terrain").c_str(), FlagSet(*o.env, "randomize") ? " (randomised robot)" : "",
+              schedule_path.c_str(), static_cast<unsigned long long>(o.seed));
   std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
               "|e| vx", "|e| vy", "|e| wz");
   for (const auto& p : r->phases)
@@ -105,32 +103,36 @@ int EvalWalkSchedule(const EvalOptions& o, const policy::PolicyModel& model, env
   return r->fell ? 1 : 0;
 }
 
-}  // namespace
-
-int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::QuadrupedWalk& env) {
-  if (!o.schedule.empty()) return EvalWalkSchedule(o, model, env);
-  envs::WalkEvalOptions eo;
+// pbppo eval: the paper's test, or with --schedule the schedule.
+int EvalWalk(const EvalRequest& o, Env& e) {
+  auto& env = static_cast<QuadrupedWalk&>(e);
+  const policy::PolicyModel& model = *o.model;
+  if (!FlagText(*o.env, "schedule").empty()) return EvalWalkSchedule(o, model, env);
+  const std::string plot = FlagText(*o.env, "plot"), trajectories = FlagText(*o.env, "trajectories");
+  const std::string terrain = FlagText(*o.env, "terrain");
+  const bool randomize = FlagSet(*o.env, "randomize");
+  WalkEvalOptions eo;
   eo.robots = o.episodes > 0 ? o.episodes : 50;
   eo.seed = o.seed;
-  eo.trace_robots = o.plot.empty() && o.trajectories.empty() ? 0 : 3;
-  auto r = envs::EvaluateWalk(model, env, eo);
+  eo.trace_robots = plot.empty() && trajectories.empty() ? 0 : 3;
+  auto r = EvaluateWalk(model, env, eo);
   if (!r) {
     std::fprintf(stderr, "pbppo eval: %s: %s\n", o.blob.c_str(), r.error().message.c_str());
     return 1;
   }
   const double dur = env.params().episode_s;
   std::string plot_note;
-  if (!o.plot.empty()) {
+  if (!plot.empty()) {
     char title[200];
     std::snprintf(title, sizeof title, "%s, %s terrain: commanded (dashed) and measured body velocity",
-                  std::filesystem::path(o.blob).filename().c_str(), o.env.terrain.c_str());
-    if (auto st = Plot(o.plot, *r, title); !st) {
+                  std::filesystem::path(o.blob).filename().c_str(), terrain.c_str());
+    if (auto st = Plot(plot, *r, title); !st) {
       plot_note = st.error().message;
       std::fprintf(stderr, "pbppo eval: --plot: %s\n", plot_note.c_str());
     }
   }
-  if (!o.trajectories.empty()) {
-    std::ofstream f(o.trajectories);
+  if (!trajectories.empty()) {
+    std::ofstream f(trajectories);
     f << "robot,t_s,vx_cmd_mps,vx_mps,vy_cmd_mps,vy_mps,yaw_rate_cmd_radps,yaw_rate_radps,x_m,y_m,z_m,yaw_rad,"
          "on_blocks,fell\n";
     for (std::size_t k = 0; k < r->traces.size(); ++k)
@@ -139,7 +141,7 @@ int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::Quadr
           << t.measured[1] << ',' << t.command[2] << ',' << t.measured[2] << ',' << t.position[0] << ','
           << t.position[1] << ',' << t.position[2] << ',' << t.yaw_rad << ',' << t.on_blocks << ',' << t.fell << '\n';
     if (!f) {
-      std::fprintf(stderr, "pbppo eval: --trajectories: cannot write '%s'\n", o.trajectories.c_str());
+      std::fprintf(stderr, "pbppo eval: --trajectories: cannot write '%s'\n", trajectories.c_str());
       return 1;
     }
   }
@@ -147,8 +149,8 @@ int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::Quadr
     nlohmann::json j;
     j["blob"] = o.blob;
     j["env"] = "quadruped-walk";
-    j["terrain"] = o.env.terrain;
-    j["randomize"] = o.env.randomize;
+    j["terrain"] = terrain;
+    j["randomize"] = randomize;
     j["robots"] = r->robots;
     j["episode_s"] = dur;
     j["seed"] = o.seed;
@@ -172,12 +174,11 @@ int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::Quadr
     j["steps"] = r->steps;
     j["mean_return"] = r->mean_return;
     j["forward_problems"] = r->forward_problems;
-    if (!o.plot.empty()) j["plot"] = plot_note.empty() ? o.plot : "";
+    if (!plot.empty()) j["plot"] = plot_note.empty() ? plot : "";
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("%s on quadruped-walk, %s terrain%s: %d robots x %.0f s, seed %llu\n", o.blob.c_str(),
-                o.env.terrain.c_str(), o.env.randomize ? " (randomised robots)" : "", r->robots, dur,
-                static_cast<unsigned long long>(o.seed));
+    std::printf("%s on quadruped-walk, %s terrain%s: %d robots x %.0f s, seed %llu\n", o.blob.c_str(), terrain.c_str(),
+                randomize ? " (randomised robots)" : "", r->robots, dur, static_cast<unsigned long long>(o.seed));
     std::printf("mean |error|  vx %.3f m/s  vy %.3f m/s  yaw rate %.3f rad/s   (every step)\n", r->mean_abs_error[0],
                 r->mean_abs_error[1], r->mean_abs_error[2]);
     std::printf(
@@ -191,9 +192,69 @@ int EvalWalk(const EvalOptions& o, const policy::PolicyModel& model, envs::Quadr
       std::printf("  fall: robot %d at %.2f s%s (%s), command vx %.2f vy %.2f yaw rate %.2f\n", f.robot, f.time_s,
                   f.on_blocks ? " on blocks" : "", f.base_contact ? "base contact" : "tilt", f.command[0], f.command[1],
                   f.command[2]);
-    if (!o.plot.empty() && plot_note.empty()) std::printf("plot %s\n", o.plot.c_str());
+    if (!plot.empty() && plot_note.empty()) std::printf("plot %s\n", plot.c_str());
   }
   return 0;
 }
 
-}  // namespace pbppo::cli
+}  // namespace
+
+EnvSpec QuadrupedWalkEnv() {
+  EnvSpec s;
+  s.name = "quadruped-walk";
+  s.description = "the quadruped's velocity tracking, docs/quadruped_walk.md";
+  using K = EnvFlag::Kind;
+  // A walk.yaml override is checked as the environment applies it.
+  auto applies = [](Status (*apply)(const std::string&, QuadrupedWalkParams&)) {
+    return ParsedBy([apply](const std::string& v) {
+      QuadrupedWalkParams p;
+      return apply(v, p);
+    });
+  };
+  s.flags = {
+      Flag("terrain", EnvFlag::kBoth, K::kText, "flat", "has terrains to choose",
+           "flat, or mixed (flat and block episodes 1:1)", OneOf({"flat", "mixed"}), true),
+      Flag("commands", EnvFlag::kBoth, K::kText, "", "has velocity commands",
+           "VX:VY:YAW command maxima (ranges [-max, max]); default: models/quadruped/walk.yaml's",
+           applies(ApplyCommandSpec), true),
+      Flag("command-shares", EnvFlag::kTrain, K::kText, "", "has velocity commands",
+           "HEADING:ZERO_PLANAR[:SINGLE_AXIS], the share of commands whose yaw rate follows a heading (the rest "
+           "draw a yaw rate), the share with vx = vy = 0 (standing or turning in place) and the share along one "
+           "axis alone (vx, vy or a yaw rate); default: models/quadruped/walk.yaml's",
+           applies(ApplyCommandShares)),
+      Flag("reward-scales", EnvFlag::kTrain, K::kText, "", "has reward scales to set",
+           "NAME=VALUE[,NAME=VALUE...] replaces those reward scales of models/quadruped/walk.yaml for this run "
+           "(e.g. tracking_ang_vel=1.0; also tracking_sigma, the tracking terms' width)",
+           applies(ApplyRewardScales)),
+      Flag("randomize", EnvFlag::kEval, K::kSwitch, "", "has randomised robots",
+           "randomised robots as in training (friction, mass, gains, latency, pushes); default: the nominal robot"),
+      Flag("schedule", EnvFlag::kEval, K::kText, "", "takes a velocity schedule",
+           "one robot commanded by this velocity schedule (the HIL's, e.g. models/quadruped/schedules/demo.yaml): "
+           "per-phase tracking, as pbppo-hil quadruped prints it"),
+      Flag("settle-s", EnvFlag::kEval, K::kReal, "1", "takes a velocity schedule",
+           "--schedule: tracking is judged this long after each phase starts", InRange(0, 100)),
+      Flag("plot", EnvFlag::kEval, K::kText, "", "draw plots",
+           "commanded against measured velocities of the first robots, to this PNG"),
+      Flag("trajectories", EnvFlag::kEval, K::kText, "", "write trajectories",
+           "every step of the first robots (commanded and measured velocities, pose) to this CSV"),
+  };
+  s.make = [](const EnvOptions& o) -> Result<std::unique_ptr<Env>> {
+    QuadrupedWalkOptions q;
+    q.models_dir = ModelsDir(o);
+    q.terrain = FlagText(o, "terrain");
+    q.commands = FlagText(o, "commands");
+    q.command_shares = FlagText(o, "command-shares");
+    q.reward_scales = FlagText(o, "reward-scales");
+    // Training always randomises the robot; pbppo eval takes the nominal one unless --randomize,
+    // and the paper's test's commands whatever training used.
+    q.randomize = o.purpose == EnvPurpose::kTrain || FlagSet(o, "randomize");
+    q.paper_test = o.purpose == EnvPurpose::kEval;
+    return AsEnv(QuadrupedWalk::Make(q));
+  };
+  s.evaluation.default_episodes = 50;
+  s.evaluation.episodes_are = "robots";
+  s.evaluation.run = EvalWalk;
+  return s;
+}
+
+}  // namespace pbppo::envs
