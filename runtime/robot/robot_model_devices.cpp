@@ -54,116 +54,130 @@ Status Builder::CanDevices(const YAML::Node& root) {
   for (std::size_t t = 0; t < m.transports.size(); ++t)
     if (m.transports[t].kind == "can") can_transport = static_cast<int>(t);
   if (can_transport < 0) return f.Fail("transports", "no transport of kind can for the CAN map");
-  const std::string transport = m.transports[static_cast<std::size_t>(can_transport)].name;
   if (map.motors.size() != body.joint_count())
     return f.Fail("files.can_map", "the CAN map has " + std::to_string(map.motors.size()) +
                                        " motors, the description " + std::to_string(body.joint_count()) +
                                        " actuated joints");
-  YAML::Node motors, imus;
+  YAML::Node motors;
   PBPPO_TRY(f.Map(root, "motors", "", &motors));
   PBPPO_TRY(f.Keys(motors, "motors",
                    {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor", "policy_gains"}));
-  double policy_kp = -1, policy_kd = -1;
+  MotorSettings ms;
   if (motors["policy_gains"]) {
     YAML::Node g;
     PBPPO_TRY(f.Map(motors, "policy_gains", "motors", &g));
     PBPPO_TRY(f.Keys(g, "motors.policy_gains", {"kp_nm_rad", "kd_nm_s_rad"}));
-    PBPPO_TRY(f.Number(g, "kp_nm_rad", "motors.policy_gains", 0.0, 1e4, &policy_kp));
-    PBPPO_TRY(f.Number(g, "kd_nm_s_rad", "motors.policy_gains", 0.0, 1e3, &policy_kd));
+    PBPPO_TRY(f.Number(g, "kp_nm_rad", "motors.policy_gains", 0.0, 1e4, &ms.policy_kp));
+    PBPPO_TRY(f.Number(g, "kd_nm_s_rad", "motors.policy_gains", 0.0, 1e3, &ms.policy_kd));
   }
-  StreamSpec proto;
-  proto.transport = transport;
-  proto.period_s = m.tick_period_s;
-  proto.kind = StreamKind::kMotor;
-  double margin = 0, factor = 0;
-  PBPPO_TRY(ReadStale(motors, "motors", &proto.stale_after));
-  PBPPO_TRY(f.Count(motors, "invalid_safe_stop", "motors", 1, 1000000, &proto.invalid_safe_stop));
-  PBPPO_TRY(f.Number(motors, "position_margin_rad", "motors", 0.0, 10.0, &margin));
-  PBPPO_TRY(f.Number(motors, "velocity_factor", "motors", 1.0, 100.0, &factor));
-  for (std::size_t k = 0; k < map.motors.size(); ++k) {
-    const CanMotor& cm = map.motors[k];
-    const std::string where = "files.can_map: motors[" + std::to_string(k) + "] '" + cm.joint + "'";
-    const auto it = std::find(body.joint_names.begin(), body.joint_names.end(), cm.joint);
-    if (it == body.joint_names.end()) return f.Fail(where, "is not a joint of " + body.urdf_path);
-    const auto j = static_cast<std::size_t>(it - body.joint_names.begin());
-    const UrdfJoint& uj = body.joint_at(j);
-    const MitRange& r = map.range_of(cm);
-    const double tau = std::min({uj.effort_nm, r.t_max, -r.t_min});
-    const double v = std::min({uj.velocity_rad_s, r.v_max, -r.v_min});
-    const bool velocity = body.velocity_commanded(j);
-    if (velocity && r.kp_min > 0)
-      return f.Fail(where, "actuator '" + map.actuators[cm.actuator].name + "' has kp_min " +
-                               YamlFields::Num(r.kp_min) + ": velocity-commanded joint '" + cm.joint +
-                               "' needs kp 0 exactly");
-    if (uj.continuous()) {
-      // The multi-turn angle is unwrapped from one reply to the next: the joint must turn less than
-      // half the MIT position range between two replies the supervisor still accepts.
-      const double gap_s = (proto.stale_after.lost + 1) * proto.period_s, turn = gap_s * factor * v;
-      if (!(turn < 0.5 * (r.p_max - r.p_min)))
-        return f.Fail("motors.stale_after.lost",
-                      YamlFields::Num(proto.stale_after.lost) + " periods without a reply let continuous joint '" +
-                          cm.joint + "' turn up to " + YamlFields::Num(turn) + " rad (" + YamlFields::Num(factor) +
-                          " x " + YamlFields::Num(v) + " rad/s for " + YamlFields::Num(gap_s) +
-                          " s) between two replies, not less than half its MIT position range [" +
-                          YamlFields::Num(r.p_min) + ", " + YamlFields::Num(r.p_max) +
-                          "]: its multi-turn angle could not be unwrapped");
-    }
-    StreamSpec s = proto;
-    s.name = cm.joint;
-    s.device = static_cast<std::uint32_t>(k);
-    PBPPO_TRY(StartStream(std::move(s), where));
-    MotorSpec mo;
-    mo.joint = cm.joint;
-    mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
-    mo.control = body.control[j];
-    mo.continuous = uj.continuous();
-    mo.default_q_rad = body.default_q_rad[j];
-    mo.policy_kp = velocity ? -1 : policy_kp;
-    mo.policy_kd = velocity ? -1 : policy_kd;
-    mo.q_field = static_cast<std::uint32_t>(m.fields.size());
-    // A continuous joint has no position bound: its field is only checked for being finite.
-    PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - margin, uj.upper_rad + margin, where));
-    mo.dq_field = mo.q_field + 1;
-    PBPPO_TRY(AddField("dq_" + cm.joint, -factor * v, factor * v, where));
-    mo.tau_field = mo.q_field + 2;
-    PBPPO_TRY(AddField("tau_" + cm.joint, std::min(r.t_min, -tau), std::max(r.t_max, tau), where));
-    const auto motor = static_cast<std::int32_t>(m.motors.size());
-    auto command = [&](const char* prefix, double lo, double hi, double neutral, safety::StopKind stop,
-                       double stop_value, std::uint32_t* index) -> Status {
-      CommandSpec c;
-      c.name = prefix + cm.joint;
-      if (!(neutral >= lo && neutral <= hi))
-        return f.Fail(where, "command '" + c.name + "': its neutral value " + YamlFields::Num(neutral) +
-                                 " (the description's default pose or gains) is outside [" + YamlFields::Num(lo) +
-                                 ", " + YamlFields::Num(hi) + "] (the joint's and the actuator's limits)");
-      c.min = c.degraded_min = lo;
-      c.max = c.degraded_max = hi;
-      c.neutral = neutral;
-      c.stop = stop;
-      c.stop_value = stop_value;
-      c.motor = motor;
-      if (stop == safety::StopKind::kHoldInput) c.hold_input = static_cast<std::int32_t>(mo.q_field);
-      *index = static_cast<std::uint32_t>(m.commands.size());
-      return AddCommand(std::move(c), where);
-    };
-    // Safe-stop damps: no stiffness, the damping gain, no speed, no torque (a position-commanded
-    // motor's target is the measured position). A velocity-commanded motor has no q_des_ or kp_:
-    // it holds zero speed with its velocity gain (stand-up, hold) or the damping gain (safe-stop).
-    mo.q = mo.kp = kNoCommand;
-    if (!velocity)
-      PBPPO_TRY(command("q_des_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
-                        safety::StopKind::kHoldInput, 0.0, &mo.q));
-    PBPPO_TRY(command("dq_des_", -v, v, 0.0, safety::StopKind::kValue, 0.0, &mo.dq));
-    if (!velocity)
-      PBPPO_TRY(
-          command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, safety::StopKind::kValue, 0.0, &mo.kp));
-    PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max,
-                      velocity ? body.velocity_kd_nm_s_rad[j] : body.kd_nm_s_rad, safety::StopKind::kValue,
-                      body.damping_kd_nm_s_rad, &mo.kd));
-    PBPPO_TRY(command("tau_ff_", -tau, tau, 0.0, safety::StopKind::kValue, 0.0, &mo.tau));
-    m.motors.push_back(mo);
+  ms.proto.transport = m.transports[static_cast<std::size_t>(can_transport)].name;
+  ms.proto.period_s = m.tick_period_s;
+  ms.proto.kind = StreamKind::kMotor;
+  PBPPO_TRY(ReadStale(motors, "motors", &ms.proto.stale_after));
+  PBPPO_TRY(f.Count(motors, "invalid_safe_stop", "motors", 1, 1000000, &ms.proto.invalid_safe_stop));
+  PBPPO_TRY(f.Number(motors, "position_margin_rad", "motors", 0.0, 10.0, &ms.margin));
+  PBPPO_TRY(f.Number(motors, "velocity_factor", "motors", 1.0, 100.0, &ms.factor));
+  for (std::size_t k = 0; k < map.motors.size(); ++k) PBPPO_TRY(MitMotor(k, ms));
+  return CanImus(root, ms.proto);
+}
+
+// Motor k of the CAN map: its stream, its reply's fields and its commands.
+Status Builder::MitMotor(std::size_t k, const MotorSettings& ms) {
+  const CanMap& map = *m.can;
+  const RobotDescription& body = *m.body;
+  const CanMotor& cm = map.motors[k];
+  const std::string where = "files.can_map: motors[" + std::to_string(k) + "] '" + cm.joint + "'";
+  const auto it = std::find(body.joint_names.begin(), body.joint_names.end(), cm.joint);
+  if (it == body.joint_names.end()) return f.Fail(where, "is not a joint of " + body.urdf_path);
+  const auto j = static_cast<std::size_t>(it - body.joint_names.begin());
+  const UrdfJoint& uj = body.joint_at(j);
+  const MitRange& r = map.range_of(cm);
+  const double tau = std::min({uj.effort_nm, r.t_max, -r.t_min});
+  const double v = std::min({uj.velocity_rad_s, r.v_max, -r.v_min});
+  const bool velocity = body.velocity_commanded(j);
+  if (velocity && r.kp_min > 0)
+    return f.Fail(where, "actuator '" + map.actuators[cm.actuator].name + "' has kp_min " + YamlFields::Num(r.kp_min) +
+                             ": velocity-commanded joint '" + cm.joint + "' needs kp 0 exactly");
+  if (uj.continuous()) {
+    // The multi-turn angle is unwrapped from one reply to the next: the joint must turn less than
+    // half the MIT position range between two replies the supervisor still accepts.
+    const double gap_s = (ms.proto.stale_after.lost + 1) * ms.proto.period_s, turn = gap_s * ms.factor * v;
+    if (!(turn < 0.5 * (r.p_max - r.p_min)))
+      return f.Fail("motors.stale_after.lost",
+                    YamlFields::Num(ms.proto.stale_after.lost) + " periods without a reply let continuous joint '" +
+                        cm.joint + "' turn up to " + YamlFields::Num(turn) + " rad (" + YamlFields::Num(ms.factor) +
+                        " x " + YamlFields::Num(v) + " rad/s for " + YamlFields::Num(gap_s) +
+                        " s) between two replies, not less than half its MIT position range [" +
+                        YamlFields::Num(r.p_min) + ", " + YamlFields::Num(r.p_max) +
+                        "]: its multi-turn angle could not be unwrapped");
   }
+  StreamSpec s = ms.proto;
+  s.name = cm.joint;
+  s.device = static_cast<std::uint32_t>(k);
+  PBPPO_TRY(StartStream(std::move(s), where));
+  MotorSpec mo;
+  mo.joint = cm.joint;
+  mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
+  mo.control = body.control[j];
+  mo.continuous = uj.continuous();
+  mo.default_q_rad = body.default_q_rad[j];
+  mo.policy_kp = velocity ? -1 : ms.policy_kp;
+  mo.policy_kd = velocity ? -1 : ms.policy_kd;
+  mo.q_field = static_cast<std::uint32_t>(m.fields.size());
+  // A continuous joint has no position bound: its field is only checked for being finite.
+  PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - ms.margin, uj.upper_rad + ms.margin, where));
+  mo.dq_field = mo.q_field + 1;
+  PBPPO_TRY(AddField("dq_" + cm.joint, -ms.factor * v, ms.factor * v, where));
+  mo.tau_field = mo.q_field + 2;
+  PBPPO_TRY(AddField("tau_" + cm.joint, std::min(r.t_min, -tau), std::max(r.t_max, tau), where));
+  const auto motor = static_cast<std::int32_t>(m.motors.size());
+  auto command = [&](const char* prefix, double lo, double hi, double neutral, safety::StopKind stop, double stop_value,
+                     std::uint32_t* index) {
+    return MotorCommand({prefix + cm.joint, lo, hi, neutral, stop, stop_value, motor,
+                         stop == safety::StopKind::kHoldInput ? static_cast<std::int32_t>(mo.q_field) : -1},
+                        where, index);
+  };
+  // Safe-stop damps: no stiffness, the damping gain, no speed, no torque (a position-commanded
+  // motor's target is the measured position). A velocity-commanded motor has no q_des_ or kp_:
+  // it holds zero speed with its velocity gain (stand-up, hold) or the damping gain (safe-stop).
+  mo.q = mo.kp = kNoCommand;
+  if (!velocity)
+    PBPPO_TRY(command("q_des_", std::max(uj.lower_rad, r.p_min), std::min(uj.upper_rad, r.p_max), mo.default_q_rad,
+                      safety::StopKind::kHoldInput, 0.0, &mo.q));
+  PBPPO_TRY(command("dq_des_", -v, v, 0.0, safety::StopKind::kValue, 0.0, &mo.dq));
+  if (!velocity)
+    PBPPO_TRY(command("kp_", std::max(0.0, r.kp_min), r.kp_max, body.kp_nm_rad, safety::StopKind::kValue, 0.0, &mo.kp));
+  PBPPO_TRY(command("kd_", std::max(0.0, r.kd_min), r.kd_max,
+                    velocity ? body.velocity_kd_nm_s_rad[j] : body.kd_nm_s_rad, safety::StopKind::kValue,
+                    body.damping_kd_nm_s_rad, &mo.kd));
+  PBPPO_TRY(command("tau_ff_", -tau, tau, 0.0, safety::StopKind::kValue, 0.0, &mo.tau));
+  m.motors.push_back(mo);
+  return {};
+}
+
+Status Builder::MotorCommand(const MotorCommandSpec& c, const std::string& where, std::uint32_t* index) {
+  if (!(c.neutral >= c.lo && c.neutral <= c.hi))
+    return f.Fail(where, "command '" + c.name + "': its neutral value " + YamlFields::Num(c.neutral) +
+                             " (the description's default pose or gains) is outside [" + YamlFields::Num(c.lo) + ", " +
+                             YamlFields::Num(c.hi) + "] (the joint's and the actuator's limits)");
+  CommandSpec s;
+  s.name = c.name;
+  s.min = s.degraded_min = c.lo;
+  s.max = s.degraded_max = c.hi;
+  s.neutral = c.neutral;
+  s.stop = c.stop;
+  s.stop_value = c.stop_value;
+  s.motor = c.motor;
+  s.hold_input = c.hold_input;
+  *index = static_cast<std::uint32_t>(m.commands.size());
+  return AddCommand(std::move(s), where);
+}
+
+// The CAN map's IMUs: a stream each, its quaternion, gyro and acceleration fields.
+Status Builder::CanImus(const YAML::Node& root, StreamSpec proto) {
+  const CanMap& map = *m.can;
   if (map.imus.empty()) return {};
+  YAML::Node imus;
   PBPPO_TRY(f.Map(root, "imus", "", &imus));
   PBPPO_TRY(f.Keys(imus, "imus", {"stale_after", "invalid_safe_stop"}));
   proto.kind = StreamKind::kImu;

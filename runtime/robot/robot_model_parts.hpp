@@ -9,6 +9,22 @@
 
 namespace pbppo::robot::detail {
 
+// The motors section's settings every motor of the CAN map shares.
+struct MotorSettings {
+  StreamSpec proto;  // its stream: transport, period, staleness, invalid samples
+  double margin = 0, factor = 0;
+  double policy_kp = -1, policy_kd = -1;
+};
+
+// One command of a motor: its limits, its neutral value and what safe-stop sends.
+struct MotorCommandSpec {
+  std::string name;
+  double lo = 0, hi = 0, neutral = 0;
+  safety::StopKind stop = safety::StopKind::kValue;
+  double stop_value = 0;
+  std::int32_t motor = -1, hold_input = -1;
+};
+
 struct Builder {
   RobotModel& m;
   const YamlFields& f;
@@ -33,6 +49,9 @@ struct Builder {
  private:
   Status SignalFields(SignalSpec::Op op, const std::string& arg, const std::string& where,
                       std::vector<std::uint32_t>* out);
+  Status MitMotor(std::size_t k, const MotorSettings& settings);
+  Status MotorCommand(const MotorCommandSpec& command, const std::string& where, std::uint32_t* index);
+  Status CanImus(const YAML::Node& root, StreamSpec proto);
   Status InMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, DdsMessageSpec* out);
   Status OutMessage(const YAML::Node& n, const std::string& where, DdsMessageSpec* out);
   Status DdsMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, const IdlFileReader& read,
