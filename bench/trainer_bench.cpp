@@ -10,6 +10,14 @@
 //     chunked, see ppo.hpp) taking turns: samples per second (rollout samples x epochs / update
 //     time) of wall time and per CPU second, the median of `repeats` updates; and the critic's values
 //     and GAE (ComputeReturns).
+//   pbppo_bench_trainer recipes [repeats=7]
+//     The PPO update alone at the shapes and settings of the project's recipes: tools/train_auv.sh
+//     (16 x 256, minibatch 512, 64-64 tanh, 2 threads), tools/train_quadruped.sh (512 x 24,
+//     minibatch 3072, 128-64-32 ELU, the privileged critic, 2 threads), tools/mujoco_table.sh
+//     (1 x 2048, minibatch 64, 64-64 tanh, 1 thread) and tools/learn_pendulum.sh (4 x 1024,
+//     minibatch 64, 1 and 2 threads), the input and action sizes from the environments themselves:
+//     samples per second of wall time and of the busiest thread's CPU time, the median of `repeats`
+//     updates after one unmeasured.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "policies/envs/env.hpp"
 #include "policies/trainer/ppo.hpp"
 #include "policies/trainer/trainer.hpp"
 
@@ -167,10 +176,95 @@ int Update(int repeats) {
   return 0;
 }
 
+struct Recipe {
+  const char* name;
+  envs::EnvOptions env;
+  int envs, steps, minibatch, epochs, threads;
+  std::vector<int> hidden;
+  policy::Activation activation;
+  bool walking;  // legged_gym's PPO settings (tools/train_quadruped.sh)
+};
+
+int Recipes(int repeats) {
+  const auto tanh = policy::Activation::kTanh;
+  auto env = [](const char* name) {
+    envs::EnvOptions e;
+    e.name = name;
+    return e;
+  };
+  envs::EnvOptions auv = env("auv-nav");
+  auv.layout = "mixed";
+  const std::vector<Recipe> recipes = {
+      {"train_auv", auv, 16, 256, 512, 10, 2, {64, 64}, tanh, false},
+      {"train_quadruped", env("quadruped-walk"), 512, 24, 3072, 5, 2, {128, 64, 32}, policy::Activation::kElu, true},
+      {"mujoco_table hopper", env("hopper"), 1, 2048, 64, 10, 1, {64, 64}, tanh, false},
+      {"mujoco_table ant", env("ant"), 1, 2048, 64, 10, 1, {64, 64}, tanh, false},
+      {"learn_pendulum", env("pendulum"), 4, 1024, 64, 10, 1, {64, 64}, tanh, false},
+      {"learn_pendulum", env("pendulum"), 4, 1024, 64, 10, 2, {64, 64}, tanh, false},
+  };
+  std::printf(
+      "PPO update at the recipes' shapes: samples per second (rollout samples x epochs / update time) of wall\n"
+      "time and of the busiest thread's CPU time, median of %d updates.\n",
+      repeats);
+  std::printf("%-20s %5s %4s %4s %4s %9s %5s %3s  %10s %10s\n", "recipe", "obs", "crit", "act", "mb", "rollout", "ep",
+              "thr", "wall/s", "busiest/s");
+  for (const Recipe& rc : recipes) {
+    auto made = envs::MakeEnv(rc.env);
+    if (!made) {
+      std::fprintf(stderr, "trainer_bench: %s: %s\n", rc.name, made.error().message.c_str());
+      return 1;
+    }
+    const envs::Env& e = **made;
+    const int obs = static_cast<int>(e.observation_size()), critic = static_cast<int>(e.critic_observation_size());
+    const int actions = static_cast<int>(e.action_size());
+    TrainOptions o;
+    o.num_envs = rc.envs;
+    o.rollout_steps = rc.steps;
+    o.minibatch = rc.minibatch;
+    o.epochs = rc.epochs;
+    o.threads = rc.threads;
+    o.policy_hidden = rc.hidden;
+    o.activation = rc.activation;
+    if (rc.walking) {
+      o.learning_rate = 1e-3;
+      o.lr_schedule = ParseLrSchedule("adaptive:0.01").value();
+      o.ent_coef = 0.01;
+      o.vf_coef = 1.0;
+      o.clip_vf = 0.2;
+      o.max_grad_norm = 1.0;
+    }
+    Ppo ppo(o, obs, critic > 0 ? critic : obs, actions);
+    Rng rng(7);
+    RolloutStorage r = SyntheticRollout(ppo, rc.steps, rc.envs, obs, critic, actions, rng);
+    WorkerPool pool(rc.threads);
+    std::vector<double> wall, busiest;
+    for (int k = 0; k <= repeats; ++k) {
+      const std::vector<double> t0 = ThreadCpu(pool);
+      const auto w0 = Clock::now();
+      (void)ppo.Update(r, 0.2, false, pool);
+      const double w = std::chrono::duration<double>(Clock::now() - w0).count();
+      const std::vector<double> t1 = ThreadCpu(pool);
+      double most = 0;
+      for (std::size_t i = 0; i < t0.size(); ++i) most = std::max(most, t1[i] - t0[i]);
+      if (k == 0) continue;  // the first update: workspaces and caches warm up
+      wall.push_back(w);
+      busiest.push_back(most);
+    }
+    const double samples = static_cast<double>(r.size()) * o.epochs;
+    char roll[32];
+    std::snprintf(roll, sizeof roll, "%dx%d", rc.envs, rc.steps);
+    std::printf("%-20s %5d %4d %4d %4d %9s %5d %3d  %10.0f %10.0f\n", rc.name, obs, critic, actions, rc.minibatch, roll,
+                rc.epochs, rc.threads, samples / Median(wall), samples / Median(busiest));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "update") return Update(argc > 2 ? std::max(1, std::atoi(argv[2])) : 5);
+  if (argc > 1 && std::string(argv[1]) == "recipes") return Recipes(argc > 2 ? std::max(1, std::atoi(argv[2])) : 7);
   if (argc > 1 && std::string(argv[1]) == "pendulum") return Pendulum(argc - 1, argv + 1);
   return Pendulum(argc, argv);
 }
