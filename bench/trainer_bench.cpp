@@ -6,10 +6,9 @@
 //   pbppo_bench_trainer update [repeats=5]
 //     The PPO update alone (ppo.hpp) at locomotion shapes: 48 actor inputs, 12 actions, a 65-input
 //     critic, ELU networks 128-64-32, 256-128-64 and 512-256-128, rollouts of 64 x 24 to 512 x 24
-//     steps in 4 minibatches, 5 epochs, on 1 and 2 threads, in both update modes (split and
-//     chunked, see ppo.hpp) taking turns: samples per second (rollout samples x epochs / update
-//     time) of wall time and per CPU second, the median of `repeats` updates; and the critic's values
-//     and GAE (ComputeReturns).
+//     steps in 4 minibatches, 5 epochs, on 1 and 2 threads: samples per second (rollout samples x
+//     epochs / update time) of wall time, per CPU second and per CPU second of the busiest thread,
+//     the median of `repeats` updates; and the critic's values and GAE (ComputeReturns).
 //   pbppo_bench_trainer recipes [repeats=7]
 //     The PPO update alone at the shapes and settings of the project's recipes: tools/train_auv.sh
 //     (16 x 256, minibatch 512, 64-64 tanh, 2 threads), tools/train_quadruped.sh (512 x 24,
@@ -24,7 +23,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -116,14 +114,12 @@ int Update(int repeats) {
   const int obs = 48, critic = 65, actions = 12;
   std::printf(
       "PPO update at locomotion shapes: %d actor inputs, %d actions, %d critic inputs, ELU, 4 minibatches, 5 epochs.\n"
-      "split: the actor's and the critic's halves of each minibatch side by side (below --chunked-minibatch);\n"
-      "chunked: each minibatch in %d column chunks on every thread. Samples per second of wall time and per core\n"
-      "(per CPU second of the process: spinning at a barrier counts), median of %d updates, the two modes taking\n"
-      "turns; busiest: per CPU second of the busiest thread (what the wall rate would be with a core per\n"
-      "thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
-      obs, actions, critic, Ppo::kChunks, repeats);
-  std::printf("%-12s %-8s %5s %3s  %9s %9s %9s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "thr", "split/s",
-              "per core", "busiest", "chunked/s", "per core", "busiest", "values/s");
+      "Samples per second of wall time and per core (per CPU second of the process: spinning at a barrier\n"
+      "counts), median of %d updates; busiest: per CPU second of the busiest thread (what the wall rate would be\n"
+      "with a core per thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
+      obs, actions, critic, repeats);
+  std::printf("%-12s %-8s %5s %6s %3s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "chunks", "thr", "update/s",
+              "per core", "busiest", "values/s");
   const std::vector<Shape> shapes = {{{128, 64, 32}, 512, 24},  {{256, 128, 64}, 64, 24},  {{256, 128, 64}, 128, 32},
                                      {{256, 128, 64}, 256, 48}, {{512, 256, 128}, 64, 24}, {{512, 256, 128}, 128, 32}};
   for (const Shape& shape : shapes) {
@@ -136,40 +132,33 @@ int Update(int repeats) {
       o.threads = threads;
       o.max_grad_norm = 1.0;
       o.clip_vf = 0.2;
-      TrainOptions chunked = o;
-      o.chunked_minibatch = std::numeric_limits<long>::max();  // split
-      chunked.chunked_minibatch = 2;
-      Ppo split_ppo(o, obs, critic, actions), chunked_ppo(chunked, obs, critic, actions);
+      Ppo ppo(o, obs, critic, actions);
       Rng rng(7);
-      RolloutStorage r = SyntheticRollout(split_ppo, shape.steps, shape.envs, obs, critic, actions, rng);
+      RolloutStorage r = SyntheticRollout(ppo, shape.steps, shape.envs, obs, critic, actions, rng);
       WorkerPool pool(threads);
-      std::vector<double> wall[2], cpu[2], busiest[2], values_s;
+      std::vector<double> wall, cpu, busiest, values_s;
       for (int k = 0; k < repeats; ++k) {
         const auto v0 = Clock::now();
-        split_ppo.ComputeReturns(r, pool);
+        ppo.ComputeReturns(r, pool);
         values_s.push_back(std::chrono::duration<double>(Clock::now() - v0).count());
-        for (int mode = 0; mode < 2; ++mode) {
-          Ppo& ppo = mode == 0 ? split_ppo : chunked_ppo;
-          const std::vector<double> t0 = ThreadCpu(pool);
-          const double c0 = CpuSeconds();
-          const auto w0 = Clock::now();
-          (void)ppo.Update(r, 0.2, false, pool);
-          wall[mode].push_back(std::chrono::duration<double>(Clock::now() - w0).count());
-          cpu[mode].push_back(CpuSeconds() - c0);
-          const std::vector<double> t1 = ThreadCpu(pool);
-          double most = 0;
-          for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
-          busiest[mode].push_back(most);
-        }
+        const std::vector<double> t0 = ThreadCpu(pool);
+        const double c0 = CpuSeconds();
+        const auto w0 = Clock::now();
+        (void)ppo.Update(r, 0.2, false, pool);
+        wall.push_back(std::chrono::duration<double>(Clock::now() - w0).count());
+        cpu.push_back(CpuSeconds() - c0);
+        const std::vector<double> t1 = ThreadCpu(pool);
+        double most = 0;
+        for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
+        busiest.push_back(most);
       }
       const double samples = static_cast<double>(r.size()) * o.epochs;
       char net[32], roll[32];
       std::snprintf(net, sizeof net, "%d-%d-%d", shape.hidden[0], shape.hidden[1], shape.hidden[2]);
       std::snprintf(roll, sizeof roll, "%dx%d", shape.envs, shape.steps);
-      std::printf("%-12s %-8s %5d %3d  %9.0f %9.0f %9.0f  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch, threads,
-                  samples / Median(wall[0]), samples / Median(cpu[0]), samples / Median(busiest[0]),
-                  samples / Median(wall[1]), samples / Median(cpu[1]), samples / Median(busiest[1]),
-                  static_cast<double>(r.size()) / Median(values_s));
+      std::printf("%-12s %-8s %5d %6d %3d  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch,
+                  Ppo::Chunks(o.minibatch), threads, samples / Median(wall), samples / Median(cpu),
+                  samples / Median(busiest), static_cast<double>(r.size()) / Median(values_s));
       std::fflush(stdout);
     }
   }
