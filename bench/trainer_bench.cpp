@@ -9,14 +9,15 @@
 //     steps in 4 minibatches, 5 epochs, on 1 and 2 threads: samples per second (rollout samples x
 //     epochs / update time) of wall time, per CPU second and per CPU second of the busiest thread,
 //     the median of `repeats` updates; and the critic's values and GAE (ComputeReturns).
-//   pbppo_bench_trainer recipes [repeats=7]
+//   pbppo_bench_trainer recipes [repeats=7] [NAME] [THREADS]
 //     The PPO update alone at the shapes and settings of the project's recipes: tools/train_auv.sh
 //     (16 x 256, minibatch 512, 64-64 tanh, 2 threads), tools/train_quadruped.sh (512 x 24,
 //     minibatch 3072, 128-64-32 ELU, the privileged critic, 2 threads), tools/mujoco_table.sh
 //     (1 x 2048, minibatch 64, 64-64 tanh, 1 thread) and tools/learn_pendulum.sh (4 x 1024,
 //     minibatch 64, 1 and 2 threads), the input and action sizes from the environments themselves:
 //     samples per second of wall time and of the busiest thread's CPU time, the median of `repeats`
-//     updates after one unmeasured.
+//     updates after one unmeasured. NAME: only the recipes whose name contains it; THREADS: on that
+//     many threads instead of each recipe's own.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -174,7 +175,7 @@ struct Recipe {
   bool walking;  // legged_gym's PPO settings (tools/train_quadruped.sh)
 };
 
-int Recipes(int repeats) {
+int Recipes(int repeats, const std::string& only, int threads) {
   const auto tanh = policy::Activation::kTanh;
   auto env = [](const char* name) {
     envs::EnvOptions e;
@@ -197,7 +198,9 @@ int Recipes(int repeats) {
       repeats);
   std::printf("%-20s %5s %4s %4s %4s %9s %5s %3s  %10s %10s\n", "recipe", "obs", "crit", "act", "mb", "rollout", "ep",
               "thr", "wall/s", "busiest/s");
-  for (const Recipe& rc : recipes) {
+  for (Recipe rc : recipes) {
+    if (std::string(rc.name).find(only) == std::string::npos) continue;
+    if (threads > 0) rc.threads = threads;
     auto made = envs::MakeEnv(rc.env);
     if (!made) {
       std::fprintf(stderr, "trainer_bench: %s: %s\n", rc.name, made.error().message.c_str());
@@ -253,7 +256,9 @@ int Recipes(int repeats) {
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "update") return Update(argc > 2 ? std::max(1, std::atoi(argv[2])) : 5);
-  if (argc > 1 && std::string(argv[1]) == "recipes") return Recipes(argc > 2 ? std::max(1, std::atoi(argv[2])) : 7);
+  if (argc > 1 && std::string(argv[1]) == "recipes")
+    return Recipes(argc > 2 ? std::max(1, std::atoi(argv[2])) : 7, argc > 3 ? argv[3] : "",
+                   argc > 4 ? std::atoi(argv[4]) : 0);
   if (argc > 1 && std::string(argv[1]) == "pendulum") return Pendulum(argc - 1, argv + 1);
   return Pendulum(argc, argv);
 }
