@@ -6,20 +6,28 @@
 //   pbppo_bench_trainer update [repeats=5]
 //     The PPO update alone (ppo.hpp) at locomotion shapes: 48 actor inputs, 12 actions, a 65-input
 //     critic, ELU networks 128-64-32, 256-128-64 and 512-256-128, rollouts of 64 x 24 to 512 x 24
-//     steps in 4 minibatches, 5 epochs, on 1 and 2 threads, in both update modes (split and
-//     chunked, see ppo.hpp) taking turns: samples per second (rollout samples x epochs / update
-//     time) of wall time and per CPU second, the median of `repeats` updates; and the critic's values
-//     and GAE (ComputeReturns).
+//     steps in 4 minibatches, 5 epochs, on 1 and 2 threads: samples per second (rollout samples x
+//     epochs / update time) of wall time, per CPU second and per CPU second of the busiest thread,
+//     the median of `repeats` updates; and the critic's values and GAE (ComputeReturns).
+//   pbppo_bench_trainer recipes [repeats=7] [NAME] [THREADS]
+//     The PPO update alone at the shapes and settings of the project's recipes: tools/train_auv.sh
+//     (16 x 256, minibatch 512, 64-64 tanh, 2 threads), tools/train_quadruped.sh (512 x 24,
+//     minibatch 3072, 128-64-32 ELU, the privileged critic, 2 threads), tools/mujoco_table.sh
+//     (1 x 2048, minibatch 64, 64-64 tanh, 1 thread) and tools/learn_pendulum.sh (4 x 1024,
+//     minibatch 64, 1 and 2 threads), the input and action sizes from the environments themselves:
+//     samples per second of wall time and of the busiest thread's CPU time, the median of `repeats`
+//     updates after one unmeasured. NAME: only the recipes whose name contains it; THREADS: on that
+//     many threads instead of each recipe's own.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <limits>
 #include <string>
 #include <vector>
 
+#include "policies/envs/env.hpp"
 #include "policies/trainer/ppo.hpp"
 #include "policies/trainer/trainer.hpp"
 
@@ -107,14 +115,12 @@ int Update(int repeats) {
   const int obs = 48, critic = 65, actions = 12;
   std::printf(
       "PPO update at locomotion shapes: %d actor inputs, %d actions, %d critic inputs, ELU, 4 minibatches, 5 epochs.\n"
-      "split: the actor's and the critic's halves of each minibatch side by side (below --chunked-minibatch);\n"
-      "chunked: each minibatch in %d column chunks on every thread. Samples per second of wall time and per core\n"
-      "(per CPU second of the process: spinning at a barrier counts), median of %d updates, the two modes taking\n"
-      "turns; busiest: per CPU second of the busiest thread (what the wall rate would be with a core per\n"
-      "thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
-      obs, actions, critic, Ppo::kChunks, repeats);
-  std::printf("%-12s %-8s %5s %3s  %9s %9s %9s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "thr", "split/s",
-              "per core", "busiest", "chunked/s", "per core", "busiest", "values/s");
+      "Samples per second of wall time and per core (per CPU second of the process: spinning at a barrier\n"
+      "counts), median of %d updates; busiest: per CPU second of the busiest thread (what the wall rate would be\n"
+      "with a core per thread); values: the critic's values and GAE (ComputeReturns), samples per wall second.\n",
+      obs, actions, critic, repeats);
+  std::printf("%-12s %-8s %5s %6s %3s  %9s %9s %9s  %9s\n", "networks", "rollout", "mb", "chunks", "thr", "update/s",
+              "per core", "busiest", "values/s");
   const std::vector<Shape> shapes = {{{128, 64, 32}, 512, 24},  {{256, 128, 64}, 64, 24},  {{256, 128, 64}, 128, 32},
                                      {{256, 128, 64}, 256, 48}, {{512, 256, 128}, 64, 24}, {{512, 256, 128}, 128, 32}};
   for (const Shape& shape : shapes) {
@@ -127,42 +133,121 @@ int Update(int repeats) {
       o.threads = threads;
       o.max_grad_norm = 1.0;
       o.clip_vf = 0.2;
-      TrainOptions chunked = o;
-      o.chunked_minibatch = std::numeric_limits<long>::max();  // split
-      chunked.chunked_minibatch = 2;
-      Ppo split_ppo(o, obs, critic, actions), chunked_ppo(chunked, obs, critic, actions);
+      Ppo ppo(o, obs, critic, actions);
       Rng rng(7);
-      RolloutStorage r = SyntheticRollout(split_ppo, shape.steps, shape.envs, obs, critic, actions, rng);
+      RolloutStorage r = SyntheticRollout(ppo, shape.steps, shape.envs, obs, critic, actions, rng);
       WorkerPool pool(threads);
-      std::vector<double> wall[2], cpu[2], busiest[2], values_s;
+      std::vector<double> wall, cpu, busiest, values_s;
       for (int k = 0; k < repeats; ++k) {
         const auto v0 = Clock::now();
-        split_ppo.ComputeReturns(r, pool);
+        ppo.ComputeReturns(r, pool);
         values_s.push_back(std::chrono::duration<double>(Clock::now() - v0).count());
-        for (int mode = 0; mode < 2; ++mode) {
-          Ppo& ppo = mode == 0 ? split_ppo : chunked_ppo;
-          const std::vector<double> t0 = ThreadCpu(pool);
-          const double c0 = CpuSeconds();
-          const auto w0 = Clock::now();
-          (void)ppo.Update(r, 0.2, false, pool);
-          wall[mode].push_back(std::chrono::duration<double>(Clock::now() - w0).count());
-          cpu[mode].push_back(CpuSeconds() - c0);
-          const std::vector<double> t1 = ThreadCpu(pool);
-          double most = 0;
-          for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
-          busiest[mode].push_back(most);
-        }
+        const std::vector<double> t0 = ThreadCpu(pool);
+        const double c0 = CpuSeconds();
+        const auto w0 = Clock::now();
+        (void)ppo.Update(r, 0.2, false, pool);
+        wall.push_back(std::chrono::duration<double>(Clock::now() - w0).count());
+        cpu.push_back(CpuSeconds() - c0);
+        const std::vector<double> t1 = ThreadCpu(pool);
+        double most = 0;
+        for (std::size_t w = 0; w < t0.size(); ++w) most = std::max(most, t1[w] - t0[w]);
+        busiest.push_back(most);
       }
       const double samples = static_cast<double>(r.size()) * o.epochs;
       char net[32], roll[32];
       std::snprintf(net, sizeof net, "%d-%d-%d", shape.hidden[0], shape.hidden[1], shape.hidden[2]);
       std::snprintf(roll, sizeof roll, "%dx%d", shape.envs, shape.steps);
-      std::printf("%-12s %-8s %5d %3d  %9.0f %9.0f %9.0f  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch, threads,
-                  samples / Median(wall[0]), samples / Median(cpu[0]), samples / Median(busiest[0]),
-                  samples / Median(wall[1]), samples / Median(cpu[1]), samples / Median(busiest[1]),
-                  static_cast<double>(r.size()) / Median(values_s));
+      std::printf("%-12s %-8s %5d %6d %3d  %9.0f %9.0f %9.0f  %9.0f\n", net, roll, o.minibatch,
+                  Ppo::Chunks(o.minibatch), threads, samples / Median(wall), samples / Median(cpu),
+                  samples / Median(busiest), static_cast<double>(r.size()) / Median(values_s));
       std::fflush(stdout);
     }
+  }
+  return 0;
+}
+
+struct Recipe {
+  const char* name;
+  envs::EnvOptions env;
+  int envs, steps, minibatch, epochs, threads;
+  std::vector<int> hidden;
+  policy::Activation activation;
+  bool walking;  // legged_gym's PPO settings (tools/train_quadruped.sh)
+};
+
+int Recipes(int repeats, const std::string& only, int threads) {
+  const auto tanh = policy::Activation::kTanh;
+  auto env = [](const char* name) {
+    envs::EnvOptions e;
+    e.name = name;
+    return e;
+  };
+  envs::EnvOptions auv = env("auv-nav");
+  auv.layout = "mixed";
+  const std::vector<Recipe> recipes = {
+      {"train_auv", auv, 16, 256, 512, 10, 2, {64, 64}, tanh, false},
+      {"train_quadruped", env("quadruped-walk"), 512, 24, 3072, 5, 2, {128, 64, 32}, policy::Activation::kElu, true},
+      {"mujoco_table hopper", env("hopper"), 1, 2048, 64, 10, 1, {64, 64}, tanh, false},
+      {"mujoco_table ant", env("ant"), 1, 2048, 64, 10, 1, {64, 64}, tanh, false},
+      {"learn_pendulum", env("pendulum"), 4, 1024, 64, 10, 1, {64, 64}, tanh, false},
+      {"learn_pendulum", env("pendulum"), 4, 1024, 64, 10, 2, {64, 64}, tanh, false},
+  };
+  std::printf(
+      "PPO update at the recipes' shapes: samples per second (rollout samples x epochs / update time) of wall\n"
+      "time and of the busiest thread's CPU time, median of %d updates.\n",
+      repeats);
+  std::printf("%-20s %5s %4s %4s %4s %9s %5s %3s  %10s %10s\n", "recipe", "obs", "crit", "act", "mb", "rollout", "ep",
+              "thr", "wall/s", "busiest/s");
+  for (Recipe rc : recipes) {
+    if (std::string(rc.name).find(only) == std::string::npos) continue;
+    if (threads > 0) rc.threads = threads;
+    auto made = envs::MakeEnv(rc.env);
+    if (!made) {
+      std::fprintf(stderr, "trainer_bench: %s: %s\n", rc.name, made.error().message.c_str());
+      return 1;
+    }
+    const envs::Env& e = **made;
+    const int obs = static_cast<int>(e.observation_size()), critic = static_cast<int>(e.critic_observation_size());
+    const int actions = static_cast<int>(e.action_size());
+    TrainOptions o;
+    o.num_envs = rc.envs;
+    o.rollout_steps = rc.steps;
+    o.minibatch = rc.minibatch;
+    o.epochs = rc.epochs;
+    o.threads = rc.threads;
+    o.policy_hidden = rc.hidden;
+    o.activation = rc.activation;
+    if (rc.walking) {
+      o.learning_rate = 1e-3;
+      o.lr_schedule = ParseLrSchedule("adaptive:0.01").value();
+      o.ent_coef = 0.01;
+      o.vf_coef = 1.0;
+      o.clip_vf = 0.2;
+      o.max_grad_norm = 1.0;
+    }
+    Ppo ppo(o, obs, critic > 0 ? critic : obs, actions);
+    Rng rng(7);
+    RolloutStorage r = SyntheticRollout(ppo, rc.steps, rc.envs, obs, critic, actions, rng);
+    WorkerPool pool(rc.threads);
+    std::vector<double> wall, busiest;
+    for (int k = 0; k <= repeats; ++k) {
+      const std::vector<double> t0 = ThreadCpu(pool);
+      const auto w0 = Clock::now();
+      (void)ppo.Update(r, 0.2, false, pool);
+      const double w = std::chrono::duration<double>(Clock::now() - w0).count();
+      const std::vector<double> t1 = ThreadCpu(pool);
+      double most = 0;
+      for (std::size_t i = 0; i < t0.size(); ++i) most = std::max(most, t1[i] - t0[i]);
+      if (k == 0) continue;  // the first update: workspaces and caches warm up
+      wall.push_back(w);
+      busiest.push_back(most);
+    }
+    const double samples = static_cast<double>(r.size()) * o.epochs;
+    char roll[32];
+    std::snprintf(roll, sizeof roll, "%dx%d", rc.envs, rc.steps);
+    std::printf("%-20s %5d %4d %4d %4d %9s %5d %3d  %10.0f %10.0f\n", rc.name, obs, critic, actions, rc.minibatch, roll,
+                rc.epochs, rc.threads, samples / Median(wall), samples / Median(busiest));
+    std::fflush(stdout);
   }
   return 0;
 }
@@ -171,6 +256,9 @@ int Update(int repeats) {
 
 int main(int argc, char** argv) {
   if (argc > 1 && std::string(argv[1]) == "update") return Update(argc > 2 ? std::max(1, std::atoi(argv[2])) : 5);
+  if (argc > 1 && std::string(argv[1]) == "recipes")
+    return Recipes(argc > 2 ? std::max(1, std::atoi(argv[2])) : 7, argc > 3 ? argv[3] : "",
+                   argc > 4 ? std::atoi(argv[4]) : 0);
   if (argc > 1 && std::string(argv[1]) == "pendulum") return Pendulum(argc - 1, argv + 1);
   return Pendulum(argc, argv);
 }

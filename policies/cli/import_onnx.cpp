@@ -8,6 +8,7 @@
 #include "policies/trainer/exporter.hpp"
 #include "runtime/core/cli_checks.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/policy/reference.hpp"
 #include "runtime/policy/signature.hpp"
 #include "runtime/robot/robot_model.hpp"
 
@@ -57,7 +58,7 @@ int ImportOnnx(const ImportOnnxOptions& o) {
       "%.3g (%.2g of the tolerance)\n",
       imported->golden.observations.size(), imported->check_max_abs, imported->check_max_ratio);
   // The same golden rows the check ran on (32 from --seed), written beside the blob.
-  if (auto st = trainer::WritePolicy(o.out, s, o.seed); !st) return fail(st.error().message);
+  if (auto st = policy::WritePolicyFiles(o.out, s, imported->golden); !st) return fail(st.error().message);
   std::printf("wrote        %s (%llu parameters) and %s\n", o.out.c_str(),
               static_cast<unsigned long long>(s.ParameterCount()), policy::GoldenPathFor(o.out).c_str());
   return 0;

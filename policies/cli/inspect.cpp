@@ -167,16 +167,12 @@ int Synth(const SynthOptions& o) {
     }
     robot::ApplyLayoutToSpec(*layout, spec);
   }
-  if (auto st = policy::WriteBlobFile(o.out, spec); !st) {
+  if (auto st = policy::WritePolicyFiles(o.out, spec, policy::MakeGoldenVectors(spec, o.golden_rows, o.seed + 1));
+      !st) {
     std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
     return 1;
   }
-  const std::string golden = policy::GoldenPathFor(o.out);
-  if (auto st = policy::WriteGoldenFile(golden, policy::MakeGoldenVectors(spec, o.golden_rows, o.seed + 1)); !st) {
-    std::fprintf(stderr, "pbppo synth: %s\n", st.error().message.c_str());
-    return 1;
-  }
-  std::printf("wrote %s and %s\n", o.out.c_str(), golden.c_str());
+  std::printf("wrote %s and %s\n", o.out.c_str(), policy::GoldenPathFor(o.out).c_str());
   return 0;
 }
 

@@ -181,15 +181,11 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
   o.total_steps = 200000;
   s.add_option("--seed", o.seed, "Seed")->check(cli_checks::NonNegativeInteger());
   s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
-  s.add_option("--chunked-minibatch", o.chunked_minibatch,
-               "Minibatches of at least N samples are computed in column chunks on every thread, summed in a fixed "
-               "order (the same result for any --threads); smaller ones run the policy and value network side by "
-               "side");
   // Sizes and PPO's coefficients: (flag, variable, help) each.
   using IntOption = std::tuple<const char*, int*, const char*>;
   for (auto [flag, value, help] : {IntOption{"--threads", &o.threads,
-                                             "Worker threads: the environments' steps and the update (see "
-                                             "--chunked-minibatch)"},
+                                             "Worker threads: the environments' steps and the update (whose "
+                                             "result does not depend on the count)"},
                                    IntOption{"--envs", &o.num_envs, "Parallel environments"},
                                    IntOption{"--rollout", &o.rollout_steps, "Steps per environment and iteration"},
                                    IntOption{"--minibatch", &o.minibatch, "Minibatch size"},

@@ -20,8 +20,9 @@ class Adam {
         b1_(beta1),
         b2_(beta2) {}
 
-  // The same step in parts: Advance() once, then Apply() over ranges of the parameters that
-  // together cover them all (element by element the same arithmetic as Step(), in any split).
+  // One step in parts: Advance() once, then Apply() over ranges of the parameters that together
+  // cover them all (element by element the same arithmetic in any split). p -= lr * the
+  // bias-corrected update for gradient `g` multiplied by `grad_scale` (the clip factor).
   void Advance() noexcept { ++t_; }
   void Apply(S* p, const S* g, double lr, S grad_scale, Eigen::Index begin, Eigen::Index end) {
     const Eigen::Index n = end - begin;
@@ -39,15 +40,6 @@ class Adam {
     const S eps = static_cast<S>(eps_);
     pv.array() -= step * m.array() / (v.array().sqrt() * inv_sqrt_bc2 + eps);
   }
-  Eigen::Index size() const noexcept { return m_.size(); }
-
-  // p -= lr * scale-corrected update for gradient `g` multiplied by `grad_scale` (the clip factor).
-  void Step(S* p, const S* g, double lr, S grad_scale = S(1)) {
-    Advance();
-    Apply(p, g, lr, grad_scale, 0, m_.size());
-  }
-
-  long steps() const noexcept { return t_; }
 
  private:
   Vec<S> m_, v_;

@@ -52,8 +52,7 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
 }
 
 Status WritePolicy(const std::string& path, const policy::PolicySpec& spec, std::uint64_t seed) {
-  if (auto st = policy::WriteBlobFile(path, spec); !st) return st;
-  return policy::WriteGoldenFile(policy::GoldenPathFor(path), policy::MakeGoldenVectors(spec, 32, seed));
+  return policy::WritePolicyFiles(path, spec, policy::MakeGoldenVectors(spec, 32, seed));
 }
 
 Status LoadActor(const std::string& path, const envs::Env& env, const GaussianPolicy<float>& actor, float* params,

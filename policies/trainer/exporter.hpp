@@ -33,7 +33,8 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
                                const ObservationNormalizer& normalizer, const envs::Env& env,
                                const ProvenanceInfo& info);
 
-// The blob and its golden vectors (32 rows from `seed`) beside it (GoldenPathFor).
+// The blob and its golden vectors (32 rows from `seed`) beside it, written together
+// (policy::WritePolicyFiles).
 Status WritePolicy(const std::string& path, const policy::PolicySpec& spec, std::uint64_t seed);
 
 // --init: the blob's network into the actor's mean parameters and its normaliser into

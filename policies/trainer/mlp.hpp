@@ -20,8 +20,6 @@ template <typename S>
 using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
 template <typename S>
 using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
-template <typename S>
-using RowVec = Eigen::Matrix<S, 1, Eigen::Dynamic>;
 
 using policy::Activation;
 
@@ -29,12 +27,6 @@ struct MlpShape {
   std::vector<int> widths;                    // input first, output last
   Activation hidden = Activation::kTanh;      // after every layer but the last
   Activation output = Activation::kIdentity;  // after the last layer
-  std::size_t ParameterCount() const {
-    std::size_t n = 0;
-    for (std::size_t l = 0; l + 1 < widths.size(); ++l)
-      n += static_cast<std::size_t>(widths[l + 1]) * static_cast<std::size_t>(widths[l] + 1);
-    return n;
-  }
 };
 
 // y = f(z) in place, and the derivative f'(z) expressed through y (tanh: 1 - y^2, relu: y > 0,
@@ -100,8 +92,6 @@ class Mlp {
   int input_size() const noexcept { return shape_.widths.front(); }
   int output_size() const noexcept { return shape_.widths.back(); }
   Activation activation(std::size_t l) const noexcept { return l + 1 == layers() ? shape_.output : shape_.hidden; }
-  std::size_t weight_offset(std::size_t l) const noexcept { return w_off_[l]; }
-  std::size_t bias_offset(std::size_t l) const noexcept { return b_off_[l]; }
 
   Eigen::Map<const Mat<S>> W(const S* p, std::size_t l) const { return {p + w_off_[l], out(l), in(l)}; }
   Eigen::Map<Mat<S>> W(S* p, std::size_t l) const { return {p + w_off_[l], out(l), in(l)}; }

@@ -18,7 +18,6 @@ Status TrainOptions::Validate() const {
   if (threads < 1 || threads > 256) return Invalid("--threads", std::to_string(threads) + " is not in [1, 256]");
   if (minibatch < 2) return Invalid("--minibatch", std::to_string(minibatch) + " is below 2");
   if (epochs < 1) return Invalid("--epochs", std::to_string(epochs) + " is not positive");
-  if (chunked_minibatch < 2) return Invalid("--chunked-minibatch", std::to_string(chunked_minibatch) + " is below 2");
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
   if (critic_warmup > 0 && init_blob.empty())
     return Invalid("--critic-warmup", "needs --init (it holds a trained policy while the fresh value network learns)");
@@ -54,7 +53,7 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
       {"env", e.name}, {"models", e.models_dir},
       // Budget and parallelism.
       {"seed", o.seed}, {"steps", o.total_steps}, {"envs", o.num_envs}, {"rollout", o.rollout_steps},
-      {"threads", o.threads}, {"chunked_minibatch", o.chunked_minibatch},
+      {"threads", o.threads},
       // PPO.
       {"minibatch", o.minibatch}, {"epochs", o.epochs}, {"learning_rate", o.learning_rate},
       {"lr_schedule", o.lr_schedule.Describe()}, {"gamma", o.gamma}, {"gae_lambda", o.gae_lambda},

@@ -28,10 +28,6 @@ struct TrainOptions {
   int num_envs = 1;                    // --envs
   int rollout_steps = 2048;            // --rollout: per environment and iteration
   int threads = 1;
-  // --chunked-minibatch: minibatches of at least this many samples are computed in column chunks on
-  // every thread and summed in a fixed order (the result does not depend on the thread count);
-  // smaller ones run the actor and the critic side by side on two threads.
-  long chunked_minibatch = 2048;
 
   // PPO.
   int minibatch = 64;

@@ -21,10 +21,6 @@ double SquaredNorm(const float* x, Eigen::Index n) {
   return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
 }
 
-double SquaredNorm(const Vec<float>& v) {
-  return SquaredNorm(v.data(), v.size());
-}
-
 // The update's statistics are summed over minibatches, then averaged.
 void AddPolicyStats(UpdateStats& sum, const PolicyLossStats& ps, bool with_entropy = true) {
   sum.policy_loss += ps.policy_loss;
@@ -132,258 +128,173 @@ double Ppo::ExplainedVariance(const RolloutStorage& r) {
 }
 
 UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, WorkerPool& pool) {
-  Minibatches m;
   const long B = r.size();
-  m.size = std::min<long>(o_.minibatch, B);
-  m.per_epoch = (B + m.size - 1) / m.size;
-  m.total = m.per_epoch * o_.epochs;
-  m.perms.resize(static_cast<std::size_t>(o_.epochs));
-  for (auto& p : m.perms) {
+  const long mb = std::min<long>(o_.minibatch, B), per_epoch = (B + mb - 1) / mb, total = per_epoch * o_.epochs;
+  std::vector<std::vector<long>> perms(static_cast<std::size_t>(o_.epochs));  // per epoch, columns in minibatch order
+  for (auto& p : perms) {
     p.resize(static_cast<std::size_t>(B));
     for (long i = 0; i < B; ++i) p[static_cast<std::size_t>(i)] = i;
     for (long i = B - 1; i > 0; --i)
       std::swap(p[static_cast<std::size_t>(i)],
                 p[static_cast<std::size_t>(rng_.Below(static_cast<std::uint64_t>(i + 1)))]);
   }
-  UpdateStats st = m.size >= o_.chunked_minibatch ? UpdateChunked(r, m, eps, critic_only, pool)
-                                                  : UpdateSplit(r, m, eps, critic_only, pool);
-  double ls = 0;
-  for (int j = 0; j < r.action_size; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
-  st.log_std_mean = ls / r.action_size;
-  return st;
-}
-
-UpdateStats Ppo::UpdateSplit(const RolloutStorage& r, const Minibatches& mbs, double eps, bool critic_only,
-                             WorkerPool& pool) {
-  const long B = r.size(), mb = mbs.size, per_epoch = mbs.per_epoch, total = mbs.total;
-  const auto& perms = mbs.perms;
-  const int d = r.obs_size, a = r.action_size, vd = r.value_input_size();
-  const Mat<float>& value_in = r.value_inputs();
-  // Squared gradient norms per minibatch, [policy, value] in two slots alternating by parity.
-  double sq[2][2] = {{0, 0}, {0, 0}};
-  // Each minibatch's learning rate, in the same alternating slots: the policy thread adapts it
-  // before the barrier and the value thread reads its minibatch's slot after it, so neither reads
-  // a rate the other is writing.
-  double step_lr[2] = {lr_, lr_};
-  UpdateStats sum;
-  // A held policy (--critic-warmup) has KL 0 from the rollout's: adapting to it would raise the rate
-  // to its ceiling before the policy's first step, so the rate waits for the policy.
-  const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive && !critic_only;
-  // With two threads or more the policy's and the value network's halves of each minibatch run side
-  // by side, meeting before the shared gradient clip.
-  const bool split = pool.size() >= 2;
-  SpinBarrier sync(split ? 2 : 1);
-
-  auto clip_scale = [&](long k) {
-    const double n = std::sqrt(sq[k & 1][0] + sq[k & 1][1]);
-    return std::pair<double, float>(
-        n, o_.max_grad_norm > 0 && n > 0 ? static_cast<float>(std::min(1.0, o_.max_grad_norm / (n + 1e-6))) : 1.f);
-  };
-  // Minibatch k's value-network columns: its inputs, returns and the values the rollout had.
-  auto gather_value = [&](long k, Mat<float>& v_in, std::vector<float>& rt, std::vector<float>& ov) {
-    const auto& p = perms[static_cast<std::size_t>(k / per_epoch)];
-    const long s0 = (k % per_epoch) * mb, n = std::min(mb, B - s0);
-    v_in.resize(vd, n);
-    for (long j = 0; j < n; ++j) {
-      const long i = p[static_cast<std::size_t>(s0 + j)];
-      v_in.col(j) = value_in.col(i);
-      rt[static_cast<std::size_t>(j)] = r.returns[static_cast<std::size_t>(i)];
-      ov[static_cast<std::size_t>(j)] = r.values[static_cast<std::size_t>(i)];
-    }
-  };
-  auto value_step = [&](long k, Mat<float>& v_in, std::vector<float>& rt, std::vector<float>& ov,
-                        ValueWorkspace<float>& wsv) {
-    sum.value_loss += ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf,
-                                       o_.vf_coef, wsv, critic_grad_.data());
-    sq[k & 1][1] = SquaredNorm(critic_grad_);
-  };
-  auto policy_loop = [&](bool sequential_value, PolicyWorkspace<float>& wsp, ValueWorkspace<float>& wsv) {
-    Mat<float> o(d, mb), act(a, mb), old_mu(a, mb), v_in(vd, mb);
-    std::vector<float> lp(static_cast<std::size_t>(mb)), ad(static_cast<std::size_t>(mb)),
-        rt(static_cast<std::size_t>(mb)), ov(static_cast<std::size_t>(mb));
-    for (long k = 0; k < total; ++k) {
-      const auto& p = perms[static_cast<std::size_t>(k / per_epoch)];
-      const long s0 = (k % per_epoch) * mb, n = std::min(mb, B - s0);
-      o.resize(d, n);
-      act.resize(a, n);
-      old_mu.resize(a, n);
-      for (long j = 0; j < n; ++j) {
-        const long i = p[static_cast<std::size_t>(s0 + j)];
-        o.col(j) = r.obs.col(i);
-        act.col(j) = r.actions.col(i);
-        old_mu.col(j) = r.action_mean.col(i);
-        lp[static_cast<std::size_t>(j)] = r.log_prob[static_cast<std::size_t>(i)];
-        ad[static_cast<std::size_t>(j)] = r.advantages[static_cast<std::size_t>(i)];
-      }
-      const PolicyLossStats ps = PolicyLossAndGrad(actor_, actor_params_.data(), o, act, lp.data(), ad.data(), eps,
-                                                   o_.ent_coef, o_.normalize_advantages, wsp, actor_grad_.data());
-      AddPolicyStats(sum, ps);
-      // The KL divergence from the rollout's policy, before this minibatch's step; the adaptive
-      // schedule sets the step's rate from it (the value thread reads it after the barrier).
-      const double mb_kl =
-          SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data()) / static_cast<double>(n);
-      sum.kl += mb_kl;
-      if (adaptive) lr_ = o_.lr_schedule.Adapt(lr_, mb_kl);
-      step_lr[k & 1] = lr_;
-      sq[k & 1][0] = critic_only ? 0.0 : SquaredNorm(actor_grad_);  // a held actor takes no part in the clip
-      if (sequential_value) {
-        gather_value(k, v_in, rt, ov);
-        value_step(k, v_in, rt, ov, wsv);
-      } else {
-        sync.ArriveAndWait();
-      }
-      const auto [norm, scale] = clip_scale(k);
-      sum.grad_norm += norm;
-      if (!critic_only) actor_adam_.Step(actor_params_.data(), actor_grad_.data(), lr_, scale);
-      if (sequential_value) critic_adam_.Step(critic_params_.data(), critic_grad_.data(), lr_, scale);
-    }
-  };
-  auto value_loop = [&](ValueWorkspace<float>& wsv) {
-    Mat<float> v_in(vd, mb);
-    std::vector<float> rt(static_cast<std::size_t>(mb)), ov(static_cast<std::size_t>(mb));
-    for (long k = 0; k < total; ++k) {
-      gather_value(k, v_in, rt, ov);
-      value_step(k, v_in, rt, ov, wsv);
-      sync.ArriveAndWait();
-      critic_adam_.Step(critic_params_.data(), critic_grad_.data(), step_lr[k & 1], clip_scale(k).second);
-    }
-  };
-  PolicyWorkspace<float> wsp;
-  ValueWorkspace<float> wsv;
-  if (split) {
-    pool.Run([&](int w) {
-      if (w == 0) policy_loop(false, wsp, wsv);
-      if (w == 1) value_loop(wsv);
-    });
-  } else {
-    policy_loop(true, wsp, wsv);
-  }
-  return MeanOver(sum, total);
-}
-
-UpdateStats Ppo::UpdateChunked(const RolloutStorage& r, const Minibatches& mbs, double eps, bool critic_only,
-                               WorkerPool& pool) {
-  const long B = r.size();
-  const int W = pool.size(), K = kChunks, S = kSegments;
+  const int K = Chunks(mb), S = Segments(K);
+  // The threads that take part: no more than there are tasks in a phase.
+  const int W = std::min(pool.size(), 2 * std::max(K, S));
   const int d = r.obs_size, a = r.action_size, vd = r.value_input_size();
   const Eigen::Index P = actor_params_.size(), V = critic_params_.size();
   const Mat<float>& value_in = r.value_inputs();
   // A held policy (--critic-warmup) has KL 0 from the rollout's: adapting to it would raise the rate
   // to its ceiling before the policy's first step, so the rate waits for the policy.
   const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive && !critic_only;
-  std::vector<Vec<float>> actor_grads(static_cast<std::size_t>(K), Vec<float>::Zero(P));
-  std::vector<Vec<float>> critic_grads(static_cast<std::size_t>(K), Vec<float>::Zero(V));
+  // Chunk c of network n (0: the actor, 1: the critic) runs on thread (c + n) % W, the actor's
+  // segments 0..S-1 and the critic's S..2S-1 on thread (index % W): each thread takes its share of
+  // both networks. With one thread, or one chunk (two threads at most: one per network), every
+  // network stays on one thread, which then reads only what it wrote itself but for the other
+  // network's part of the gradient norm (and, for the critic, the actor's KL divergence): one
+  // barrier per minibatch instead of three.
+  const bool network_per_thread = W == 1 || K == 1;
+  // A minibatch of one chunk computes its gradients in place; more sum theirs into them.
+  const std::size_t buffers = K > 1 ? static_cast<std::size_t>(K) : 0;
+  std::vector<Vec<float>> actor_chunks(buffers, Vec<float>::Zero(P)), critic_chunks(buffers, Vec<float>::Zero(V));
   struct ChunkStats {
     PolicyLossStats policy;
     double value_loss = 0, gaussian_kl = 0;
   };
-  std::vector<ChunkStats> chunk(static_cast<std::size_t>(K));
-  std::vector<double> seg_sq(static_cast<std::size_t>(2 * S), 0.0);  // actor segments, then critic's
+  // What threads exchange within a minibatch, in two sets by its parity: with one barrier per
+  // minibatch a thread may fill the next minibatch's while another still reads this one's.
+  struct Shared {
+    std::vector<ChunkStats> chunk;
+    std::vector<double> seg_sq;  // the actor's segments, then the critic's
+  };
+  Shared shared[2];
+  for (Shared& sh : shared) {
+    sh.chunk.resize(static_cast<std::size_t>(K));
+    sh.seg_sq.assign(static_cast<std::size_t>(2 * S), 0.0);
+  }
   UpdateStats sum;
   double lr_end = lr_;
   SpinBarrier sync(W);
-  auto segment = [](Eigen::Index n, int s, int count) {
-    return std::pair<Eigen::Index, Eigen::Index>(n * s / count, n * (s + 1) / count);
+  auto segment = [S](Eigen::Index n, int s) {
+    return std::pair<Eigen::Index, Eigen::Index>(n * s / S, n * (s + 1) / S);
   };
 
   pool.Run([&](int w) {
+    if (w >= W) return;
     Mat<float> o(d, 0), act(a, 0), old_mu(a, 0), v_in(vd, 0);
     Vec<float> adv;
     std::vector<float> lp, rt, ov;
     PolicyWorkspace<float> wsp;
     ValueWorkspace<float> wsv;
     double lr = lr_;  // every thread follows the same rate
-    for (long k = 0; k < mbs.total; ++k) {
-      const auto& p = mbs.perms[static_cast<std::size_t>(k / mbs.per_epoch)];
-      const long s0 = (k % mbs.per_epoch) * mbs.size, n = std::min(mbs.size, B - s0);
-      // The minibatch's advantages, normalised over the whole minibatch (each thread the same).
-      adv.resize(n);
-      for (long j = 0; j < n; ++j) adv[j] = r.advantages[static_cast<std::size_t>(p[static_cast<std::size_t>(s0 + j)])];
-      if (o_.normalize_advantages && n > 1) {
-        const float m = adv.mean();
-        const float var = (adv.array() - m).square().sum() / static_cast<float>(n - 1);
-        adv = (adv.array() - m) / (std::sqrt(var) + 1e-8f);
-      }
-      // 1. Each chunk's gradient of the minibatch's mean loss.
-      for (int c = w; c < K; c += W) {
+    for (long k = 0; k < total; ++k) {
+      const auto& p = perms[static_cast<std::size_t>(k / per_epoch)];
+      const long s0 = (k % per_epoch) * mb, n = std::min(mb, B - s0);
+      auto column = [&](long j) { return p[static_cast<std::size_t>(s0 + j)]; };
+      Shared& sh = shared[k & 1];
+      // 1. Each chunk's gradient of the minibatch's mean loss, per network.
+      bool have_advantages = false;
+      for (int t = 0; t < 2 * K; ++t) {
+        const int c = t / 2;
+        const bool actor = t % 2 == 0;
+        if ((c + (actor ? 0 : 1)) % W != w) continue;
         const long c0 = n * c / K, nc = n * (c + 1) / K - c0;
-        o.resize(d, nc);
-        act.resize(a, nc);
-        old_mu.resize(a, nc);
-        v_in.resize(vd, nc);
-        lp.resize(static_cast<std::size_t>(nc));
-        rt.resize(static_cast<std::size_t>(nc));
-        ov.resize(static_cast<std::size_t>(nc));
-        for (long j = 0; j < nc; ++j) {
-          const long i = p[static_cast<std::size_t>(s0 + c0 + j)];
-          const auto u = static_cast<std::size_t>(i), uj = static_cast<std::size_t>(j);
-          o.col(j) = r.obs.col(i);
-          act.col(j) = r.actions.col(i);
-          old_mu.col(j) = r.action_mean.col(i);
-          v_in.col(j) = value_in.col(i);
-          lp[uj] = r.log_prob[u];
-          rt[uj] = r.returns[u];
-          ov[uj] = r.values[u];
+        ChunkStats& cs = sh.chunk[static_cast<std::size_t>(c)];
+        if (actor) {
+          if (!have_advantages) {  // the minibatch's, normalised over the whole minibatch
+            adv.resize(n);
+            for (long j = 0; j < n; ++j) adv[j] = r.advantages[static_cast<std::size_t>(column(j))];
+            if (o_.normalize_advantages) NormalizeAdvantages(adv);
+            have_advantages = true;
+          }
+          o.resize(d, nc);
+          act.resize(a, nc);
+          old_mu.resize(a, nc);
+          lp.resize(static_cast<std::size_t>(nc));
+          for (long j = 0; j < nc; ++j) {
+            const long i = column(c0 + j);
+            o.col(j) = r.obs.col(i);
+            act.col(j) = r.actions.col(i);
+            old_mu.col(j) = r.action_mean.col(i);
+            lp[static_cast<std::size_t>(j)] = r.log_prob[static_cast<std::size_t>(i)];
+          }
+          float* grad = K > 1 ? actor_chunks[static_cast<std::size_t>(c)].data() : actor_grad_.data();
+          cs.policy = PolicyLossAndGrad(actor_, actor_params_.data(), o, act, lp.data(), adv.data() + c0, eps,
+                                        c == 0 ? o_.ent_coef : 0.0, wsp, grad, static_cast<int>(n));
+          cs.gaussian_kl = SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data());
+        } else {
+          v_in.resize(vd, nc);
+          rt.resize(static_cast<std::size_t>(nc));
+          ov.resize(static_cast<std::size_t>(nc));
+          for (long j = 0; j < nc; ++j) {
+            const long i = column(c0 + j);
+            v_in.col(j) = value_in.col(i);
+            rt[static_cast<std::size_t>(j)] = r.returns[static_cast<std::size_t>(i)];
+            ov[static_cast<std::size_t>(j)] = r.values[static_cast<std::size_t>(i)];
+          }
+          float* grad = K > 1 ? critic_chunks[static_cast<std::size_t>(c)].data() : critic_grad_.data();
+          cs.value_loss = ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf,
+                                           o_.vf_coef, wsv, grad, static_cast<int>(n));
         }
-        ChunkStats& cs = chunk[static_cast<std::size_t>(c)];
-        cs.policy = PolicyLossAndGrad(actor_, actor_params_.data(), o, act, lp.data(), adv.data() + c0, eps,
-                                      c == 0 ? o_.ent_coef : 0.0, false, wsp,
-                                      actor_grads[static_cast<std::size_t>(c)].data(), static_cast<int>(n));
-        cs.gaussian_kl = SumGaussianKl(wsp.net.y.back(), log_std(), old_mu, r.log_std.data());
-        cs.value_loss =
-            ValueLossAndGrad(critic_, critic_params_.data(), v_in, rt.data(), ov.data(), o_.clip_vf, o_.vf_coef, wsv,
-                             critic_grads[static_cast<std::size_t>(c)].data(), static_cast<int>(n));
       }
-      sync.ArriveAndWait();
-      // 2. The minibatch's gradient: the chunks' summed in chunk order, segment by segment, with each
+      if (!network_per_thread) sync.ArriveAndWait();
+      // 2. The minibatch's gradient, segment by segment: the chunks' summed in chunk order; each
       // segment's squared norm.
-      for (int sg = w; sg < 2 * S; sg += W) {
-        const bool actor = sg < S;
-        const auto [b, e] = segment(actor ? P : V, actor ? sg : sg - S, S);
-        auto& grads = actor ? actor_grads : critic_grads;
-        auto total = (actor ? actor_grad_ : critic_grad_).segment(b, e - b);
-        total = grads[0].segment(b, e - b);
-        for (int c = 1; c < K; ++c) total += grads[static_cast<std::size_t>(c)].segment(b, e - b);
-        seg_sq[static_cast<std::size_t>(sg)] = actor && critic_only ? 0.0 : SquaredNorm(total.data(), e - b);
-      }
-      if (w == 0) {
-        if (!critic_only) actor_adam_.Advance();
-        critic_adam_.Advance();
+      for (int i = w; i < 2 * S; i += W) {
+        const bool actor = i < S;
+        const int sg = actor ? i : i - S;
+        const auto [b, e] = segment(actor ? P : V, sg);
+        if (K > 1) {
+          const auto& chunks = actor ? actor_chunks : critic_chunks;
+          auto whole = (actor ? actor_grad_ : critic_grad_).segment(b, e - b);
+          whole = chunks[0].segment(b, e - b);
+          for (int c = 1; c < K; ++c) whole += chunks[static_cast<std::size_t>(c)].segment(b, e - b);
+        }
+        const float* g = (actor ? actor_grad_ : critic_grad_).data() + b;
+        // A held actor takes no part in the clip.
+        sh.seg_sq[static_cast<std::size_t>(i)] = actor && critic_only ? 0.0 : SquaredNorm(g, e - b);
+        if (sg == 0 && !(actor && critic_only)) (actor ? actor_adam_ : critic_adam_).Advance();
       }
       sync.ArriveAndWait();
       // 3. Every thread: the norm, the clip factor, the rate; then the Adam steps of its segments.
       double sq = 0, kl_sum = 0;
-      for (double x : seg_sq) sq += x;
-      for (const ChunkStats& cs : chunk) kl_sum += cs.gaussian_kl;
+      for (double x : sh.seg_sq) sq += x;
+      for (const ChunkStats& cs : sh.chunk) kl_sum += cs.gaussian_kl;
       const double mb_kl = kl_sum / static_cast<double>(n);
       if (adaptive) lr = o_.lr_schedule.Adapt(lr, mb_kl);
       const double norm = std::sqrt(sq);
       const float scale =
           o_.max_grad_norm > 0 && norm > 0 ? static_cast<float>(std::min(1.0, o_.max_grad_norm / (norm + 1e-6))) : 1.f;
       if (w == 0) {
-        for (const ChunkStats& cs : chunk) {
-          AddPolicyStats(sum, cs.policy, &cs == &chunk[0]);  // the entropy: the actor's, once
+        for (const ChunkStats& cs : sh.chunk) {
+          AddPolicyStats(sum, cs.policy, &cs == &sh.chunk[0]);  // the entropy: the actor's, once
           sum.value_loss += cs.value_loss;
         }
         sum.grad_norm += norm;
         sum.kl += mb_kl;
         lr_end = lr;
       }
-      for (int sg = w; sg < 2 * S; sg += W) {
-        const bool actor = sg < S;
+      for (int i = w; i < 2 * S; i += W) {
+        const bool actor = i < S;
         if (actor && critic_only) continue;
-        const auto [b, e] = segment(actor ? P : V, actor ? sg : sg - S, S);
+        const auto [b, e] = segment(actor ? P : V, actor ? i : i - S);
         if (actor) {
           actor_adam_.Apply(actor_params_.data(), actor_grad_.data(), lr, scale, b, e);
         } else {
           critic_adam_.Apply(critic_params_.data(), critic_grad_.data(), lr, scale, b, e);
         }
       }
-      sync.ArriveAndWait();  // the parameters are whole again before the next minibatch reads them
+      // The parameters are whole again before the next minibatch reads them (with a network per
+      // thread, its own thread wrote them).
+      if (!network_per_thread) sync.ArriveAndWait();
     }
   });
   lr_ = lr_end;
-  return MeanOver(sum, mbs.total);
+  UpdateStats st = MeanOver(sum, total);
+  double ls = 0;
+  for (int j = 0; j < r.action_size; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
+  st.log_std_mean = ls / r.action_size;
+  return st;
 }
 
 }  // namespace pbppo::trainer

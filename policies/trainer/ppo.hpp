@@ -4,8 +4,8 @@
 // the clip bound the clip schedule chose (clip_schedule.hpp) and the learning rate the
 // learning-rate schedule sets (lr_schedule.hpp). Losses and gradients: ppo_loss.hpp.
 //
-// Deterministic: the same rollout, bound and thread count give bit-identical parameters, on every
-// machine the build runs on (PinEigenBlocking).
+// Deterministic: the same rollout and bound give bit-identical parameters for any thread count, on
+// every machine the build runs on (PinEigenBlocking).
 #pragma once
 
 #include <cstddef>
@@ -62,23 +62,20 @@ class Ppo {
   // each minibatch's KL divergence sets the rate of its step (and of the steps after it).
   UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool);
 
-  // Minibatches of at least options.chunked_minibatch samples are cut into kChunks column chunks
-  // whose gradients the threads compute side by side and sum in chunk order (the same arithmetic
-  // for any thread count; the sums, gradient norm and Adam step are split over kSegments parameter
-  // segments). Smaller ones run the actor's and the critic's halves of each minibatch on two threads.
+  // How the update divides a minibatch, whatever the thread count: minibatches of kChunkedFrom
+  // samples or more in kChunks column chunks (chunks are the faster from about there:
+  // pbppo_bench_trainer update), smaller ones in one; each chunk's gradient of the minibatch's mean
+  // loss computed on its own per network, the chunks' gradients summed in chunk order, and the
+  // squared gradient norm summed over Segments(chunks) parameter segments per network, in segment
+  // order. The threads share the chunk and segment tasks (Update says how); the arithmetic is the
+  // same for any share.
+  static constexpr long kChunkedFrom = 2048;
   static constexpr int kChunks = 4;
   static constexpr int kSegments = 8;
+  static int Chunks(long minibatch) noexcept { return minibatch >= kChunkedFrom ? kChunks : 1; }
+  static int Segments(int chunks) noexcept { return chunks == 1 ? 1 : kSegments; }
 
  private:
-  struct Minibatches {
-    long size = 0, per_epoch = 0, total = 0;  // samples per minibatch, minibatches per epoch and in all
-    std::vector<std::vector<long>> perms;     // per epoch, the rollout's columns in minibatch order
-  };
-  UpdateStats UpdateSplit(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
-                          WorkerPool& pool);
-  UpdateStats UpdateChunked(const RolloutStorage& rollout, const Minibatches& mbs, double eps, bool critic_only,
-                            WorkerPool& pool);
-
   const TrainOptions& o_;
   GaussianPolicy<float> actor_;
   Mlp<float> critic_;

@@ -7,7 +7,8 @@
 //   L_clip  = -mean_i min(r_i A_i, clamp(r_i, 1 - eps, 1 + eps) A_i),  r_i = exp(logp_i - old_i)
 //   L_value = mean_i (R_i - v'_i)^2,  v'_i = v_i, or old_v_i + clamp(v_i - old_v_i, -c, c) with
 //             value clipping c > 0 (the SB3 form).
-// A is normalised per minibatch, (A - mean) / (std + 1e-8) with the unbiased std, when asked.
+// A is normalised per minibatch (NormalizeAdvantages), (A - mean) / (std + 1e-8) with the unbiased
+// std, unless --no-adv-norm.
 #pragma once
 
 #include <algorithm>
@@ -37,8 +38,18 @@ template <typename S>
 struct PolicyWorkspace {
   typename Mlp<S>::Workspace net;
   Mat<S> dmean;
-  Vec<S> adv;
 };
+
+// A minibatch's advantages, in place: (A - mean) / (std + 1e-8) with the unbiased std (unchanged
+// below two samples).
+template <typename S>
+void NormalizeAdvantages(Vec<S>& adv) {
+  const Eigen::Index n = adv.size();
+  if (n < 2) return;
+  const S m = adv.mean();
+  const S var = (adv.array() - m).square().sum() / static_cast<S>(n - 1);
+  adv = (adv.array() - m) / (std::sqrt(var) + static_cast<S>(1e-8));
+}
 
 // log N(a; mu, diag(exp(log_std))^2) per column.
 template <typename S, typename DA, typename DM>
@@ -61,27 +72,21 @@ S GaussianEntropy(const S* log_std, int n) {
 }
 
 // Policy part of the loss, L_clip + ent_coef * (-entropy), and its gradient into `grad`
-// (policy.size() elements, overwritten). mean_over: the number of samples the means are taken over,
-// 0 for these columns; a chunk of a larger minibatch passes the minibatch's size (its advantages
-// normalised over the minibatch beforehand), so that the chunks' gradients and statistics add up
-// to the minibatch's, and only one chunk passes the entropy coefficient.
+// (policy.size() elements, overwritten), for the advantages as given (normalised beforehand over the
+// whole minibatch, if at all). mean_over: the number of samples the means are taken over, 0 for
+// these columns; a chunk of a larger minibatch passes the minibatch's size, so that the chunks'
+// gradients and statistics add up to the minibatch's, and only one chunk passes the entropy
+// coefficient.
 template <typename S, typename DO, typename DA>
 PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, const Eigen::MatrixBase<DO>& obs,
                                   const Eigen::MatrixBase<DA>& actions, const S* old_logp, const S* advantages,
-                                  double clip_eps, double ent_coef, bool normalize_advantages, PolicyWorkspace<S>& ws,
-                                  S* grad, int mean_over = 0) {
+                                  double clip_eps, double ent_coef, PolicyWorkspace<S>& ws, S* grad,
+                                  int mean_over = 0) {
   const int B = static_cast<int>(obs.cols());
   const int M = mean_over > 0 ? mean_over : B;
   const int A = pol.action_size;
   const S* log_std = p + pol.log_std_offset();
   const Mat<S>& mu = pol.mean.Forward(p, obs, ws.net);
-
-  ws.adv = Eigen::Map<const Vec<S>>(advantages, B);
-  if (normalize_advantages && B > 1) {
-    const S m = ws.adv.mean();
-    const S var = (ws.adv.array() - m).square().sum() / static_cast<S>(B - 1);
-    ws.adv = (ws.adv.array() - m) / (std::sqrt(var) + static_cast<S>(1e-8));
-  }
 
   const S eps = static_cast<S>(clip_eps);
   const S inv_b = S(1) / static_cast<S>(M);
@@ -98,7 +103,7 @@ PolicyLossStats PolicyLossAndGrad(const GaussianPolicy<S>& pol, const S* p, cons
     lp -= static_cast<S>(A) * static_cast<S>(0.5 * std::log(2.0 * std::numbers::pi));
     const S log_ratio = lp - old_logp[i];
     const S r = std::exp(log_ratio);
-    const S adv = ws.adv[i];
+    const S adv = advantages[i];
     const S u1 = r * adv;
     const S u2 = std::clamp(r, S(1) - eps, S(1) + eps) * adv;
     loss -= static_cast<double>(std::min(u1, u2));

@@ -1,6 +1,7 @@
 #include "runtime/policy/blob.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -474,7 +475,10 @@ Result<PolicySpec> ReadBlobFile(const std::string& path, const BlobLimits& limit
   return r;
 }
 
-Status WriteFileAtomic(const std::string& path, std::span<const std::uint8_t> bytes) {
+namespace {
+
+// `bytes` in a temporary file beside `path`, flushed: its name, or an error and nothing left behind.
+Result<std::string> WriteTemporary(const std::string& path, std::span<const std::uint8_t> bytes) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return MakeError(ErrorCode::kIo, tmp + ": cannot create: " + std::strerror(errno));
@@ -495,10 +499,44 @@ Status WriteFileAtomic(const std::string& path, std::span<const std::uint8_t> by
     ::unlink(tmp.c_str());
     return MakeError(ErrorCode::kIo, tmp + ": flush failed: " + std::strerror(e));
   }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int e = errno;
-    ::unlink(tmp.c_str());
-    return MakeError(ErrorCode::kIo, path + ": rename failed: " + std::strerror(e));
+  return tmp;
+}
+
+}  // namespace
+
+Status WriteFileAtomic(const std::string& path, std::span<const std::uint8_t> bytes) {
+  const FileBytes file{path, bytes};
+  return WriteFilesAtomic(std::span(&file, 1));
+}
+
+Status WriteFilesAtomic(std::span<const FileBytes> files) {
+  // A folder in a file's place would fail its rename after the others: refused before anything.
+  for (const FileBytes& f : files) {
+    struct stat st{};
+    if (::stat(f.path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+      return MakeError(ErrorCode::kIo, f.path + ": is a folder, not a file");
+  }
+  std::vector<std::string> tmps;
+  auto remove_temporaries = [&tmps](std::size_t from) {
+    for (std::size_t i = from; i < tmps.size(); ++i) ::unlink(tmps[i].c_str());
+  };
+  for (const FileBytes& f : files) {
+    auto tmp = WriteTemporary(f.path, f.bytes);
+    if (!tmp) {
+      remove_temporaries(0);
+      return std::move(tmp).error();
+    }
+    tmps.push_back(std::move(*tmp));
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (::rename(tmps[i].c_str(), files[i].path.c_str()) != 0) {
+      const int e = errno;
+      remove_temporaries(i);
+      std::string replaced;
+      for (std::size_t k = 0; k < i; ++k) replaced += (k > 0 ? ", " : "") + files[k].path;
+      return MakeError(ErrorCode::kIo, files[i].path + ": rename failed: " + std::strerror(e) +
+                                           (replaced.empty() ? "" : " (already replaced: " + replaced + ")"));
+    }
   }
   return {};
 }

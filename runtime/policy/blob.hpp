@@ -37,6 +37,16 @@ Result<std::vector<std::uint8_t>> ReadFileBytes(const std::string& path, std::ui
 // previous file at `path`, if any, is untouched and no temporary is left behind.
 Status WriteFileAtomic(const std::string& path, std::span<const std::uint8_t> bytes);
 
+// Several files together, each as WriteFileAtomic writes one: every temporary file written and
+// flushed before the first rename, the renames in the order given. An error while writing (a path
+// that is a folder, a missing folder, a full disk) leaves every previous file untouched and no
+// temporary behind; a rename that fails after others succeeded names the files already replaced.
+struct FileBytes {
+  std::string path;
+  std::span<const std::uint8_t> bytes;
+};
+Status WriteFilesAtomic(std::span<const FileBytes> files);
+
 // EncodeBlob + WriteFileAtomic.
 Status WriteBlobFile(const std::string& path, const PolicySpec& spec);
 

@@ -117,7 +117,10 @@ GoldenVectors MakeGoldenVectors(const PolicySpec& s, std::size_t rows, std::uint
   return g;
 }
 
-Status WriteGoldenFile(const std::string& path, const GoldenVectors& g) {
+namespace {
+
+// The golden file's text.
+std::string GoldenText(const GoldenVectors& g) {
   std::string text;
   text += "# pbppo golden vectors: observation (float32) | reference action (float64 forward over the\n";
   text += "# blob's float32 parameters) | per-element bound on a float32 forward's deviation\n";
@@ -141,7 +144,17 @@ Status WriteGoldenFile(const std::string& path, const GoldenVectors& g) {
     }
     text += "\n";
   }
-  return WriteFileAtomic(path, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+  return text;
+}
+
+std::span<const std::uint8_t> Bytes(const std::string& text) {
+  return {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()};
+}
+
+}  // namespace
+
+Status WriteGoldenFile(const std::string& path, const GoldenVectors& g) {
+  return WriteFileAtomic(path, Bytes(GoldenText(g)));
 }
 
 Result<GoldenVectors> ReadGoldenFile(const std::string& path) {
@@ -194,6 +207,20 @@ Result<GoldenVectors> ReadGoldenFile(const std::string& path) {
 
 std::string GoldenPathFor(const std::string& blob_path) {
   return PathBeside(blob_path, ".golden");
+}
+
+Status WritePolicyFiles(const std::string& blob_path, const PolicySpec& spec, const GoldenVectors& golden) {
+  auto blob = EncodeBlob(spec);
+  if (!blob) return blob.error();
+  const std::string golden_path = GoldenPathFor(blob_path);
+  if (golden.input_size != spec.input_size || golden.output_size != spec.output_size)
+    return MakeError(ErrorCode::kInvalidValue,
+                     golden_path + ": golden vectors of " + std::to_string(golden.input_size) + " observations and " +
+                         std::to_string(golden.output_size) + " actions for a policy of " +
+                         std::to_string(spec.input_size) + " and " + std::to_string(spec.output_size));
+  const std::string text = GoldenText(golden);
+  const FileBytes files[] = {{golden_path, Bytes(text)}, {blob_path, *blob}};
+  return WriteFilesAtomic(files);
 }
 
 }  // namespace pbppo::policy

@@ -41,4 +41,10 @@ Result<GoldenVectors> ReadGoldenFile(const std::string& path);
 // The conventional golden-vector path beside a blob: "x.blob" -> "x.golden".
 std::string GoldenPathFor(const std::string& blob_path);
 
+// A policy's files: the blob at `blob_path` and `golden` (vectors of this spec) beside it
+// (GoldenPathFor), written together (WriteFilesAtomic: the golden file renamed into place first,
+// the blob last), so that a spec that does not encode, golden vectors of another shape or an error
+// while writing leave the previous files as they were.
+Status WritePolicyFiles(const std::string& blob_path, const PolicySpec& spec, const GoldenVectors& golden);
+
 }  // namespace pbppo::policy

@@ -366,10 +366,10 @@ if(EXISTS ${WORK}/walk_empty/selected.blob OR EXISTS ${WORK}/walk_empty/select.c
   message(FATAL_ERROR "select_quadruped wrote a choice after a failed evaluation")
 endif()
 # Same seed and thread count: byte-identical quadruped blobs (Pb-PPO, the adaptive rate, minibatches
-# in column chunks over both threads, as the shipped recipe trains).
+# of 2304 in column chunks over both threads, as the shipped recipe trains).
 foreach(k a b)
-  run(0 ${PBPPO} train --env quadruped-walk --schedule pbppo --arms 0.1:0.3:3 --feedback rollout --steps 960
-      --envs 8 --rollout 24 --minibatch 96 --chunked-minibatch 64 --epochs 2 --hidden 16-16 --activation elu
+  run(0 ${PBPPO} train --env quadruped-walk --schedule pbppo --arms 0.1:0.3:3 --feedback rollout --steps 4608
+      --envs 96 --rollout 24 --minibatch 2304 --epochs 2 --hidden 16-16 --activation elu
       --lr-schedule adaptive:0.01 --seed 2 --threads 2 --no-plots --quiet --out ${WORK}/walk_det_${k})
 endforeach()
 expect_same_bytes(${WORK}/walk_det_a/policy.blob ${WORK}/walk_det_b/policy.blob

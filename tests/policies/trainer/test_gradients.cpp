@@ -119,6 +119,11 @@ TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, v
         adv[i] = rng.Normal();
         ret[i] = rng.Normal();
       }
+      if (normalize) {  // as the update does before the loss
+        Vec<double> a = Eigen::Map<const Vec<double>>(adv.data(), B);
+        NormalizeAdvantages(a);
+        adv.assign(a.data(), a.data() + B);
+      }
       const double eps = 0.1, ent = 0.01, vf = 0.5, cvf = clip_values ? 0.2 : 0.0;
       PolicyWorkspace<double> wsp;
       ValueWorkspace<double> wsv;
@@ -126,13 +131,13 @@ TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, v
       auto total = [&] {
         std::vector<double> scratch_p(pol.size()), scratch_v(value.size());
         const PolicyLossStats st = PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), adv.data(), eps,
-                                                     ent, normalize, wsp, scratch_p.data());
+                                                     ent, wsp, scratch_p.data());
         const double lv =
             ValueLossAndGrad(value, pv.data(), obs, ret.data(), old_v.data(), cvf, vf, wsv, scratch_v.data());
         return st.policy_loss - ent * st.entropy + vf * lv;
       };
-      const PolicyLossStats st = PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), adv.data(), eps, ent,
-                                                   normalize, wsp, gp.data());
+      const PolicyLossStats st =
+          PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), adv.data(), eps, ent, wsp, gp.data());
       ValueLossAndGrad(value, pv.data(), obs, ret.data(), old_v.data(), cvf, vf, wsv, gv.data());
       // The data really exercises both branches of the clip.
       CHECK(st.clip_fraction > 0.1);
@@ -144,7 +149,7 @@ TEST_CASE("full PPO loss gradient matches finite differences (policy, log-std, v
 }
 
 TEST_CASE("chunks of a minibatch: their gradients and statistics add up to the whole minibatch's") {
-  // The chunked update's arithmetic: each chunk's loss averaged over the whole minibatch (mean_over),
+  // The update's chunks: each chunk's loss averaged over the whole minibatch (mean_over),
   // advantages normalised over the minibatch beforehand, the entropy term in one chunk only.
   Rng rng(17);
   const Nets nets = MakeNets({5, 16, 8, 3}, {7, 16, 8, 1}, Activation::kElu, rng);
@@ -164,8 +169,10 @@ TEST_CASE("chunks of a minibatch: their gradients and statistics add up to the w
   PolicyWorkspace<double> wsp;
   ValueWorkspace<double> wsv;
   std::vector<double> gp(pol.size()), gv(value.size());
+  Vec<double> whole_adv = Eigen::Map<const Vec<double>>(adv.data(), n);
+  NormalizeAdvantages(whole_adv);
   const PolicyLossStats whole =
-      PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), adv.data(), eps, ent, true, wsp, gp.data());
+      PolicyLossAndGrad(pol, pp.data(), obs, actions, old_logp.data(), whole_adv.data(), eps, ent, wsp, gp.data());
   const double whole_v =
       ValueLossAndGrad(value, pv.data(), critic_obs, ret.data(), old_v.data(), cvf, vf, wsv, gv.data());
 
@@ -180,7 +187,7 @@ TEST_CASE("chunks of a minibatch: their gradients and statistics add up to the w
     const int c0 = n * c / 4, nc = n * (c + 1) / 4 - c0;
     const PolicyLossStats st =
         PolicyLossAndGrad(pol, pp.data(), obs.middleCols(c0, nc), actions.middleCols(c0, nc), old_logp.data() + c0,
-                          norm.data() + c0, eps, c == 0 ? ent : 0.0, false, wsp, cp.data(), n);
+                          norm.data() + c0, eps, c == 0 ? ent : 0.0, wsp, cp.data(), n);
     vloss += ValueLossAndGrad(value, pv.data(), critic_obs.middleCols(c0, nc), ret.data() + c0, old_v.data() + c0, cvf,
                               vf, wsv, cv.data(), n);
     loss += st.policy_loss;

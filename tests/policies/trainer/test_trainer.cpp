@@ -74,16 +74,21 @@ TEST_CASE("PPO learns Pendulum on a small budget (rl-zoo settings, fixed seed)")
   CHECK(r->final_return > -600);  // real progress, far above random
 }
 
-TEST_CASE("chunked minibatches: PPO still learns Pendulum, deterministically") {
-  // Every minibatch in column chunks (--chunked-minibatch 2; rl-zoo's minibatch of 64 in chunks of 16).
+TEST_CASE("minibatches in chunks: PPO still learns Pendulum, deterministically") {
+  // rl-zoo's settings on 8 environments, in minibatches of 2048 samples (4 chunks of 512): 4
+  // minibatches per epoch, a larger rate and budget.
   TrainOptions c = RlZoo();
-  c.chunked_minibatch = 2;
+  c.num_envs = 8;
+  c.minibatch = 2048;
+  c.learning_rate = 3e-3;
+  c.total_steps = 245760;
   c.threads = 2;
+  REQUIRE(Ppo::Chunks(c.minibatch) == 4);
   auto a = Train(c), b = Train(c);
   REQUIRE(a.ok());
   REQUIRE(b.ok());
-  MESSAGE("chunked updates: last-100 return " << a->final_return);
-  CHECK(a->final_return > -600);  // as the split update above
+  MESSAGE("minibatches of 2048 in 4 chunks: last-100 return " << a->final_return);
+  CHECK(a->final_return > -600);  // as with whole minibatches of 64 above
   for (std::size_t l = 0; l < a->spec.layers.size(); ++l) CHECK(a->spec.layers[l].weight == b->spec.layers[l].weight);
 }
 
@@ -109,35 +114,62 @@ RolloutStorage RandomRollout(const Ppo& ppo, int steps, int envs, int obs, int c
   return r;
 }
 
-TEST_CASE("chunked update: the same parameters for 1, 2 and 3 threads (the split update: per thread count)") {
-  TrainOptions o;
-  o.policy_hidden = {64, 32};
-  o.activation = policy::Activation::kElu;
-  o.minibatch = 1500;
-  o.chunked_minibatch = 1000;
-  o.epochs = 3;
-  o.clip_vf = 0.2;
-  o.ent_coef = 0.01;
-  o.lr_schedule = ParseLrSchedule("adaptive").value();
-  std::vector<std::vector<float>> actor, critic_out;
-  std::vector<double> lr;
-  for (int threads : {1, 2, 3}) {
-    Ppo ppo(o, 10, 14, 4);
-    RolloutStorage r = RandomRollout(ppo, 25, 240, 10, 14, 4);  // 6000 samples: 4 minibatches of 1500
-    WorkerPool pool(threads);
-    const UpdateStats st = ppo.Update(r, 0.2, false, pool);
-    CHECK(std::isfinite(st.value_loss));
-    CHECK(st.kl > 0);
-    actor.emplace_back(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
-    ppo.ComputeReturns(r, pool);
-    critic_out.emplace_back(r.values.begin(), r.values.end());
-    lr.push_back(ppo.learning_rate());
-  }
-  for (int k = 1; k < 3; ++k) {
-    CAPTURE(k + 1);
-    CHECK(actor[static_cast<std::size_t>(k)] == actor[0]);
-    CHECK(critic_out[static_cast<std::size_t>(k)] == critic_out[0]);
-    CHECK(lr[static_cast<std::size_t>(k)] == lr[0]);
+TEST_CASE("chunks of a minibatch: 4 from 2048 samples, else 1") {
+  CHECK(Ppo::Chunks(2) == 1);
+  CHECK(Ppo::Chunks(64) == 1);   // tools/mujoco_table.sh, tools/learn_pendulum.sh
+  CHECK(Ppo::Chunks(512) == 1);  // tools/train_auv.sh
+  CHECK(Ppo::Chunks(2047) == 1);
+  CHECK(Ppo::Chunks(2048) == 4);
+  CHECK(Ppo::Chunks(3072) == 4);  // tools/train_quadruped.sh
+  CHECK(Ppo::Segments(1) == 1);
+  CHECK(Ppo::Segments(4) == Ppo::kSegments);
+}
+
+TEST_CASE("the update: the same parameters for 1, 2 and 3 threads, minibatches in one chunk or in several") {
+  // 6000 samples in minibatches of 64 (one chunk; the last minibatch of each epoch 48 samples), of
+  // 2048 (4 chunks; 2048, 2048 and 1904 samples) and of 3072 (3072 and 2928), with the adaptive
+  // rate, the entropy term and value clipping; and with the actor held (--critic-warmup).
+  for (int minibatch : {64, 2048, 3072}) {
+    for (bool critic_only : {false, true}) {
+      CAPTURE(minibatch);
+      CAPTURE(critic_only);
+      TrainOptions o;
+      o.policy_hidden = {64, 32};
+      o.activation = policy::Activation::kElu;
+      o.minibatch = minibatch;
+      o.epochs = 2;
+      o.clip_vf = 0.2;
+      o.ent_coef = 0.01;
+      o.lr_schedule = ParseLrSchedule("adaptive").value();
+      std::vector<std::vector<float>> actor, critic_out;
+      std::vector<double> lr, grad_norm, value_loss;
+      for (int threads : {1, 2, 3}) {
+        Ppo ppo(o, 10, 14, 4);
+        RolloutStorage r = RandomRollout(ppo, 25, 240, 10, 14, 4);
+        const std::vector<float> actor_before(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
+        WorkerPool pool(threads);
+        const UpdateStats st = ppo.Update(r, 0.2, critic_only, pool);
+        CHECK(std::isfinite(st.value_loss));
+        CHECK(st.grad_norm > 0);
+        if (!critic_only) CHECK(st.kl > 0);
+        actor.emplace_back(ppo.actor_params(), ppo.actor_params() + ppo.actor().size());
+        CHECK((actor.back() == actor_before) == critic_only);
+        ppo.ComputeReturns(r, pool);
+        critic_out.emplace_back(r.values.begin(), r.values.end());
+        lr.push_back(ppo.learning_rate());
+        grad_norm.push_back(st.grad_norm);
+        value_loss.push_back(st.value_loss);
+      }
+      CHECK((lr[0] == o.learning_rate) == critic_only);  // the adaptive rate waits for a held actor
+      for (std::size_t k = 1; k < 3; ++k) {
+        CAPTURE(k + 1);
+        CHECK(actor[k] == actor[0]);
+        CHECK(critic_out[k] == critic_out[0]);
+        CHECK(lr[k] == lr[0]);
+        CHECK(grad_norm[k] == grad_norm[0]);
+        CHECK(value_loss[k] == value_loss[0]);
+      }
+    }
   }
 }
 
@@ -293,9 +325,6 @@ TEST_CASE("trainer errors name the field and value") {
   c = Small();
   c.num_envs = 0;
   CHECK(Train(c).error().message.find("--envs: 0") != std::string::npos);
-  c = Small();
-  c.chunked_minibatch = 1;
-  CHECK(Train(c).error().message.find("--chunked-minibatch: 1 is below 2") != std::string::npos);
   c = Small();
   c.schedule.arms = {1.5};
   CHECK(Train(c).error().message.find("1.5") != std::string::npos);

@@ -1,14 +1,19 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "runtime/core/crc32.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/policy/reference.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo::policy;
@@ -257,4 +262,66 @@ TEST_CASE("files are written atomically and read back, errors name the path") {
   REQUIRE_FALSE(junk.ok());
   CHECK(junk.error().message ==
         dir + "/junk.blob: policy blob: magic: not a pbppo policy blob (expected \"PBPPOPOL\")");
+}
+
+namespace {
+// The folder's file names, sorted.
+std::vector<std::string> FilesIn(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string Contents(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+}  // namespace
+
+TEST_CASE("a blob and its golden vectors are written together, or neither changes") {
+  const std::string dir = pbppo::test::ScratchDir("policy_files");
+  const std::string blob = dir + "/p.blob", golden = dir + "/p.golden";
+  const PolicySpec spec = Small();
+  REQUIRE(WritePolicyFiles(blob, spec, MakeGoldenVectors(spec, 8, 3)).ok());
+  CHECK(FilesIn(dir) == std::vector<std::string>{"p.blob", "p.golden"});
+  auto back = ReadBlobFile(blob);
+  REQUIRE(back.ok());
+  auto rows = ReadGoldenFile(golden);
+  REQUIRE(rows.ok());
+  CHECK(rows->observations.size() == 8);
+  CHECK(rows->expected[5].action == ReferenceForward(*back, rows->observations[5].data()).action);
+  const std::string blob_bytes = Contents(blob), golden_bytes = Contents(golden);
+
+  // Refusals before anything is written: the previous pair stays, no temporary is left.
+  const PolicySpec other = MakeRandomSpec({6, 7, 3}, Activation::kTanh, 12);
+  auto wrong_shape = WritePolicyFiles(blob, spec, MakeGoldenVectors(other, 8, 3));
+  REQUIRE_FALSE(wrong_shape.ok());
+  CHECK(wrong_shape.error().message ==
+        golden + ": golden vectors of 6 observations and 3 actions for a policy of 5 and 3");
+  PolicySpec bad = MakeRandomSpec({5, 9, 3}, Activation::kTanh, 13);
+  const GoldenVectors bad_rows = MakeGoldenVectors(bad, 8, 3);
+  bad.obs_clip = 0.0f;
+  CHECK_FALSE(WritePolicyFiles(blob, bad, bad_rows).ok());
+  // A folder where the blob goes: its golden file is not replaced either.
+  std::filesystem::create_directory(dir + "/q.blob");
+  std::ofstream(dir + "/q.golden") << "the previous golden file";
+  auto folder = WritePolicyFiles(dir + "/q.blob", spec, MakeGoldenVectors(spec, 8, 3));
+  REQUIRE_FALSE(folder.ok());
+  CHECK(folder.error().message == dir + "/q.blob: is a folder, not a file");
+  CHECK(Contents(dir + "/q.golden") == "the previous golden file");
+  auto missing = WritePolicyFiles(dir + "/missing/p.blob", spec, MakeGoldenVectors(spec, 8, 3));
+  REQUIRE_FALSE(missing.ok());
+  CHECK(missing.error().message.find(dir + "/missing/p.golden.tmp.") == 0);
+  CHECK(missing.error().message.find(": cannot create: ") != std::string::npos);
+  CHECK(Contents(blob) == blob_bytes);
+  CHECK(Contents(golden) == golden_bytes);
+  CHECK(FilesIn(dir) == std::vector<std::string>{"p.blob", "p.golden", "q.blob", "q.golden"});
+
+  // A new pair replaces both.
+  const PolicySpec next = MakeRandomSpec({5, 7, 3}, Activation::kTanh, 14);
+  REQUIRE(WritePolicyFiles(blob, next, MakeGoldenVectors(next, 4, 9)).ok());
+  CHECK(Contents(blob) != blob_bytes);
+  CHECK(ReadGoldenFile(golden)->observations.size() == 4);
+  CHECK(FilesIn(dir) == std::vector<std::string>{"p.blob", "p.golden", "q.blob", "q.golden"});
 }
