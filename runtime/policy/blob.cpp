@@ -320,7 +320,10 @@ Result<std::vector<std::uint8_t>> EncodeBlob(const PolicySpec& s) {
   return std::move(w.bytes);
 }
 
-Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits& limits) {
+namespace {
+
+// The blob's frame: size, magic, version, header size, declared size, CRC.
+Status CheckFrame(std::span<const std::uint8_t> b, const BlobLimits& limits) {
   constexpr std::size_t kMin = kBlobHeaderBytes + 4;
   if (b.size() < kMin) {
     return Fail(ErrorCode::kFormat, Str("truncated: %zu bytes, a blob has at least %zu", b.size(), kMin));
@@ -354,31 +357,22 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
     return Fail(ErrorCode::kFormat,
                 Str("crc32 0x%08x does not match the content (0x%08x): the blob is corrupted", stored_crc, crc));
   }
+  return {};
+}
 
-  PolicySpec s;
-  s.input_size = Load<std::uint32_t>(b, kOffInputSize);
-  s.output_size = Load<std::uint32_t>(b, kOffOutputSize);
-  const auto layer_count = Load<std::uint32_t>(b, kOffLayerCount);
-  const auto head = Load<std::uint32_t>(b, kOffActionHead);
-  s.io_layout_hash = Load<std::uint64_t>(b, kOffIoLayoutHash);
-  if (auto st = CheckShape(s.input_size, s.output_size, layer_count, limits); !st) return st.error();
-  if (head > static_cast<std::uint32_t>(ActionHead::kTanh)) {
-    return Fail(ErrorCode::kInvalidValue, Str("action_head %u unknown (0..1)", head));
-  }
-  s.action_head = static_cast<ActionHead>(head);
+using LayerRecords = std::vector<std::array<std::uint32_t, 4>>;
 
-  ByteReader r(b, body);
-  std::uint8_t skip[kBlobHeaderBytes];
-  (void)r.Raw(skip, kBlobHeaderBytes);
+// The layer table, checked completely, and the exact byte count it implies, before anything is
+// allocated for the weights.
+Status ReadLayerTable(ByteReader& r, const PolicySpec& s, std::uint32_t layer_count, const BlobLimits& limits,
+                      LayerRecords* records) {
   if (r.left() / kLayerRecordBytes < layer_count) return Fail(ErrorCode::kFormat, "layer table: truncated");
-
-  // The layer table, checked completely, and the exact byte count it implies, before allocating.
-  std::vector<std::array<std::uint32_t, 4>> records(layer_count);
+  records->resize(layer_count);
   std::uint32_t prev = s.input_size;
   std::uint64_t params = 0;
   for (std::uint32_t i = 0; i < layer_count; ++i) {
-    (void)r.Raw(records[i].data(), kLayerRecordBytes);
-    const auto& rec = records[i];
+    (void)r.Raw((*records)[i].data(), kLayerRecordBytes);
+    const auto& rec = (*records)[i];
     if (auto st = CheckLayerShape(i, rec[0], rec[1], rec[2], prev, i + 1 == layer_count, s.output_size, limits); !st) {
       return st.error();
     }
@@ -403,12 +397,17 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
     return Fail(ErrorCode::kFormat, Str("sizes in the header need at least %llu more bytes, the blob has %zu",
                                         static_cast<unsigned long long>(min_rest), r.left()));
   }
+  return {};
+}
 
+// The normaliser, the layers' weights, the action map, the names and the provenance.
+Status ReadBody(ByteReader& r, const LayerRecords& records, const BlobLimits& limits, PolicySpec* out) {
+  PolicySpec& s = *out;
   (void)r.Floats(&s.obs_mean, s.input_size);
   (void)r.Floats(&s.obs_inv_std, s.input_size);
   (void)r.Raw(&s.obs_clip, sizeof(float));
-  s.layers.resize(layer_count);
-  for (std::uint32_t i = 0; i < layer_count; ++i) {
+  s.layers.resize(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
     DenseLayer& l = s.layers[i];
     l.in = records[i][0];
     l.out = records[i][1];
@@ -439,6 +438,30 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
     return Fail(ErrorCode::kFormat, "provenance: truncated");
   }
   if (r.left() != 0) return Fail(ErrorCode::kFormat, Str("%zu unexpected bytes before the crc32", r.left()));
+  return {};
+}
+
+}  // namespace
+
+Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits& limits) {
+  if (auto st = CheckFrame(b, limits); !st) return st.error();
+  PolicySpec s;
+  s.input_size = Load<std::uint32_t>(b, kOffInputSize);
+  s.output_size = Load<std::uint32_t>(b, kOffOutputSize);
+  const auto layer_count = Load<std::uint32_t>(b, kOffLayerCount);
+  const auto head = Load<std::uint32_t>(b, kOffActionHead);
+  s.io_layout_hash = Load<std::uint64_t>(b, kOffIoLayoutHash);
+  if (auto st = CheckShape(s.input_size, s.output_size, layer_count, limits); !st) return st.error();
+  if (head > static_cast<std::uint32_t>(ActionHead::kTanh)) {
+    return Fail(ErrorCode::kInvalidValue, Str("action_head %u unknown (0..1)", head));
+  }
+  s.action_head = static_cast<ActionHead>(head);
+  ByteReader r(b, b.size() - 4);
+  std::uint8_t skip[kBlobHeaderBytes];
+  (void)r.Raw(skip, kBlobHeaderBytes);
+  LayerRecords records;
+  if (auto st = ReadLayerTable(r, s, layer_count, limits, &records); !st) return st.error();
+  if (auto st = ReadBody(r, records, limits, &s); !st) return st.error();
   if (auto st = ValidateSpec(s, limits); !st) return st.error();
   return s;
 }
