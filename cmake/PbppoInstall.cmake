@@ -1,7 +1,8 @@
 # Installs the runtime libraries, headers and programs with a CMake package config,
-# so a controller project can find_package(pbppo-rt) and link pbppo::runtime (inference),
-# pbppo::robot, pbppo::can, pbppo::safety, pbppo::rt and pbppo::dds; the robots' Fast DDS profile goes
-# to share/pbppo-rt/dds_profile.xml.
+# so a controller project can find_package(pbppo-rt) and link pbppo::runtime (everything a
+# controller uses) or its parts: pbppo::core, pbppo::policy (the blob and inference), pbppo::robot,
+# pbppo::safety, pbppo::rt, pbppo::loop, pbppo::can, pbppo::dds, pbppo::transports; the robots'
+# Fast DDS profile goes to share/pbppo-rt/dds_profile.xml.
 include(CMakePackageConfigHelpers)
 
 install(EXPORT pbppo-rtTargets
