@@ -183,7 +183,7 @@ int Recipes(int repeats, const std::string& only, int threads) {
     return e;
   };
   envs::EnvOptions auv = env("auv-nav");
-  auv.layout = "mixed";
+  auv.flags["layout"] = "mixed";
   const std::vector<Recipe> recipes = {
       {"train_auv", auv, 16, 256, 512, 10, 2, {64, 64}, tanh, false},
       {"train_quadruped", env("quadruped-walk"), 512, 24, 3072, 5, 2, {128, 64, 32}, policy::Activation::kElu, true},
