@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 
 #include "runtime/core/clock.hpp"
 #include "runtime/transport/dds/cdr.hpp"
@@ -25,6 +26,20 @@ void Encode(const robot::DdsMessageSpec& spec, std::byte* sample, TermValue term
     double sum = 0;
     for (const robot::ValueTerm& t : v.terms) sum += term(t);
     EncodeLeaf(spec.type.leaves[v.leaf], sum, sample);
+  }
+}
+
+// The terms any message may carry: constants, the tick, the mode, the clock and the message's
+// sequence number; nullopt for the others.
+std::optional<double> CommonTerm(const robot::ValueTerm& t, std::uint64_t tick, safety::Mode mode,
+                                 std::uint64_t sequence) noexcept {
+  switch (t.kind) {
+    case Kind::kConstant: return t.value;
+    case Kind::kTick: return static_cast<double>(tick);
+    case Kind::kMode: return static_cast<double>(static_cast<std::uint8_t>(mode));
+    case Kind::kClockNs: return static_cast<double>(MonotonicNs());
+    case Kind::kSequence: return static_cast<double>(sequence);
+    default: return std::nullopt;
   }
 }
 
@@ -92,12 +107,8 @@ void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept 
 }
 
 double DdsTransport::Term(const robot::ValueTerm& t, const robot::RobotData& d, std::uint64_t sequence) const noexcept {
+  if (const auto v = CommonTerm(t, d.tick, d.mode, sequence)) return *v;
   switch (t.kind) {
-    case Kind::kConstant: return t.value;
-    case Kind::kTick: return static_cast<double>(d.tick);
-    case Kind::kMode: return static_cast<double>(static_cast<std::uint8_t>(d.mode));
-    case Kind::kClockNs: return static_cast<double>(MonotonicNs());
-    case Kind::kSequence: return static_cast<double>(sequence);
     case Kind::kCommand: return d.command[t.index];
     case Kind::kField: return d.fields[t.index];
     case Kind::kSamples: return static_cast<double>(d.samples[t.index]);
@@ -140,12 +151,8 @@ bool DdsTransport::WaitForSample(std::uint32_t stream, std::uint64_t* version, s
 
 double DdsTransport::StatusTerm(const robot::ValueTerm& t, const robot::ControllerStatus& s,
                                 std::uint64_t sequence) const noexcept {
+  if (const auto v = CommonTerm(t, s.tick, s.mode, sequence)) return *v;
   switch (t.kind) {
-    case Kind::kConstant: return t.value;
-    case Kind::kTick: return static_cast<double>(s.tick);
-    case Kind::kMode: return static_cast<double>(static_cast<std::uint8_t>(s.mode));
-    case Kind::kClockNs: return static_cast<double>(MonotonicNs());
-    case Kind::kSequence: return static_cast<double>(sequence);
     case Kind::kPhase: return s.phase;
     case Kind::kCause: return s.cause;
     case Kind::kCount: return static_cast<double>(s.counts.n[t.index]);
@@ -159,8 +166,8 @@ double DdsTransport::StatusTerm(const robot::ValueTerm& t, const robot::Controll
         if (snapshot_terms_[k].kind == t.kind && snapshot_terms_[k].index == t.index)
           return snapshot_[k].load(std::memory_order_relaxed);
       return 0;
+    default: return 0;  // the common terms, above
   }
-  return 0;
 }
 
 void DdsTransport::PublishStatus(const robot::ControllerStatus& s) {
