@@ -53,11 +53,11 @@ bool ReadCdrHeader(const std::byte* sample, bool* big_endian) noexcept {
   return true;
 }
 
-double DecodeLeaf(const robot::IdlLeaf& leaf, const std::byte* sample, bool big_endian) noexcept {
-  const std::byte* p = sample + kCdrHeaderBytes + leaf.cdr_offset;
-  const std::uint32_t n = robot::IdlScalarSize(leaf.type);
+double DecodeScalar(IdlScalar type, std::uint32_t cdr_offset, const std::byte* sample, bool big_endian) noexcept {
+  const std::byte* p = sample + kCdrHeaderBytes + cdr_offset;
+  const std::uint32_t n = robot::IdlScalarSize(type);
   const std::uint64_t raw = Load(p, n, big_endian);
-  switch (leaf.type) {
+  switch (type) {
     case IdlScalar::kBool: return raw != 0 ? 1.0 : 0.0;
     case IdlScalar::kChar:
     case IdlScalar::kInt8:
@@ -83,11 +83,11 @@ double DecodeLeaf(const robot::IdlLeaf& leaf, const std::byte* sample, bool big_
   return 0;
 }
 
-void EncodeLeaf(const robot::IdlLeaf& leaf, double value, std::byte* sample) noexcept {
-  std::byte* p = sample + kCdrHeaderBytes + leaf.cdr_offset;
-  const std::uint32_t n = robot::IdlScalarSize(leaf.type);
+void EncodeScalar(IdlScalar type, std::uint32_t cdr_offset, double value, std::byte* sample) noexcept {
+  std::byte* p = sample + kCdrHeaderBytes + cdr_offset;
+  const std::uint32_t n = robot::IdlScalarSize(type);
   std::uint64_t raw = 0;
-  switch (leaf.type) {
+  switch (type) {
     case IdlScalar::kBool: raw = value != 0 ? 1 : 0; break;
     case IdlScalar::kChar:
     case IdlScalar::kInt8: raw = static_cast<std::uint8_t>(Saturate<std::int8_t>(value)); break;

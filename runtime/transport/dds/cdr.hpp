@@ -28,9 +28,17 @@ void WriteCdrHeader(std::byte* sample) noexcept;
 // false for anything else (parameter lists, XCDR2).
 bool ReadCdrHeader(const std::byte* sample, bool* big_endian) noexcept;
 
-// The leaf's value in `sample` (header included, of the leaf's message).
-double DecodeLeaf(const robot::IdlLeaf& leaf, const std::byte* sample, bool big_endian) noexcept;
-// Writes `value` into the leaf (little-endian).
-void EncodeLeaf(const robot::IdlLeaf& leaf, double value, std::byte* sample) noexcept;
+// The value of the `type` at `cdr_offset` (from the data's start) in `sample` (header included).
+double DecodeScalar(robot::IdlScalar type, std::uint32_t cdr_offset, const std::byte* sample, bool big_endian) noexcept;
+// Writes `value` as the `type` at `cdr_offset` (little-endian).
+void EncodeScalar(robot::IdlScalar type, std::uint32_t cdr_offset, double value, std::byte* sample) noexcept;
+
+// The same for a leaf of the sample's message.
+inline double DecodeLeaf(const robot::IdlLeaf& leaf, const std::byte* sample, bool big_endian) noexcept {
+  return DecodeScalar(leaf.type, leaf.cdr_offset, sample, big_endian);
+}
+inline void EncodeLeaf(const robot::IdlLeaf& leaf, double value, std::byte* sample) noexcept {
+  EncodeScalar(leaf.type, leaf.cdr_offset, value, sample);
+}
 
 }  // namespace pbppo::dds

@@ -19,16 +19,6 @@ bool Snapshotted(Kind k) noexcept {
   return k == Kind::kField || k == Kind::kCommand || k == Kind::kSamples;
 }
 
-// Each member the message's values name, the sum of its terms (term(t) gives one) encoded.
-template <typename TermValue>
-void Encode(const robot::DdsMessageSpec& spec, std::byte* sample, TermValue term) noexcept {
-  for (const robot::LeafValue& v : spec.values) {
-    double sum = 0;
-    for (const robot::ValueTerm& t : v.terms) sum += term(t);
-    EncodeLeaf(spec.type.leaves[v.leaf], sum, sample);
-  }
-}
-
 // The terms any message may carry: constants, the tick, the mode, the clock and the message's
 // sequence number; nullopt for the others.
 std::optional<double> CommonTerm(const robot::ValueTerm& t, std::uint64_t tick, safety::Mode mode,
@@ -59,10 +49,20 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
     WriteCdrHeader(sample.data());
     if (m.direction == MessageDirection::kIn) {
       const double lost_s = m.lost_after_s > 0 && options.lost_after_s > 0 ? options.lost_after_s : m.lost_after_s;
-      t->in_.push_back({i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9)});
+      In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, {}};
+      for (const robot::FieldLeaf& fl : m.fields)
+        in.steps.push_back({fl.field, m.type.leaves[fl.leaf].cdr_offset, m.type.leaves[fl.leaf].type});
+      t->in_.push_back(std::move(in));
       continue;
     }
-    (m.direction == MessageDirection::kOut ? t->out_ : t->status_).push_back({i, std::move(sample), 0});
+    Out out{i, std::move(sample), 0, {}};
+    for (const robot::LeafValue& v : m.values) {
+      const robot::IdlLeaf& leaf = m.type.leaves[v.leaf];
+      for (const robot::ValueTerm& term : v.terms) out.steps.push_back({term, leaf.cdr_offset, leaf.type, false});
+      if (v.terms.empty()) out.steps.push_back({robot::ValueTerm{}, leaf.cdr_offset, leaf.type, false});  // 0
+      out.steps.back().last = true;
+    }
+    (m.direction == MessageDirection::kOut ? t->out_ : t->status_).push_back(std::move(out));
     if (m.direction != MessageDirection::kStatus) continue;
     for (const robot::LeafValue& v : m.values)
       for (const robot::ValueTerm& term : v.terms)
@@ -78,6 +78,17 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
 
 DdsTransport::~DdsTransport() = default;
 
+template <typename TermValue>
+void DdsTransport::Encode(Out& out, TermValue term) noexcept {
+  double sum = 0;
+  for (const EncodeStep& s : out.steps) {
+    sum += term(s.term);
+    if (!s.last) continue;
+    EncodeScalar(s.type, s.offset, sum, out.sample.data());
+    sum = 0;
+  }
+}
+
 void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept {
   bool lost = false;
   const std::int64_t now = MonotonicNs();
@@ -87,10 +98,9 @@ void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept 
     bool big_endian = false;
     if (v != 0 && v != in.version && ReadCdrHeader(in.sample.data(), &big_endian)) {
       in.version = v;
-      const robot::DdsMessageSpec& spec = link_->message(in.message);
-      for (const robot::FieldLeaf& fl : spec.fields)
-        d.fields[fl.field] = DecodeLeaf(spec.type.leaves[fl.leaf], in.sample.data(), big_endian);
-      d.fresh[spec.stream] = 1;
+      for (const DecodeStep& s : in.steps)
+        d.fields[s.field] = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
+      d.fresh[in.stream] = 1;
     }
     if (in.lost_after_ns > 0) {
       const std::int64_t last = r.last_receive_ns();
@@ -119,8 +129,7 @@ double DdsTransport::Term(const robot::ValueTerm& t, const robot::RobotData& d, 
 void DdsTransport::Write(const robot::RobotModel&, robot::RobotData& d) noexcept {
   for (Out& out : out_) {
     out.sequence += 1;
-    Encode(link_->message(out.message), out.sample.data(),
-           [&](const robot::ValueTerm& t) { return Term(t, d, out.sequence); });
+    Encode(out, [&](const robot::ValueTerm& t) { return Term(t, d, out.sequence); });
     if (!link_->writer(out.message)->Push(out.sample.data())) send_failures_.fetch_add(1, std::memory_order_relaxed);
   }
   for (std::size_t k = 0; k < snapshot_terms_.size(); ++k)
@@ -135,12 +144,12 @@ Status DdsTransport::Connect(std::int64_t timeout_ns) {
 }
 
 bool DdsTransport::Paces(std::uint32_t stream) const noexcept {
-  return std::any_of(in_.begin(), in_.end(), [&](const In& in) { return link_->message(in.message).stream == stream; });
+  return std::any_of(in_.begin(), in_.end(), [&](const In& in) { return in.stream == stream; });
 }
 
 bool DdsTransport::WaitForSample(std::uint32_t stream, std::uint64_t* version, std::int64_t timeout_ns) {
   for (const In& in : in_) {
-    if (link_->message(in.message).stream != stream) continue;
+    if (in.stream != stream) continue;
     DdsReader& r = *link_->reader(in.message);
     if (!r.WaitNewer(*version, timeout_ns)) return false;
     *version = r.version();
@@ -173,8 +182,7 @@ double DdsTransport::StatusTerm(const robot::ValueTerm& t, const robot::Controll
 void DdsTransport::PublishStatus(const robot::ControllerStatus& s) {
   for (Out& out : status_) {
     out.sequence += 1;
-    Encode(link_->message(out.message), out.sample.data(),
-           [&](const robot::ValueTerm& t) { return StatusTerm(t, s, out.sequence); });
+    Encode(out, [&](const robot::ValueTerm& t) { return StatusTerm(t, s, out.sequence); });
     (void)link_->writer(out.message)->Write(out.sample.data());  // counted by the writer
   }
 }

@@ -44,18 +44,37 @@ class DdsTransport final : public robot::Transport {
   std::uint64_t send_failures() const noexcept { return send_failures_.load(std::memory_order_relaxed); }
 
  private:
+  // The messages' mappings flattened at Open, so that a tick reads a few contiguous cache lines
+  // rather than the robot file's nested declarations.
+  struct DecodeStep {  // a field of an in message's stream from its leaf
+    std::uint32_t field = 0;
+    std::uint32_t offset = 0;  // the leaf's CDR offset
+    robot::IdlScalar type = robot::IdlScalar::kDouble;
+  };
+  struct EncodeStep {  // a term of an out or status message's value; `last` closes the sum
+    robot::ValueTerm term;
+    std::uint32_t offset = 0;  // the value's leaf
+    robot::IdlScalar type = robot::IdlScalar::kDouble;
+    bool last = false;
+  };
   struct In {
     std::size_t message = 0;
     std::vector<std::byte> sample;
     std::uint64_t version = 0;
     std::int64_t lost_after_ns = 0;
+    std::uint32_t stream = 0;
+    std::vector<DecodeStep> steps;
   };
   struct Out {
     std::size_t message = 0;
     std::vector<std::byte> sample;
     std::uint64_t sequence = 0;
+    std::vector<EncodeStep> steps;
   };
   DdsTransport() = default;
+  // Each value of `out` (the sum of its terms; term(t) gives one) encoded into its sample.
+  template <typename TermValue>
+  static void Encode(Out& out, TermValue term) noexcept;
   double Term(const robot::ValueTerm& t, const robot::RobotData& d, std::uint64_t sequence) const noexcept;
   double StatusTerm(const robot::ValueTerm& t, const robot::ControllerStatus& s, std::uint64_t sequence) const noexcept;
 

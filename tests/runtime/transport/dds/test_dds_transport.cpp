@@ -52,12 +52,6 @@ std::size_t Message(DdsLink& l, const char* topic) {
   return *i;
 }
 
-std::uint32_t Leaf(const robot::IdlMessage& type, const char* path) {
-  const int k = type.LeafIndex(path);
-  REQUIRE_MESSAGE(k >= 0, path);
-  return static_cast<std::uint32_t>(k);
-}
-
 std::uint32_t FieldOf(const robot::RobotModel& m, const std::string& name) {
   const int k = m.FieldIndex(name);
   REQUIRE_MESSAGE(k >= 0, name);
