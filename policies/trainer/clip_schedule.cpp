@@ -7,6 +7,8 @@
 #include <limits>
 #include <sstream>
 
+#include "runtime/core/enum_name.hpp"
+
 namespace pbppo::trainer {
 namespace {
 
@@ -152,13 +154,7 @@ class DiscountedUcb final : public ClipSchedule {
 }  // namespace
 
 const char* ToString(ScheduleMode m) noexcept {
-  switch (m) {
-    case ScheduleMode::kFixed: return "fixed";
-    case ScheduleMode::kPaper: return "pbppo-paper";
-    case ScheduleMode::kReference: return "pbppo-reference";
-    case ScheduleMode::kDucb: return "pbppo";
-  }
-  return "?";
+  return EnumName(m, {"fixed", "pbppo-paper", "pbppo-reference", "pbppo"});
 }
 
 const char* ToString(FeedbackSource f) noexcept {

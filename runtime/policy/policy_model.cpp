@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "runtime/core/enum_name.hpp"
 #include "runtime/policy/blob.hpp"
 
 #ifdef EIGEN_RUNTIME_NO_MALLOC
@@ -46,12 +47,7 @@ void PackRows(const DenseLayer& l, float* dst) {
 }  // namespace
 
 const char* ToString(Kernel k) noexcept {
-  switch (k) {
-    case Kernel::kAuto: return "auto";
-    case Kernel::kPortable: return "portable";
-    case Kernel::kAvx512: return "avx512";
-  }
-  return "unknown";
+  return EnumName(k, {"auto", "portable", "avx512"});
 }
 
 bool KernelAvailable(Kernel k) noexcept {

@@ -2,27 +2,17 @@
 
 #include <cmath>
 
+#include "runtime/core/enum_name.hpp"
 #include "runtime/core/random.hpp"
 
 namespace pbppo::policy {
 
 const char* ToString(Activation a) noexcept {
-  switch (a) {
-    case Activation::kIdentity: return "identity";
-    case Activation::kTanh: return "tanh";
-    case Activation::kElu: return "elu";
-    case Activation::kRelu: return "relu";
-    case Activation::kLeakyRelu: return "leaky_relu";
-  }
-  return "unknown";
+  return EnumName(a, {"identity", "tanh", "elu", "relu", "leaky_relu"});
 }
 
 const char* ToString(ActionHead h) noexcept {
-  switch (h) {
-    case ActionHead::kLinear: return "linear";
-    case ActionHead::kTanh: return "tanh";
-  }
-  return "unknown";
+  return EnumName(h, {"linear", "tanh"});
 }
 
 bool ParseActivation(const std::string& s, Activation* out) noexcept {

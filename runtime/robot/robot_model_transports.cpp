@@ -5,17 +5,13 @@
 #include <filesystem>
 #include <span>
 
+#include "runtime/core/enum_name.hpp"
 #include "runtime/robot/robot_model_parts.hpp"
 
 namespace pbppo::robot {
 
 const char* ToString(MessageDirection d) noexcept {
-  switch (d) {
-    case MessageDirection::kIn: return "in";
-    case MessageDirection::kOut: return "out";
-    case MessageDirection::kStatus: return "status";
-  }
-  return "?";
+  return EnumName(d, {"in", "out", "status"});
 }
 
 namespace detail {

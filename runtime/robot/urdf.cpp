@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "runtime/core/enum_name.hpp"
 #include "runtime/robot/text_file.hpp"
 #include "runtime/robot/yaml_fields.hpp"
 
@@ -437,12 +438,7 @@ std::string Base(const std::string& path) {
 }  // namespace
 
 const char* ToString(UrdfJointType type) noexcept {
-  switch (type) {
-    case UrdfJointType::kRevolute: return "revolute";
-    case UrdfJointType::kContinuous: return "continuous";
-    case UrdfJointType::kFixed: return "fixed";
-  }
-  return "?";
+  return EnumName(type, {"revolute", "continuous", "fixed"});
 }
 
 int UrdfModel::FindLink(const std::string& n) const noexcept {

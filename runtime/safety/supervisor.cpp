@@ -2,6 +2,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iterator>
+#include <string>
+#include <type_traits>
+
+#include "runtime/core/enum_name.hpp"
 
 namespace pbppo::safety {
 namespace {
@@ -104,32 +109,20 @@ void CheckRest(const SupervisorModel& m, const SupervisorInput& in, Findings& f)
 
 }  // namespace
 
+constexpr const char* kModeNames[] = {"nominal", "degraded", "safe-stop", "e-stop"};
+static_assert(std::size(kModeNames) == kModeCount);
+constexpr const char* kCauseNames[] = {"command limit",    "rate limit",         "non-finite command",
+                                       "inference failed", "invalid sample",     "stale sample",
+                                       "lost peer",        "transport degraded", "transport fault",
+                                       "deadline overrun", "signal limit",       "e-stop request"};
+static_assert(std::size(kCauseNames) == kCauseCount);
+
 const char* ToString(Mode mode) noexcept {
-  switch (mode) {
-    case Mode::kNominal: return "nominal";
-    case Mode::kDegraded: return "degraded";
-    case Mode::kSafeStop: return "safe-stop";
-    case Mode::kEStop: return "e-stop";
-  }
-  return "?";
+  return EnumName(mode, kModeNames);
 }
 
 const char* ToString(Cause cause) noexcept {
-  switch (cause) {
-    case Cause::kCommandLimit: return "command limit";
-    case Cause::kRateLimit: return "rate limit";
-    case Cause::kNonFiniteCommand: return "non-finite command";
-    case Cause::kInferenceFailed: return "inference failed";
-    case Cause::kInvalidSample: return "invalid sample";
-    case Cause::kStaleSample: return "stale sample";
-    case Cause::kLostPeer: return "lost peer";
-    case Cause::kTransportDegraded: return "transport degraded";
-    case Cause::kTransportFault: return "transport fault";
-    case Cause::kDeadlineOverrun: return "deadline overrun";
-    case Cause::kSignalLimit: return "signal limit";
-    case Cause::kEStopRequest: return "e-stop request";
-  }
-  return "?";
+  return EnumName(cause, kCauseNames);
 }
 
 Status ValidateSupervisorModel(const SupervisorModel& m) {
@@ -302,12 +295,17 @@ bool Reset(SupervisorState& st, bool armed) noexcept {
 std::size_t Describe(const SupervisorModel& m, const Decision& d, char* buf, std::size_t size) noexcept {
   if (size == 0) return 0;
   const char* mode = ToString(d.any ? d.cause_mode : d.mode);
+  // The i-th entry's name (its .name, or the string itself), "?" when i is out of range.
   auto name = [](const auto& v, std::int32_t i) -> const char* {
-    return i >= 0 && static_cast<std::size_t>(i) < v.size() ? v[static_cast<std::size_t>(i)].name.c_str() : "?";
+    if (i < 0 || static_cast<std::size_t>(i) >= v.size()) return "?";
+    const auto& e = v[static_cast<std::size_t>(i)];
+    if constexpr (std::is_same_v<std::decay_t<decltype(e)>, std::string>) {
+      return e.c_str();
+    } else {
+      return e.name.c_str();
+    }
   };
-  const char* input = d.input >= 0 && static_cast<std::size_t>(d.input) < m.input_names.size()
-                          ? m.input_names[static_cast<std::size_t>(d.input)].c_str()
-                          : "?";
+  const char* input = name(m.input_names, d.input);
   const char* cause = ToString(d.cause);
   int len = 0;
   if (!d.any) {
@@ -331,23 +329,17 @@ std::size_t Describe(const SupervisorModel& m, const Decision& d, char* buf, std
         break;
       case Cause::kLostPeer:
         if (d.input == -2) {
-          const char* t = d.subject >= 0 && static_cast<std::size_t>(d.subject) < m.transport_names.size()
-                              ? m.transport_names[static_cast<std::size_t>(d.subject)].c_str()
-                              : "?";
-          len = std::snprintf(buf, size, "%s: %s: transport '%s' reports the peer gone", mode, cause, t);
+          len = std::snprintf(buf, size, "%s: %s: transport '%s' reports the peer gone", mode, cause,
+                              name(m.transport_names, d.subject));
         } else {
           len = std::snprintf(buf, size, "%s: %s: %s: no sample for %.0f ticks > %.0f", mode, cause,
                               name(m.streams, d.subject), d.value, d.limit);
         }
         break;
       case Cause::kTransportDegraded:
-      case Cause::kTransportFault: {
-        const char* t = d.subject >= 0 && static_cast<std::size_t>(d.subject) < m.transport_names.size()
-                            ? m.transport_names[static_cast<std::size_t>(d.subject)].c_str()
-                            : "?";
-        len = std::snprintf(buf, size, "%s: %s: '%s'", mode, cause, t);
+      case Cause::kTransportFault:
+        len = std::snprintf(buf, size, "%s: %s: '%s'", mode, cause, name(m.transport_names, d.subject));
         break;
-      }
       case Cause::kDeadlineOverrun:
         len = std::snprintf(buf, size, "%s: %s: %.0f consecutive misses >= %.0f", mode, cause, d.value, d.limit);
         break;
