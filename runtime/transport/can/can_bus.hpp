@@ -15,6 +15,9 @@ namespace pbppo::can {
 
 class CanBus {
  public:
+  CanBus() = default;
+  CanBus(const CanBus&) = delete;  // a bus is a device: never copied (nor its implementations)
+  CanBus& operator=(const CanBus&) = delete;
   virtual ~CanBus() = default;
   // Drains what arrived until nothing is left or `out` is full; returns the frames written.
   virtual std::size_t Receive(std::span<CanFrame> out) noexcept = 0;

@@ -25,8 +25,6 @@ class MemoryCanNetwork;
 class MemoryCanBus final : public CanBus {
  public:
   ~MemoryCanBus() override;
-  MemoryCanBus(const MemoryCanBus&) = delete;
-  MemoryCanBus& operator=(const MemoryCanBus&) = delete;
   std::size_t Receive(std::span<CanFrame> out) noexcept override;
   std::size_t ReceiveAtLeast(std::span<CanFrame> out, std::size_t want, std::int64_t timeout_ns) noexcept override;
   std::size_t Send(std::span<const CanFrame> frames) noexcept override;

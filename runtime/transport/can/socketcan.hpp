@@ -34,8 +34,6 @@ class SocketCanBus final : public CanBus {
   // Opens and configures the socket; errors name the interface and the call that failed.
   static Result<std::unique_ptr<SocketCanBus>> Open(const SocketCanOptions& options);
   ~SocketCanBus() override;
-  SocketCanBus(const SocketCanBus&) = delete;
-  SocketCanBus& operator=(const SocketCanBus&) = delete;
 
   // Drains the socket until EAGAIN or `out` is full. Data frames go to `out` (with the kernel's
   // receive time); error frames are decoded into stats() and also returned when keep_error_frames.

@@ -156,20 +156,16 @@ bool DdsLink::Flush(std::int64_t timeout_ns) {
 
 DdsLinkCounters DdsLink::counters() const noexcept {
   DdsLinkCounters c;
-  for (const auto& r : readers_) {
-    if (!r) continue;
-    const DdsReaderCounters rc = r->counters();
-    c.received += rc.received;
-    c.malformed += rc.malformed;
-    c.dropped += rc.dropped;
-  }
-  for (const auto& w : writers_) {
-    if (!w) continue;
-    const DdsWriterCounters wc = w->counters();
-    c.written += wc.written;
-    c.write_failed += wc.failed;
-    c.push_dropped += wc.dropped;
-  }
+  const auto each = [](const auto& endpoints, auto add) {
+    for (const auto& e : endpoints)
+      if (e) add(e->counters());
+  };
+  each(readers_, [&](const DdsReaderCounters& r) {
+    c.received += r.received, c.malformed += r.malformed, c.dropped += r.dropped;
+  });
+  each(writers_, [&](const DdsWriterCounters& w) {
+    c.written += w.written, c.write_failed += w.failed, c.push_dropped += w.dropped;
+  });
   return c;
 }
 
