@@ -26,6 +26,7 @@
 #include <mujoco/mujoco.h>
 
 #include "bench/cpu_time.hpp"
+#include "bench/training_rate.hpp"
 #include "policies/envs/mujoco_tasks.hpp"
 #include "policies/trainer/trainer.hpp"
 
@@ -33,6 +34,7 @@ namespace {
 
 using pbppo::bench::CpuSeconds;
 using pbppo::bench::Median;
+using pbppo::bench::TrainOneThread;
 
 using namespace pbppo;
 
@@ -138,17 +140,13 @@ int main(int argc, char** argv) {
     trainer::TrainOptions o;
     o.env.name = name;
     o.total_steps = static_cast<std::uint64_t>(train_steps);
-    o.threads = 1;
     o.seed = 1;
-    const double t2 = CpuSeconds();
-    auto trained = trainer::Train(o);
-    const double train_cpu = CpuSeconds() - t2;
+    auto trained = TrainOneThread(o);
     if (!trained) {
       std::fprintf(stderr, "mujoco_tasks_bench: %s\n", trained.error().message.c_str());
       return 1;
     }
-    // One thread: the calling thread did all the work, so its CPU time is the run's.
-    const double train_rate = static_cast<double>(trained->env_steps) / train_cpu;
+    const double train_rate = trained->steps_per_cpu_s;
 
     std::vector<double> rl, rr, zl, zr;
     Episodes(env, episodes, false, rl, rr);
@@ -158,7 +156,8 @@ int main(int argc, char** argv) {
     std::snprintf(random, sizeof random, "%.1f, %.1f", len.mean, ret.mean);
     std::snprintf(spread, sizeof spread, "(+- %.1f, +- %.1f)", len.sd, ret.sd);
     std::printf("%-13s %12.0f %12.0f %12.0f %12.1f s %10.1f   %-26s %-26s %.0f, %.1f\n", name.c_str(), Median(physics),
-                Median(stepping), train_rate, 1e6 / train_rate, trained->final_return, random, spread, zl[0], zr[0]);
+                Median(stepping), train_rate, 1e6 / train_rate, trained->result.final_return, random, spread, zl[0],
+                zr[0]);
     std::fflush(stdout);
   }
   return 0;

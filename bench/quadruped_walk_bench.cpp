@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bench/cpu_time.hpp"
+#include "bench/training_rate.hpp"
 #include "policies/envs/quadruped_walk.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/policy/blob.hpp"
@@ -31,6 +32,7 @@ namespace {
 
 using pbppo::bench::CpuSeconds;
 using pbppo::bench::Median;
+using pbppo::bench::TrainOneThread;
 
 }  // namespace
 
@@ -124,16 +126,12 @@ int main(int argc, char** argv) {
   o.policy_hidden = {128, 64, 32};
   o.activation = policy::Activation::kElu;
   o.total_steps = static_cast<std::uint64_t>(train_iterations) * 512 * 24;
-  o.threads = 1;
-  const double t0 = CpuSeconds();
-  auto trained = trainer::Train(o);
-  const double cpu = CpuSeconds() - t0;
+  auto trained = TrainOneThread(o);
   if (!trained) {
     std::fprintf(stderr, "quadruped_walk_bench: %s\n", trained.error().message.c_str());
     return 1;
   }
-  // One thread: the calling thread did all the work, so its CPU time is the run's.
-  const double rate = static_cast<double>(trained->env_steps) / cpu;
+  const double rate = trained->steps_per_cpu_s;
   std::printf("quadruped-walk flat   training from scratch, recipe settings, %d iterations on one thread\n",
               train_iterations);
   std::printf("  environment steps/s per core, updates included:   %8.0f\n", rate);
