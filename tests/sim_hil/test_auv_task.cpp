@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sim_hil/scenarios/auv_nav_task.hpp"
+#include "tests/support/refusal.hpp"
 #include "tests/support/robot_models.hpp"
 
 using namespace pbppo::sim;
@@ -465,28 +466,22 @@ TEST_CASE("auv task: bad layout files are refused naming the element and field")
     REQUIRE_FALSE(l.ok());
     CHECK_MESSAGE(l.error().message.find(c.expect) != std::string::npos, l.error().message);
   }
-  auto missing = LoadAuvLayout(kModel + "layouts/nonexistent.yaml");
-  REQUIRE_FALSE(missing.ok());
-  CHECK(missing.error().message.find("nonexistent.yaml: cannot open") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(LoadAuvLayout(kModel + "layouts/nonexistent.yaml"))
+            .find("nonexistent.yaml: cannot open") != std::string::npos);
 }
 
 TEST_CASE("auv task: an IO layout the task cannot serve is refused naming the element") {
   AuvTaskConfig c = Config("easy");
   c.io.observations[3].signal = "sonar_16";  // 16 beams: sonar_0 ... sonar_15
-  auto t = AuvNavTask::Create(c);
-  REQUIRE_FALSE(t.ok());
-  CHECK(t.error().message.find("observations[3] 'sonar_3': signal 'sonar_16' is not provided") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(AuvNavTask::Create(c))
+            .find("observations[3] 'sonar_3': signal 'sonar_16' is not provided") != std::string::npos);
   c = Config("easy");
   c.io.actions[1].command = "heave";
-  t = AuvNavTask::Create(c);
-  REQUIRE_FALSE(t.ok());
-  CHECK(t.error().message.find("actions[1] 'omega': command 'heave' is not one of surge_speed, yaw_rate") !=
-        std::string::npos);
+  CHECK(pbppo::test::RefusalOf(AuvNavTask::Create(c))
+            .find("actions[1] 'omega': command 'heave' is not one of surge_speed, yaw_rate") != std::string::npos);
   c = Config("easy");
   c.io.robot = "pendulum";
-  t = AuvNavTask::Create(c);
-  REQUIRE_FALSE(t.ok());
-  CHECK(t.error().message.find("robot is 'pendulum'") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(AuvNavTask::Create(c)).find("robot is 'pendulum'") != std::string::npos);
 }
 
 TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
@@ -523,27 +518,22 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   auto LoadSonarParams = [&](const std::string& path) { return ParseSonarParams(doc(), path); };
   auto LoadAuvTaskParams = [&](const std::string& path) { return ParseAuvTaskParams(doc(), path, 5.0); };
   write("mass_kg: 50.0", "mass_kg: -3");
-  auto p = LoadAuvParams(scratch);
-  REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message.find("auv_bad.yaml: hull.mass_kg: '-3' is outside") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(LoadAuvParams(scratch)).find("auv_bad.yaml: hull.mass_kg: '-3' is outside") !=
+        std::string::npos);
   write("integrator: rk2", "integrator: rk45");
-  p = LoadAuvParams(scratch);
-  REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message.find("simulation.integrator: 'rk45' is not one of") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(LoadAuvParams(scratch)).find("simulation.integrator: 'rk45' is not one of") !=
+        std::string::npos);
   write("mass_kg: 50.0", "mass_kg: 50.0");
-  p = LoadAuvParams(scratch, 0.03);  // not a whole number of 0.02 s physics steps
-  REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message.find("control period (robot.yaml timing.policy_period_s) = 0.03") != std::string::npos);
+  // not a whole number of 0.02 s physics steps
+  CHECK(pbppo::test::RefusalOf(LoadAuvParams(scratch, 0.03))
+            .find("control period (robot.yaml timing.policy_period_s) = 0.03") != std::string::npos);
   write("linear: [10.0, 100.0, 100.0, 2.0, 8.0, 8.0]", "linear: [10.0, 100.0]");
-  p = LoadAuvParams(scratch);
-  REQUIRE_FALSE(p.ok());
-  CHECK(p.error().message.find("damping.linear: expected a list of 6 numbers") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(LoadAuvParams(scratch)).find("damping.linear: expected a list of 6 numbers") !=
+        std::string::npos);
   auto sonar_refused = [&](const std::string& from, const std::string& to, const std::string& message) {
     CAPTURE(to);
     write(from, to);
-    const auto s = LoadSonarParams(scratch);
-    REQUIRE_FALSE(s.ok());
-    CHECK(s.error().message.find(message) != std::string::npos);
+    CHECK(pbppo::test::RefusalOf(LoadSonarParams(scratch)).find(message) != std::string::npos);
   };
   sonar_refused("beams: 16", "beams: 2.5", "sonar.beams: '2.5' is not an integer");
   sonar_refused("beam_width_deg: 22.5", "beam_width_deg: 120", "sonar.beam_width_deg: '120' is outside");
@@ -553,15 +543,14 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
   CHECK(s->beam_width_rad == doctest::Approx(kPi / 8));
   CHECK(s->rays_per_beam == 5);
   write("safe_distance_m: 1.2", "safe_distnce_m: 1.2");
-  auto t = LoadAuvTaskParams(scratch);
-  REQUIRE_FALSE(t.ok());
-  CHECK(t.error().message.find("task.safe_distnce_m: unknown field") != std::string::npos);
+  CHECK(pbppo::test::RefusalOf(LoadAuvTaskParams(scratch)).find("task.safe_distnce_m: unknown field") !=
+        std::string::npos);
   write("bearing_gain: 2.0", "bearing_gain: 2.0\n  progress: spline");
-  t = LoadAuvTaskParams(scratch);
-  REQUIRE_FALSE(t.ok());
-  CHECK(t.error().message.find("task.progress: 'spline' is not euclidean or geodesic") != std::string::npos);
+  CHECK(
+      pbppo::test::RefusalOf(LoadAuvTaskParams(scratch)).find("task.progress: 'spline' is not euclidean or geodesic") !=
+      std::string::npos);
   write("bearing_gain: 2.0", "bearing_gain: 2.0\n  progress: geodesic");
-  t = LoadAuvTaskParams(scratch);
+  auto t = LoadAuvTaskParams(scratch);
   REQUIRE(t.ok());
   CHECK(t->progress == AuvTaskParams::Progress::kGeodesic);
   CHECK(Config("hard").task.progress == AuvTaskParams::Progress::kEuclidean);  // the shipped file: the paper's
@@ -570,9 +559,7 @@ TEST_CASE("auv task: bad values in auv.yaml are refused naming the field") {
                           const std::string& from = "bearing_gain: 2.0") {
     CAPTURE(to);
     write(from, to);
-    const auto r = LoadAuvTaskParams(scratch);
-    REQUIRE_FALSE(r.ok());
-    CHECK(r.error().message.find(message) != std::string::npos);
+    CHECK(pbppo::test::RefusalOf(LoadAuvTaskParams(scratch)).find(message) != std::string::npos);
   };
   task_refused("bearing_gain: 2.0\n  geodesic_margin: 1.5", "task.geodesic_margin");
   task_refused("bearing_gain: 2.0\n  geodesic_margin: {distance_m: -1, cost: 2}",

@@ -182,6 +182,7 @@ namespace {
 struct FaultRun {
   std::unique_ptr<sim::QuadrupedRig> rig;
   std::uint64_t fault_tick = 5000, safe_tick = 0;
+  std::string why;  // the safe-stop's causes (SafeStopRun)
 };
 
 FaultRun RunFault(sim::HilFault fault, bool kill_operator, std::uint64_t until_tick) {
@@ -206,70 +207,58 @@ std::string Reason(const sim::QuadrupedRig& rig, Mode mode) {
                           rig.loop().supervisor().entered[static_cast<std::size_t>(mode)]);
 }
 
+// A fault that must end in safe-stop: the run, printed, with the causes it named.
+FaultRun SafeStopRun(const char* what, const sim::HilFault& fault, bool kill_operator, std::uint64_t until_tick) {
+  FaultRun r = RunFault(fault, kill_operator, until_tick);
+  r.why = Reason(*r.rig, Mode::kSafeStop);
+  std::printf("fault %s at tick %llu: safe-stop at tick %llu (%s)\n", what,
+              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick),
+              r.why.c_str());
+  REQUIRE(r.safe_tick > 0);
+  return r;
+}
+
 }  // namespace
 
 TEST_CASE("quadruped HIL fault: a motor falls silent while walking - safe-stop within 3 ticks of the stale limit") {
-  sim::HilFault f;
-  f.kind = sim::HilFaultKind::kSilentMotor;
-  f.motor = 2;  // LF_KFE
-  FaultRun r = RunFault(f, false, 5600);
-  const std::string why = Reason(*r.rig, Mode::kSafeStop);
-  std::printf("fault silent motor at tick %llu: safe-stop at tick %llu (%s)\n",
-              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
-  REQUIRE(r.safe_tick > 0);
+  // motor 2 of the CAN map: LF_KFE
+  const sim::HilFault f{.kind = sim::HilFaultKind::kSilentMotor, .motor = 2};
+  const FaultRun r = SafeStopRun("silent motor", f, false, 5600);
   // The reply is owed at the fault tick; its age passes the safe-stop limit (2) at +3: detection.
   CHECK(r.safe_tick <= r.fault_tick + 3 + 3);
-  CHECK(why.find("LF_KFE") != std::string::npos);
+  CHECK(r.why.find("LF_KFE") != std::string::npos);
   CheckCommandsWithinLimits(*r.rig);
 }
 
 TEST_CASE("quadruped HIL fault: the IMU stops - safe-stop within 3 ticks of its stale limit") {
-  sim::HilFault f;
-  f.kind = sim::HilFaultKind::kImuSilent;
-  FaultRun r = RunFault(f, false, 5600);
-  const std::string why = Reason(*r.rig, Mode::kSafeStop);
-  std::printf("fault IMU silent at tick %llu: safe-stop at tick %llu (%s)\n",
-              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
-  REQUIRE(r.safe_tick > 0);
+  const sim::HilFault f{.kind = sim::HilFaultKind::kImuSilent};
+  const FaultRun r = SafeStopRun("IMU silent", f, false, 5600);
   const auto& imu = r.rig->model().streams[static_cast<std::size_t>(r.rig->model().StreamIndex("base_imu"))];
   CHECK(r.safe_tick <= r.fault_tick + imu.stale_safe_stop_ticks + 1 + 3);
-  CHECK(why.find("base_imu") != std::string::npos);
+  CHECK(r.why.find("base_imu") != std::string::npos);
   CheckCommandsWithinLimits(*r.rig);
 }
 
 TEST_CASE("quadruped HIL fault: bus-off on one bus - safe-stop within 3 ticks, naming the bus") {
-  sim::HilFault f;
-  f.kind = sim::HilFaultKind::kBusOff;
-  f.bus = 1;
-  FaultRun r = RunFault(f, false, 5600);
-  const std::string why = Reason(*r.rig, Mode::kSafeStop);
-  std::printf("fault bus-off at tick %llu: safe-stop at tick %llu (%s)\n",
-              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
-  REQUIRE(r.safe_tick > 0);
+  const sim::HilFault f{.kind = sim::HilFaultKind::kBusOff, .bus = 1};
+  const FaultRun r = SafeStopRun("bus-off", f, false, 5600);
   CHECK(r.safe_tick <= r.fault_tick + 3);
-  CHECK(why.find(r.rig->model().can->buses[1].name) != std::string::npos);
+  CHECK(r.why.find(r.rig->model().can->buses[1].name) != std::string::npos);
   CheckCommandsWithinLimits(*r.rig);
 }
 
 TEST_CASE("quadruped HIL fault: the operator dies - safe-stop within 3 ticks of the command stream's stale limit") {
-  FaultRun r = RunFault({}, true, 6000);
-  const std::string why = Reason(*r.rig, Mode::kSafeStop);
-  std::printf("fault operator dead at tick %llu: safe-stop at tick %llu (%s)\n",
-              static_cast<unsigned long long>(r.fault_tick), static_cast<unsigned long long>(r.safe_tick), why.c_str());
-  REQUIRE(r.safe_tick > 0);
+  const FaultRun r = SafeStopRun("operator dead", {}, true, 6000);
   const auto& op = r.rig->model().streams[static_cast<std::size_t>(r.rig->model().StreamIndex("velocity_command"))];
   // The last sample came at most one period before the kill; stale beyond safe_stop ticks.
   CHECK(r.safe_tick <= r.fault_tick + op.stale_safe_stop_ticks + 1 + 3);
   CHECK(r.safe_tick > r.fault_tick);
-  CHECK(why.find("velocity_command") != std::string::npos);
+  CHECK(r.why.find("velocity_command") != std::string::npos);
   CheckCommandsWithinLimits(*r.rig);
 }
 
 TEST_CASE("quadruped HIL fault: 10 % of frames dropped (bursts of at most 2) - it keeps walking, degraded at most") {
-  sim::HilFault f;
-  f.kind = sim::HilFaultKind::kDropFrames;
-  f.probability = 0.10;
-  f.max_burst = 2;
+  const sim::HilFault f{.kind = sim::HilFaultKind::kDropFrames, .probability = 0.10, .max_burst = 2};
   FaultRun r = RunFault(f, false, 9000);
   const sim::RigReport rep = r.rig->Report(1.0);
   std::printf("fault 10%% drops from tick %llu: mode %s, fell %d, dropped %llu frames at LF_HAA\n",

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "policies/envs/auv_nav.hpp"
+#include "tests/support/refusal.hpp"
 
 namespace pbppo::envs {
 namespace {
@@ -58,11 +59,25 @@ std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t see
   return seen;
 }
 
-// The same episode (seed 9) driven straight ahead for up to `steps` steps in auv-nav made with
-// `with` and with `without`: the observations agree at every step (the options differ in the
-// reward only); returns the two returns, each step's reward pair handed to `step_check`.
-std::pair<double, double> SameEpisodeReturns(const EnvOptions& with, const EnvOptions& without, int steps,
+// auv-nav made with `o` and --FLAG VALUE is refused with "--FLAG: MESSAGE", for each (VALUE, MESSAGE).
+void CheckRefusals(EnvOptions o, const std::string& flag,
+                   const std::vector<std::pair<std::string, std::string>>& value_messages) {
+  for (const auto& [value, message] : value_messages) {
+    CAPTURE(value);
+    o.flags[flag] = value;
+    CHECK(test::RefusalOf(MakeNamed("auv-nav", o)) == "--" + flag + ": " + message);
+  }
+}
+
+// The same episode (seed 9) on the hard layout driven straight ahead for up to `steps` steps in
+// auv-nav made with `with` and with `with` less the flag `flag`: the observations agree at every
+// step (the flag changes the reward only); returns the two returns, each step's reward pair
+// handed to `step_check`.
+std::pair<double, double> SameEpisodeReturns(EnvOptions with, const std::string& flag, int steps,
                                              const std::function<void(double, double)>& step_check = {}) {
+  with.flags["layout"] = "hard";
+  EnvOptions without = with;
+  without.flags.erase(flag);
   auto a = MakeNamed("auv-nav", with);
   auto b = MakeNamed("auv-nav", without);
   REQUIRE(a.ok());
@@ -176,9 +191,7 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
   CHECK(seen.size() == 3);
   EnvOptions o;
   o.flags["layout"] = "labyrinth";
-  auto bad = MakeNamed("auv-nav", o);
-  REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message.find("--layout: 'labyrinth' unknown") != std::string::npos);
+  CHECK(test::RefusalOf(MakeNamed("auv-nav", o)).find("--layout: 'labyrinth' unknown") != std::string::npos);
 }
 
 TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad values are refused naming the part") {
@@ -192,27 +205,16 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
         }).size() == 3);
   // The same episode earns a different progress reward with the margin (the path and its length
   // change) and the same observations (the reward only).
-  o.flags["layout"] = "hard";
-  EnvOptions without = o;
-  without.flags.erase("geodesic-margin");
-  const auto [sum_with, sum_without] = SameEpisodeReturns(o, without, 30);
+  const auto [sum_with, sum_without] = SameEpisodeReturns(o, "geodesic-margin", 30);
   CHECK(sum_with != sum_without);
-  for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
-           {"2", "'2' is not DISTANCE_M:COST (e.g. 2:4)"},
-           {"2:", "'2:': cost '' is not a number in [0, 100]"},
-           {"x:4", "'x:4': distance 'x' is not a number in [0, 100]"},
-           {"2:-1", "'2:-1': cost '-1' is not a number in [0, 100]"},
-           {"2:4:1", "'2:4:1': cost '4:1' is not a number in [0, 100]"},
-           {"nan:4", "'nan:4': distance 'nan' is not a number in [0, 100]"}}) {
-    CAPTURE(spec);
-    o.flags["geodesic-margin"] = spec;
-    auto bad = MakeNamed("auv-nav", o);
-    REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "--geodesic-margin: " + message);
-  }
-  o.flags["geodesic-margin"] = "2:4";
-  auto pendulum = MakeNamed("pendulum", o);
-  REQUIRE_FALSE(pendulum.ok());
+  CheckRefusals(o, "geodesic-margin",
+                {{"2", "'2' is not DISTANCE_M:COST (e.g. 2:4)"},
+                 {"2:", "'2:': cost '' is not a number in [0, 100]"},
+                 {"x:4", "'x:4': distance 'x' is not a number in [0, 100]"},
+                 {"2:-1", "'2:-1': cost '-1' is not a number in [0, 100]"},
+                 {"2:4:1", "'2:4:1': cost '4:1' is not a number in [0, 100]"},
+                 {"nan:4", "'nan:4': distance 'nan' is not a number in [0, 100]"}});
+  CHECK(test::RefusalOf(MakeNamed("pendulum", o)) == "--geodesic-margin: only auv-nav has one, not 'pendulum'");
 }
 
 TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout, bad values are refused") {
@@ -225,27 +227,16 @@ TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout,
         }).size() == 3);
   // Straight ahead from the hard start runs along the bottom wall or into the first circle: the
   // same observations, less reward once inside the band.
-  o.flags["layout"] = "hard";
-  EnvOptions without = o;
-  without.flags.erase("clearance-penalty");
   const auto [sum_with, sum_without] =
-      SameEpisodeReturns(o, without, 200, [](double with, double plain) { CHECK(with <= plain); });
+      SameEpisodeReturns(o, "clearance-penalty", 200, [](double with, double plain) { CHECK(with <= plain); });
   CHECK(sum_with < sum_without);
   o.flags["clearance-penalty"] = "1.5:1";
-  auto pendulum = MakeNamed("pendulum", o);
-  REQUIRE_FALSE(pendulum.ok());
-  CHECK(pendulum.error().message == "--clearance-penalty: only auv-nav has one, not 'pendulum'");
-  for (const auto& [spec, message] : std::vector<std::pair<std::string, std::string>>{
-           {"1.5", "'1.5' is not DISTANCE_M:PER_STEP (e.g. 1.5:1)"},
-           {"1.5:", "'1.5:': per-step cost '' is not a number in [0, 100]"},
-           {"-1:1", "'-1:1': distance '-1' is not a number in [0, 100]"},
-           {"1.5:inf", "'1.5:inf': per-step cost 'inf' is not a number in [0, 100]"}}) {
-    CAPTURE(spec);
-    o.flags["clearance-penalty"] = spec;
-    auto bad = MakeNamed("auv-nav", o);
-    REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "--clearance-penalty: " + message);
-  }
+  CHECK(test::RefusalOf(MakeNamed("pendulum", o)) == "--clearance-penalty: only auv-nav has one, not 'pendulum'");
+  CheckRefusals(o, "clearance-penalty",
+                {{"1.5", "'1.5' is not DISTANCE_M:PER_STEP (e.g. 1.5:1)"},
+                 {"1.5:", "'1.5:': per-step cost '' is not a number in [0, 100]"},
+                 {"-1:1", "'-1:1': distance '-1' is not a number in [0, 100]"},
+                 {"1.5:inf", "'1.5:inf': per-step cost 'inf' is not a number in [0, 100]"}});
 }
 
 TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in every layout") {
@@ -283,13 +274,9 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
   }
   EnvOptions o;
   o.flags["extra-obstacles"] = "17";
-  auto bad = MakeNamed("auv-nav", o);
-  REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message == "--extra-obstacles: 17 is not in [0, 16]");
+  CHECK(test::RefusalOf(MakeNamed("auv-nav", o)) == "--extra-obstacles: 17 is not in [0, 16]");
   o.flags["extra-obstacles"] = "1";
-  auto pendulum = MakeNamed("pendulum", o);
-  REQUIRE_FALSE(pendulum.ok());
-  CHECK(pendulum.error().message == "--extra-obstacles: only auv-nav has obstacles, not 'pendulum'");
+  CHECK(test::RefusalOf(MakeNamed("pendulum", o)) == "--extra-obstacles: only auv-nav has obstacles, not 'pendulum'");
 }
 
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
@@ -304,9 +291,8 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   REQUIRE(plain.ok());
   CHECK(dynamic_cast<AuvNav*>(plain->get())->config().task.progress == sim::AuvTaskParams::Progress::kEuclidean);
   o.flags["progress"] = "manhattan";
-  auto bad = MakeNamed("auv-nav", o);
-  REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message == "--progress: 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
+  CHECK(test::RefusalOf(MakeNamed("auv-nav", o)) ==
+        "--progress: 'manhattan': unknown (euclidean, geodesic, or LAYOUT=MODE,...)");
   // Per layout: the named layouts take the mode, the others keep auv.yaml's.
   o.flags["progress"] = "hard=geodesic";
   CHECK(CheckEpisodeConfigs(o, 4, [](const sim::AuvTaskConfig& cfg) {
@@ -321,9 +307,7 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
            {"medium=euclidean,geodesic", "'medium=euclidean,geodesic': 'geodesic' is not LAYOUT=MODE"}}) {
     CAPTURE(spec);
     o.flags["progress"] = spec;
-    bad = MakeNamed("auv-nav", o);
-    REQUIRE_FALSE(bad.ok());
-    CHECK(bad.error().message == "--progress: " + message);
+    CHECK(test::RefusalOf(MakeNamed("auv-nav", o)) == "--progress: " + message);
     CHECK(AuvNav::ProgressFor(spec, "hard").error().message == message);
   }
   CHECK(*AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "easy").value() ==
@@ -333,9 +317,7 @@ TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout
   CHECK_FALSE(AuvNav::ProgressFor("easy=geodesic,medium=euclidean", "hard").value().has_value());
   o.flags["progress"] = "geodesic";
   o.flags.erase("layout");
-  bad = MakeNamed("pendulum", o);
-  REQUIRE_FALSE(bad.ok());
-  CHECK(bad.error().message.find("only auv-nav has a progress term") != std::string::npos);
+  CHECK(test::RefusalOf(MakeNamed("pendulum", o)).find("only auv-nav has a progress term") != std::string::npos);
 }
 
 TEST_CASE("exploring starts: anywhere free, any current target - success counted only from the layout's start") {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "runtime/loop/trajectory_source.hpp"
+#include "tests/support/refusal.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -16,11 +17,7 @@ TEST_CASE("stand trajectory: the shipped file loads - errors name the field") {
   REQUIRE_MESSAGE(t.ok(), t.error().message);
   CHECK(t->joints.size() == 12);
   CHECK(t->duration_s == 2.0);
-  auto err = [&](const std::string& y) {
-    auto r = loop::ParseTrajectory(y, "traj.yaml", d);
-    REQUIRE_FALSE(r.ok());
-    return r.error().message;
-  };
+  auto err = [&](const std::string& y) { return pbppo::test::RefusalOf(loop::ParseTrajectory(y, "traj.yaml", d)); };
   CHECK(err("duration_s: 1\njoints: [{joint: LF_KNEE, amplitude_rad: 0.1, frequency_hz: 1}]") ==
         "traj.yaml: joints[0] 'LF_KNEE'.joint: is not an actuated joint of the robot");
   CHECK(err("duration_s: 1\njoints: [{joint: LF_KFE, amplitude_rad: 1.2, frequency_hz: 1}]") ==
@@ -43,11 +40,7 @@ TEST_CASE("trajectory: speeds for velocity-commanded joints, never a position - 
   CHECK(t->joints[0].amplitude_rad_s == 3.0);
   CHECK(t->joints[1].frequency_hz == 0.0);  // a constant speed needs no frequency
   CHECK_FALSE(t->joints[2].velocity);
-  auto err = [&](const std::string& y) {
-    auto r = loop::ParseTrajectory(y, "traj.yaml", d);
-    REQUIRE_FALSE(r.ok());
-    return r.error().message;
-  };
+  auto err = [&](const std::string& y) { return pbppo::test::RefusalOf(loop::ParseTrajectory(y, "traj.yaml", d)); };
   CHECK(err("duration_s: 1\njoints: [{joint: left_wheel, amplitude_rad: 0.5, frequency_hz: 1}]") ==
         "traj.yaml: joints[0] 'left_wheel'.amplitude_rad: joint 'left_wheel' is velocity-commanded (continuous): it "
         "takes no position target (give speed_rad_s, amplitude_rad_s)");

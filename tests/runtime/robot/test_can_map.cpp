@@ -3,6 +3,7 @@
 #include <string>
 
 #include "runtime/robot/can_map.hpp"
+#include "tests/support/refusal.hpp"
 #include "tests/support/test_paths.hpp"
 #include "tests/support/text_edit.hpp"
 
@@ -26,8 +27,7 @@ imus:
 )";
 
 std::string ErrorOf(const std::string& text) {
-  auto r = ParseCanMap(text, "t.yaml");
-  return r.ok() ? std::string() : r.error().message;
+  return pbppo::test::RefusalOf(ParseCanMap(text, "t.yaml"));
 }
 }  // namespace
 

@@ -1,6 +1,7 @@
 #include <doctest/doctest.h>
 
 #include "runtime/robot/io_layout.hpp"
+#include "tests/support/refusal.hpp"
 #include "tests/support/test_paths.hpp"
 
 using namespace pbppo::robot;
@@ -16,8 +17,7 @@ actions:
 )";
 
 std::string ErrorOf(const std::string& text) {
-  auto r = ParseIoLayout(text, "t.yaml");
-  return r.ok() ? std::string() : r.error().message;
+  return pbppo::test::RefusalOf(ParseIoLayout(text, "t.yaml"));
 }
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "runtime/robot/urdf.hpp"
+#include "tests/support/refusal.hpp"
 #include "tests/support/test_paths.hpp"
 #include "tests/support/text_edit.hpp"
 
@@ -45,9 +46,7 @@ const char* kGood = R"(<?xml version="1.0"?>
 )";
 
 std::string ErrorOf(const std::string& xml) {
-  auto r = ParseUrdf(xml, "arm.urdf");
-  REQUIRE_FALSE(r.ok());
-  return r.error().message;
+  return pbppo::test::RefusalOf(ParseUrdf(xml, "arm.urdf"));
 }
 
 }  // namespace

@@ -102,14 +102,13 @@ TEST_CASE("dds wire: the AUV's sensor sample, command and status are the bytes f
   using pbppo_idl::auv::SensorState;
   const robot::IdlMessage& s = MessageType(m, "sensor_state");
   // Every scalar member of the sensor sample, named alike in the IDL and the generated setters.
-#define PBPPO_SENSOR(X)                                                                                          \
-  X(tick)                                                                                                        \
-  X(stamp_ns)                                                                                                    \
-  X(x_m)                                                                                                         \
-  X(y_m) X(depth_m) X(roll_rad) X(pitch_rad) X(yaw_rad) X(surge_mps) X(sway_mps) X(heave_mps) X(roll_rate_radps) \
-      X(pitch_rate_radps) X(yaw_rate_radps) X(sonar_beams) X(target_index) X(target_x_m) X(target_y_m)           \
-          X(target_distance_m) X(target_bearing_rad) X(route_bearing_rad) X(clearance_m) X(mission_complete)     \
-              X(episode_end)
+  // clang-format off
+#define PBPPO_SENSOR(X) \
+  X(tick) X(stamp_ns) X(x_m) X(y_m) X(depth_m) X(roll_rad) X(pitch_rad) X(yaw_rad) X(surge_mps) \
+  X(sway_mps) X(heave_mps) X(roll_rate_radps) X(pitch_rate_radps) X(yaw_rate_radps) X(sonar_beams) \
+  X(target_index) X(target_x_m) X(target_y_m) X(target_distance_m) X(target_bearing_rad) \
+  X(route_bearing_rad) X(clearance_m) X(mission_complete) X(episode_end)
+// clang-format on
 #define PBPPO_SET(f) g.f(static_cast<std::remove_reference_t<decltype(g.f())>>(Value(s, #f)));
 #define PBPPO_GET(f) out.Set(#f, static_cast<double>(g.f())).ok();
   Check<pbppo_idl::auv::SensorStatePubSubType, SensorState>(
@@ -154,12 +153,11 @@ TEST_CASE("dds wire: the quadruped operator's velocity command and status are th
       v, [&](pbppo_idl::quadruped::VelocityCommand& g) { PBPPO_VELOCITY(PBPPO_SET) },
       [&](const pbppo_idl::quadruped::VelocityCommand& g, dds::DdsSample& out) { PBPPO_VELOCITY(PBPPO_GET) });
   const robot::IdlMessage& s = MessageType(m, "status");
-#define PBPPO_QSTATUS(X)                                                                                         \
-  X(tick)                                                                                                        \
-  X(phase)                                                                                                       \
-  X(mode)                                                                                                        \
-  X(cause) X(commands_received) X(command_vx_mps) X(command_vy_mps) X(command_yaw_rate_radps) X(deadline_misses) \
-      X(stale_samples) X(tick_median_us) X(tick_max_us)
+  // clang-format off
+#define PBPPO_QSTATUS(X) \
+  X(tick) X(phase) X(mode) X(cause) X(commands_received) X(command_vx_mps) X(command_vy_mps) \
+  X(command_yaw_rate_radps) X(deadline_misses) X(stale_samples) X(tick_median_us) X(tick_max_us)
+  // clang-format on
 #undef PBPPO_SET
 #define PBPPO_SET(f) g.f(static_cast<std::remove_reference_t<decltype(g.f())>>(Value(s, #f)));
   Check<pbppo_idl::quadruped::QuadrupedStatusPubSubType, pbppo_idl::quadruped::QuadrupedStatus>(
