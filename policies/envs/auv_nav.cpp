@@ -156,10 +156,6 @@ AuvNav::AuvNav(std::vector<std::shared_ptr<const sim::AuvTaskConfig>> configs, s
                std::string name)
     : configs_(std::move(configs)), tasks_(std::move(tasks)), name_(std::move(name)) {}
 
-std::uint32_t AuvNav::observation_size() const noexcept {
-  return static_cast<std::uint32_t>(tasks_[0].observation_size());
-}
-
 std::uint32_t AuvNav::max_episode_steps() const noexcept {
   return static_cast<std::uint32_t>(tasks_[0].max_episode_steps());
 }

@@ -55,8 +55,6 @@ class AuvNav final : public Env {
   static Result<std::optional<std::pair<double, double>>> ParseClearancePenalty(const std::string& spec);
 
   const std::string& name() const noexcept override { return name_; }
-  std::uint32_t observation_size() const noexcept override;
-  std::uint32_t action_size() const noexcept override { return 2; }
   std::span<const float> action_low() const noexcept override { return {low_.data(), 2}; }
   std::span<const float> action_high() const noexcept override { return {high_.data(), 2}; }
   std::uint32_t max_episode_steps() const noexcept override;

@@ -54,8 +54,9 @@ class Env {
   virtual ~Env() = default;
 
   virtual const std::string& name() const noexcept = 0;
-  virtual std::uint32_t observation_size() const noexcept = 0;
-  virtual std::uint32_t action_size() const noexcept = 0;
+  // The policy's input and output widths: the IO layout's, the one statement of them.
+  std::uint32_t observation_size() const noexcept { return layout().observation_size(); }
+  std::uint32_t action_size() const noexcept { return layout().action_size(); }
   // Bounds of the action Step() accepts; actions outside are clipped to them.
   virtual std::span<const float> action_low() const noexcept = 0;
   virtual std::span<const float> action_high() const noexcept = 0;

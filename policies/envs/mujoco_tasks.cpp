@@ -150,10 +150,8 @@ MujocoTask::MujocoTask(std::shared_ptr<const Shared> shared) : shared_(std::move
   const mjModel* m = shared_->model;
   name_ = shared_->spec->name;
   d_ = mj_makeData(m);
-  obs_size_ = ObservationSize(shared_->spec->kind, m);
-  act_size_ = static_cast<std::uint32_t>(m->nu);
-  low_.assign(act_size_, -1.0f);
-  high_.assign(act_size_, 1.0f);
+  low_.assign(static_cast<std::size_t>(m->nu), -1.0f);
+  high_.assign(static_cast<std::size_t>(m->nu), 1.0f);
   mj_forward(m, d_);
 }
 

@@ -64,8 +64,6 @@ class MujocoTask final : public Env {
   MujocoTask& operator=(const MujocoTask&) = delete;
 
   const std::string& name() const noexcept override { return name_; }
-  std::uint32_t observation_size() const noexcept override { return obs_size_; }
-  std::uint32_t action_size() const noexcept override { return act_size_; }
   std::span<const float> action_low() const noexcept override { return low_; }
   std::span<const float> action_high() const noexcept override { return high_; }
   std::uint32_t max_episode_steps() const noexcept override { return kEpisodeSteps; }
@@ -95,8 +93,6 @@ class MujocoTask final : public Env {
   std::shared_ptr<const Shared> shared_;
   std::string name_;
   mjData_* d_ = nullptr;
-  std::uint32_t obs_size_ = 0;
-  std::uint32_t act_size_ = 0;
   std::vector<float> low_, high_;
   std::uint32_t elapsed_ = 0;
 };

@@ -25,8 +25,6 @@ class Pendulum final : public Env {
   static Result<std::unique_ptr<Pendulum>> Make(robot::IoLayout layout);
 
   const std::string& name() const noexcept override { return name_; }
-  std::uint32_t observation_size() const noexcept override { return 3; }
-  std::uint32_t action_size() const noexcept override { return 1; }
   std::span<const float> action_low() const noexcept override { return {&low_, 1}; }
   std::span<const float> action_high() const noexcept override { return {&high_, 1}; }
   std::uint32_t max_episode_steps() const noexcept override { return kEpisodeSteps; }

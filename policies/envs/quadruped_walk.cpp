@@ -307,12 +307,6 @@ std::string QuadrupedWalk::provenance() const {
                 p.latency_periods[0], p.latency_periods[1], p.push_velocity_mps, p.push_interval_s);
   return out + text;
 }
-std::uint32_t QuadrupedWalk::observation_size() const noexcept {
-  return builder_.observation_size();
-}
-std::uint32_t QuadrupedWalk::action_size() const noexcept {
-  return static_cast<std::uint32_t>(shared_->robot().joint_count());
-}
 std::span<const float> QuadrupedWalk::action_low() const noexcept {
   return shared_->low;
 }

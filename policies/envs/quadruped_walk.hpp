@@ -94,8 +94,6 @@ class QuadrupedWalk final : public Env {
   const std::string& name() const noexcept override;
   // The terrain, the observation noise and the randomisation the robot trains with.
   std::string provenance() const override;
-  std::uint32_t observation_size() const noexcept override;
-  std::uint32_t action_size() const noexcept override;
   std::span<const float> action_low() const noexcept override;
   std::span<const float> action_high() const noexcept override;
   std::uint32_t max_episode_steps() const noexcept override;
