@@ -49,6 +49,17 @@ schedule_runs() {
   done
 }
 
+# run_dir_argument USAGE ARGS...: sets `run` to the script's one argument, a folder (a training
+# run's --out); fails with "usage: USAGE" otherwise.
+run_dir_argument() {
+  local usage="$1"
+  shift
+  if [ $# -ne 1 ] || [ ! -d "$1" ]; then
+    fail "usage: $usage"
+  fi
+  run="$1"
+}
+
 # run_candidates RUN_DIR FIRST: sets the array `candidates` to RUN_DIR/FIRST (when it exists) and
 # every RUN_DIR/snapshots/*.blob (pbppo train --snapshots), the blobs a selection script chooses
 # among; fails naming both when there is none.

@@ -10,11 +10,16 @@ source "$(dirname "$0")/common.sh"
 cd "$root"
 out="${1:-build/results/hil_missions}"
 blob="${BLOB:-policies/frozen/auv_nav/auv_nav.blob}"
+[ -r "$blob" ] || fail "BLOB '$blob' not readable"
 layouts="${LAYOUTS:-easy medium hard}"
+for layout in $layouts; do
+  [ -f "models/auv/layouts/$layout.yaml" ] || fail "LAYOUTS: '$layout' is not a file of models/auv/layouts"
+done
 seeds="${SEEDS:-$(seq -s ' ' 1 30)}"
+[ -n "${seeds// /}" ] || fail "SEEDS: empty (one or more non-negative integers)"
+for seed in $seeds; do non_negative_int SEEDS "$seed"; done
 hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
 ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
-[ -r "$blob" ] || fail "BLOB '$blob' not readable"
 mkdir -p "$out"
 echo "layout,seed,result,targets,time_s" >"$out/missions.csv"
 domain=$((120 + $$ % 100))

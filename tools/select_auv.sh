@@ -12,10 +12,7 @@
 #   (PBPPO=path/to/pbppo, EPISODES=100, DEV_SEED=777, CONFIRM_SEED=888, JOBS=2)
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
-if [ $# -ne 1 ] || [ ! -d "$1" ]; then
-  fail "usage: tools/select_auv.sh RUN_DIR (a pbppo train --out folder)"
-fi
-run="$1"
+run_dir_argument "tools/select_auv.sh RUN_DIR (a pbppo train --out folder)" "$@"
 pbppo="$(program PBPPO build/default/policies/pbppo)"
 episodes="${EPISODES:-100}"
 seed="${DEV_SEED:-777}"

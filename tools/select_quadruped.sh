@@ -20,10 +20,7 @@
 #    JOBS=2)
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
-if [ $# -ne 1 ] || [ ! -d "$1" ]; then
-  fail "usage: tools/select_quadruped.sh RUN_DIR (a pbppo train --env quadruped-walk --out folder)"
-fi
-run="$1"
+run_dir_argument "tools/select_quadruped.sh RUN_DIR (a pbppo train --env quadruped-walk --out folder)" "$@"
 pbppo="$(program PBPPO build/default/policies/pbppo)"
 demo_seeds="${DEMO_SEEDS:-101 102 103 104}"
 seed="${DEV_SEED:-101}"
