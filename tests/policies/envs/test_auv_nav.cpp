@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "policies/envs/auv_nav.hpp"
@@ -57,6 +58,14 @@ std::set<std::string> CheckEpisodeConfigs(const EnvOptions& o, std::uint64_t see
     seen.insert(auv->config().layout.name);
   }
   return seen;
+}
+
+// Options on the mixed layout (each episode draws easy, medium or hard) with `flags` besides.
+EnvOptions Mixed(std::map<std::string, std::string> flags) {
+  EnvOptions o;
+  o.flags = std::move(flags);
+  o.flags["layout"] = "mixed";
+  return o;
 }
 
 // auv-nav made with `o` and --FLAG VALUE is refused with "--FLAG: MESSAGE", for each (VALUE, MESSAGE).
@@ -195,10 +204,7 @@ TEST_CASE("layout 'mixed' draws every layout - unknown layouts are refused by na
 }
 
 TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad values are refused naming the part") {
-  EnvOptions o;
-  o.flags["layout"] = "mixed";
-  o.flags["progress"] = "geodesic";
-  o.flags["geodesic-margin"] = "2:4";
+  EnvOptions o = Mixed({{"progress", "geodesic"}, {"geodesic-margin", "2:4"}});
   CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.geodesic_margin_m == 2.0);
           CHECK(cfg.task.geodesic_margin_cost == 4.0);
@@ -218,9 +224,7 @@ TEST_CASE("auv-nav: --geodesic-margin sets the margin in every layout, bad value
 }
 
 TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout, bad values are refused") {
-  EnvOptions o;
-  o.flags["layout"] = "mixed";
-  o.flags["clearance-penalty"] = "1.5:0.75";
+  EnvOptions o = Mixed({{"clearance-penalty", "1.5:0.75"}});
   CHECK(CheckEpisodeConfigs(o, 5, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.clearance_penalty_m == 1.5);
           CHECK(cfg.task.clearance_penalty_per_step == 0.75);
@@ -242,9 +246,7 @@ TEST_CASE("auv-nav: --clearance-penalty sets the clearance term in every layout,
 TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in every layout") {
   // Mean random obstacles placed over 40 episodes per layout, without and with 3 extra.
   auto placed = [](int extra) {
-    EnvOptions o;
-    o.flags["layout"] = "mixed";
-    o.flags["extra-obstacles"] = std::to_string(extra);
+    EnvOptions o = Mixed({{"extra-obstacles", std::to_string(extra)}});
     auto made = MakeNamed("auv-nav", o);
     REQUIRE_MESSAGE(made.ok(), made.error().message);
     auto* auv = dynamic_cast<AuvNav*>(made->get());
@@ -275,14 +277,13 @@ TEST_CASE("auv-nav: --extra-obstacles draws more random obstacles per episode in
   EnvOptions o;
   o.flags["extra-obstacles"] = "17";
   CHECK(test::RefusalOf(MakeNamed("auv-nav", o)) == "--extra-obstacles: 17 is not in [0, 16]");
-  o.flags["extra-obstacles"] = "1";
+  // insert_or_assign, not `= "1"`: GCC 12 warns (-Wrestrict) wrongly on that assignment here
+  o.flags.insert_or_assign("extra-obstacles", std::string("1"));
   CHECK(test::RefusalOf(MakeNamed("pendulum", o)) == "--extra-obstacles: only auv-nav has obstacles, not 'pendulum'");
 }
 
 TEST_CASE("auv-nav: --progress replaces auv.yaml's progress term in every layout, bad names are refused") {
-  EnvOptions o;
-  o.flags["layout"] = "mixed";
-  o.flags["progress"] = "geodesic";
+  EnvOptions o = Mixed({{"progress", "geodesic"}});
   CHECK(CheckEpisodeConfigs(o, 3, [](const sim::AuvTaskConfig& cfg) {
           CHECK(cfg.task.progress == sim::AuvTaskParams::Progress::kGeodesic);
         }).size() == 3);
