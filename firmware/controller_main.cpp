@@ -309,8 +309,10 @@ int Run(const Options& o) {
   std::atomic<bool> done{false};
   auto clock = MakeClock(robot, o, ts, done);
   if (!clock) return Fail(clock.error().message);
+  // A robot on CAN: where its buses are (--can, else the interfaces its CAN map names).
+  const std::string where = robot.can ? " on " + (o.can.empty() ? std::string("its CAN map's buses") : o.can) : "";
   if (!o.quiet && robot.phases.enable_motors)
-    std::printf("pbppo-controller: %s, %s\n", robot.name.c_str(),
+    std::printf("pbppo-controller: %s%s, %s\n", robot.name.c_str(), where.c_str(),
                 source->kind == loop::SourceKind::kTrajectory ? "with a trajectory"
                 : source->kind == loop::SourceKind::kPolicy   ? "with a policy"
                                                               : "holding the default pose");
