@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -385,47 +386,54 @@ Status Parser::Const() {
 }
 
 Result<std::uint32_t> Parser::ConstExpr() {
-  // Sums and products of integer literals and constants, left to right within each level.
-  auto factor = [&]() -> Result<std::uint64_t> {
+  // Sums and products of integer literals and constants, left to right within each level. Every
+  // value on the way stays within 32 bits, so that no step can wrap.
+  constexpr std::uint64_t kMax = 0xffffffffull;
+  auto too_large = [&](const std::string& v) { return Fail("constant " + v + " is too large"); };
+  auto factor = [&](std::uint64_t* out) -> Status {
     const Token& t = Peek();
     if (t.kind == Token::kNumber) {
-      ++i_;
       char* end = nullptr;
+      errno = 0;
       const unsigned long long v = std::strtoull(t.text.c_str(), &end, 0);
       if (*end != '\0') return IdlError(*t.file, t.line, "'" + t.text + "' is not a whole number");
-      return static_cast<std::uint64_t>(v);
+      if (errno == ERANGE || v > kMax) return too_large(t.text);
+      ++i_;
+      *out = v;
+      return {};
     }
     if (t.kind == Token::kIdent) {
       const std::string q = Resolve(t.text, consts_);
       if (q.empty()) return IdlError(*t.file, t.line, "'" + t.text + "' is not an integer constant");
       ++i_;
-      return consts_.at(q);
+      *out = consts_.at(q);
+      return {};
     }
     return IdlError(*t.file, t.line, "expected a number, got '" + t.text + "'");
   };
-  auto term = [&]() -> Result<std::uint64_t> {
-    auto v = factor();
-    while (v && (Peek().text == "*" || Peek().text == "/")) {
+  auto term = [&](std::uint64_t* out) -> Status {
+    PBPPO_TRY(factor(out));
+    while (Peek().text == "*" || Peek().text == "/") {
       const bool times = t_[i_++].text == "*";
-      auto w = factor();
-      if (!w) return w;
-      if (!times && *w == 0) return Fail("division by zero");
-      v = times ? *v * *w : *v / *w;
-      if (*v > kMaxArray * kMaxArray) return Fail("constant too large");
+      std::uint64_t w = 0;
+      PBPPO_TRY(factor(&w));
+      if (!times && w == 0) return Fail("division by zero");
+      *out = times ? *out * w : *out / w;  // both within 32 bits: the product fits in 64
+      if (*out > kMax) return too_large(std::to_string(*out));
     }
-    return v;
+    return {};
   };
-  auto v = term();
-  while (v && (Peek().text == "+" || Peek().text == "-")) {
+  std::uint64_t v = 0;
+  PBPPO_TRY(term(&v));
+  while (Peek().text == "+" || Peek().text == "-") {
     const bool plus = t_[i_++].text == "+";
-    auto w = term();
-    if (!w) return std::move(w).error();
-    if (!plus && *w > *v) return Fail("negative constant");
-    v = plus ? *v + *w : *v - *w;
+    std::uint64_t w = 0;
+    PBPPO_TRY(term(&w));
+    if (!plus && w > v) return Fail("negative constant");
+    v = plus ? v + w : v - w;
+    if (v > kMax) return too_large(std::to_string(v));
   }
-  if (!v) return std::move(v).error();
-  if (*v > 0xffffffffull) return Fail("constant " + std::to_string(*v) + " is too large");
-  return static_cast<std::uint32_t>(*v);
+  return static_cast<std::uint32_t>(v);
 }
 
 Result<TypeRef> Parser::Type() {

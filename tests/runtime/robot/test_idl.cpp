@@ -215,6 +215,12 @@ TEST_CASE("idl: what a message cannot be is refused naming the file, the line an
       {"struct S { double v; /* open", "comment not closed"},
       {"module m { struct S { double v; };", "expected"},
       {"struct S { double v[N]; };", "'N' is not an integer constant"},
+      {"const long N = 4294967296; struct S { double v[2]; };", "constant 4294967296 is too large"},
+      {"const long N = 99999999999999999999; struct S { double v[2]; };", "constant 99999999999999999999 is too large"},
+      {"const long N = 65536 * 65536; struct S { double v[2]; };", "constant 4294967296 is too large"},
+      {"const long N = 4294967295 + 1; struct S { double v[2]; };", "constant 4294967296 is too large"},
+      {"const long N = 2 - 3; struct S { double v[2]; };", "negative constant"},
+      {"const long N = 2 / 0; struct S { double v[2]; };", "division by zero"},
       {"struct S { double v; } $", "unexpected character '$'"},
       {"", "defines no struct"},
   };
