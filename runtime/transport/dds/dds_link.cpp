@@ -156,16 +156,20 @@ bool DdsLink::Flush(std::int64_t timeout_ns) {
 
 DdsLinkCounters DdsLink::counters() const noexcept {
   DdsLinkCounters c;
-  const auto each = [](const auto& endpoints, auto add) {
-    for (const auto& e : endpoints)
-      if (e) add(e->counters());
-  };
-  each(readers_, [&](const DdsReaderCounters& r) {
-    c.received += r.received, c.malformed += r.malformed, c.dropped += r.dropped;
-  });
-  each(writers_, [&](const DdsWriterCounters& w) {
-    c.written += w.written, c.write_failed += w.failed, c.push_dropped += w.dropped;
-  });
+  for (const auto& reader : readers_) {
+    if (!reader) continue;
+    const DdsReaderCounters r = reader->counters();
+    c.received += r.received;
+    c.malformed += r.malformed;
+    c.dropped += r.dropped;
+  }
+  for (const auto& writer : writers_) {
+    if (!writer) continue;
+    const DdsWriterCounters w = writer->counters();
+    c.written += w.written;
+    c.write_failed += w.failed;
+    c.push_dropped += w.dropped;
+  }
   return c;
 }
 
