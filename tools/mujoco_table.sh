@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The paper's table on our trainer: hopper, walker2d, half-cheetah and ant (docs/mujoco_tasks.md),
-# six clip schedules (fixed:0.02, fixed:0.15, fixed:0.23, pbppo-paper:wi-ad, pbppo-reference, pbppo)
+# six clip schedules (fixed:0.02, fixed:0.15, fixed:0.23, pbppo-paper:wi-ad, pbppo-reference, pbppo;
+# pbppo-reference is the released script's rule as it runs by default, wo-ad)
 # x 5 seeds, 10^6 environment steps each with the paper's PPO settings (its released script's: one
 # environment, 2048-step rollouts, minibatch 64, 10 epochs, lr 3e-4, 64-64 tanh, gamma 0.99,
 # lambda 0.95; bandit arms 0.02:0.5:6 and 2 evaluation episodes per iteration, counted), every final

@@ -62,17 +62,18 @@ class DiscountedSum final : public ClipSchedule {
   int Choose() override {
     const std::size_t n = arms_.size();
     std::vector<double> u = e_;
-    if (advantage_) {
-      double mean = 0;
-      for (double v : e_) mean += v;
-      mean /= static_cast<double>(n);
-      for (double& v : u) v -= mean;
-    }
+    // The script divides first; wi-ad then shifts what it divided (the paper: the sums themselves).
     if (reference_) {
       const double denom = *std::max_element(u.begin(), u.end()) + 0.001;
       bool finite = denom != 0.0;
       for (std::size_t i = 0; i < n && finite; ++i) finite = std::isfinite(u[i] / denom);
       for (std::size_t i = 0; i < n; ++i) u[i] = finite ? u[i] / denom : 0.0;
+    }
+    if (advantage_) {
+      double mean = 0;
+      for (double v : u) mean += v;
+      mean /= static_cast<double>(n);
+      for (double& v : u) v -= mean;
     }
     std::vector<double> score(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -225,7 +226,10 @@ Result<ScheduleConfig> ParseSchedule(const std::string& schedule, const std::vec
   }
   if (head == "pbppo-paper" || head == "pbppo-reference") {
     c.mode = head == "pbppo-paper" ? ScheduleMode::kPaper : ScheduleMode::kReference;
-    if (tail == "wi-ad" || colon == std::string::npos) {
+    // Without a variant: the paper's wi-ad, and the released script's default, wo-ad.
+    if (colon == std::string::npos) {
+      c.advantage = c.mode == ScheduleMode::kPaper;
+    } else if (tail == "wi-ad") {
       c.advantage = true;
     } else if (tail == "wo-ad") {
       c.advantage = false;

@@ -5,11 +5,14 @@
 //   pbppo-paper[:wi-ad|:wo-ad]
 //                       the paper's equations: UCB_i = U_i + lambda sqrt(N / (N_i + 1e-6)),
 //                       E_i <- gamma_b E_i + R for the pulled arm, U = E (wo-ad) or E - mean(E)
-//                       (wi-ad, a uniform shift that never changes the argmax). Defaults
-//                       lambda 5, gamma_b 0.99.
+//                       (wi-ad, the default: a uniform shift that never changes the argmax).
+//                       Defaults lambda 5, gamma_b 0.99.
 //   pbppo-reference[:wi-ad|:wo-ad]
-//                       the released script's rule: score_i = E_i / (max_j E_j + 0.001) +
-//                       lambda sqrt(N / (N_i + 1e-6)) with the same discounted-sum E. Quirks kept:
+//                       the released script's rule, wo-ad by default as the script runs:
+//                       score_i = U_i + lambda sqrt(N / (N_i + 1e-6)) with the same discounted-sum
+//                       E and U_i = E_i / (max_j E_j + 0.001); wi-ad, as the script computes it,
+//                       subtracts the mean of those ratios from each (after dividing), so it
+//                       chooses exactly as wo-ad and only the logged values differ. Quirks kept:
 //                       the exploitation term is tiny beside the bonus (near round-robin, an
 //                       index-order sweep at the start), the discounted sum favours often-pulled
 //                       arms, and with negative returns a negative denominator flips the ranking.

@@ -48,7 +48,9 @@ TEST_CASE("schedule names, variants and defaults") {
   CHECK_FALSE(p.advantage);
   CHECK(p.lambda == 5.0);
   CHECK(p.gamma == 0.99);
-  CHECK(Config("pbppo-reference", {0.1}).advantage);
+  CHECK(Config("pbppo-paper", {0.1}).advantage);            // the paper's wi-ad
+  CHECK_FALSE(Config("pbppo-reference", {0.1}).advantage);  // the released script's default, wo-ad
+  CHECK(Config("pbppo-reference:wi-ad", {0.1}).advantage);
   CHECK(Config("pbppo", {0.1}).mode == ScheduleMode::kDucb);
   CHECK(ParseSchedule("pbppo-paper:xx", {0.1}).error().message.find("variant 'xx'") != std::string::npos);
   CHECK(ParseSchedule("adaptive", {0.1}).error().message.find("'adaptive' unknown") != std::string::npos);
@@ -104,6 +106,22 @@ TEST_CASE("reference rule: index-order sweep at the start, near round-robin afte
     CHECK(a.value > 0.0);
     CHECK(a.value <= 1.0);
     CHECK(a.bonus >= 5.0);
+  }
+}
+
+TEST_CASE("reference rule, wi-ad as the script computes it: the ratios shifted by their mean, the same choices") {
+  auto wo = MakeClipSchedule(Config("pbppo-reference:wo-ad", {0.1, 0.2, 0.3}));
+  auto wi = MakeClipSchedule(Config("pbppo-reference:wi-ad", {0.1, 0.2, 0.3}));
+  const double returns[] = {50, -20, 80, 10, -5, 120, 30, 60, -40, 90, 15, 70};
+  for (double r : returns) {
+    const int a = wo->Choose();
+    CHECK(wi->Choose() == a);
+    double mean = 0;
+    for (const auto& arm : wo->arms()) mean += arm.value;
+    mean /= 3;
+    for (std::size_t i = 0; i < 3; ++i) CHECK(wi->arms()[i].value == doctest::Approx(wo->arms()[i].value - mean));
+    wo->Update(a, r, 0);
+    wi->Update(a, r, 0);
   }
 }
 
