@@ -9,7 +9,8 @@
 # Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot of
 # the training curves (pbppo curves: mean over seeds with a one-sd band).
 # Usage: tools/compare_auv_schedules.sh [OUT_DIR=runs/compare_auv]
-#   (PBPPO=path/to/pbppo, STEPS=1e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100, PROGRESS, MARGIN may be set)
+#   (PBPPO=path/to/pbppo, STEPS=1e6, SEEDS="1 2 3 4 5", THREADS=2, EPISODES=100, PROGRESS, MARGIN and
+#   SCHEDULES="fixed:0.2 pbppo-paper:wi-ad pbppo-reference pbppo" may be set)
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 out="${1:-$root/runs/compare_auv}"
@@ -20,7 +21,7 @@ margin="${MARGIN-2:4}"
 seeds="${SEEDS:-1 2 3 4 5}"
 threads="${THREADS:-2}"
 episodes="${EPISODES:-100}"
-schedules=("fixed:0.2" "pbppo-paper:wi-ad" "pbppo-reference" "pbppo")
+read -r -a schedules <<<"${SCHEDULES:-fixed:0.2 pbppo-paper:wi-ad pbppo-reference pbppo}"
 common=(--env auv-nav --layout hard --threads "$threads" --envs 16 --rollout 256 --minibatch 512 --epochs 10
   --lr 3e-4 --gamma 0.99 --normalize-obs --scale-rewards --arms 0.05:0.4:6 --feedback rollout --steps "$steps"
   --progress "$progress" ${margin:+--geodesic-margin "$margin"})
