@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Clip-schedule comparison on auv-nav (hard layout): fixed:0.2 against the three Pb-PPO schedules
-# (pbppo-paper wi-ad, pbppo-reference: the script's default wo-ad, pbppo), 5 seeds each, equal total environment steps: the
-# bandits take `rollout` feedback (mean return of the episodes finished in the next rollout), which
-# costs no extra steps, so every run uses exactly STEPS environment steps. After training, each
-# policy is evaluated deterministically on 100 hard episodes from seed 900001 (not a training seed).
+# (pbppo-paper wi-ad, pbppo-reference: the released script's default wo-ad, pbppo), 5 seeds each,
+# equal total environment steps: the bandits take `rollout` feedback (mean return of the episodes
+# finished in the next rollout), which costs no extra steps, so every run uses exactly STEPS
+# environment steps. After training, each policy is evaluated deterministically on 100 hard
+# episodes from seed 900001 (not a training seed).
 # The reward is the shipped policy's training reward (PROGRESS=geodesic, MARGIN=2:4: the geodesic
 # progress term with its margin; PROGRESS=euclidean MARGIN= for the paper's).
 # Writes docs/results/auv_hard_schedules.md (means with 95% t-intervals over seeds) and a plot of

@@ -132,10 +132,11 @@ def check_synthetic(replay, work):
         path = os.path.join(work, name + ".txt")
         with open(path, "w") as f:
             f.write("".join("%.17g\n" % r for r in returns))
+        oracle = {wi_ad: run_oracle(returns, wi_ad) for wi_ad in (False, True)}
         for schedule, wi_ad in (("pbppo-reference", False), ("pbppo-reference:wo-ad", False),
                                 ("pbppo-reference:wi-ad", True)):
             ours = replay_ours(replay, schedule, path)
-            script = run_oracle(returns, wi_ad)
+            script = oracle[wi_ad]
             if len(ours) != len(returns):
                 fail("%s %s: %d choices for %d returns" % (name, schedule, len(ours), len(returns)))
             t = first_difference(ours, script)
@@ -149,8 +150,7 @@ def check_synthetic(replay, work):
                              % (name, schedule, t, i, ov[i], sv[i]))
             print("%-12s %-22s %d iterations: every choice and value as the script's rule"
                   % (name, schedule, len(returns)))
-        old = run_oracle(returns, True, old_order=True)
-        t = first_difference(old, run_oracle(returns, True))
+        t = first_difference(run_oracle(returns, True, old_order=True), oracle[True])
         if t is not None:
             diverged.append((name, t))
     if not diverged:
@@ -175,12 +175,14 @@ def check_recorded(pbppo, work):
         fail("the recorded run logged %d iterations, not 400" % len(rows))
     rule = ScriptRule(wi_ad=False)
     feedback = []
+    counts = [0] * N_ARMS
     for row in rows:
         t = int(row["iteration"])
         arm = rule.choose()
         if int(row["arm"]) != arm:
             fail("recorded run, iteration %d: the trainer chose arm %s, the script's rule arm %d"
                  % (t, row["arm"], arm))
+        counts[arm] += 1
         for i in range(N_ARMS):
             logged = float(row["arm%d_value" % i])
             if abs(logged - rule.values[i]) > 1e-5 * max(1.0, abs(rule.values[i])):
@@ -191,9 +193,6 @@ def check_recorded(pbppo, work):
             fail("recorded run, iteration %d: feedback %s is not finite" % (t, row["feedback"]))
         feedback.append(r)
         rule.update(arm, r)
-    counts = [0] * N_ARMS
-    for row in rows:
-        counts[int(row["arm"])] += 1
     print("recorded pendulum run, %d iterations (feedback %.1f .. %.1f): every choice as the script's rule; "
           "pulls per arm %s" % (len(rows), min(feedback), max(feedback), counts))
 
