@@ -64,7 +64,9 @@ run_pair() {  # run_pair NAME LAYOUT SEED [HIL ARGS...] ; lock-step, both to com
     --events "$work/$name.json" "$@" >"$work/$name.hil.log" 2>&1 &
   local pid=$!
   local rc=0
-  "$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet \
+  # Compared byte for byte: no tick may run without its sample, however loaded the machine (the
+  # lock-step timeout, 500 ms by default, is there for a vanished vehicle).
+  "$ctl" --robot "$robot" --policy "$blob" --lockstep --lockstep-timeout-ms 20000 --domain "$domain" --quiet \
     >"$work/$name.ctl.log" 2>&1 || rc=$?
   wait "$pid" || fail "$name: pbppo-hil exited $?: $(cat "$work/$name.hil.log")"
   [ "$rc" -eq 0 ] || fail "$name: pbppo-controller exited $rc: $(cat "$work/$name.ctl.log")"
