@@ -28,6 +28,9 @@ PACKAGES=(
   # CAN: tools, DBC decoding (python3-yaml: tools/gen_can_dbc.py), and the QEMU runner for the vcan tests (kernel has no AF_CAN)
   can-utils python3-can python3-canmatrix python3-yaml
   qemu-system-x86 busybox-static kmod cpio xz-utils
+  # arm64: the cross compiler, and qemu-aarch64 for the arm64 build's tests (tools/arm64/make_root.sh
+  # unpacks the arm64 libraries beside the machine's own)
+  g++-aarch64-linux-gnu qemu-user
   # ONNX import (pbppo import-onnx): the ONNX library and protobuf, the test-model generator
   # (tools/onnx/make_models.py) and the ONNX Runtime reference it is checked against (tools/onnx)
   libonnx-dev libprotobuf-dev protobuf-compiler python3-onnx python3-numpy nodejs npm

@@ -2,11 +2,11 @@
 # The whole test suite, from a fresh Debian 12 machine: installs what is missing, builds the
 # optimised and the sanitizer configurations and runs every test. Exit status 0 only if all pass.
 #
-# Within the hour on a 2-core machine: once the optimised build is done, the ASan+UBSan, TSan and
-# libFuzzer builds run one after another in the background at the lowest CPU priority, on what the
-# tests leave free (the SocketCAN tests run inside a one-vCPU VM, the long tests leave a core
-# idle), and each test stage waits only for the build it needs. Every stage's duration is printed
-# when the script ends, passing or not.
+# Within the hour on a 2-core machine: once the optimised build is done, the ASan+UBSan, TSan,
+# arm64 and libFuzzer builds run one after another in the background at the lowest CPU priority,
+# on what the tests leave free (the SocketCAN tests run inside a one-vCPU VM, the long tests leave
+# a core idle), and each test stage waits only for the build it needs. Every stage's duration is
+# printed when the script ends, passing or not.
 #
 #   tools/test.sh               everything
 #   tools/test.sh --builds ...  (internal) the background builds
@@ -34,10 +34,13 @@ if [ "${1-}" = "--builds" ]; then
   # shares the CPU with the others whatever its processes' nice values: the group itself is niced
   # (measured without it: the compilers at 49 % of a core each, the tests beside them at 30 %).
   echo 19 >/proc/self/autogroup 2>/dev/null || true
-  for spec in "asan" "tsan pbppo_tests_threads pbppo-controller pbppo-operator pbppo_report" "fuzz $*"; do
+  for spec in "asan" "tsan pbppo_tests_threads pbppo-controller pbppo-operator pbppo_report" "arm64" "fuzz $*"; do
     read -r -a words <<<"$spec"
     rc=0
-    nice -n 19 bash -c "set -euo pipefail; $(declare -f build); jobs=$jobs; build ${words[*]}" \
+    # The arm64 build needs its root of arm64 libraries (downloaded once, then kept).
+    root=""
+    if [ "${words[0]}" = arm64 ]; then root="tools/arm64/make_root.sh build/arm64-root;"; fi
+    nice -n 19 bash -c "set -euo pipefail; $(declare -f build); jobs=$jobs; $root build ${words[*]}" \
       >"build/${words[0]}-build.log" 2>&1 || rc=$?
     echo "$rc" >"build/${words[0]}-build.rc"
     [ "$rc" -eq 0 ] || exit "$rc"
@@ -107,7 +110,7 @@ done
 rm -f build/*-build.rc
 setsid bash "$PWD/tools/test.sh" --builds "${fuzz_targets[@]}" &
 builds_pid=$!
-echo "ASan+UBSan, TSan and libFuzzer builds started in the background at nice 19 (logs: build/*-build.log)"
+echo "ASan+UBSan, TSan, arm64 and libFuzzer builds started in the background at nice 19 (logs: build/*-build.log)"
 
 stage "tests: optimised build"
 ctest --preset default -j "$jobs" -LE vcan --no-tests=error
@@ -137,6 +140,12 @@ ctest --preset asan -j "$jobs" -L 'unit|dds' -E "$long_cases" --no-tests=error
 stage "ThreadSanitizer build (preset tsan, runtime-only), then its threaded tests"
 wait_build tsan
 ctest --preset tsan -j "$jobs" -L threads --no-tests=error
+
+# The arm64 cross-build (runtime-only: runtime, firmware, report, DDS) and its tests under
+# qemu-aarch64: everything but the SocketCAN tests, which need a kernel with vcan.
+stage "arm64 cross-build (preset arm64), then its tests under qemu-aarch64"
+wait_build arm64
+ctest --preset arm64 -j "$jobs" --no-tests=error
 
 # The corpora are replayed as tests of the optimised and the ASan builds (fuzz_replay.*); here each
 # libFuzzer binary runs from its corpus.

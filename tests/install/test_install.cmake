@@ -6,13 +6,26 @@ execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK}
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "cmake --install failed (${rc})")
 endif()
-foreach(f lib/cmake/pbppo-rt/pbppo-rtConfig.cmake include/pbppo-rt/runtime/policy/policy_model.hpp bin/pbppo)
+# On a cross-build (TOOLCHAIN, EMULATOR: its words joined by '|'), the consumer is cross-built with
+# the same toolchain file and runs through the emulator.
+set(expected lib/cmake/pbppo-rt/pbppo-rtConfig.cmake include/pbppo-rt/runtime/policy/policy_model.hpp
+  bin/pbppo-controller)
+if(TOOLS)
+  list(APPEND expected bin/pbppo)
+endif()
+string(REPLACE "|" ";" run "${EMULATOR}")
+set(cross "")
+if(TOOLCHAIN)
+  # The installed tree is outside the toolchain's root, where packages are searched: named.
+  set(cross -DCMAKE_TOOLCHAIN_FILE=${TOOLCHAIN} -Dpbppo-rt_DIR=${WORK}/prefix/lib/cmake/pbppo-rt)
+endif()
+foreach(f ${expected})
   if(NOT EXISTS ${WORK}/prefix/${f})
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR}/tests/install/consumer -B ${WORK}/build
-  -G ${GENERATOR} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release
+  -G ${GENERATOR} -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_PREFIX_PATH=${WORK}/prefix -DCMAKE_BUILD_TYPE=Release ${cross}
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "consumer configure failed:\n${out}\n${err}")
@@ -21,7 +34,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK}/build RESULT_VARIABLE r
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "consumer build failed:\n${out}\n${err}")
 endif()
-execute_process(COMMAND ${WORK}/build/consumer ${SOURCE_DIR}/tests/data/blobs/p3.blob
+execute_process(COMMAND ${run} ${WORK}/build/consumer ${SOURCE_DIR}/tests/data/blobs/p3.blob
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "consumer failed (${rc}):\n${out}\n${err}")
@@ -33,7 +46,7 @@ set(profile ${WORK}/prefix/share/pbppo-rt/dds_profile.xml)
 if(NOT EXISTS ${profile})
   message(FATAL_ERROR "not installed: share/pbppo-rt/dds_profile.xml")
 endif()
-execute_process(COMMAND ${WORK}/build/consumer_dds ${SOURCE_DIR}/models/auv/robot.yaml ${profile} 231 TIMEOUT 60
+execute_process(COMMAND ${run} ${WORK}/build/consumer_dds ${SOURCE_DIR}/models/auv/robot.yaml ${profile} 231 TIMEOUT 60
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "consumer_dds failed (${rc}):\n${out}\n${err}")

@@ -25,7 +25,8 @@ Result<std::unique_ptr<CanTransport>> CanTransport::Open(const robot::RobotModel
   const robot::CanMap& map = *m.can;
   std::unique_ptr<CanTransport> t(new CanTransport());
   t->first_link_ = m.transports[static_cast<std::size_t>(index)].first_link;
-  t->interfaces_ = o.interfaces;
+  // A copy moved in: copy-assigning draws a false -Wnull-dereference from GCC 12 for aarch64.
+  t->interfaces_ = std::vector<std::string>(o.interfaces);
   if (o.network != nullptr) {
     if (o.network->bus_count() != map.buses.size())
       return MakeError(ErrorCode::kMismatch, "can: the in-process network has " +

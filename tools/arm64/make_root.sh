@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# An arm64 root for cross-building and running pbppo-rt's robot side (cmake/aarch64.cmake):
+# the arm64 packages of the runtime's dependencies, with everything they depend on, unpacked into
+# DIR, beside (never into) the machine's own amd64 installation. Debian's multiarch cannot hold
+# both: libyaml-cpp-dev has no Multi-Arch field, so installing its arm64 package removes the amd64
+# one. The packages come from the machine's own apt sources; apt only downloads them here, with an
+# empty package status, so their whole dependency closure comes along (the C library included:
+# qemu-aarch64 -L DIR runs the programs with it).
+#
+# usage: tools/arm64/make_root.sh DIR     (root: adds the arm64 architecture to dpkg if missing)
+# Idempotent: a DIR made from the same package list is kept (DIR/.packages records it). The root
+# cannot be moved once made: its packages' CMake files name it.
+set -euo pipefail
+[ $# -eq 1 ] || { echo "usage: $0 DIR" >&2; exit 2; }
+dir=$1
+# The robot side's build and test dependencies (runtime-only preset; see docs/arm64.md).
+packages=(libc6-dev libstdc++-12-dev libyaml-cpp-dev libfastrtps-dev libfastcdr-dev libssl-dev
+  nlohmann-json3-dev libeigen3-dev libcli11-dev doctest-dev)
+want="${packages[*]}"
+if [ -f "$dir/.packages" ] && [ "$(cat "$dir/.packages")" = "$want" ]; then
+  echo "arm64 root: $dir (kept)"
+  exit 0
+fi
+if ! dpkg --print-foreign-architectures | grep -qx arm64; then
+  dpkg --add-architecture arm64
+  apt-get update -q >/dev/null
+elif ! apt-cache show libc6:arm64 >/dev/null 2>&1; then
+  apt-get update -q >/dev/null
+fi
+rm -rf "$dir"
+mkdir -p "$dir"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$tmp/debs/partial" "$tmp/state"
+: >"$tmp/state/status"
+apt-get -q -o APT::Architecture=arm64 -o 'APT::Architectures::=arm64' -o Dir::State::status="$tmp/state/status" \
+  -o Dir::Cache::archives="$tmp/debs" -o Debug::NoLocking=1 \
+  install --download-only -y --no-install-recommends "${packages[@]}" >"$tmp/apt.log" 2>&1 ||
+  { cat "$tmp/apt.log" >&2; echo "arm64 root: apt could not download the arm64 packages" >&2; exit 1; }
+n=0
+for deb in "$tmp"/debs/*.deb; do
+  dpkg-deb -x "$deb" "$dir"
+  n=$((n + 1))
+done
+# Links to absolute paths (libfoo.so -> /lib/aarch64-linux-gnu/libfoo.so.1) point into the root.
+find "$dir" -type l -lname '/*' -print0 | while IFS= read -r -d '' link; do
+  target=$(readlink "$link")
+  ln -sfn "$(realpath -m --relative-to="$(dirname "$link")" "$dir$target")" "$link"
+done
+# The packages' CMake files name their libraries by absolute paths (/usr/lib/aarch64-linux-gnu/...):
+# they are made to name the root's (so the root stays where it was made).
+abs=$(realpath "$dir")
+grep -rlZ '"/usr' --include='*.cmake' "$dir" | xargs -0 -r sed -i "s|\"/usr|\"$abs/usr|g"
+echo "$want" >"$dir/.packages"
+echo "arm64 root: $dir ($n packages, $(du -sh "$dir" | cut -f1))"
