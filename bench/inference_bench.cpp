@@ -1,6 +1,6 @@
 // Single-call latency of the policy forward pass on the reference shapes.
 //
-//   pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|all] [--json FILE]
+//   pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|neon|all] [--json FILE]
 //
 // Each call is timed on its own with the time-stamp counter (serialising reads), the median
 // cost of an empty timed region is subtracted, and the distribution over N calls is reported
@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
       json_path = next();
     } else {
       std::fprintf(stderr,
-                   "usage: pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|all] [--json FILE]\n");
+                   "usage: pbppo_bench_inference [--calls N] [--kernel auto|portable|avx512|neon|all] [--json FILE]\n");
       return 2;
     }
   }
@@ -170,13 +170,15 @@ int main(int argc, char** argv) {
   if (kernel_arg == "all") {
     kernels = AvailableKernels();
   } else if (kernel_arg == "auto") {
-    kernels = {KernelAvailable(Kernel::kAvx512) ? Kernel::kAvx512 : Kernel::kPortable};
-  } else if (kernel_arg == "portable") {
-    kernels = {Kernel::kPortable};
-  } else if (kernel_arg == "avx512") {
-    kernels = {Kernel::kAvx512};
+    kernels = {AutoKernel()};
+  } else if (const auto k = KernelFromName(kernel_arg)) {
+    if (!KernelAvailable(*k)) {
+      std::fprintf(stderr, "pbppo_bench_inference: --kernel %s: not supported by this CPU\n", kernel_arg.c_str());
+      return 2;
+    }
+    kernels = {*k};
   } else {
-    std::fprintf(stderr, "pbppo_bench_inference: --kernel '%s' unknown (auto, portable, avx512, all)\n",
+    std::fprintf(stderr, "pbppo_bench_inference: --kernel '%s' unknown (auto, portable, avx512, neon, all)\n",
                  kernel_arg.c_str());
     return 2;
   }

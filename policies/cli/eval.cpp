@@ -28,10 +28,9 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
   s.add_option("--episodes", o.episodes, "Episodes (default 100" + sizes + ")")->check(CLI::Range(1, 1000000));
   s.add_option("--seed", o.seed, "Seed for the initial states")->check(cli_checks::NonNegativeInteger());
   s.add_option("--kernel", o.kernel,
-               "Forward kernel: auto (AVX-512 where the CPU has it), portable (the same figures on every machine that "
-               "runs this build) "
-               "or avx512")
-      ->check(CLI::IsMember({"auto", "portable", "avx512"}));
+               "Forward kernel: auto (AVX-512 where the CPU has it, NEON on aarch64), portable (the same figures on "
+               "every machine that runs this build), avx512 or neon")
+      ->check(CLI::IsMember({"auto", "portable", "avx512", "neon"}));
   s.add_flag("--json", o.json, "Print JSON");
 }
 
@@ -60,9 +59,7 @@ int Eval(const EvalOptions& o) {
     return 2;
   }
   policy::LoadOptions load;
-  for (policy::Kernel k : {policy::Kernel::kAuto, policy::Kernel::kPortable, policy::Kernel::kAvx512}) {
-    if (o.kernel == policy::ToString(k)) load.kernel = k;
-  }
+  load.kernel = policy::KernelFromName(o.kernel).value_or(policy::Kernel::kAuto);
   auto model = policy::PolicyModel::FromFile(o.blob, load);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());

@@ -23,7 +23,7 @@ struct EvalOptions {
   }();
   int episodes = 0;  // 0: the environment's test size
   std::uint64_t seed = 7;
-  // The forward kernel: auto (AVX-512 where the CPU has it), portable or avx512. The kernels round
+  // The forward kernel: auto (AVX-512 or NEON where the CPU has it), portable, avx512 or neon. The kernels round
   // differently, so a chaotic task's deterministic episodes can differ between machines; portable
   // gives every machine the same figures.
   std::string kernel = "auto";

@@ -9,11 +9,12 @@ namespace pbppo::policy::detail {
 
 inline constexpr std::uint32_t kLanes = 16;         // floats per 64-byte vector
 inline constexpr std::uint32_t kTileVectors = 8;    // output vectors per AVX-512 tile
-inline constexpr std::uint32_t kRowFormMaxOut = 4;  // avx512: narrower layers use row dot products
+inline constexpr std::uint32_t kRowFormMaxOut = 4;  // packed: narrower layers use row dot products
 
 struct KernelLayer {
-  // portable: row-major [out][in]; avx512: tiles [tile][in][vectors*16], or for layers of at
-  // most kRowFormMaxOut outputs row-major [out][in rounded up to 16], zero-padded
+  // portable: row-major [out][in]; avx512 and neon (the packed layout): tiles
+  // [tile][in][vectors*16], or for layers of at most kRowFormMaxOut outputs row-major
+  // [out][in rounded up to 16], zero-padded
   const float* weight;
   const float* bias;  // [out_pad], zero beyond out
   std::uint32_t in;
@@ -55,5 +56,6 @@ inline constexpr std::uint32_t kBadAction = 2u;
 std::uint32_t ForwardPortable(const ModelView& m, const DataView& d) noexcept;
 std::uint32_t ForwardAvx512(const ModelView& m, const DataView& d) noexcept;
 bool CpuHasAvx512() noexcept;
+std::uint32_t ForwardNeon(const ModelView& m, const DataView& d) noexcept;  // aarch64 (forward_neon.cpp)
 
 }  // namespace pbppo::policy::detail

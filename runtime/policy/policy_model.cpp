@@ -47,7 +47,19 @@ void PackRows(const DenseLayer& l, float* dst) {
 }  // namespace
 
 const char* ToString(Kernel k) noexcept {
-  return EnumName(k, {"auto", "portable", "avx512"});
+  return EnumName(k, {"auto", "portable", "avx512", "neon"});
+}
+
+std::optional<Kernel> KernelFromName(std::string_view name) noexcept {
+  for (Kernel k : {Kernel::kAuto, Kernel::kPortable, Kernel::kAvx512, Kernel::kNeon})
+    if (name == ToString(k)) return k;
+  return std::nullopt;
+}
+
+Kernel AutoKernel() noexcept {
+  if (KernelAvailable(Kernel::kAvx512)) return Kernel::kAvx512;
+  if (KernelAvailable(Kernel::kNeon)) return Kernel::kNeon;
+  return Kernel::kPortable;
 }
 
 bool KernelAvailable(Kernel k) noexcept {
@@ -55,6 +67,12 @@ bool KernelAvailable(Kernel k) noexcept {
     case Kernel::kAuto:
     case Kernel::kPortable: return true;
     case Kernel::kAvx512: return detail::CpuHasAvx512();
+    case Kernel::kNeon:
+#if defined(__aarch64__)
+      return true;  // Advanced SIMD is part of every ARMv8-A CPU
+#else
+      return false;
+#endif
   }
   return false;
 }
@@ -62,6 +80,7 @@ bool KernelAvailable(Kernel k) noexcept {
 std::vector<Kernel> AvailableKernels() {
   std::vector<Kernel> v{Kernel::kPortable};
   if (KernelAvailable(Kernel::kAvx512)) v.push_back(Kernel::kAvx512);
+  if (KernelAvailable(Kernel::kNeon)) v.push_back(Kernel::kNeon);
   return v;
 }
 
@@ -78,7 +97,8 @@ const char* ToString(ForwardStatus s) noexcept {
 Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOptions& options) {
   if (auto st = ValidateSpec(spec, options.limits); !st) return st.error();
   Kernel kernel = options.kernel;
-  if (kernel == Kernel::kAuto) kernel = KernelAvailable(Kernel::kAvx512) ? Kernel::kAvx512 : Kernel::kPortable;
+  if (kernel == Kernel::kAuto) kernel = AutoKernel();
+  const bool packed = kernel == Kernel::kAvx512 || kernel == Kernel::kNeon;  // kernel_view.hpp's packed layout
   if (!KernelAvailable(kernel)) {
     return MakeError(ErrorCode::kUnsupported,
                      std::string("kernel ") + ToString(kernel) + " is not supported by this CPU");
@@ -99,7 +119,7 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
     const std::uint32_t lp = Pad(l.out);
     max_pad = std::max(max_pad, lp);
     std::size_t floats = static_cast<std::size_t>(l.out) * l.in;
-    if (kernel == Kernel::kAvx512) {
+    if (packed) {
       floats = l.out <= detail::kRowFormMaxOut ? static_cast<std::size_t>(l.out) * Pad(l.in)
                                                : static_cast<std::size_t>(lp) * l.in;
     }
@@ -121,9 +141,9 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   for (std::size_t li = 0; li < spec.layers.size(); ++li) {
     const DenseLayer& l = spec.layers[li];
     const std::uint32_t lp = Pad(l.out);
-    if (kernel == Kernel::kAvx512 && l.out <= detail::kRowFormMaxOut) {
+    if (packed && l.out <= detail::kRowFormMaxOut) {
       PackRows(l, at(off_w[li]));
-    } else if (kernel == Kernel::kAvx512) {
+    } else if (packed) {
       PackTiles(l, lp, at(off_w[li]));
     } else {
       copy(l.weight, at(off_w[li]));
@@ -192,8 +212,12 @@ Result<PolicyData> MakePolicyData(const PolicyModel& model) {
 ForwardStatus Forward(const PolicyModel& model, PolicyData& data) noexcept {
   if (data.model_ != &model) return ForwardStatus::kWrongModel;
   ++data.forward_calls;
-  const std::uint32_t bad = model.kernel() == Kernel::kAvx512 ? detail::ForwardAvx512(model.view(), data.view_)
-                                                              : detail::ForwardPortable(model.view(), data.view_);
+  std::uint32_t bad = 0;
+  switch (model.kernel()) {
+    case Kernel::kAvx512: bad = detail::ForwardAvx512(model.view(), data.view_); break;
+    case Kernel::kNeon: bad = detail::ForwardNeon(model.view(), data.view_); break;
+    default: bad = detail::ForwardPortable(model.view(), data.view_); break;
+  }
   if (bad & detail::kBadObservation) {
     ++data.nonfinite_observations;
     return ForwardStatus::kNonFiniteObservation;

@@ -3,8 +3,10 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "runtime/core/aligned_arena.hpp"
@@ -15,10 +17,14 @@
 
 namespace pbppo::policy {
 
-// Which forward implementation a model runs. kAuto picks the fastest this CPU supports.
-enum class Kernel : std::uint8_t { kAuto, kPortable, kAvx512 };
+// Which forward implementation a model runs. kAuto picks the fastest this CPU supports (AutoKernel):
+// avx512 on x86-64 with AVX-512 F/DQ/BW/VL, neon on aarch64, portable otherwise.
+enum class Kernel : std::uint8_t { kAuto, kPortable, kAvx512, kNeon };
 const char* ToString(Kernel k) noexcept;
+// The kernel of a name ToString gives ("auto", "portable", "avx512", "neon"); nullopt for another.
+std::optional<Kernel> KernelFromName(std::string_view name) noexcept;
 bool KernelAvailable(Kernel k) noexcept;
+Kernel AutoKernel() noexcept;
 std::vector<Kernel> AvailableKernels();
 
 struct LoadOptions {

@@ -78,7 +78,8 @@ TEST_CASE("every kernel reproduces the golden vectors within the float32 error b
     const GoldenVectors g = MakeGoldenVectors(spec, 64, 5);
     for (Kernel k : AvailableKernels()) {
       CAPTURE(shape.name);
-      CAPTURE(ToString(k));
+      const std::string kernel_name = ToString(k);
+      CAPTURE(kernel_name);
       auto model = PolicyModel::FromSpec(spec, {.kernel = k});
       REQUIRE(model.ok());
       REQUIRE(model->kernel() == k);
@@ -117,7 +118,8 @@ TEST_CASE("leaky_relu with random slopes in [0, 1]: every kernel within the boun
       const GoldenVectors g = MakeGoldenVectors(spec, 48, seed + 10);
       for (Kernel k : AvailableKernels()) {
         CAPTURE(specs);
-        CAPTURE(ToString(k));
+        const std::string kernel_name = ToString(k);
+        CAPTURE(kernel_name);
         auto model = PolicyModel::FromSpec(spec, {.kernel = k});
         REQUIRE(model.ok());
         const Deviation d = Check(*model, g);
@@ -148,7 +150,8 @@ TEST_CASE("leaky_relu is x > 0 ? x : alpha * x exactly, on every kernel") {
     std::fill(spec.action_high.begin(), spec.action_high.end(), 1e30f);
     for (Kernel k : AvailableKernels()) {
       CAPTURE(n);
-      CAPTURE(ToString(k));
+      const std::string kernel_name = ToString(k);
+      CAPTURE(kernel_name);
       const auto run = pbppo::test::OnKernel(spec, k);
       const PolicyModel* model = &run->model;
       PolicyData* data = &*run->data;
@@ -185,27 +188,35 @@ TEST_CASE("golden files written by the writer are reproduced from the files") {
   }
 }
 
-TEST_CASE("shipped reference blobs load and match their golden files (format stability)") {
-  const std::string dir = pbppo::test::SourcePath("tests/data/blobs");
+TEST_CASE("shipped and reference blobs: every kernel within each golden row's bound and under 1e-5 on every row") {
   int seen = 0;
-  for (const char* name : {"p1", "p2", "p3"}) {
-    const std::string blob = dir + "/" + name + ".blob";
+  for (const char* rel : {"tests/data/blobs/p1.blob", "tests/data/blobs/p2.blob", "tests/data/blobs/p3.blob",
+                          "policies/frozen/auv_nav/auv_nav.blob", "policies/frozen/quadruped_walk/flat.blob",
+                          "policies/frozen/quadruped_walk/mixed.blob"}) {
+    const std::string blob = pbppo::test::SourcePath(rel);
     auto g = ReadGoldenFile(GoldenPathFor(blob));
     REQUIRE_MESSAGE(g.ok(), g.error().message);
     for (Kernel k : AvailableKernels()) {
+      const std::string blob_name = rel;
+      CAPTURE(blob_name);
+      const std::string kernel_name = ToString(k);
+      CAPTURE(kernel_name);
       auto model = PolicyModel::FromFile(blob, {.kernel = k});
       REQUIRE_MESSAGE(model.ok(), model.error().message);
-      Check(*model, *g);
+      const Deviation d = Check(*model, *g);
+      MESSAGE(rel << " " << ToString(k) << ": max |error| " << d.worst_abs << ", " << d.worst_ratio << " of the bound");
+      CHECK(d.worst_abs < 1e-5);
     }
     ++seen;
   }
-  CHECK(seen == 3);
+  CHECK(seen == 6);
 }
 
 TEST_CASE("non-finite observations skip inference and are counted") {
   const PolicySpec spec = MakeRandomSpec({24, 64, 64, 2}, Activation::kTanh, 3);
   for (Kernel k : AvailableKernels()) {
-    CAPTURE(ToString(k));
+    const std::string kernel_name = ToString(k);
+    CAPTURE(kernel_name);
     const auto run = pbppo::test::OnKernel(spec, k);
     const PolicyModel* model = &run->model;
     PolicyData* data = &*run->data;
@@ -275,5 +286,18 @@ TEST_CASE("an unavailable kernel is refused at load, not at run time") {
   }
   auto m = PolicyModel::FromSpec(spec);
   REQUIRE(m.ok());
+  CHECK(m->kernel() == AutoKernel());
+  // The packed kernel of this architecture is the automatic choice; the other is refused.
+#if defined(__aarch64__)
+  CHECK(m->kernel() == Kernel::kNeon);
+  CHECK_FALSE(KernelAvailable(Kernel::kAvx512));
+#else
   CHECK(m->kernel() == (KernelAvailable(Kernel::kAvx512) ? Kernel::kAvx512 : Kernel::kPortable));
+  auto neon = PolicyModel::FromSpec(spec, {.kernel = Kernel::kNeon});
+  REQUIRE_FALSE(neon.ok());
+  CHECK(neon.error().message == "kernel neon is not supported by this CPU");
+#endif
+  CHECK(KernelFromName("neon") == Kernel::kNeon);
+  CHECK(KernelFromName("avx512") == Kernel::kAvx512);
+  CHECK_FALSE(KernelFromName("sse").has_value());
 }

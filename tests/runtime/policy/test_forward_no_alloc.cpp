@@ -38,7 +38,8 @@ TEST_CASE("100,000 forward calls allocate nothing") {
                          Net{{24, 64, 64, 2}, Activation::kLeakyRelu}}) {
     const PolicySpec spec = MakeRandomSpec(net.widths, net.act, 2);
     for (Kernel k : AvailableKernels()) {
-      CAPTURE(ToString(k));
+      const std::string kernel_name = ToString(k);
+      CAPTURE(kernel_name);
       const auto run = pbppo::test::OnKernel(spec, k);
       const PolicyModel* model = &run->model;
       PolicyData* data = &*run->data;

@@ -16,11 +16,14 @@ using pbppo::test::ScratchDir;
 using pbppo::test::SourcePath;
 
 TEST_CASE("self-test: the shipped and test blobs pass their golden vectors on every kernel") {
-  for (const char* rel : {"policies/frozen/auv_nav/auv_nav.blob", "tests/data/blobs/p1.blob",
+  for (const char* rel : {"policies/frozen/auv_nav/auv_nav.blob", "policies/frozen/quadruped_walk/flat.blob",
+                          "policies/frozen/quadruped_walk/mixed.blob", "tests/data/blobs/p1.blob",
                           "tests/data/blobs/p2.blob", "tests/data/blobs/p3.blob"}) {
     for (Kernel k : AvailableKernels()) {
-      CAPTURE(rel);
-      CAPTURE(ToString(k));
+      const std::string blob_name = rel;
+      CAPTURE(blob_name);
+      const std::string kernel_name = ToString(k);
+      CAPTURE(kernel_name);
       LoadOptions o;
       o.kernel = k;
       auto model = PolicyModel::FromFile(SourcePath(rel), o);
