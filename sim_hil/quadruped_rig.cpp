@@ -82,7 +82,7 @@ bool QuadrupedRig::Tick() noexcept {
   const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
   const double* v = b.velocity_mps;
   RigSample t;
-  t.t_s = static_cast<float>(static_cast<double>(tick_ + 1) * model_.tick_period_s);
+  t.t_s = static_cast<double>(tick_ + 1) * model_.tick_period_s;
   t.x_m = static_cast<float>(b.position_m[0]);
   t.y_m = static_cast<float>(b.position_m[1]);
   t.z_m = static_cast<float>(b.position_m[2] - p.TerrainHeightAt(b.position_m[0], b.position_m[1]));
@@ -98,8 +98,7 @@ bool QuadrupedRig::Tick() noexcept {
             : 0.0;
     (k == 0 ? t.cmd_vx : k == 1 ? t.cmd_vy : t.cmd_yaw_rate) = static_cast<float>(c);
   }
-  t.schedule_phase =
-      static_cast<std::int8_t>(schedule_->schedule().PhaseAt(static_cast<double>(tick_) * model_.tick_period_s));
+  t.schedule_phase = schedule_->schedule().PhaseAt(static_cast<double>(tick_) * model_.tick_period_s);
   t.loop_phase = static_cast<std::uint8_t>(loop_->phase());
   t.mode = static_cast<std::uint8_t>(loop_->supervisor().mode);
   t.feet = static_cast<std::uint8_t>(p.foot_contacts());
@@ -123,8 +122,12 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
 }
 
 RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
+  return ReportOfTrace(trace_, schedule_->schedule(), settle_s, by_command);
+}
+
+RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedule& s, double settle_s,
+                        bool by_command) {
   RigReport rep;
-  const loop::Schedule& s = schedule_->schedule();
   if (!by_command)
     for (const loop::SchedulePhase& ph : s.phases) {
       PhaseTracking t;
@@ -133,13 +136,13 @@ RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
       t.end_s = ph.start_s + ph.duration_s;
       rep.phases.push_back(t);
     }
-  for (const RigSample& x : trace_) {
+  for (const RigSample& x : trace) {
     // A fall: tilted beyond 60 degrees, or the body on the ground while the controller still
     // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state).
     const bool stopped = x.mode >= static_cast<std::uint8_t>(safety::Mode::kSafeStop);
     if (!rep.fell && ((x.body_contact && !stopped) || x.tilt_rad > 1.047f)) {
       rep.fell = true;
-      rep.fell_at_s = static_cast<double>(x.t_s);
+      rep.fell_at_s = x.t_s;
     }
     std::size_t phase = 0;
     if (by_command) {
@@ -150,18 +153,18 @@ RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
           c[2] != rep.phases.back().command[2]) {
         PhaseTracking t;
         t.name = "command " + std::to_string(rep.phases.size() + 1);
-        t.start_s = static_cast<double>(x.t_s);
+        t.start_s = x.t_s;
         std::copy(c, c + 3, t.command);
         rep.phases.push_back(t);
       }
-      rep.phases.back().end_s = static_cast<double>(x.t_s);
+      rep.phases.back().end_s = x.t_s;
       phase = rep.phases.size() - 1;
     } else {
       if (x.schedule_phase < 0) continue;
       phase = static_cast<std::size_t>(x.schedule_phase);
     }
     PhaseTracking& t = rep.phases[phase];
-    if (static_cast<double>(x.t_s) < t.start_s + settle_s) continue;
+    if (x.t_s < t.start_s + settle_s) continue;
     const double cmd[3] = {static_cast<double>(x.cmd_vx), static_cast<double>(x.cmd_vy),
                            static_cast<double>(x.cmd_yaw_rate)};
     const double meas[3] = {static_cast<double>(x.vx_mps), static_cast<double>(x.vy_mps),
@@ -180,9 +183,8 @@ RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
     }
     rep.max_planar_error = std::max({rep.max_planar_error, t.mean_abs_error[0], t.mean_abs_error[1]});
   }
-  for (std::size_t i = 1; i < trace_.size(); ++i)
-    rep.distance_m +=
-        static_cast<double>(std::hypot(trace_[i].x_m - trace_[i - 1].x_m, trace_[i].y_m - trace_[i - 1].y_m));
+  for (std::size_t i = 1; i < trace.size(); ++i)
+    rep.distance_m += static_cast<double>(std::hypot(trace[i].x_m - trace[i - 1].x_m, trace[i].y_m - trace[i - 1].y_m));
   return rep;
 }
 
@@ -194,11 +196,11 @@ Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& pat
   for (std::size_t i = 0; i < trace.size(); i += std::max<std::uint32_t>(every, 1)) {
     const RigSample& s = trace[i];
     std::snprintf(line, sizeof line, "%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%d,%d,%d,%d,%d\n",
-                  static_cast<double>(s.t_s), static_cast<double>(s.x_m), static_cast<double>(s.y_m),
-                  static_cast<double>(s.z_m), static_cast<double>(s.yaw_rad), static_cast<double>(s.vx_mps),
-                  static_cast<double>(s.vy_mps), static_cast<double>(s.yaw_rate_radps), static_cast<double>(s.cmd_vx),
-                  static_cast<double>(s.cmd_vy), static_cast<double>(s.cmd_yaw_rate), static_cast<double>(s.tilt_rad),
-                  s.schedule_phase, s.loop_phase, s.mode, s.feet, s.body_contact ? 1 : 0);
+                  s.t_s, static_cast<double>(s.x_m), static_cast<double>(s.y_m), static_cast<double>(s.z_m),
+                  static_cast<double>(s.yaw_rad), static_cast<double>(s.vx_mps), static_cast<double>(s.vy_mps),
+                  static_cast<double>(s.yaw_rate_radps), static_cast<double>(s.cmd_vx), static_cast<double>(s.cmd_vy),
+                  static_cast<double>(s.cmd_yaw_rate), static_cast<double>(s.tilt_rad), s.schedule_phase, s.loop_phase,
+                  s.mode, s.feet, s.body_contact ? 1 : 0);
     text += line;
   }
   return policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});

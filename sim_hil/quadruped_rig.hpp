@@ -49,12 +49,12 @@ struct RigOptions {
 
 // One tick of the trace.
 struct RigSample {
-  float t_s = 0;
+  double t_s = 0;                                    // double: a float would lose the tick after a day
   float x_m = 0, y_m = 0, z_m = 0, yaw_rad = 0;      // base, world
   float vx_mps = 0, vy_mps = 0, yaw_rate_radps = 0;  // base frame
   float cmd_vx = 0, cmd_vy = 0, cmd_yaw_rate = 0;    // the command the controller holds
   float tilt_rad = 0;                                // from upright
-  std::int8_t schedule_phase = -1;                   // -1: after the schedule
+  std::int32_t schedule_phase = -1;                  // -1: after the schedule
   std::uint8_t loop_phase = 0, mode = 0;
   std::uint8_t feet = 0;  // contact bits
   bool body_contact = false;
@@ -124,6 +124,11 @@ class QuadrupedRig {
   std::uint64_t tick_ = 0;
   loop::TickStatus status_ = loop::TickStatus::kRunning;
 };
+
+// The report of a trace: per phase of `schedule` (`by_command`: per run of one command in force)
+// the mean |velocity error| after `settle_s`, falls and distance (QuadrupedRig::Report).
+RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedule& schedule, double settle_s,
+                        bool by_command);
 
 // Writes the trace as CSV (one row per `every` ticks); errors name the path.
 Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& path, std::uint32_t every = 10);
