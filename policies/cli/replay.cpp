@@ -28,7 +28,8 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
 }
 
 int Replay(const ReplayOptions& o) {
-  auto log = loop::ReadLog(o.log);
+  // A recording cut short (a full disk, a crash) replays up to its last whole record.
+  auto log = loop::ReadLog(o.log, loop::LogTail::kAcceptCut);
   if (!log) return Fail(log.error().message);
   auto robot = robot::LoadRobotModel(o.robot);
   if (!robot) return Fail(robot.error().message);
@@ -53,6 +54,10 @@ int Replay(const ReplayOptions& o) {
               static_cast<unsigned long long>(r->ticks), static_cast<unsigned long long>(r->compared),
               static_cast<unsigned long long>(r->mismatches), r->mismatches != 0 ? "; first: " : "",
               r->first_mismatch.c_str());
+  if (!log->complete)
+    std::printf("replay: %s ends early, at offset %zu: %s; the %zu whole records before it were replayed\n",
+                o.log.c_str(), log->cut_at, log->cut_reason.c_str(), log->records.size());
+  if (r->compared == 0) return Fail(o.log + ": no command to compare (no whole tick recorded)");
   return r->mismatches == 0 ? 0 : 1;
 }
 

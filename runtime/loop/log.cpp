@@ -372,7 +372,7 @@ Status ParseRecord(Reader& r, const LogHeader& h, const std::string& w, LogRecor
 
 }  // namespace
 
-Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin) {
+Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin, LogTail tail) {
   Log log;
   Reader r(bytes, 0, origin);
   if (auto st = r.Need(16, "header", "magic"); !st) return st.error();
@@ -394,16 +394,31 @@ Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& ori
   Reader hr(payload, payload_at, origin);
   if (auto st = ParseHeader(hr, log.header); !st) return st.error();
   if (hr.left() != 0) return hr.Fail(hr.offset(), "header", std::to_string(hr.left()) + " bytes after the last field");
+  // A record the file ends inside: with kAcceptCut the log ends before it.
+  const bool accept_cut = tail == LogTail::kAcceptCut;
+  auto cut = [&](std::size_t at, const std::string& what, std::size_t needs) {
+    log.cut_at = at;
+    log.cut_reason = "the file ends inside " + what + ": it needs " + std::to_string(needs) + " bytes, " +
+                     std::to_string(bytes.size() - at) + " are left";
+  };
   for (std::size_t k = 0; r.left() > 0; ++k) {
     LogRecord rec;
     rec.offset = r.offset();
     if (log.complete) return r.Fail(rec.offset, "record " + std::to_string(k), "after the end record");
+    if (accept_cut && r.left() < 5) {
+      cut(rec.offset, "record " + std::to_string(k), 5);
+      break;
+    }
     PBPPO_GET(type, r, std::uint8_t, "record " + std::to_string(k), "type");
     rec.type = type;
     const std::string w = "record " + std::to_string(k) + " (" + TypeName(type) + ")";
     const std::size_t len_at = r.offset();
     PBPPO_GET(len, r, std::uint32_t, w, "length");
     if (len > (1u << 24)) return r.Fail(len_at, w, "field 'length': " + std::to_string(len) + " is above 16 MiB");
+    if (accept_cut && r.left() < std::size_t{len} + 4) {
+      cut(rec.offset, w, 5 + std::size_t{len} + 4);
+      break;
+    }
     if (auto st = r.Need(std::size_t{len} + 4, w, "payload"); !st) return st.error();
     const auto body = r.Take(len);
     const std::uint32_t stored = *r.Get<std::uint32_t>(w, "crc");
@@ -413,18 +428,23 @@ Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& ori
     if (auto st = ParseRecord(rr, log.header, w, rec, log); !st) return st.error();
     if (type != kEnd) log.records.push_back(std::move(rec));
   }
-  if (!log.complete) return r.Fail(bytes.size(), "end", "no end record: the log is truncated");
+  if (!log.complete && !accept_cut) return r.Fail(bytes.size(), "end", "no end record: the log is truncated");
+  if (!log.complete && log.cut_reason.empty()) {
+    log.cut_at = bytes.size();
+    log.cut_reason = log.records.empty() ? "no record and no end record after the header"
+                                         : "no end record after record " + std::to_string(log.records.size() - 1);
+  }
   return log;
 }
 
 #undef PBPPO_COUNT
 #undef PBPPO_GET
 
-Result<Log> ReadLog(const std::string& path) {
+Result<Log> ReadLog(const std::string& path, LogTail tail) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  return ParseLog(bytes, path);
+  return ParseLog(bytes, path, tail);
 }
 
 }  // namespace pbppo::loop

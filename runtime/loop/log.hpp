@@ -115,12 +115,22 @@ struct Log {
   std::vector<LogRecord> records;
   std::uint64_t dropped = 0;
   bool complete = false;  // an end record closes it
+  // A log read with LogTail::kAcceptCut that ends without its end record: where its whole records
+  // end (an offset in the file) and why the rest is not there ("the file ends inside record 1360
+  // (inputs): it needs 95 bytes, 41 are left", "no end record after record 1359").
+  std::size_t cut_at = 0;
+  std::string cut_reason;
 };
+
+// How a log that ends without its end record is read: refused (kStrict), or (kAcceptCut) read up
+// to its last whole record, as a recording cut short by a full disk or a crash leaves it. Damage
+// before the end (a record whose CRC fails, a field out of range) is refused either way.
+enum class LogTail : std::uint8_t { kStrict, kAcceptCut };
 
 // Parses a whole log. `origin` names it in errors: "run.log: offset 312: record 5 (inputs): field
 // 'values': truncated (needs 312 bytes, 40 left)", "...: CRC 0x1234abcd does not match 0x...".
 // With a model, the counts are checked against it too (a log of another robot is refused).
-Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin);
-Result<Log> ReadLog(const std::string& path);
+Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin, LogTail tail = LogTail::kStrict);
+Result<Log> ReadLog(const std::string& path, LogTail tail = LogTail::kStrict);
 
 }  // namespace pbppo::loop

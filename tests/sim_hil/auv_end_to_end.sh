@@ -10,7 +10,8 @@
 #      then holds a safe-stop, and its counters show it;
 #   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause;
 #   6. record and replay: a lock-step run recorded (--record) replays (pbppo replay) to
-#      bit-identical commands; a truncated or corrupted log is refused naming the offset.
+#      bit-identical commands; a log cut short replays up to its last whole record and says
+#      where it ends; a log cut inside its header or corrupted is refused naming the offset.
 # usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
@@ -131,16 +132,23 @@ expect "$work/rec.ctl.log" "log: .*run.log, [0-9]+ records, 0 dropped"
   fail "replay: $(cat "$work/replay.log")"
 expect "$work/replay.log" "replay: .*run.log: [0-9]+ ticks, [0-9]+ commands compared, 0 different$"
 [ "$(wc -l <"$work/replayed.txt")" -gt 290 ] || fail "replay: short output"
-head -c 1000 "$work/run.log" >"$work/truncated.log"
+# A recording cut short (a full disk): its whole records replay, and the replay says where it ends.
+head -c 20000 "$work/run.log" >"$work/cut.log"
+"$pbppo" replay "$work/cut.log" --robot "$robot" --policy "$blob" >"$work/replay_cut.log" 2>&1 ||
+  fail "a log cut short: $(cat "$work/replay_cut.log")"
+expect "$work/replay_cut.log" "replay: .*cut.log: [0-9]+ ticks, [0-9]+ commands compared, 0 different$"
+expect "$work/replay_cut.log" "cut.log ends early, at offset [0-9]+: the file ends inside record [0-9]+"
+# One cut inside its header has nothing to replay: refused.
+head -c 40 "$work/run.log" >"$work/truncated.log"
 rc=0
 "$pbppo" replay "$work/truncated.log" --robot "$robot" --policy "$blob" >"$work/replay2.log" 2>&1 || rc=$?
 [ "$rc" -eq 1 ] || fail "a truncated log: exit $rc"
-expect "$work/replay2.log" "truncated.log: offset [0-9]+: (record [0-9]+|end)"
+expect "$work/replay2.log" "truncated.log: offset [0-9]+: header"
 cp "$work/run.log" "$work/corrupt.log"
 printf '\x55' | dd of="$work/corrupt.log" bs=1 seek=3000 conv=notrunc status=none
 rc=0
 "$pbppo" replay "$work/corrupt.log" --robot "$robot" --policy "$blob" >"$work/replay3.log" 2>&1 || rc=$?
 [ "$rc" -eq 1 ] || fail "a corrupted log: exit $rc"
 expect "$work/replay3.log" "corrupt.log: offset [0-9]+: record [0-9]+"
-cat "$work/replay.log" "$work/replay2.log" "$work/replay3.log" | sed 's/^/   /'
+cat "$work/replay.log" "$work/replay_cut.log" "$work/replay2.log" "$work/replay3.log" | sed 's/^/   /'
 echo "auv end to end: all checks passed"

@@ -171,3 +171,51 @@ TEST_CASE("log: a truncated or corrupt log is refused naming the offset and the 
   CHECK(Refusal({b.begin(), b.begin() + static_cast<long>(third)}) ==
         "run.log: offset " + std::to_string(third) + ": end: no end record: the log is truncated");
 }
+
+TEST_CASE("log: a log cut short (a full disk) is read up to its last whole record, and those replay bit for bit") {
+  const Recorded r = Record("cut");
+  const std::vector<std::uint8_t>& b = r.bytes;
+  auto whole = loop::ParseLog(b, "run.log");
+  REQUIRE(whole.ok());
+  const std::size_t n = whole->records.size();
+  REQUIRE(n > 100);
+  const robot::RobotModel& m = test::AuvRobot();
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE(source.ok());
+  // Cut inside record 100's payload, inside its length field, and at its start (a boundary).
+  const std::size_t at = whole->records[100].offset;
+  for (std::size_t extra : {std::size_t{12}, std::size_t{3}, std::size_t{0}}) {
+    CAPTURE(extra);
+    const std::vector<std::uint8_t> cut(b.begin(), b.begin() + static_cast<long>(at + extra));
+    // Read strictly, it is refused as before.
+    CHECK_FALSE(loop::ParseLog(cut, "run.log").ok());
+    auto log = loop::ParseLog(cut, "run.log", loop::LogTail::kAcceptCut);
+    REQUIRE_MESSAGE(log.ok(), log.error().message);
+    CHECK_FALSE(log->complete);
+    CHECK(log->records.size() == 100);
+    CHECK(log->cut_at == (extra == 0 ? cut.size() : at));
+    if (extra == 0) {
+      CHECK(log->cut_reason == "no end record after record 99");
+    } else {
+      // Inside the length field the record's type is not read yet; inside the payload it is.
+      const std::string type = whole->records[100].type == 1 ? "inputs" : "outputs";
+      const std::string where = extra == 3 ? "record 100:" : "record 100 (" + type + "):";
+      CHECK(log->cut_reason.rfind("the file ends inside " + where, 0) == 0);
+      CHECK(log->cut_reason.find(std::to_string(cut.size() - at) + " are left") != std::string::npos);
+    }
+    auto replay = loop::Replay(m, *log, source->get(), r.source_hash);
+    REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+    CHECK(replay->compared > 40);
+    CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+  }
+  // Damage before the end is refused even when a cut is accepted.
+  auto bad = b;
+  bad[whole->records[50].offset + 9] ^= 0x01;
+  const std::vector<std::uint8_t> bad_cut(bad.begin(), bad.begin() + static_cast<long>(at + 12));
+  auto refused = loop::ParseLog(bad_cut, "run.log", loop::LogTail::kAcceptCut);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message.find("record 50 (") != std::string::npos);
+  CHECK(refused.error().message.find("CRC does not match the record") != std::string::npos);
+}
