@@ -440,7 +440,7 @@ endif()
 run(0 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --episodes 1)
 expect_in("${OUT}" " kernel")
 run(2 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --kernel sse9)
-expect_in("${ERR}" "--kernel: sse9 not in {auto,portable,avx512}")
+expect_in("${ERR}" "--kernel: sse9 not in {auto,portable,avx512,neon}")
 run(2 ${PBPPO} eval ${WORK}/hopper/policy.blob --env hopper --contact-forces zero)
 expect_in("${ERR}" "--contact-forces: only ant has contact forces to leave out, not 'hopper'")
 
