@@ -1,12 +1,12 @@
 // pbppo-controller: the controller program of every robot, over runtime/loop.
 //
-//   pbppo-controller --robot models/<robot>/robot.yaml [--policy BLOB [--commands SCHEDULE] | --trajectory FILE]
+//   pbppo-controller --robot NAME|ROBOT.yaml [--policy BLOB [--commands SCHEDULE] | --trajectory FILE | --safe-stop]
 //       [--lockstep [--lockstep-timeout-ms MS]] [--lockstep-wait-ms MS] [--period-ms MS]
 //       DDS:  [--domain D] [--dds-profile FILE] [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]
 //             [--peer-timeout-s S] [--lost-after-s S] [--writer-poll-us N] [--status-every-s S]
 //       CAN:  [--can IF0,IF1] [--candump FILE] [--receive-all]
 //       [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
-//       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--quiet]
+//       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--kernel K] [--quiet] [--inject-stall-at-tick N]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it
 // was trained for another layout, naming the first difference) and runs the blob's golden vectors
@@ -20,15 +20,20 @@
 // (--lockstep; the stream's end field ends the run), or each tick waiting for what the CAN
 // transport is owed (--lockstep-wait-ms). A status thread publishes the robot's status messages.
 // SIGINT/SIGTERM, --ticks or --duration (seconds of ticks: in lock-step, simulated time) stop:
-// motors are damped and switched off; a robot without motors sends its stop command.
+// motors are damped and switched off; a robot without motors sends its stop command. --safe-stop
+// does only that (what a service runs after the controller ended, docs/service.md). Under a
+// service manager ($NOTIFY_SOCKET) it reports ready once the robot runs and feeds the watchdog only
+// while the loop's tick count advances (runtime/rt/service_notify.hpp).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -41,7 +46,9 @@
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
+#include "runtime/policy/kernel_option.hpp"
 #include "runtime/rt/rt_setup.hpp"
+#include "runtime/rt/service_notify.hpp"
 #include "runtime/rt/tick_profiler.hpp"
 #include "runtime/transport/bindings.hpp"
 
@@ -51,13 +58,15 @@ using namespace pbppo;
 
 struct Options {
   std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump, commands;
+  std::string kernel = "auto";
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
+  bool safe_stop = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
   std::int64_t writer_poll_us = -1;
-  std::uint64_t max_ticks = 0;
+  std::uint64_t max_ticks = 0, stall_at_tick = 0;
 };
 
 int Fail(const std::string& msg, int rc = 2) {
@@ -66,7 +75,7 @@ int Fail(const std::string& msg, int rc = 2) {
 }
 
 void AddOptions(CLI::App& app, Options& o) {
-  app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)")->required();
+  app.add_option("--robot", o.robot, "The robot: an installed robot's name (auv) or its robot.yaml")->required();
   app.add_option("--policy", o.policy, "Frozen policy blob (its golden vectors beside it)");
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
   app.add_option("--commands", o.commands,
@@ -113,6 +122,14 @@ void AddOptions(CLI::App& app, Options& o) {
       ->check(CLI::Range(0.05, 3600.0));
   app.add_flag("--quiet", o.quiet, "No progress line");
   app.add_flag("--skip-self-test", o.skip_self_test, "Arm without running the blob's golden vectors");
+  policy::AddKernelOption(app, o.kernel);
+  app.add_flag("--safe-stop", o.safe_stop,
+               "Only stop the robot: damp its motors, then switch them off (a robot without motors: send its "
+               "stop command), then exit. What the service runs after the controller ended, however it ended");
+  app.add_option("--inject-stall-at-tick", o.stall_at_tick,
+                 "Fault injection (the watchdog's test): the control loop stops ticking at this tick while the rest "
+                 "of the process goes on (0: never)")
+      ->check(pbppo::cli_checks::NonNegativeInteger());
   app.add_option("--writer-poll-us", o.writer_poll_us,
                  "DDS writer threads poll for samples every N us, so the tick makes no system call (0: the "
                  "tick wakes them; default: 200 free-running, 0 in lock-step)")
@@ -171,14 +188,41 @@ Result<Transports> OpenTransports(const robot::RobotModel& robot, const Options&
     if (!o.quiet && !t.dds.messages.empty())
       std::fprintf(stderr, "pbppo-controller: transport '%s' on DDS domain %d (%s naming)%s\n", t.name.c_str(),
                    o.domain, dds::ToString(*naming), t.dds.wait_for_peer ? ", waiting for its peer" : "");
-    if (auto st = (*opened)->Connect(static_cast<std::int64_t>(o.peer_timeout_s * 1e9)); !st)
-      return MakeError(st.error().code, st.error().message + " (--peer-timeout-s)");
+    // --safe-stop sends its stop whether or not the peer is there (it may be what stopped).
+    const double wait_s = o.safe_stop ? std::min(o.peer_timeout_s, 2.0) : o.peer_timeout_s;
+    if (auto st = (*opened)->Connect(static_cast<std::int64_t>(wait_s * 1e9)); !st) {
+      if (!o.safe_stop) return MakeError(st.error().code, st.error().message + " (--peer-timeout-s)");
+      std::fprintf(stderr, "pbppo-controller: --safe-stop: %s; sending the stop anyway\n", st.error().message.c_str());
+    }
     ts.all.push_back(opened->get());
     ts.specs.push_back(&t);
     ts.owned.push_back(std::move(*opened));
   }
   return ts;
 }
+
+// --inject-stall-at-tick: the inner clock's ticks until that tick, then none until Stop().
+class StallingClock final : public rt::TickClock {
+ public:
+  StallingClock(std::unique_ptr<rt::TickClock> inner, std::uint64_t stall_at) noexcept
+      : inner_(std::move(inner)), stall_at_(stall_at) {}
+  bool Wait(rt::TickTiming& t) noexcept override {
+    if (!inner_->Wait(t)) return false;
+    if (t.tick < stall_at_) return true;
+    while (!stop_.load(std::memory_order_relaxed)) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    return false;
+  }
+  void Stop() noexcept override {
+    stop_.store(true, std::memory_order_relaxed);
+    inner_->Stop();
+  }
+  std::uint64_t deadline_misses() const noexcept override { return inner_->deadline_misses(); }
+
+ private:
+  std::unique_ptr<rt::TickClock> inner_;
+  std::uint64_t stall_at_;
+  std::atomic<bool> stop_{false};
+};
 
 // The tick clock: one tick per sample of the robot's lock-step stream (a pacing thread), each
 // tick paced by a transport that waits (CAN lock-step), or absolute deadlines.
@@ -214,12 +258,82 @@ Result<Clock> MakeClock(const robot::RobotModel& robot, const Options& o, const 
     fr->Start();
     c.clock = std::move(fr);
   }
+  if (o.stall_at_tick > 0) c.clock = std::make_unique<StallingClock>(std::move(c.clock), o.stall_at_tick);
   return c;
 }
 
+// The service manager (rt/service_notify.hpp), from the status thread: ready once the robot runs
+// (robots with motors: stood up, in hold or run), the watchdog only while the tick count advances,
+// stopping once the stop began, a status line with each publication.
+struct ServiceState {
+  rt::ServiceNotifier* notify = nullptr;
+  bool ready = false, stopping = false;
+  std::uint64_t last_tick = 0;
+  std::chrono::steady_clock::time_point last_ping{};
+
+  void Poll(const robot::RobotModel& robot, const loop::LoopStatus& st, bool published) {
+    if (notify == nullptr || !notify->active()) return;
+    const bool running =
+        st.phase == loop::Phase::kRun || (robot.phases.enable_motors && st.phase == loop::Phase::kHold);
+    if (!ready && running) {
+      ready = true;
+      notify->Ready();
+    }
+    const bool ending = st.phase == loop::Phase::kDamping || st.phase == loop::Phase::kMotorOff ||
+                        st.phase == loop::Phase::kDone || st.phase == loop::Phase::kFailed || loop::StopRequested();
+    if (!stopping && ending) {
+      stopping = true;
+      notify->Stopping();
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (notify->watchdog_ns() > 0 && st.tick != last_tick &&
+        now - last_ping >= std::chrono::nanoseconds(notify->watchdog_ns() / 4)) {
+      notify->Watchdog();
+      last_tick = st.tick;
+      last_ping = now;
+    }
+    if (published) {
+      char line[160];
+      std::snprintf(line, sizeof line, "tick %llu, phase %s, mode %s", static_cast<unsigned long long>(st.tick),
+                    loop::ToString(st.phase), safety::ToString(st.mode));
+      notify->Status(line);
+    }
+  }
+};
+
+// Start-up (loading, self-test, waiting for peers) keeps the watchdog fed from a thread of its own;
+// once the loop ticks, only its progress does (ServiceState).
+class StartupWatchdog {
+ public:
+  explicit StartupWatchdog(rt::ServiceNotifier& n) {
+    if (!n.active() || n.watchdog_ns() <= 0) return;
+    thread_ = std::thread([this, &n] {
+      std::unique_lock lock(m_);
+      do n.Watchdog();
+      while (!cv_.wait_for(lock, std::chrono::nanoseconds(n.watchdog_ns() / 4), [this] { return done_; }));
+    });
+  }
+  ~StartupWatchdog() { Finish(); }
+  void Finish() {
+    {
+      std::lock_guard lock(m_);
+      done_ = true;
+    }
+    cv_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
 // The phase as it changes (robots with phases) or a progress line every status period (others).
-loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o) {
-  return [&robot, &o, phase = loop::Phase::kDisarmed](const loop::LoopStatus& st, bool published) mutable {
+loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o, ServiceState* service) {
+  return [&robot, &o, service, phase = loop::Phase::kDisarmed](const loop::LoopStatus& st, bool published) mutable {
+    service->Poll(robot, st, published);
     if (st.phase != phase && robot.phases.enable_motors) {
       std::printf("pbppo-controller: tick %llu: now %s\n", static_cast<unsigned long long>(st.tick),
                   loop::ToString(st.phase));
@@ -234,8 +348,8 @@ loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Optio
   };
 }
 
-void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const loop::RunResult& r,
-                  const char* clock) {
+void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const loop::RunResult& r, const char* clock,
+                  bool safe_stop) {
   const safety::SupervisorState& sup = l.supervisor();
   std::printf("controller: %llu ticks (%s), final mode %s%s%s, phase %s\n", static_cast<unsigned long long>(r.ticks),
               clock, safety::ToString(sup.mode), sup.mode != safety::Mode::kNominal ? " - " : "",
@@ -254,7 +368,10 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
                   loop::ToString(p.to));
   for (const auto& m : l.mode_changes())
     std::printf("mode change: tick %llu: %s\n", static_cast<unsigned long long>(m.tick), m.reason);
-  const char* end = r.ended ? nullptr : r.stopped ? "a signal" : "--ticks or --duration";
+  const char* end = r.ended                                            ? nullptr
+                    : r.stopped                                        ? "a signal"
+                    : safe_stop && r.status == loop::TickStatus::kDone ? "--safe-stop, its stop done"
+                                                                       : "--ticks or --duration";
   std::printf("stopped by %s%s\n", end != nullptr ? end : "the end field ",
               end != nullptr ? "" : robot.fields[static_cast<std::size_t>(robot.lockstep_end_field)].name.c_str());
 }
@@ -274,6 +391,11 @@ std::uint64_t MaxTicks(const robot::RobotModel& robot, const Options& o, const T
 
 // Everything is loaded and checked before anything moves: the robot once, its source, its transports.
 int Run(const Options& o) {
+  auto notifier = rt::ServiceNotifier::FromEnvironment();
+  if (!notifier) return Fail(notifier.error().message);
+  StartupWatchdog startup(*notifier);
+  if (o.safe_stop && (!o.policy.empty() || !o.trajectory.empty() || !o.commands.empty() || o.lockstep))
+    return Fail("--safe-stop: takes no --policy, --trajectory, --commands or --lockstep (it only stops the robot)");
   auto loaded = robot::LoadRobotModel(o.robot);
   if (!loaded) return Fail(loaded.error().message);
   // Per-tick limits follow the tick period (a faster free-running tick than the robot's).
@@ -281,8 +403,12 @@ int Run(const Options& o) {
       robot::WithTickPeriod(*loaded, o.period_ms > 0 && !o.lockstep ? o.period_ms * 1e-3 : loaded->tick_period_s);
   if (!ticking) return Fail(ticking.error().message);
   const robot::RobotModel& robot = *ticking;
-  auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test});
+  auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test, policy::KernelOption(o.kernel)});
   if (!source) return Fail(source.error().message);
+  if (source->policy)
+    std::printf("pbppo-controller: policy %s on the %s kernel%s\n", o.policy.c_str(),
+                policy::ToString(source->policy->kernel()),
+                o.skip_self_test ? " (self-test skipped)" : ", its golden vectors passed");
   auto opened = OpenTransports(robot, o, *source);
   if (!opened) return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
   Transports& ts = *opened;
@@ -309,6 +435,10 @@ int Run(const Options& o) {
   std::atomic<bool> done{false};
   auto clock = MakeClock(robot, o, ts, done);
   if (!clock) return Fail(clock.error().message);
+  if (o.safe_stop) {
+    loop->RequestStop();  // the first tick begins the stop: damping, then motors off
+    std::printf("pbppo-controller: %s: safe stop\n", robot.name.c_str());
+  }
   // A robot on CAN: where its buses are (--can, else the interfaces its CAN map names).
   const std::string where = robot.can ? " on " + (o.can.empty() ? std::string("its CAN map's buses") : o.can) : "";
   if (!o.quiet && robot.phases.enable_motors)
@@ -318,20 +448,23 @@ int Run(const Options& o) {
                                                               : "holding the default pose");
   std::fflush(stdout);
   std::optional<loop::StatusPublisher> status;
-  status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9), Progress(robot, o));
+  ServiceState service{&*notifier};
+  startup.Finish();  // the status thread feeds the watchdog from here on (one thread sends at a time)
+  status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9), Progress(robot, o, &service));
 
   // Every heap allocation of this (the control) thread while the loop runs is counted.
   std::uint64_t allocations = 0;
   loop::RunResult r;
   {
     AllocationScope scope;
-    r = loop::Run(robot, data, *loop, ts.all, *clock->clock, {MaxTicks(robot, o, ts), true});
+    r = loop::Run(robot, data, *loop, ts.all, *clock->clock, {MaxTicks(robot, o, ts), !o.safe_stop});
     allocations = scope.count();
   }
   done.store(true);
   clock->clock->Stop();
   if (clock->pacer.joinable()) clock->pacer.join();
   status.reset();
+  if (!service.stopping) notifier->Stopping();
   const robot::ControllerStatus final_status = loop::StatusOf(*loop);
   for (robot::Transport* t : ts.all) t->Finish(final_status);
   if (recorder)
@@ -339,7 +472,7 @@ int Run(const Options& o) {
   if (!o.quiet && !robot.phases.enable_motors) std::fprintf(stderr, "\n");
 
   const rt::ProfileReport report = rt::TakeReport(loop->profiler());
-  PrintSummary(robot, *loop, r, clock->name);
+  PrintSummary(robot, *loop, r, clock->name, o.safe_stop);
   std::printf("control thread heap allocations during the loop: %llu\n", static_cast<unsigned long long>(allocations));
   for (const robot::Transport* t : ts.all)
     if (const std::string s = t->Summary(); !s.empty()) std::printf("%s\n", s.c_str());

@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
   int domain = 0;
   double peer_timeout_s = 30, linger_s = 1.0;
   bool quiet = false;
-  app.add_option("--robot", robot_path, "The robot (models/<robot>/robot.yaml)")->required();
+  app.add_option("--robot", robot_path, "The robot: an installed robot's name (auv) or its robot.yaml")->required();
   app.add_option("--schedule", schedule_path, "Schedule of one of its streams (e.g. models/quadruped/schedules/*.yaml)")
       ->required();
   app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));

@@ -32,9 +32,9 @@ struct AuvHilOptions {
   std::string dds_identity = "hil";                   // --dds-security: this participant's certificate name
   double max_time_s = 0.0;                            // simulated seconds; 0: the task's episode limit only
   std::string trajectory_csv, plot_png, events_json;  // empty: not written
-  std::string robot = "models/auv/robot.yaml";        // the robot (plant, layouts, IO layout, DDS profile)
-  double peer_timeout_s = 30.0;                       // waiting for the controller to appear
-  double command_timeout_s = 10.0;                    // lock-step: longest wait for the next command
+  std::string robot = "auv";        // the robot, a name or its robot.yaml (plant, layouts, IO layout, DDS profile)
+  double peer_timeout_s = 30.0;     // waiting for the controller to appear
+  double command_timeout_s = 10.0;  // lock-step: longest wait for the next command
   // Fault injection for tests of the controller's supervisor: from simulated time fault_time_s on,
   // every published sample carries the fault: "nan" (yaw and surge speed NaN) or "range" (surge
   // speed 99 m/s, beyond any plausible value). Empty: none.

@@ -80,7 +80,7 @@ void AddAuvOptions(CLI::App& app, pbppo::sim::AuvHilOptions& o) {
   app.add_option("--trajectory", o.trajectory_csv, "Write the trajectory (CSV)");
   app.add_option("--plot", o.plot_png, "Plot the trajectory over the map (PNG)");
   app.add_option("--events", o.events_json, "Write the episode's events (JSON)");
-  app.add_option("--robot", o.robot, "The robot (models/auv/robot.yaml)");
+  app.add_option("--robot", o.robot, "The robot: a name or its robot.yaml (default auv)");
   app.add_option_function<std::string>(
       "--fault",
       [&o](const std::string& v) {

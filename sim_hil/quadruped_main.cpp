@@ -24,7 +24,7 @@ namespace pbppo::sim {
 namespace {
 
 struct Options {
-  std::string robot = "models/quadruped/robot.yaml", scenario, policy, commands, trace, report, plot;
+  std::string robot = "quadruped", scenario, policy, commands, trace, report, plot;
   std::string can;      // IF0[,IF1]
   std::string profile;  // --in-process: the controller's tick profile (JSON)
   std::string operator_kind = "schedule", dds_naming = "native";
@@ -220,7 +220,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
 int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   CLI::App app{"pbppo-hil quadruped: the quadruped's Simbody plant behind its emulated CAN devices"};
   Options o;
-  app.add_option("--robot", o.robot, "The robot (models/<robot>/robot.yaml)");
+  app.add_option("--robot", o.robot, "The robot: a name or its robot.yaml (default quadruped)");
   app.add_option("--scenario", o.scenario, "Scenario file (terrain, start, pushes, faults); default: flat ground");
   app.add_flag("--stand", o.stand, "The base welded to a stand (no contact)");
   app.add_option("--can", o.can, "CAN interfaces, one per bus of the CAN map (IF0,IF1)");

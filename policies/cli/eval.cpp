@@ -12,6 +12,7 @@
 #include "policies/cli/train.hpp"
 #include "policies/envs/registry.hpp"
 #include "runtime/core/cli_checks.hpp"
+#include "runtime/policy/kernel_option.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/robot/io_layout.hpp"
 
@@ -27,10 +28,7 @@ void AddEvalOptions(CLI::App& s, EvalOptions& o) {
                std::to_string(e.evaluation.default_episodes);
   s.add_option("--episodes", o.episodes, "Episodes (default 100" + sizes + ")")->check(CLI::Range(1, 1000000));
   s.add_option("--seed", o.seed, "Seed for the initial states")->check(cli_checks::NonNegativeInteger());
-  s.add_option("--kernel", o.kernel,
-               "Forward kernel: auto (AVX-512 where the CPU has it, NEON on aarch64), portable (the same figures on "
-               "every machine that runs this build), avx512 or neon")
-      ->check(CLI::IsMember({"auto", "portable", "avx512", "neon"}));
+  policy::AddKernelOption(s, o.kernel);
   s.add_flag("--json", o.json, "Print JSON");
 }
 
@@ -59,7 +57,7 @@ int Eval(const EvalOptions& o) {
     return 2;
   }
   policy::LoadOptions load;
-  load.kernel = policy::KernelFromName(o.kernel).value_or(policy::Kernel::kAuto);
+  load.kernel = policy::KernelOption(o.kernel);
   auto model = policy::PolicyModel::FromFile(o.blob, load);
   if (!model) {
     std::fprintf(stderr, "pbppo eval: %s\n", model.error().message.c_str());

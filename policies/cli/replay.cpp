@@ -6,6 +6,7 @@
 
 #include "runtime/loop/replay.hpp"
 #include "runtime/loop/source_files.hpp"
+#include "runtime/policy/kernel_option.hpp"
 
 namespace pbppo::cli {
 namespace {
@@ -20,10 +21,12 @@ int Fail(const std::string& msg) {
 CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
   auto* c = app.add_subcommand("replay", "Replay a recorded controller log and compare the commands bit for bit");
   c->add_option("log", o.log, "Log written by pbppo-controller --record")->required();
-  c->add_option("--robot", o.robot, "The robot of the recording (models/<robot>/robot.yaml)")->required();
+  c->add_option("--robot", o.robot, "The robot of the recording: a name or its robot.yaml")->required();
   c->add_option("--policy", o.policy, "The recording's policy blob");
   c->add_option("--trajectory", o.trajectory, "The recording's joint trajectory file");
   c->add_option("--out", o.out, "Write the replayed commands (one line per tick, hexadecimal floats)");
+  policy::AddKernelOption(*c, o.kernel)
+      ->description("The recording's forward kernel (pbppo-controller --kernel; auto: this CPU's fastest)");
   return c;
 }
 
@@ -41,7 +44,7 @@ int Replay(const ReplayOptions& o) {
   if (kind == loop::SourceKind::kNone && !(o.policy.empty() && o.trajectory.empty()))
     return Fail(o.log + ": recorded without a command source: no --policy or --trajectory");
   // The self-test ran when the recording armed; a replay compares the commands instead.
-  auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false});
+  auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
   if (!source) return Fail(source.error().message);
   auto r = loop::Replay(*robot, *log, source->source.get(), source->hash);
   if (!r) return Fail(r.error().message);

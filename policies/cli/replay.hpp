@@ -15,6 +15,7 @@ namespace pbppo::cli {
 
 struct ReplayOptions {
   std::string log, robot, policy, trajectory, out;
+  std::string kernel = "auto";  // the recording's forward kernel
 };
 
 // Adds the subcommand to `app`; Replay runs it.

@@ -48,7 +48,7 @@ Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFile
     auto keys = TrustedKeys(robot);
     if (!keys) return std::move(keys).error();
     if (auto st = CheckSignature(*keys, files.policy, Bytes(*bytes)); !st) return st.error();
-    auto model = policy::PolicyModel::FromBlob(Bytes(*bytes));
+    auto model = policy::PolicyModel::FromBlob(Bytes(*bytes), {.kernel = files.kernel});
     if (!model) return MakeError(model.error().code, files.policy + ": " + model.error().message);
     s.policy = std::make_unique<policy::PolicyModel>(std::move(*model));
     if (files.self_test)

@@ -21,9 +21,10 @@
 namespace pbppo::loop {
 
 struct SourceFiles {
-  std::string policy;      // a blob ("": none)
-  std::string trajectory;  // a trajectory file ("": none)
-  bool self_test = true;   // run the blob's golden vectors (refuse to arm on a mismatch)
+  std::string policy;                             // a blob ("": none)
+  std::string trajectory;                         // a trajectory file ("": none)
+  bool self_test = true;                          // run the blob's golden vectors (refuse to arm on a mismatch)
+  policy::Kernel kernel = policy::Kernel::kAuto;  // the forward kernel (one this CPU has)
 };
 
 struct LoadedSource {

@@ -1,5 +1,7 @@
 #include "runtime/robot/robot_model.hpp"
 
+#include "runtime/robot/find_robot.hpp"
+
 #include <algorithm>
 #include <filesystem>
 #include <set>
@@ -372,7 +374,10 @@ Result<double> RobotModel::Parameter(const std::string& n) const {
   return it->second;
 }
 
-Result<RobotModel> LoadRobotModel(const std::string& robot_yaml) {
+Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
+  auto found = FindRobot(name_or_path);
+  if (!found) return std::move(found).error();
+  const std::string& robot_yaml = *found;
   RobotModel m;
   m.path = robot_yaml;
   m.dir = std::filesystem::path(robot_yaml).parent_path().string();

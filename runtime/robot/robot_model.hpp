@@ -190,8 +190,9 @@ struct RobotModel {
   Result<double> Parameter(const std::string& name) const;
 };
 
-// Reads robot.yaml and every file it names; errors name the file, the field and the value.
-Result<RobotModel> LoadRobotModel(const std::string& robot_yaml);
+// Reads robot.yaml and every file it names; errors name the file, the field and the value. The
+// robot is a path or an installed robot's name (runtime/robot/find_robot.hpp).
+Result<RobotModel> LoadRobotModel(const std::string& name_or_path);
 // The same robot ticking every tick_period_s: stale ages in ticks, rates per tick, phase lengths
 // and the policy period follow (a sample a little late at a faster tick still counts as on time:
 // stale limits are n and a half periods). Refuses a policy period that is not a whole number of

@@ -3,6 +3,8 @@
 # (--robot models/quadruped/robot.yaml) waiting for each tick's replies.
 # 1) --duration: arming, stand-up, hold, damping, motor off -> exit 0.
 # 2) SIGINT during the trajectory -> damping -> motor off -> exit 0.
+# 3) the controller killed (SIGKILL) during the trajectory, its motors left enabled; then
+#    --safe-stop (what the service runs after any end): damping -> motor off -> exit 0.
 # usage: stand_programs.sh HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 src=$3 work=$4
@@ -21,6 +23,18 @@ stop_hil() {
   cat "$work/hil.$1.log"
 }
 
+# start_trajectory N: the controller on the stand trajectory (ctl_pid), 1 s into its run phase.
+start_trajectory() {
+  "$ctl" --robot models/quadruped/robot.yaml --can "$can" --trajectory models/quadruped/stand_trajectory.yaml \
+    --lockstep-wait-ms 2000 >"$work/ctl.$1.log" 2>&1 &
+  ctl_pid=$!
+  for _ in $(seq 1 3000); do
+    grep -q -- "now run" "$work/ctl.$1.log" 2>/dev/null && break
+    sleep 0.1
+  done
+  sleep 1
+}
+
 echo "== 1: --duration 1.3"
 run_hil 1
 rc=0
@@ -35,14 +49,7 @@ grep -Eq "LF_HAA .* motor_mode 0" "$work/hil.1.log"
 
 echo "== 2: SIGINT during the trajectory"
 run_hil 2
-"$ctl" --robot models/quadruped/robot.yaml --can "$can" --trajectory models/quadruped/stand_trajectory.yaml \
-  --lockstep-wait-ms 2000 >"$work/ctl.2.log" 2>&1 &
-ctl_pid=$!
-for _ in $(seq 1 3000); do
-  grep -q -- "now run" "$work/ctl.2.log" 2>/dev/null && break
-  sleep 0.1
-done
-sleep 1
+start_trajectory 2
 kill -INT "$ctl_pid"
 rc=0
 wait "$ctl_pid" || rc=$?
@@ -51,4 +58,20 @@ stop_hil 2
 [ "$rc" -eq 0 ] || { echo "controller exited with $rc"; exit 1; }
 grep -q "run -> damping" "$work/ctl.2.log"
 grep -q "motor-off -> done" "$work/ctl.2.log"
+
+echo "== 3: killed during the trajectory, then --safe-stop"
+run_hil 3
+start_trajectory 3
+kill -KILL "$ctl_pid"
+wait "$ctl_pid" 2>/dev/null || true
+rc=0
+"$ctl" --robot quadruped --can "$can" --safe-stop --lockstep-wait-ms 2000 >"$work/ctl.3s.log" 2>&1 || rc=$?
+cat "$work/ctl.3s.log"
+stop_hil 3
+[ "$rc" -eq 0 ] || { echo "--safe-stop exited with $rc"; exit 1; }
+grep -q "quadruped: safe stop" "$work/ctl.3s.log"
+grep -q "disarmed -> damping" "$work/ctl.3s.log"
+grep -q "motor-off -> done" "$work/ctl.3s.log"
+grep -q "stopped by --safe-stop, its stop done" "$work/ctl.3s.log"
+[ "$(grep -Ec "motor_mode 0" "$work/hil.3.log")" -eq 12 ] || { echo "not every motor off after --safe-stop"; exit 1; }
 echo "stand_programs: OK"
