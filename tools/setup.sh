@@ -31,6 +31,8 @@ PACKAGES=(
   # arm64: the cross compiler, and qemu-aarch64 for the arm64 build's tests (tools/arm64/make_root.sh
   # unpacks the arm64 libraries beside the machine's own)
   g++-aarch64-linux-gnu qemu-user
+  # the service test (tests/packages): systemd as the first process of a PID namespace
+  systemd
   # ONNX import (pbppo import-onnx): the ONNX library and protobuf, the test-model generator
   # (tools/onnx/make_models.py) and the ONNX Runtime reference it is checked against (tools/onnx)
   libonnx-dev libprotobuf-dev protobuf-compiler python3-onnx python3-numpy nodejs npm

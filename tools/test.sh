@@ -146,6 +146,8 @@ ctest --preset tsan -j "$jobs" -L threads --no-tests=error
 stage "arm64 cross-build (preset arm64), then its tests under qemu-aarch64"
 wait_build arm64
 ctest --preset arm64 -j "$jobs" --no-tests=error
+# Its packages: unpacked like an installation, the controller under qemu-aarch64 runs the AUV mission.
+bash tests/packages/arm64_package.sh build/arm64 build/arm64-root build/default "$PWD" build/arm64/scratch/arm64_package
 
 # The corpora are replayed as tests of the optimised and the ASan builds (fuzz_replay.*); here each
 # libFuzzer binary runs from its corpus.

@@ -9,7 +9,8 @@
 #
 # usage: tools/arm64/make_root.sh DIR     (root: adds the arm64 architecture to dpkg if missing)
 # Idempotent: a DIR made from the same package list is kept (DIR/.packages records it). The root
-# cannot be moved once made: its packages' CMake files name it.
+# cannot be moved once made: its packages' CMake files name it. DIR/.files says which package each
+# file came from ("PACKAGE PATH" lines; tests/packages checks package dependencies with it).
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 DIR" >&2; exit 2; }
 dir=$1
@@ -17,7 +18,7 @@ dir=$1
 packages=(libc6-dev libstdc++-12-dev libyaml-cpp-dev libfastrtps-dev libfastcdr-dev libssl-dev
   nlohmann-json3-dev libeigen3-dev libcli11-dev doctest-dev)
 want="${packages[*]}"
-if [ -f "$dir/.packages" ] && [ "$(cat "$dir/.packages")" = "$want" ]; then
+if [ -f "$dir/.packages" ] && [ -f "$dir/.files" ] && [ "$(cat "$dir/.packages")" = "$want" ]; then
   echo "arm64 root: $dir (kept)"
   exit 0
 fi
@@ -40,8 +41,11 @@ apt-get -q -o APT::Architecture=arm64 -o 'APT::Architectures::=arm64' -o Dir::St
 n=0
 for deb in "$tmp"/debs/*.deb; do
   dpkg-deb -x "$deb" "$dir"
+  pkg=$(dpkg-deb -f "$deb" Package)
+  dpkg-deb -c "$deb" | awk -v p="$pkg" '{print p, substr($6, 2)}' >>"$tmp/files"
   n=$((n + 1))
 done
+mv "$tmp/files" "$dir/.files"
 # Links to absolute paths (libfoo.so -> /lib/aarch64-linux-gnu/libfoo.so.1) point into the root.
 find "$dir" -type l -lname '/*' -print0 | while IFS= read -r -d '' link; do
   target=$(readlink "$link")
