@@ -3,7 +3,7 @@
 # (--robot models/quadruped/robot.yaml) waiting for each tick's replies.
 # 1) --duration: arming, stand-up, hold, damping, motor off -> exit 0.
 # 2) SIGINT during the trajectory -> damping -> motor off -> exit 0.
-# 3) the controller killed (SIGKILL) during the trajectory, its motors left enabled; then
+# 3) the controller killed (SIGKILL) while standing up, its motors left enabled; then
 #    --safe-stop (what the service runs after any end): damping -> motor off -> exit 0.
 # usage: stand_programs.sh HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
@@ -23,13 +23,13 @@ stop_hil() {
   cat "$work/hil.$1.log"
 }
 
-# start_trajectory N: the controller on the stand trajectory (ctl_pid), 1 s into its run phase.
+# start_trajectory N PHASE: the controller on the stand trajectory (ctl_pid), 1 s into PHASE.
 start_trajectory() {
   "$ctl" --robot models/quadruped/robot.yaml --can "$can" --trajectory models/quadruped/stand_trajectory.yaml \
     --lockstep-wait-ms 2000 >"$work/ctl.$1.log" 2>&1 &
   ctl_pid=$!
   for _ in $(seq 1 3000); do
-    grep -q -- "now run" "$work/ctl.$1.log" 2>/dev/null && break
+    grep -q -- "now $2" "$work/ctl.$1.log" 2>/dev/null && break
     sleep 0.1
   done
   sleep 1
@@ -49,7 +49,7 @@ grep -Eq "LF_HAA .* motor_mode 0" "$work/hil.1.log"
 
 echo "== 2: SIGINT during the trajectory"
 run_hil 2
-start_trajectory 2
+start_trajectory 2 run
 kill -INT "$ctl_pid"
 rc=0
 wait "$ctl_pid" || rc=$?
@@ -59,9 +59,9 @@ stop_hil 2
 grep -q "run -> damping" "$work/ctl.2.log"
 grep -q "motor-off -> done" "$work/ctl.2.log"
 
-echo "== 3: killed during the trajectory, then --safe-stop"
+echo "== 3: killed while standing up, then --safe-stop"
 run_hil 3
-start_trajectory 3
+start_trajectory 3 stand-up  # the motors are on from here
 kill -KILL "$ctl_pid"
 wait "$ctl_pid" 2>/dev/null || true
 rc=0
