@@ -266,29 +266,29 @@ Result<Clock> MakeClock(const robot::RobotModel& robot, const Options& o, const 
 // (robots with motors: stood up, in hold or run), the watchdog only while the tick count advances,
 // stopping once the stop began, a status line with each publication.
 struct ServiceState {
-  rt::ServiceNotifier* notify = nullptr;
+  rt::ServiceNotifier& notify;
   bool ready = false, stopping = false;
   std::uint64_t last_tick = 0;
   std::chrono::steady_clock::time_point last_ping{};
 
   void Poll(const robot::RobotModel& robot, const loop::LoopStatus& st, bool published) {
-    if (notify == nullptr || !notify->active()) return;
+    if (!notify.active()) return;
     const bool running =
         st.phase == loop::Phase::kRun || (robot.phases.enable_motors && st.phase == loop::Phase::kHold);
     if (!ready && running) {
       ready = true;
-      notify->Ready();
+      notify.Ready();
     }
     const bool ending = st.phase == loop::Phase::kDamping || st.phase == loop::Phase::kMotorOff ||
                         st.phase == loop::Phase::kDone || st.phase == loop::Phase::kFailed || loop::StopRequested();
     if (!stopping && ending) {
       stopping = true;
-      notify->Stopping();
+      notify.Stopping();
     }
     const auto now = std::chrono::steady_clock::now();
-    if (notify->watchdog_ns() > 0 && st.tick != last_tick &&
-        now - last_ping >= std::chrono::nanoseconds(notify->watchdog_ns() / 4)) {
-      notify->Watchdog();
+    if (notify.watchdog_ns() > 0 && st.tick != last_tick &&
+        now - last_ping >= std::chrono::nanoseconds(notify.watchdog_ns() / 4)) {
+      notify.Watchdog();
       last_tick = st.tick;
       last_ping = now;
     }
@@ -296,7 +296,7 @@ struct ServiceState {
       char line[160];
       std::snprintf(line, sizeof line, "tick %llu, phase %s, mode %s", static_cast<unsigned long long>(st.tick),
                     loop::ToString(st.phase), safety::ToString(st.mode));
-      notify->Status(line);
+      notify.Status(line);
     }
   }
 };
@@ -448,7 +448,7 @@ int Run(const Options& o) {
                                                               : "holding the default pose");
   std::fflush(stdout);
   std::optional<loop::StatusPublisher> status;
-  ServiceState service{&*notifier};
+  ServiceState service{*notifier};
   startup.Finish();  // the status thread feeds the watchdog from here on (one thread sends at a time)
   status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9), Progress(robot, o, &service));
 

@@ -1,11 +1,10 @@
 #include "runtime/robot/robot_model.hpp"
 
-#include "runtime/robot/find_robot.hpp"
-
 #include <algorithm>
 #include <filesystem>
 #include <set>
 
+#include "runtime/robot/find_robot.hpp"
 #include "runtime/robot/robot_model_parts.hpp"
 #include "runtime/robot/text_file.hpp"
 

@@ -1,8 +1,8 @@
 // The service manager's notification protocol (systemd's sd_notify, spoken directly): datagrams
 // such as "READY=1" to the unix socket named by $NOTIFY_SOCKET, and the watchdog that
 // $WATCHDOG_USEC (and $WATCHDOG_PID) ask for. Outside a service (no $NOTIFY_SOCKET) every call is
-// a no-op. The socket is opened once at set-up; Send formats into a fixed buffer and makes one
-// sendto: no allocation, safe from a thread beside the control loop.
+// a no-op. The socket is opened once at set-up; each message is one sendto from a fixed buffer: no
+// allocation, safe from a thread beside the control loop (one sending thread at a time).
 //
 // Meaning in the controller (docs/service.md): READY=1 once the robot is armed and in its run (or
 // hold) phase, so `systemctl start` returns only then; WATCHDOG=1 only while the control loop's
