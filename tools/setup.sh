@@ -41,7 +41,7 @@ PACKAGES=(
 # installed PACKAGE: dpkg has it, or (npm) another installed nodejs package provides its command:
 # NodeSource's nodejs ships npm and conflicts with Debian's npm package.
 installed() {
-  dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q 'install ok installed' && return 0
+  dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep 'install ok installed' >/dev/null && return 0
   [ "$1" = npm ] && command -v npm >/dev/null
 }
 

@@ -26,7 +26,7 @@ echo "   $(basename "$deb"): $(($(stat -c %s "$deb") / 1024)) KiB"
 pkg=$work/pkg
 dpkg-deb -x "$deb" "$pkg"
 ctl=$pkg/usr/bin/pbppo-controller
-readelf -h "$ctl" | grep -q 'Machine:.*AArch64' || fail "pbppo-controller is not an aarch64 program"
+readelf -h "$ctl" | grep 'Machine:.*AArch64' >/dev/null || fail "pbppo-controller is not an aarch64 program"
 for f in usr/share/pbppo-rt/robots/auv/robot.yaml usr/share/pbppo-rt/policies/auv_nav/auv_nav.blob \
   usr/lib/systemd/system/pbppo-controller@.service; do
   [ -f "$pkg/$f" ] || fail "pbppo-controller (arm64) lacks $f"

@@ -40,10 +40,18 @@ done
 if grep -E 'pbppo-hil|/pbppo$|\.so|/include/|/report/' "$work/controller.files"; then
   fail "pbppo-controller holds what a robot does not need (above)"
 fi
-dpkg-deb -c "$tools_deb" | awk '{print $6}' | grep -qxF ./usr/bin/pbppo-hil || fail "pbppo-tools lacks pbppo-hil"
+dpkg-deb -c "$tools_deb" | awk '{print $6}' | grep -xF ./usr/bin/pbppo-hil >/dev/null || fail "pbppo-tools lacks pbppo-hil"
 
 # Every NEEDED library of every program comes from a package named in Depends (the controller's
 # Depends count for the tools, which depend on it).
+# (No `| grep -q` under pipefail: grep -q quits at its first match and the writer's SIGPIPE fails
+# the pipeline.)
+listed() {  # listed WORD LIST...: WORD is one of LIST
+  local w=$1 x
+  shift
+  for x in "$@"; do [ "$x" = "$w" ] && return 0; done
+  return 1
+}
 depends_of() { dpkg-deb -f "$1" Depends | tr ',' '\n' | sed 's/^ *//; s/ .*//'; }
 check_needed() {  # check_needed DEB ALLOWED_PACKAGES...
   local deb=$1 root
@@ -56,9 +64,9 @@ check_needed() {  # check_needed DEB ALLOWED_PACKAGES...
       local path pkg
       path=$(ldconfig -p | awk -v so="$so" '$1 == so && /x86-64/ && !f {print $NF; f = 1}')
       [ -n "$path" ] || fail "$(basename "$exe") needs $so, which this machine does not have"
-      pkg=$(dpkg -S "$(readlink -f "$path")" 2>/dev/null | head -1 | cut -d: -f1 || true)
-      [ -n "$pkg" ] || pkg=$(dpkg -S "$path" 2>/dev/null | head -1 | cut -d: -f1 || true)
-      printf '%s\n' "$@" | grep -qxF "$pkg" ||
+      pkg=$(dpkg -S "$(readlink -f "$path")" 2>/dev/null | awk -F: 'NR == 1 {print $1}' || true)
+      [ -n "$pkg" ] || pkg=$(dpkg -S "$path" 2>/dev/null | awk -F: 'NR == 1 {print $1}' || true)
+      listed "$pkg" "$@" ||
         fail "$(basename "$deb"): $(basename "$exe") needs $so from $pkg, which its Depends do not name"
     done
   done

@@ -22,7 +22,7 @@ if [ -f "$dir/.packages" ] && [ -f "$dir/.files" ] && [ "$(cat "$dir/.packages")
   echo "arm64 root: $dir (kept)"
   exit 0
 fi
-if ! dpkg --print-foreign-architectures | grep -qx arm64; then
+if ! dpkg --print-foreign-architectures | grep -x arm64 >/dev/null; then
   dpkg --add-architecture arm64
   apt-get update -q >/dev/null
 elif ! apt-cache show libc6:arm64 >/dev/null 2>&1; then
