@@ -14,6 +14,7 @@
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
+#include "runtime/policy/kernel_option.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/transport/bindings.hpp"
 #include "runtime/transport/can/can_transport.hpp"
@@ -28,6 +29,7 @@ struct Options {
   std::string can;      // IF0[,IF1]
   std::string profile;  // --in-process: the controller's tick profile (JSON)
   std::string operator_kind = "schedule", dds_naming = "native";
+  std::string kernel = "auto";  // --in-process: the policy's forward kernel
   std::string dds_security, dds_identity = "controller";
   int domain = 0;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
@@ -149,6 +151,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   RigOptions ro;
   ro.policy = o.policy;
   ro.self_test = !o.skip_self_test;
+  ro.kernel = policy::KernelOption(o.kernel);
   ro.realtime = o.realtime || dds_operator;  // an operator over DDS is on a wall clock
   ro.operator_transport = op.get();
   // With a DDS operator the run only needs the wall clock: late ticks (the plant shares the
@@ -164,6 +167,9 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
           ? ("velocity commands over DDS, domain " + std::to_string(o.domain) + ", " + o.dds_naming + " names").c_str()
           : ("schedule " + o.commands).c_str(),
       (*rig)->operator_source().schedule().duration_s());
+  if (const policy::PolicyModel* p = (*rig)->policy())
+    std::printf("controller: policy on the %s kernel%s\n", policy::ToString(p->kernel()),
+                o.skip_self_test ? " (self-test skipped)" : ", its golden vectors passed");
   if (ro.realtime) {
     // As pbppo-controller does: locked memory, SCHED_FIFO where permitted (warnings otherwise).
     const rt::RtSetupResult rs = rt::SetUpRealTime(rt::RtOptions{});
@@ -232,6 +238,7 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--policy", o.policy, "--in-process: the policy blob");
   app.add_option("--commands", o.commands, "--in-process: the velocity command schedule");
   app.add_flag("--skip-self-test", o.skip_self_test, "--in-process: arm without the blob's golden vectors");
+  policy::AddKernelOption(app, o.kernel);
   app.add_option("--trace", o.trace, "--in-process: write the trace (CSV, every 10 ms)");
   app.add_option("--report", o.report, "--in-process: write per-phase tracking (JSON)");
   app.add_option("--plot", o.plot,

@@ -27,11 +27,12 @@
 namespace pbppo::sim {
 
 struct RigOptions {
-  std::string policy;                       // blob ("" : hold the default pose)
-  bool self_test = true;                    // the blob's golden vectors at arming
-  std::vector<std::string> interfaces;      // SocketCAN interfaces; empty: the in-process network
-  std::int64_t wait_ns = 2'000'000'000;     // SocketCAN lock-step: the longest wait for a tick's frames
-  std::size_t command_record_capacity = 0;  // commands kept by the CAN transport (tests)
+  std::string policy;                             // blob ("" : hold the default pose)
+  bool self_test = true;                          // the blob's golden vectors at arming
+  policy::Kernel kernel = policy::Kernel::kAuto;  // the policy's forward kernel (one this CPU has)
+  std::vector<std::string> interfaces;            // SocketCAN interfaces; empty: the in-process network
+  std::int64_t wait_ns = 2'000'000'000;           // SocketCAN lock-step: the longest wait for a tick's frames
+  std::size_t command_record_capacity = 0;        // commands kept by the CAN transport (tests)
   // The operator instead of the schedule (the robot's DDS transport of velocity commands, opened
   // through the transport table); the schedule then only names the phases of the report. Must
   // outlive the rig.
@@ -96,6 +97,7 @@ class QuadrupedRig {
   QuadrupedHil& hil() noexcept { return *hil_; }
   can::CanTransport& can() noexcept { return *can_; }
   loop::ScheduleTransport& operator_source() noexcept { return *schedule_; }
+  const policy::PolicyModel* policy() const noexcept { return source_.policy.get(); }  // null: no blob
   loop::LoopData& loop() noexcept { return *loop_; }
   const loop::LoopData& loop() const noexcept { return *loop_; }
   const robot::RobotData& data() const noexcept { return data_; }

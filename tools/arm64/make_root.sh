@@ -14,10 +14,14 @@
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 DIR" >&2; exit 2; }
 dir=$1
-# The robot side's build and test dependencies (runtime-only preset; see docs/arm64.md).
+# The robot side's build and test dependencies (see docs/arm64.md), with everything they depend on.
 packages=(libc6-dev libstdc++-12-dev libyaml-cpp-dev libfastrtps-dev libfastcdr-dev libssl-dev
   nlohmann-json3-dev libeigen3-dev libcli11-dev doctest-dev)
-want="${packages[*]}"
+# The HIL's Simbody, without the dependency closure apt would bring: libsimbody-dev depends on
+# freeglut, X and Mesa (LLVM included, 90 MB more) for Simbody's visualizer, which pbppo-hil does not
+# use; its libraries need only LAPACK, BLAS and libgfortran.
+bare=(libsimbody-dev libsimbody3.7 liblapack3 libblas3 libgfortran5)
+want="${packages[*]} + ${bare[*]}"
 if [ -f "$dir/.packages" ] && [ -f "$dir/.files" ] && [ "$(cat "$dir/.packages")" = "$want" ]; then
   echo "arm64 root: $dir (kept)"
   exit 0
@@ -38,6 +42,8 @@ apt-get -q -o APT::Architecture=arm64 -o 'APT::Architectures::=arm64' -o Dir::St
   -o Dir::Cache::archives="$tmp/debs" -o Debug::NoLocking=1 \
   install --download-only -y --no-install-recommends "${packages[@]}" >"$tmp/apt.log" 2>&1 ||
   { cat "$tmp/apt.log" >&2; echo "arm64 root: apt could not download the arm64 packages" >&2; exit 1; }
+(cd "$tmp/debs" && apt-get -q -o APT::Architecture=arm64 download "${bare[@]/%/:arm64}" >"$tmp/apt-bare.log" 2>&1) ||
+  { cat "$tmp/apt-bare.log" >&2; echo "arm64 root: apt could not download ${bare[*]}" >&2; exit 1; }
 n=0
 for deb in "$tmp"/debs/*.deb; do
   dpkg-deb -x "$deb" "$dir"
@@ -45,15 +51,22 @@ for deb in "$tmp"/debs/*.deb; do
   dpkg-deb -c "$deb" | awk -v p="$pkg" '{print p, substr($6, 2)}' >>"$tmp/files"
   n=$((n + 1))
 done
+# LAPACK and BLAS are reached through links update-alternatives makes when they are installed.
+for lib in lapack blas; do
+  for name in lib$lib.so.3 lib$lib.so; do
+    ln -sfn "$lib/lib$lib.so.3" "$dir/usr/lib/aarch64-linux-gnu/$name"
+    echo "lib${lib}3 /usr/lib/aarch64-linux-gnu/$name" >>"$tmp/files"
+  done
+done
 mv "$tmp/files" "$dir/.files"
 # Links to absolute paths (libfoo.so -> /lib/aarch64-linux-gnu/libfoo.so.1) point into the root.
 find "$dir" -type l -lname '/*' -print0 | while IFS= read -r -d '' link; do
   target=$(readlink "$link")
   ln -sfn "$(realpath -m --relative-to="$(dirname "$link")" "$dir$target")" "$link"
 done
-# The packages' CMake files name their libraries by absolute paths (/usr/lib/aarch64-linux-gnu/...):
-# they are made to name the root's (so the root stays where it was made).
+# The packages' CMake files name their libraries by absolute paths (/usr/lib/aarch64-linux-gnu/...,
+# alone or in lists): they are made to name the root's (so the root stays where it was made).
 abs=$(realpath "$dir")
-grep -rlZ '"/usr' --include='*.cmake' "$dir" | xargs -0 -r sed -i "s|\"/usr|\"$abs/usr|g"
+grep -rlZE '("|;)/usr' --include='*.cmake' "$dir" | xargs -0 -r sed -i -E "s#(\"|;)/usr#\1$abs/usr#g"
 echo "$want" >"$dir/.packages"
 echo "arm64 root: $dir ($n packages, $(du -sh "$dir" | cut -f1))"
