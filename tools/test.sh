@@ -3,9 +3,9 @@
 # optimised and the sanitizer configurations and runs every test. Exit status 0 only if all pass.
 #
 # Within the hour on a 2-core machine: once the optimised build is done, the ASan+UBSan, TSan,
-# arm64 and libFuzzer builds run one after another in the background at the lowest CPU priority,
-# on what the tests leave free (the SocketCAN tests run inside a one-vCPU VM, the long tests leave
-# a core idle), and each test stage waits only for the build it needs. Every stage's duration is
+# arm64, arm64 ASan+UBSan and libFuzzer builds run one after another in the background at the
+# lowest CPU priority, on what the tests leave free (the SocketCAN tests run inside a one-vCPU VM,
+# the long tests leave a core idle), and each test stage waits only for the build it needs. Every stage's duration is
 # printed when the script ends, passing or not.
 #
 #   tools/test.sh               everything
@@ -34,7 +34,8 @@ if [ "${1-}" = "--builds" ]; then
   # shares the CPU with the others whatever its processes' nice values: the group itself is niced
   # (measured without it: the compilers at 49 % of a core each, the tests beside them at 30 %).
   echo 19 >/proc/self/autogroup 2>/dev/null || true
-  for spec in "asan" "tsan pbppo_tests_threads pbppo-controller pbppo-operator pbppo_report" "arm64" "fuzz $*"; do
+  for spec in "asan" "tsan pbppo_tests_threads pbppo-controller pbppo-operator pbppo_report" "arm64" "arm64-asan" \
+    "fuzz $*"; do
     read -r -a words <<<"$spec"
     rc=0
     # The arm64 build needs its root of arm64 libraries (downloaded once, then kept).
@@ -110,7 +111,7 @@ done
 rm -f build/*-build.rc
 setsid bash "$PWD/tools/test.sh" --builds "${fuzz_targets[@]}" &
 builds_pid=$!
-echo "ASan+UBSan, TSan, arm64 and libFuzzer builds started in the background at nice 19 (logs: build/*-build.log)"
+echo "ASan+UBSan, TSan, arm64, arm64 ASan+UBSan and libFuzzer builds started in the background at nice 19 (logs: build/*-build.log)"
 
 stage "tests: optimised build"
 ctest --preset default -j "$jobs" -LE vcan --no-tests=error
@@ -150,6 +151,12 @@ ctest --preset arm64 -j "$jobs" --no-tests=error
 bash tests/packages/arm64_package.sh build/arm64 build/arm64-root build/default "$PWD" build/arm64/scratch/arm64_package
 # The quadruped's demo schedule, its controller and plant in one arm64 process, beside x86-64's.
 bash tests/sim_hil/quadruped_demo_arm64.sh build/arm64 build/arm64-root build/default "$PWD" build/arm64/scratch/quadruped_demo
+
+# The neon kernel under AddressSanitizer and UBSan (qemu-aarch64 runs them; no leak check there):
+# the policy engine's tests (golden vectors of every shape and shipped blob) and the blob corpus.
+stage "arm64 ASan+UBSan build (preset arm64-asan), then the policy engine's tests under qemu-aarch64"
+wait_build arm64-asan
+ctest --preset arm64-asan -j "$jobs" --no-tests=error
 
 # The corpora are replayed as tests of the optimised and the ASan builds (fuzz_replay.*); here each
 # libFuzzer binary runs from its corpus.
