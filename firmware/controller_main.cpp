@@ -7,6 +7,7 @@
 //       CAN:  [--can IF0,IF1] [--candump FILE] [--receive-all]
 //       [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
 //       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--kernel K] [--quiet] [--inject-stall-at-tick N]
+//       [--failure-record FILE]
 //
 // Start-up loads the robot once (every file robot.yaml names), the policy blob (refused when it
 // was trained for another layout, naming the first difference) and runs the blob's golden vectors
@@ -23,7 +24,9 @@
 // motors are damped and switched off; a robot without motors sends its stop command. --safe-stop
 // does only that (what a service runs after the controller ended, docs/service.md). Under a
 // service manager ($NOTIFY_SOCKET) it reports ready once the robot runs and feeds the watchdog only
-// while the loop's tick count advances (runtime/rt/service_notify.hpp).
+// while the loop's tick count advances (runtime/rt/service_notify.hpp). With --failure-record the
+// service's stop (--safe-stop) records a run that ended in failure, and the next start refuses to
+// arm (exit status 3) unless the robot file allows it (service.rearm_after_failure).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -31,6 +34,9 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <mutex>
@@ -46,6 +52,7 @@
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
+#include "runtime/policy/blob.hpp"
 #include "runtime/policy/kernel_option.hpp"
 #include "runtime/rt/rt_setup.hpp"
 #include "runtime/rt/service_notify.hpp"
@@ -61,6 +68,7 @@ struct Options {
   std::string kernel = "auto";
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
+  std::string failure_record;  // the service's record of a run that ended in failure
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
   bool safe_stop = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 0;
@@ -72,6 +80,57 @@ struct Options {
 int Fail(const std::string& msg, int rc = 2) {
   std::fprintf(stderr, "pbppo-controller: %s\n", msg.c_str());
   return rc;
+}
+
+// The exit status of a controller that will not arm after a failure (the unit does not restart it).
+constexpr int kExitNotRearmed = 3;
+
+// --safe-stop under a service manager, after a run that did not end in success ($SERVICE_RESULT,
+// $EXIT_CODE, $EXIT_STATUS: what systemd gives the commands that run after the service's main
+// process): one line in `path`, unless a record is there already (the first failure's cause stays).
+Status RecordFailure(const std::string& path) {
+  const char* result = std::getenv("SERVICE_RESULT");
+  if (result == nullptr || *result == '\0' || std::string(result) == "success") return {};
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) return {};
+  const char* code = std::getenv("EXIT_CODE");
+  const char* status = std::getenv("EXIT_STATUS");
+  char when[32] = "";
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  if (gmtime_r(&now, &utc) != nullptr) std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  const std::string line = std::string("result ") + result + ", exit " + (code != nullptr ? code : "?") + " " +
+                           (status != nullptr ? status : "?") + ", at " + when + "\n";
+  if (auto st = policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(line.data()), line.size()}); !st)
+    return st;
+  std::printf("pbppo-controller: the run ended in failure (%s): recorded in %s\n",
+              line.substr(0, line.size() - 1).c_str(), path.c_str());
+  return {};
+}
+
+// A run's start with a failure record there: arms only if the robot file allows it (the record is
+// then removed, so that the next failure is recorded anew). Returns the exit status to end with, or
+// -1 to go on.
+int CheckFailureRecord(const robot::RobotModel& robot, const std::string& path) {
+  std::error_code ec;
+  const bool there = std::filesystem::exists(path, ec);
+  if (ec)  // fails closed: a record that cannot be looked for may be there
+    return Fail("not arming: cannot tell whether the failure record '" + path + "' is there: " + ec.message(),
+                kExitNotRearmed);
+  if (!there) return -1;
+  std::ifstream in(path);
+  std::string what;
+  if (!std::getline(in, what) || what.empty()) what = "the record names no cause";
+  if (!robot.service.rearm_after_failure)
+    return Fail("not arming: the last run ended in failure (" + what + "; " + path + ") and " + robot.path +
+                    " does not let a controller started again after a failure arm the robot "
+                    "(service.rearm_after_failure); once the cause is known, a person starts it",
+                kExitNotRearmed);
+  std::printf("pbppo-controller: arming again after a failure (%s): %s allows it (service.rearm_after_failure)\n",
+              what.c_str(), robot.path.c_str());
+  if (!std::filesystem::remove(path, ec) || ec)
+    return Fail("--failure-record: cannot remove '" + path + "': " + (ec ? ec.message() : "not removed"), 1);
+  return -1;
 }
 
 void AddOptions(CLI::App& app, Options& o) {
@@ -126,6 +185,10 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_flag("--safe-stop", o.safe_stop,
                "Only stop the robot: damp its motors, then switch them off (a robot without motors: send its "
                "stop command), then exit. What the service runs after the controller ended, however it ended");
+  app.add_option("--failure-record", o.failure_record,
+                 "The service's record of a run that ended in failure: --safe-stop writes it when $SERVICE_RESULT "
+                 "is not success; a run that finds it does not arm (exit status 3) unless the robot file says "
+                 "service.rearm_after_failure: true");
   app.add_option("--inject-stall-at-tick", o.stall_at_tick,
                  "Fault injection (the watchdog's test): the control loop stops ticking at this tick while the rest "
                  "of the process goes on (0: never)")
@@ -398,6 +461,14 @@ int Run(const Options& o) {
     return Fail("--safe-stop: takes no --policy, --trajectory, --commands or --lockstep (it only stops the robot)");
   auto loaded = robot::LoadRobotModel(o.robot);
   if (!loaded) return Fail(loaded.error().message);
+  if (!o.failure_record.empty()) {
+    if (o.safe_stop) {
+      if (auto st = RecordFailure(o.failure_record); !st)
+        std::fprintf(stderr, "pbppo-controller: --failure-record: %s (stopping anyway)\n", st.error().message.c_str());
+    } else if (const int rc = CheckFailureRecord(*loaded, o.failure_record); rc >= 0) {
+      return rc;
+    }
+  }
   // Per-tick limits follow the tick period (a faster free-running tick than the robot's).
   auto ticking =
       robot::WithTickPeriod(*loaded, o.period_ms > 0 && !o.lockstep ? o.period_ms * 1e-3 : loaded->tick_period_s);

@@ -389,7 +389,7 @@ Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
   const YamlFields f(robot_yaml);
   PBPPO_TRY(f.Keys(root, "",
                    {"robot", "description", "files", "timing", "parameters", "transports", "streams", "motors", "imus",
-                    "phases", "signals", "commands", "supervisor"}));
+                    "phases", "signals", "commands", "supervisor", "service"}));
   PBPPO_TRY(f.Text(root, "robot", "", &m.name, Rule::kToken));
   PBPPO_TRY(f.OptionalText(root, "description", "", &m.description));
   Loader l{{m, f}, files};
@@ -416,6 +416,12 @@ Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
   PBPPO_TRY(l.Lockstep(root));
   PBPPO_TRY(l.Phases(root));
   PBPPO_TRY(l.Supervisor(root));
+  if (root["service"]) {
+    YAML::Node n;
+    PBPPO_TRY(f.Map(root, "service", "", &n));
+    PBPPO_TRY(f.Keys(n, "service", {"rearm_after_failure"}));
+    PBPPO_TRY(f.Bool(n, "rearm_after_failure", "service", &m.service.rearm_after_failure));
+  }
   for (SignalLimitSpec& limit : m.supervisor.signal_limits) {
     int field = m.FieldIndex(limit.signal);
     for (const SignalSpec& s : m.signals)

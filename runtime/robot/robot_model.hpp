@@ -130,6 +130,13 @@ struct SignalLimitSpec {
   std::uint32_t stream = 0;  // the stream the signal is computed from (checked once it was seen)
 };
 
+// How the robot's controller runs as a service (robot.yaml `service`).
+struct ServiceSpec {
+  // A controller started again by its service after a run that ended in failure (a crash, the
+  // watchdog, an error exit) arms the robot again. Default false: it refuses, and a person starts it.
+  bool rearm_after_failure = false;
+};
+
 struct SupervisorSpec {
   bool command_limit_degrades = false;  // command_limit: degraded (else: count)
   std::uint32_t overrun_degraded = 2, overrun_safe_stop = 5;
@@ -171,6 +178,7 @@ struct RobotModel {
   std::vector<SignalSpec> signals;
   PhaseSpec phases;
   SupervisorSpec supervisor;
+  ServiceSpec service;
   std::optional<RobotDocument> dds_profile;        // files.dds_profile: Fast DDS XML profiles (transports of kind dds)
   std::optional<RobotDocument> stand_trajectory;   // files.stand_trajectory: the robot's own joint trajectory
   std::vector<TrustedKeyFile> trusted_keys;        // files.trusted_keys[.NAME] (PEM); none: unsigned blobs run

@@ -11,7 +11,10 @@
 #   3. systemd as the first process of a PID namespace runs pbppo-controller@auv.service: not
 #      ready while the vehicle is missing, ready once it runs (its status line), `systemctl stop`
 #      stops it and the safe stop runs; a loop made to stall (--inject-stall-at-tick) is killed by
-#      the watchdog (Result=watchdog) and the safe stop that follows sets the vehicle's command to 0.
+#      the watchdog, the safe stop that follows sets the vehicle's command to 0 and records the
+#      failure, and the service's restart does not arm (exit status 3, the unit stays failed); a
+#      person's start arms; with a robot file that says service.rearm_after_failure: true the
+#      restart after the watchdog arms and runs again.
 # usage: packages.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$(realpath "$1") src=$(realpath "$2") work=$(realpath -m "$3")
@@ -165,8 +168,17 @@ unit_fail() {  # unit_fail MESSAGE: the unit's status and journal, then fail
   in_ns journalctl --no-pager -n 60 | sed 's/^/   | /' || true
   fail "$*"
 }
-conf() { printf 'PBPPO_ARGS="--policy %s --no-mlock --peer-timeout-s 60 %s"\nPBPPO_TRANSPORT="--domain %s"\n' \
-  "$share/policies/auv_nav/auv_nav.blob" "$1" "$domain" | in_ns tee /run/pbppo-test/auv.conf >/dev/null; }
+conf() {  # conf ARGS [ROBOT_PATH]: the settings file
+  { printf 'PBPPO_ARGS="--policy %s --no-mlock --peer-timeout-s 60 %s"\nPBPPO_TRANSPORT="--domain %s"\n' \
+    "$share/policies/auv_nav/auv_nav.blob" "$1" "$domain"
+    [ -z "${2-}" ] || printf 'PBPPO_ROBOT_PATH=%s\n' "$2"; } | in_ns tee /run/pbppo-test/auv.conf >/dev/null
+}
+jlines=0
+journal_new() {  # journal_new FILE: the unit's journal since the last call
+  in_ns journalctl -q -u pbppo-controller@auv --no-pager >"$1.all"
+  tail -n +$((jlines + 1)) "$1.all" >"$1"
+  jlines=$(wc -l <"$1.all")
+}
 wait_state() {  # wait_state STATE SECONDS
   for _ in $(seq $(($2 * 10))); do
     [ "$(prop ActiveState)" = "$1" ] && return 0
@@ -199,27 +211,66 @@ echo "   vehicle there: active, status '$status'"
 sleep 3  # three watchdog periods, fed
 in_ns systemctl stop pbppo-controller@auv
 [ "$(prop Result)" = success ] || unit_fail "stop: Result=$(prop Result)"
-in_ns journalctl -u pbppo-controller@auv --no-pager >svc.journal
+journal_new svc.journal
 expect svc.journal "stopped by a signal"
 expect svc.journal "pbppo-controller: auv: safe stop"
 stop_vehicle
 
-# A loop that stalls: the watchdog ends it, the safe stop sets the vehicle's command to zero.
+# A loop that stalls: the watchdog ends it, the safe stop sets the vehicle's command to zero and
+# records the failure; the service starts the controller again, which does not arm (the AUV's robot
+# file does not allow it): exit status 3, and the unit stays failed.
 conf "--inject-stall-at-tick 60"
 vehicle stall
 in_ns systemctl start pbppo-controller@auv
 echo "   stalling at tick 60: $(prop ActiveState), status '$(prop StatusText)'"
-wait_state failed 30
-[ "$(prop Result)" = watchdog ] || unit_fail "stalled loop: Result=$(prop Result), not watchdog"
-in_ns journalctl -u pbppo-controller@auv --no-pager >stall.journal
+wait_state failed 40
+[ "$(prop NRestarts)" = 1 ] && [ "$(prop ExecMainStatus)" = 3 ] ||
+  unit_fail "after the stall: $(prop NRestarts) restarts, last exit status $(prop ExecMainStatus) (not 1 and 3)"
+journal_new stall.journal
 expect stall.journal "pbppo-controller: auv: safe stop"
 expect stall.journal "stopped by --safe-stop, its stop done"
+expect stall.journal "the run ended in failure \(result watchdog, exit (killed|dumped) ABRT, at .*\): recorded in /run/pbppo/auv/failed"
+expect stall.journal "not arming: the last run ended in failure \(result watchdog.*service.rearm_after_failure"
+[ "$(grep -c 'policy .* on the .* kernel' stall.journal)" = 1 ] || unit_fail "the restarted controller loaded its policy"
 sleep 1
 stop_vehicle
 # The vehicle's commanded speed: non-zero while the stalled controller's last command held, zero at the end.
 awk -F, 'NR > 1 {v = $5} NR > 1 && $5 + 0 > 0.05 {moving = 1} END {exit !(moving && v + 0 == 0)}' stall.csv ||
   fail "the vehicle's last commanded speed is $(tail -1 stall.csv | cut -d, -f5), not 0 after the safe stop"
-echo "   stalled loop: Result=watchdog, safe stop sent (commanded speed $(tail -1 stall.csv | cut -d, -f5))"
+echo "   stalled loop: watchdog, safe stop sent (commanded speed $(tail -1 stall.csv | cut -d, -f5)), restarted once:"
+grep -o 'not arming: the last run ended in failure ([^)]*)' stall.journal | sed 's/^/     /'
+
+# A person starts it again: the failure record went with the failed unit, so it arms.
+conf ""
+vehicle again
+in_ns systemctl start pbppo-controller@auv
+wait_state active 60
+in_ns systemctl stop pbppo-controller@auv
+[ "$(prop Result)" = success ] || unit_fail "started by a person: Result=$(prop Result)"
+stop_vehicle
+journal_new again.journal
+if grep -E "arming again|not arming" again.journal; then fail "a person's start found a failure record"; fi
+echo "   started again by a person: active, then stopped: Result=success"
+
+# A robot file that allows it (a copy of the AUV with service.rearm_after_failure: true): after
+# the watchdog the service's restart arms the robot again.
+rm -rf "$work/robots" && cp -r "$share/robots" "$work/robots"  # (the robots share dds_profile.xml)
+printf '\nservice:\n  rearm_after_failure: true\n' >>"$work/robots/auv/robot.yaml"
+conf "--inject-stall-at-tick 60" "$work/robots"
+vehicle rearm
+restarts=$(prop NRestarts)  # (systemd 252 keeps counting across a person's starts)
+in_ns systemctl start pbppo-controller@auv
+for _ in $(seq 300); do
+  [ "$(prop NRestarts)" = $((restarts + 1)) ] && [ "$(prop ActiveState)" = active ] && break
+  sleep 0.1
+done
+[ "$(prop NRestarts)" = $((restarts + 1)) ] && [ "$(prop ActiveState)" = active ] ||
+  unit_fail "rearm_after_failure: $(prop NRestarts) restarts (before: $restarts), $(prop ActiveState), not active again"
+in_ns systemctl stop pbppo-controller@auv
+stop_vehicle
+journal_new rearm.journal
+expect rearm.journal "arming again after a failure \(result watchdog.*allows it \(service.rearm_after_failure\)"
+echo "   rearm_after_failure: true: restarted after the watchdog and running again, then stopped"
 in_ns systemctl poweroff -f >/dev/null 2>&1 || true
 wait "$unshare_pid" 2>/dev/null || true
 ns_pid=

@@ -179,6 +179,22 @@ TEST_CASE("robot model: bad robot files are refused naming the file, the field a
   CHECK(LoadRobotModel(dir + "/none.yaml").error().message == dir + "/none.yaml: cannot open");
 }
 
+TEST_CASE("robot model: service.rearm_after_failure - false unless the robot file says true, bad values named") {
+  CHECK_FALSE(Load("models/auv/robot.yaml").service.rearm_after_failure);
+  CHECK_FALSE(Load("models/quadruped/robot.yaml").service.rearm_after_failure);
+  const test::RobotFileEdits edits("auv", "robot_model_service");
+  const std::string original = test::ReadText(test::SourcePath("models/auv/robot.yaml"));
+  std::ofstream(edits.path()) << test::ReplaceOnce(original, "robot: auv",
+                                                   "robot: auv\nservice: {rearm_after_failure: true}");
+  auto m = LoadRobotModel(edits.path());
+  REQUIRE_MESSAGE(m.ok(), m.error().message);
+  CHECK(m->service.rearm_after_failure);
+  const std::string& p = edits.path();
+  CHECK(edits.Error("robot: auv", "robot: auv\nservice: {rearm_after_failure: yes}") ==
+        p + ": service.rearm_after_failure: 'yes' is not true or false");
+  CHECK(edits.Error("robot: auv", "robot: auv\nservice: {restart: always}") == p + ": service.restart: unknown field");
+}
+
 TEST_CASE("robot model: DDS messages - declared once in IDL, mapped onto fields and commands by the robot file") {
   const RobotModel& auv = test::AuvRobot();
   REQUIRE(auv.transports.size() == 1);
