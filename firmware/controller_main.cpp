@@ -477,9 +477,8 @@ int Run(const Options& o) {
   auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test, policy::KernelOption(o.kernel)});
   if (!source) return Fail(source.error().message);
   if (source->policy)
-    std::printf("pbppo-controller: policy %s on the %s kernel%s\n", o.policy.c_str(),
-                policy::ToString(source->policy->kernel()),
-                o.skip_self_test ? " (self-test skipped)" : ", its golden vectors passed");
+    std::printf("pbppo-controller: policy %s %s\n", o.policy.c_str(),
+                policy::KernelNote(*source->policy, o.skip_self_test).c_str());
   auto opened = OpenTransports(robot, o, *source);
   if (!opened) return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
   Transports& ts = *opened;

@@ -168,8 +168,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
           : ("schedule " + o.commands).c_str(),
       (*rig)->operator_source().schedule().duration_s());
   if (const policy::PolicyModel* p = (*rig)->policy())
-    std::printf("controller: policy on the %s kernel%s\n", policy::ToString(p->kernel()),
-                o.skip_self_test ? " (self-test skipped)" : ", its golden vectors passed");
+    std::printf("controller: policy %s\n", policy::KernelNote(*p, o.skip_self_test).c_str());
   if (ro.realtime) {
     // As pbppo-controller does: locked memory, SCHED_FIFO where permitted (warnings otherwise).
     const rt::RtSetupResult rs = rt::SetUpRealTime(rt::RtOptions{});

@@ -5,8 +5,8 @@
 # Within the hour on a 2-core machine: once the optimised build is done, the ASan+UBSan, TSan,
 # arm64, arm64 ASan+UBSan and libFuzzer builds run one after another in the background at the
 # lowest CPU priority, on what the tests leave free (the SocketCAN tests run inside a one-vCPU VM,
-# the long tests leave a core idle), and each test stage waits only for the build it needs. Every stage's duration is
-# printed when the script ends, passing or not.
+# the long tests leave a core idle), and each test stage waits only for the build it needs. Every
+# stage's duration is printed when the script ends, passing or not.
 #
 #   tools/test.sh               everything
 #   tools/test.sh --builds ...  (internal) the background builds

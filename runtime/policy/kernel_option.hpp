@@ -24,4 +24,10 @@ inline Kernel KernelOption(const std::string& kernel) {
   return KernelFromName(kernel).value_or(Kernel::kAuto);
 }
 
+// What a program that arms with a policy says of it: "on the neon kernel, its golden vectors passed".
+inline std::string KernelNote(const PolicyModel& model, bool self_test_skipped) {
+  return std::string("on the ") + ToString(model.kernel()) + " kernel" +
+         (self_test_skipped ? " (self-test skipped)" : ", its golden vectors passed");
+}
+
 }  // namespace pbppo::policy

@@ -11,7 +11,7 @@
 # usage: arm64_package.sh ARM64_BUILD ARM64_ROOT HOST_BUILD SOURCE_DIR WORK_DIR
 set -euo pipefail
 abuild=$(realpath "$1") aroot=$(realpath "$2") hbuild=$(realpath "$3") src=$(realpath "$4") work=$(realpath -m "$5")
-source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, trace_difference
 source "$src/tests/packages/common.sh"  # make_packages
 fresh_dir "$work"
 [ -f "$aroot/.files" ] || fail "$aroot/.files missing: make the root with tools/arm64/make_root.sh"
@@ -66,17 +66,8 @@ compare() {
   local a=arm64_$1 b=amd64_$1
   [ "$(grep -o '[0-9]/[0-9] targets' "$a.hil.log")" = "$(grep -o '[0-9]/[0-9] targets' "$b.hil.log")" ] &&
     [ "$(wc -l <"$a.csv")" = "$(wc -l <"$b.csv")" ] || fail "$1 kernel: the missions on aarch64 and x86-64 differ"
-  if cmp -s "$a.csv" "$b.csv"; then
-    echo "   $1 kernel: the trajectories are identical"
-    return
-  fi
-  local row
-  row=$(cmp "$a.csv" "$b.csv" | sed -n 's/.*line \([0-9]*\).*/\1/p' || true)
-  echo "   $1 kernel: the same mission; the trajectories first differ at row $row of $(wc -l <"$b.csv") (float rounding):"
-  sed -n "${row}p" "$a.csv" | sed 's/^/     aarch64: /'
-  sed -n "${row}p" "$b.csv" | sed 's/^/     x86-64:  /'
-  paste -d, "$a.csv" "$b.csv" | awk -F, 'NR > 1 {d = sqrt(($2 - $12) ^ 2 + ($3 - $13) ^ 2); if (d > m) m = d}
-    END {printf "     largest distance between the two vehicles over the mission: %.3g m\n", m}'
+  echo "   $1 kernel: the same mission"
+  trace_difference aarch64 "$a.csv" "x86-64 " "$b.csv" 2 3  # the vehicle's x, y
 }
 mission arm64_portable "${arm64[@]}" --kernel portable
 mission amd64_portable "${amd64[@]}" --kernel portable

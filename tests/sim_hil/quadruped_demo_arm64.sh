@@ -10,7 +10,7 @@
 # usage: quadruped_demo_arm64.sh ARM64_BUILD ARM64_ROOT HOST_BUILD SOURCE_DIR WORK_DIR
 set -euo pipefail
 abuild=$(realpath "$1") aroot=$(realpath "$2") hbuild=$(realpath "$3") src=$(realpath "$4") work=$(realpath -m "$5")
-source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, trace_difference
 fresh_dir "$work"
 cd "$work"
 args=(quadruped --in-process --robot "$src/models/quadruped" --policy "$src/policies/frozen/quadruped_walk/flat.blob"
@@ -55,14 +55,5 @@ for line in bad:
     print("   " + line, file=sys.stderr)
 sys.exit(1 if bad else 0)
 EOF
-if cmp -s aarch64.csv x86-64.csv; then
-  echo "   the traces are identical"
-else
-  row=$(cmp aarch64.csv x86-64.csv | sed -n 's/.*line \([0-9]*\).*/\1/p' || true)
-  echo "   the traces first differ at $(sed -n "${row}p" x86-64.csv | cut -d, -f1) s (row $row of $(wc -l <x86-64.csv)), float rounding:"
-  sed -n "${row}p" aarch64.csv | sed 's/^/     aarch64: /'
-  sed -n "${row}p" x86-64.csv | sed 's/^/     x86-64:  /'
-  paste -d, aarch64.csv x86-64.csv | awk -F, 'NR > 1 {d = sqrt(($2 - $19) ^ 2 + ($3 - $20) ^ 2); if (d > m) m = d}
-    END {printf "     the two bases are never more than %.3g m apart\n", m}'
-fi
+trace_difference aarch64 aarch64.csv "x86-64 " x86-64.csv 2 3  # the base's x, y
 echo "PASS"

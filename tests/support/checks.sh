@@ -1,6 +1,7 @@
 # Sourced by the test scripts: fail MESSAGE, expect FILE PATTERN (the file is printed when the
 # extended regular expression is not found in it), fresh_dir DIR (an empty folder), and
-# start_in SRC WORK (WORK emptied, then into SRC: the scripts run from the source tree).
+# start_in SRC WORK (WORK emptied, then into SRC: the scripts run from the source tree), and
+# trace_difference (two runs' CSV traces compared).
 fail() {
   echo "FAIL: $*"
   exit 1
@@ -15,4 +16,22 @@ fresh_dir() {
 start_in() {
   fresh_dir "$2"
   cd "$1"
+}
+# trace_difference NAME_A A.csv NAME_B B.csv X_COL Y_COL: whether two traces of the same run on two
+# machines (first column the time, X_COL and Y_COL a position) are identical; else the row where
+# they first differ (float rounding) and the largest distance between the two positions.
+trace_difference() {
+  local na=$1 a=$2 nb=$3 b=$4 x=$5 y=$6 row cols
+  if cmp -s "$a" "$b"; then
+    echo "   the traces are identical"
+    return
+  fi
+  row=$(cmp "$a" "$b" | sed -n 's/.*line \([0-9]*\).*/\1/p' || true)
+  echo "   the traces first differ at $(sed -n "${row}p" "$b" | cut -d, -f1) s (row $row of $(wc -l <"$b")), float rounding:"
+  sed -n "${row}p" "$a" | sed "s/^/     $na: /"
+  sed -n "${row}p" "$b" | sed "s/^/     $nb: /"
+  cols=$(head -1 "$a" | tr ',' '\n' | wc -l)
+  paste -d, "$a" "$b" | awk -F, -v x="$x" -v y="$y" -v c="$cols" \
+    'NR > 1 {d = sqrt(($x - $(x + c)) ^ 2 + ($y - $(y + c)) ^ 2); if (d > m) m = d}
+     END {printf "     the two positions are never more than %.3g m apart\n", m}'
 }
