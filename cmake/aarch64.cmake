@@ -40,3 +40,13 @@ endif()
 # GCC's note that aarch64 passes std::pair differently from GCC < 10.1 in C++17 (Simbody's headers
 # print it hundreds of times): every library here is built by GCC 12, so it concerns none.
 set(CMAKE_CXX_FLAGS_INIT "-Wno-psabi")
+
+# Open MPI's compiler wrappers (mpicc), which FindMPI asks for flags, are the machine's own and
+# speak for its x86-64 installation: FindMPI is given the root's MPI instead (libopenmpi-dev).
+set(pbppo_mpi "${PBPPO_ARM64_ROOT}/usr/lib/aarch64-linux-gnu/openmpi")
+if(EXISTS "${pbppo_mpi}/include/mpi.h")
+  set(MPI_C_COMPILER "MPI_C_COMPILER-NOTFOUND")
+  set(MPI_C_HEADER_DIR "${pbppo_mpi}/include")
+  set(MPI_C_LIB_NAMES mpi)
+  set(MPI_mpi_LIBRARY "${pbppo_mpi}/lib/libmpi.so")
+endif()

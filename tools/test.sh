@@ -142,12 +142,14 @@ stage "ThreadSanitizer build (preset tsan, runtime-only), then its threaded test
 wait_build tsan
 ctest --preset tsan -j "$jobs" -L threads --no-tests=error
 
-# The arm64 cross-build (runtime, firmware, report, DDS, the HIL) and its tests under qemu-aarch64:
-# everything but the SocketCAN tests, which need a kernel with vcan.
+# The arm64 cross-build (runtime, firmware, report, DDS, the HIL, the pbppo tool) and its tests under
+# qemu-aarch64: all but the SocketCAN tests, which need a kernel with vcan, and those
+# tests/CMakeLists.txt names as x86-64 only (training runs, the walk from many starts).
 stage "arm64 cross-build (preset arm64), then its tests under qemu-aarch64"
 wait_build arm64
 ctest --preset arm64 -j "$jobs" --no-tests=error
-# Its packages: unpacked like an installation, the controller under qemu-aarch64 runs the AUV mission.
+# Its packages: their Depends checked, pbppo and the controller from them run under qemu-aarch64 (the
+# controller: the AUV mission).
 bash tests/packages/arm64_package.sh build/arm64 build/arm64-root build/default "$PWD" build/arm64/scratch/arm64_package
 # The quadruped's demo schedule, its controller and plant in one arm64 process, beside x86-64's.
 bash tests/sim_hil/quadruped_demo_arm64.sh build/arm64 build/arm64-root build/default "$PWD" build/arm64/scratch/quadruped_demo

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The arm64 packages (run by tools/test.sh after the arm64 build's tests; docs/arm64.md):
-#   1. cpack writes pbppo-controller and pbppo-rt-dev for arm64: aarch64 programs, the robots, the
-#      policies and the unit; every library they load is in the arm64 root and comes from a
-#      package their Depends name;
+#   1. cpack writes pbppo-controller, pbppo-tools and pbppo-rt-dev for arm64: aarch64 programs, the
+#      robots, the policies and the unit; every library they load is in the arm64 root and comes
+#      from a package their Depends name; the packaged pbppo runs under qemu-aarch64;
 #   2. the package unpacked like an installation, its controller run under qemu-aarch64 finds the
 #      AUV by name in the package's own files and completes the AUV mission, lock-step over DDS
 #      with the x86-64 simulator, with the portable kernel and with its own (neon): the same
@@ -31,15 +31,38 @@ for f in usr/share/pbppo-rt/robots/auv/robot.yaml usr/share/pbppo-rt/policies/au
   usr/lib/systemd/system/pbppo-controller@.service; do
   [ -f "$pkg/$f" ] || fail "pbppo-controller (arm64) lacks $f"
 done
-dpkg-deb -f "$deb" Depends | tr ',' '\n' | sed 's/^ *//; s/ .*//' >"$work/depends"
-for exe in "$pkg"/usr/bin/*; do
-  for so in $(readelf -d "$exe" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
-    owner=$(awk -v so="$so" '{n = split($2, p, "/")} p[n] == so {print $1; exit}' "$aroot/.files")
-    [ -n "$owner" ] || fail "$(basename "$exe") needs $so, which no arm64 package of the root holds"
-    grep -qxF "$owner" "$work/depends" || fail "$(basename "$exe") needs $so from $owner, which Depends do not name"
+# check_depends DEB DIR: DEB unpacked in DIR; every library its programs load comes from a package
+# its Depends name (or, for pbppo-tools, the pbppo-controller package it depends on names).
+check_depends() {
+  local deb=$1 dir=$2 name exe so owner
+  name=$(dpkg-deb -f "$deb" Package)
+  { dpkg-deb -f "$deb" Depends; [ "$name" = pbppo-controller ] || dpkg-deb -f "$controller_deb" Depends; } |
+    tr ',' '\n' | sed 's/^ *//; s/ .*//' >"$work/$name.depends"
+  for exe in "$dir"/usr/bin/*; do
+    readelf -h "$exe" | grep 'Machine:.*AArch64' >/dev/null || fail "$name: $(basename "$exe") is not an aarch64 program"
+    for so in $(readelf -d "$exe" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+      owner=$(awk -v so="$so" '{n = split($2, p, "/")} p[n] == so {print $1; exit}' "$aroot/.files")
+      [ -n "$owner" ] || fail "$(basename "$exe") needs $so, which no arm64 package of the root holds"
+      grep -qxF "$owner" "$work/$name.depends" || fail "$(basename "$exe") needs $so from $owner, which $name's Depends do not name"
+    done
   done
-done
-echo "   Depends: $(tr '\n' ' ' <"$work/depends")"
+  echo "   $name ($(cd "$dir/usr/bin" && echo *)): Depends $(dpkg-deb -f "$deb" Depends)"
+}
+controller_deb=$deb
+check_depends "$deb" "$pkg"
+tools_deb=$(ls "$work"/out/pbppo-tools_*_arm64.deb) || fail "no pbppo-tools arm64 package"
+tools=$work/tools
+dpkg-deb -x "$tools_deb" "$tools"
+check_depends "$tools_deb" "$tools"
+# The packaged pbppo runs on aarch64 with the root's libraries: it reads the packaged blob as the
+# x86-64 pbppo does, line for line.
+blob=$pkg/usr/share/pbppo-rt/policies/auv_nav/auv_nav.blob
+qemu-aarch64 -L "$aroot" "$tools/usr/bin/pbppo" inspect "$blob" >"$work/inspect.arm64" 2>&1 ||
+  fail "the packaged arm64 pbppo: $(cat "$work/inspect.arm64")"
+"$hbuild/policies/pbppo" inspect "$blob" >"$work/inspect.amd64" 2>&1 || fail "pbppo inspect: $(cat "$work/inspect.amd64")"
+cmp -s "$work/inspect.arm64" "$work/inspect.amd64" ||
+  fail "pbppo inspect differs on aarch64: $(diff "$work/inspect.arm64" "$work/inspect.amd64" | head -5)"
+echo "   the packaged arm64 pbppo reads the AUV's blob as x86-64's does ($(wc -l <"$work/inspect.arm64") lines): $(sed -n 3p "$work/inspect.arm64" | sed 's/^ *//')"
 
 echo "== 2: the packaged arm64 controller under qemu-aarch64: the AUV mission"
 shim=$abuild/tests/libpbppo_qemu_setsockopt.so  # qemu-user 7.2 and IP_MULTICAST_IF (docs/arm64.md)

@@ -14,13 +14,23 @@
 set -euo pipefail
 [ $# -eq 1 ] || { echo "usage: $0 DIR" >&2; exit 2; }
 dir=$1
-# The robot side's build and test dependencies (see docs/arm64.md), with everything they depend on.
+# The robot side's build and test dependencies (see docs/arm64.md), and the libraries the pbppo
+# tool runs on (MuJoCo, protobuf, Open MPI), with everything they depend on.
 packages=(libc6-dev libstdc++-12-dev libyaml-cpp-dev libfastrtps-dev libfastcdr-dev libssl-dev
-  nlohmann-json3-dev libeigen3-dev libcli11-dev doctest-dev)
-# The HIL's Simbody, without the dependency closure apt would bring: libsimbody-dev depends on
-# freeglut, X and Mesa (LLVM included, 90 MB more) for Simbody's visualizer, which pbppo-hil does not
-# use; its libraries need only LAPACK, BLAS and libgfortran.
-bare=(libsimbody-dev libsimbody3.7 liblapack3 libblas3 libgfortran5)
+  nlohmann-json3-dev libeigen3-dev libcli11-dev doctest-dev
+  libmujoco2.2.2 libprotobuf32 libprotobuf-lite32 zlib1g-dev libopenmpi3)
+# Packages taken without the dependency closure apt would bring (their libraries' own dependencies
+# are above or here):
+# - the HIL's Simbody: libsimbody-dev depends on freeglut, X and Mesa (LLVM included, 90 MB more) for
+#   Simbody's visualizer, which pbppo-hil does not use; its libraries need only LAPACK, BLAS and
+#   libgfortran;
+# - the pbppo tool's development packages: libopenmpi-dev depends on an arm64 gfortran and compiler
+#   (300 MB) for mpif90 and mpicc, which a cross-build does not run; libmujoco-dev's CMake package
+#   looks for OpenGL (the GL headers and glvnd's libraries, not Mesa) and names qhull's headers;
+#   libonnx-dev holds the ONNX schema the tool compiles with the machine's own protoc.
+bare=(libsimbody-dev libsimbody3.7 liblapack3 libblas3 libgfortran5
+  libopenmpi-dev libmujoco-dev libqhull-dev libprotobuf-dev libonnx-dev
+  libgl-dev libglx-dev libopengl-dev libglvnd-dev libgl1 libglx0 libopengl0 libglvnd0)
 want="${packages[*]} + ${bare[*]}"
 if [ -f "$dir/.packages" ] && [ -f "$dir/.files" ] && [ "$(cat "$dir/.packages")" = "$want" ]; then
   echo "arm64 root: $dir (kept)"
