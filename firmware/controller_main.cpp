@@ -331,6 +331,7 @@ Result<Clock> MakeClock(const robot::RobotModel& robot, const Options& o, const 
 struct ServiceState {
   rt::ServiceNotifier& notify;
   bool ready = false, stopping = false;
+  const char* note = "";  // appended to the status line
   std::uint64_t last_tick = 0;
   std::chrono::steady_clock::time_point last_ping{};
 
@@ -356,9 +357,9 @@ struct ServiceState {
       last_ping = now;
     }
     if (published) {
-      char line[160];
-      std::snprintf(line, sizeof line, "tick %llu, phase %s, mode %s", static_cast<unsigned long long>(st.tick),
-                    loop::ToString(st.phase), safety::ToString(st.mode));
+      char line[200];
+      std::snprintf(line, sizeof line, "tick %llu, phase %s, mode %s%s", static_cast<unsigned long long>(st.tick),
+                    loop::ToString(st.phase), safety::ToString(st.mode), note);
       notify.Status(line);
     }
   }
@@ -393,10 +394,20 @@ class StartupWatchdog {
   std::thread thread_;
 };
 
-// The phase as it changes (robots with phases) or a progress line every status period (others).
-loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o, ServiceState* service) {
-  return [&robot, &o, service, phase = loop::Phase::kDisarmed](const loop::LoopStatus& st, bool published) mutable {
+// The phase as it changes (robots with phases) or a progress line every status period (others);
+// a recording that stopped on a failure, once, as soon as the status thread sees it.
+loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o, ServiceState* service,
+                                     const loop::Recorder* recorder) {
+  return [&robot, &o, service, recorder, phase = loop::Phase::kDisarmed, told = false](const loop::LoopStatus& st,
+                                                                                       bool published) mutable {
     service->Poll(robot, st, published);
+    if (recorder != nullptr && !told && recorder->failed()) {
+      told = true;
+      std::fprintf(stderr, "\npbppo-controller: tick %llu: log %s: %s; recording stopped, the control loop goes on\n",
+                   static_cast<unsigned long long>(st.tick), o.record.c_str(), recorder->failure().c_str());
+      std::fflush(stderr);
+      service->note = ", recording stopped (a failed write)";
+    }
     if (st.phase != phase && robot.phases.enable_motors) {
       std::printf("pbppo-controller: tick %llu: now %s\n", static_cast<unsigned long long>(st.tick),
                   loop::ToString(st.phase));
@@ -520,7 +531,8 @@ int Run(const Options& o) {
   std::optional<loop::StatusPublisher> status;
   ServiceState service{*notifier};
   startup.Finish();  // the status thread feeds the watchdog from here on (one thread sends at a time)
-  status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9), Progress(robot, o, &service));
+  status.emplace(ts.all, *loop, static_cast<std::int64_t>(o.status_every_s * 1e9),
+                 Progress(robot, o, &service, recorder.get()));
 
   // Every heap allocation of this (the control) thread while the loop runs is counted.
   std::uint64_t allocations = 0;
@@ -537,8 +549,7 @@ int Run(const Options& o) {
   if (!service.stopping) notifier->Stopping();
   const robot::ControllerStatus final_status = loop::StatusOf(*loop);
   for (robot::Transport* t : ts.all) t->Finish(final_status);
-  if (recorder)
-    if (auto st = recorder->Stop(); !st) return Fail(st.error().message, 1);
+  const Status recorded = recorder ? recorder->Stop() : Status{};
   if (!o.quiet && !robot.phases.enable_motors) std::fprintf(stderr, "\n");
 
   const rt::ProfileReport report = rt::TakeReport(loop->profiler());
@@ -551,9 +562,11 @@ int Run(const Options& o) {
                 source->trajectory->rms_tracking_error_rad(), source->trajectory->rms_speed_error_rad_s(),
                 static_cast<unsigned long long>(source->trajectory->ticks()));
   if (recorder)
-    std::printf("log: %s, %llu records, %llu dropped\n", o.record.c_str(),
-                static_cast<unsigned long long>(recorder->records()),
-                static_cast<unsigned long long>(recorder->dropped()));
+    std::printf(
+        "log: %s, %llu records, %llu dropped%s%s%s\n", o.record.c_str(),
+        static_cast<unsigned long long>(recorder->records()), static_cast<unsigned long long>(recorder->dropped()),
+        recorder->failed() ? ", recording stopped: " : "", recorder->failed() ? recorder->failure().c_str() : "",
+        recorder->failed() ? (", " + std::to_string(recorder->not_written()) + " records not written").c_str() : "");
   std::printf("%s\n%s", rs.Summary().c_str(), rt::FormatText(report).c_str());
   if (!o.profile_json.empty()) {
     std::ofstream f(o.profile_json);
@@ -563,6 +576,7 @@ int Run(const Options& o) {
   if (!o.profile_png.empty())
     if (auto s = pbppo::report::PlotLatency(report, o.profile_png, "pbppo-controller tick latency"); !s)
       std::fprintf(stderr, "pbppo-controller: --profile-plot: %s\n", s.error().message.c_str());
+  if (!recorded) return Fail(recorded.error().message, 1);
   return r.status == loop::TickStatus::kFailed ? 1 : 0;
 }
 

@@ -60,6 +60,9 @@ int Replay(const ReplayOptions& o) {
   if (!log->complete)
     std::printf("replay: %s ends early, at offset %zu: %s; the %zu whole records before it were replayed\n",
                 o.log.c_str(), log->cut_at, log->cut_reason.c_str(), log->records.size());
+  else if (log->end != loop::LogEnd::kStopped)
+    std::printf("replay: %s ends where its recording stopped: %s; the %zu whole records before it were replayed\n",
+                o.log.c_str(), loop::DescribeEnd(*log).c_str(), log->records.size());
   if (r->compared == 0) return Fail(o.log + ": no command to compare (no whole tick recorded)");
   return r->mismatches == 0 ? 0 : 1;
 }

@@ -1,7 +1,13 @@
 #include "runtime/loop/log.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -28,6 +34,25 @@ struct Out {
     p += sizeof v;
   }
 };
+
+// Writes n bytes at the file's offset (retrying interrupted and short writes); how many were
+// written, and the error number of the write that failed (0 if none did).
+std::size_t WriteAll(int fd, const std::uint8_t* p, std::size_t n, int* error) noexcept {
+  std::size_t done = 0;
+  *error = 0;
+  while (done < n) {
+    const ssize_t w = ::write(fd, p + done, n - done);
+    if (w > 0) {
+      done += static_cast<std::size_t>(w);
+    } else if (w < 0 && errno == EINTR) {
+      continue;
+    } else {
+      *error = w < 0 ? errno : ENOSPC;  // a write of 0 bytes: the device takes no more
+      break;
+    }
+  }
+  return done;
+}
 
 std::vector<std::uint8_t> Frame(std::uint8_t type, const std::uint8_t* payload, std::size_t n) {
   std::vector<std::uint8_t> r(1 + 4 + n + 4);
@@ -89,8 +114,13 @@ Result<std::unique_ptr<Recorder>> Recorder::Open(const std::string& path, const 
   r->ring_->capacity = std::max<std::size_t>(queue_records, 2);
   r->ring_->bytes.assign(r->ring_->slot_bytes * r->ring_->capacity, 0);
   r->ring_->sizes.assign(r->ring_->capacity, 0);
-  r->file_ = std::fopen(path.c_str(), "wb");
-  if (r->file_ == nullptr) return MakeError(ErrorCode::kIo, "log " + path + ": cannot write");
+  r->batch_.assign(std::max<std::size_t>(std::size_t{64} << 10, r->ring_->slot_bytes), 0);
+  r->batch_sizes_.assign(r->batch_.size() / 9 + 1, 0);
+  // A file size limit (ulimit -f, LimitFSIZE=) would stop the process with SIGXFSZ at the write
+  // past it: ignored, the write fails (EFBIG) and the recorder stops recording instead.
+  std::signal(SIGXFSZ, SIG_IGN);
+  r->fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (r->fd_ < 0) return MakeError(ErrorCode::kIo, "log " + path + ": cannot write: " + std::strerror(errno));
   std::vector<std::uint8_t> p;
   auto put = [&p](const auto v) {
     const auto* b = reinterpret_cast<const std::uint8_t*>(&v);
@@ -105,10 +135,20 @@ Result<std::unique_ptr<Recorder>> Recorder::Open(const std::string& path, const 
   p.insert(p.end(), h.robot.begin(), h.robot.end());
   const auto n = static_cast<std::uint32_t>(p.size());
   const std::uint32_t crc = Crc32(p.data(), p.size());
-  const bool ok = std::fwrite(kMagic, 1, 8, r->file_) == 8 && std::fwrite(&kLogVersion, 4, 1, r->file_) == 1 &&
-                  std::fwrite(&n, 4, 1, r->file_) == 1 && std::fwrite(p.data(), 1, p.size(), r->file_) == p.size() &&
-                  std::fwrite(&crc, 4, 1, r->file_) == 1;
-  if (!ok) return MakeError(ErrorCode::kIo, "log " + path + ": cannot write the header");
+  std::vector<std::uint8_t> head(kMagic, kMagic + 8);
+  for (std::uint32_t v : {kLogVersion, n})
+    head.insert(head.end(), reinterpret_cast<const std::uint8_t*>(&v), reinterpret_cast<const std::uint8_t*>(&v) + 4);
+  head.insert(head.end(), p.begin(), p.end());
+  head.insert(head.end(), reinterpret_cast<const std::uint8_t*>(&crc), reinterpret_cast<const std::uint8_t*>(&crc) + 4);
+  int error = 0;
+  if (WriteAll(r->fd_, head.data(), head.size(), &error) != head.size()) {
+    ::close(r->fd_);
+    r->fd_ = -1;
+    ::unlink(path.c_str());
+    return MakeError(ErrorCode::kIo, "log " + path + ": cannot write the header: " + std::strerror(error));
+  }
+  r->file_bytes_ = head.size();
+  for (std::uint64_t& b : r->boundary_) b = head.size();
   Recorder* self = r.get();
   r->thread_ = std::thread([self] { self->Run(); });
   return r;
@@ -180,33 +220,148 @@ void Recorder::Outputs(const robot::RobotModel&, const robot::RobotData& d, Phas
   Push(kOutputs, scratch_.data(), static_cast<std::size_t>(o.p - scratch_.data()));
 }
 
-void Recorder::Run() {
+// Moves what is queued into the file (or, once a write has failed, counts it as not written).
+// Returns how many records it took from the queue.
+std::size_t Recorder::Drain() {
   Ring& q = *ring_;
+  std::size_t tail = q.tail.load(std::memory_order_relaxed);
+  const std::size_t head = q.head.load(std::memory_order_acquire);
+  std::size_t taken = 0;
+  while (tail != head) {
+    std::size_t bytes = 0, n = 0;
+    for (; tail != head && n < batch_sizes_.size(); ++tail, ++n) {
+      const std::size_t slot = tail % q.capacity;
+      if (bytes + q.sizes[slot] > batch_.size()) break;
+      if (!failed_.load(std::memory_order_relaxed))
+        std::memcpy(&batch_[bytes], &q.bytes[slot * q.slot_bytes], q.sizes[slot]);
+      bytes += q.sizes[slot];
+      batch_sizes_[n] = q.sizes[slot];
+    }
+    q.tail.store(tail, std::memory_order_release);  // the slots are free again
+    taken += n;
+    if (failed_.load(std::memory_order_relaxed)) {
+      not_written_.fetch_add(n, std::memory_order_relaxed);
+      continue;
+    }
+    int error = 0;
+    const std::size_t done = WriteAll(fd_, batch_.data(), bytes, &error);
+    // The records written whole, each boundary remembered (to back off to if the end record does
+    // not fit after a failure).
+    std::size_t whole = 0, k = 0;
+    for (; k < n && whole + batch_sizes_[k] <= done; ++k) {
+      whole += batch_sizes_[k];
+      const std::uint64_t records = written_.load(std::memory_order_relaxed) + 1;
+      boundary_[records % kBoundaries] = file_bytes_ + whole;
+      written_.store(records, std::memory_order_relaxed);
+    }
+    file_bytes_ += whole;
+    if (error != 0) {
+      not_written_.fetch_add(n - k, std::memory_order_relaxed);
+      Fail(error, "write failed after " + std::to_string(written_.load(std::memory_order_relaxed)) +
+                      " records: " + std::strerror(error));
+    }
+  }
+  return taken;
+}
+
+// Stops recording on a failure: the file cut back to its last whole record, the end record naming
+// the error, the failure published to the tick's side.
+void Recorder::Fail(int error, const std::string& what) {
+  if (failed_.load(std::memory_order_relaxed)) return;
+  failure_ = what;
+  error_ = error;
+  if (error != ENOENT) (void)WriteEnd(LogEnd::kWriteFailed, error);
+  failed_.store(true, std::memory_order_release);
+}
+
+// Writes the end record after the last whole record; after a failure, where the disk takes no more,
+// backs off one record at a time (at most kBoundaries - 1), those records counted as not written.
+// Returns 0, or the error number of what failed.
+std::vector<std::uint8_t> Recorder::EndRecord(LogEnd why, int error) const {
+  std::uint8_t payload[21];
+  Out o{payload};
+  o.Put(dropped_.load(std::memory_order_relaxed));
+  o.Put(static_cast<std::uint8_t>(why));
+  o.Put(static_cast<std::uint32_t>(error));
+  o.Put(not_written_.load(std::memory_order_relaxed));
+  return Frame(kEnd, payload, sizeof payload);
+}
+
+int Recorder::WriteEnd(LogEnd why, int error) {
+  for (std::size_t back = 0; back < kBoundaries; ++back) {
+    const std::uint64_t records = written_.load(std::memory_order_relaxed);
+    const auto end = EndRecord(why, error);
+    const std::uint64_t at = boundary_[records % kBoundaries];
+    int e = 0;
+    // After a failure the file may end inside a record: cut back to the boundary first (a stop
+    // writes at the end of what was written, so a pipe or a terminal takes a log too).
+    const bool cut = why != LogEnd::kStopped || at != file_bytes_;
+    if (cut && (::ftruncate(fd_, static_cast<off_t>(at)) != 0 || ::lseek(fd_, static_cast<off_t>(at), SEEK_SET) < 0))
+      e = errno;
+    else if (WriteAll(fd_, end.data(), end.size(), &e) == end.size()) {
+      file_bytes_ = at + end.size();
+      end_at_ = at;
+      ended_ = true;
+      return 0;
+    }
+    if (why == LogEnd::kStopped || records == 0 || back + 1 == kBoundaries) {
+      if (cut) (void)::ftruncate(fd_, static_cast<off_t>(at));  // the whole records stay
+      return e != 0 ? e : EIO;
+    }
+    written_.store(records - 1, std::memory_order_relaxed);  // one record less, room for the end
+    not_written_.fetch_add(1, std::memory_order_relaxed);
+  }
+  return EIO;
+}
+
+void Recorder::Run() {
+  // Every second or so: is the file still there (a removed directory takes its files along, and
+  // writes to them then succeed into nothing)?
+  int polls = 0;
   for (;;) {
     const bool stopping = stop_.load(std::memory_order_acquire);
-    std::size_t tail = q.tail.load(std::memory_order_relaxed);
-    const std::size_t head = q.head.load(std::memory_order_acquire);
-    for (; tail != head; ++tail) {
-      const std::size_t slot = tail % q.capacity;
-      if (std::fwrite(&q.bytes[slot * q.slot_bytes], 1, q.sizes[slot], file_) != q.sizes[slot]) write_failed_ = true;
-      written_.fetch_add(1, std::memory_order_relaxed);
-    }
-    q.tail.store(tail, std::memory_order_release);
+    Drain();
     if (stopping) return;
+    if (++polls >= 500 && !failed_.load(std::memory_order_relaxed)) {
+      polls = 0;
+      struct stat st{};
+      if (::fstat(fd_, &st) == 0 && st.st_nlink == 0)
+        Fail(ENOENT,
+             "the file was removed after " + std::to_string(written_.load(std::memory_order_relaxed)) + " records");
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
 }
 
 Status Recorder::Stop() {
-  if (file_ == nullptr) return {};
+  if (fd_ < 0) return {};
   stop_.store(true, std::memory_order_release);
   if (thread_.joinable()) thread_.join();
-  const std::uint64_t dropped = dropped_.load(std::memory_order_relaxed);
-  const auto end = Frame(kEnd, reinterpret_cast<const std::uint8_t*>(&dropped), 8);
-  if (std::fwrite(end.data(), 1, end.size(), file_) != end.size()) write_failed_ = true;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (write_failed_ || !closed) return MakeError(ErrorCode::kIo, "log " + path_ + ": write failed");
+  if (!failed_.load(std::memory_order_relaxed)) {
+    struct stat st{};
+    if (::fstat(fd_, &st) == 0 && st.st_nlink == 0)
+      Fail(ENOENT,
+           "the file was removed after " + std::to_string(written_.load(std::memory_order_relaxed)) + " records");
+    else if (const int e = WriteEnd(LogEnd::kStopped, 0); e != 0)
+      Fail(e, "write failed after " + std::to_string(written_.load(std::memory_order_relaxed)) +
+                  " records (the end record): " + std::strerror(e));
+  }
+  // The end record written at the failure counted the records lost until then: it is written over
+  // (in place: no new space) with the run's final counts. Where that fails, the first one stays.
+  if (failed_.load(std::memory_order_relaxed) && ended_) {
+    const auto end = EndRecord(LogEnd::kWriteFailed, error_);
+    (void)!::pwrite(fd_, end.data(), end.size(), static_cast<off_t>(end_at_));
+  }
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (failed_.load(std::memory_order_relaxed)) {
+    const std::uint64_t lost = not_written_.load(std::memory_order_relaxed);
+    return MakeError(ErrorCode::kIo, "log " + path_ + ": " + failure_ + "; " + std::to_string(lost) +
+                                         " records not written; the file holds " +
+                                         std::to_string(written_.load(std::memory_order_relaxed)) + " whole records" +
+                                         (ended_ ? " and its end record" : ", without its end record"));
+  }
+  if (!closed) return MakeError(ErrorCode::kIo, "log " + path_ + ": closing the file failed: " + std::strerror(errno));
   return {};
 }
 
@@ -362,6 +517,17 @@ Status ParseRecord(Reader& r, const LogHeader& h, const std::string& w, LogRecor
   } else if (rec.type == kEnd) {
     PBPPO_GET(dropped, r, std::uint64_t, w, "dropped");
     log.dropped = dropped;
+    if (log.version >= 2) {
+      const std::size_t at = r.offset();
+      PBPPO_GET(why, r, std::uint8_t, w, "why");
+      PBPPO_GET(error, r, std::uint32_t, w, "error");
+      PBPPO_GET(lost, r, std::uint64_t, w, "not_written");
+      if (why > static_cast<std::uint8_t>(LogEnd::kWriteFailed))
+        return r.Fail(at, w, "field 'why': " + std::to_string(why) + " is not a reason a log ends");
+      log.end = static_cast<LogEnd>(why);
+      log.end_error = error;
+      log.not_written = lost;
+    }
     log.complete = true;
   } else {
     return r.Fail(r.offset(), w, "field 'type': " + std::to_string(rec.type) + " is not a record type");
@@ -380,10 +546,11 @@ Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& ori
   if (std::memcmp(magic.data(), kMagic, 8) != 0)
     return r.Fail(0, "header", "field 'magic': not a pbppo log (PBPPOLOG)");
   PBPPO_GET(version, r, std::uint32_t, "header", "version");
-  if (version != kLogVersion)
-    return r.Fail(
-        8, "header",
-        "field 'version': " + std::to_string(version) + " (this reader knows " + std::to_string(kLogVersion) + ")");
+  if (version < 1 || version > kLogVersion)
+    return r.Fail(8, "header",
+                  "field 'version': " + std::to_string(version) + " (this reader knows 1 to " +
+                      std::to_string(kLogVersion) + ")");
+  log.version = version;
   PBPPO_GET(n, r, std::uint32_t, "header", "length");
   if (auto st = r.Need(std::size_t{n} + 4, "header", "payload"); !st) return st.error();
   const std::size_t payload_at = r.offset();
@@ -445,6 +612,13 @@ Result<Log> ReadLog(const std::string& path, LogTail tail) {
   if (!f) return MakeError(ErrorCode::kIo, path + ": cannot open");
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   return ParseLog(bytes, path, tail);
+}
+
+std::string DescribeEnd(const Log& log) {
+  if (!log.complete) return log.cut_reason;
+  if (log.end == LogEnd::kStopped) return "stopped";
+  return "a write failed: " + std::string(std::strerror(static_cast<int>(log.end_error))) + " (" +
+         std::to_string(log.end_error) + "); " + std::to_string(log.not_written) + " records not written after it";
 }
 
 }  // namespace pbppo::loop

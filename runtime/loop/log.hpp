@@ -4,7 +4,7 @@
 // tick queues them (no allocation, lock or file access; drops counted) and a thread writes them.
 // Replay (runtime/loop/replay.hpp) runs the same Tick over a log and compares the commands.
 //
-// Format (little-endian), version 1:
+// Format (little-endian), version 2 (version 1 differs only in the end record, and is read too):
 //   header   "PBPPOLOG" u32 version, u32 n, n bytes of payload, u32 CRC-32 of the payload:
 //            u64 robot hash, u64 source hash, f64 tick period, u32 source kind, u32 options,
 //            u32 fields, u32 streams, u32 links, u32 commands, u32 motors, u16 + robot name
@@ -13,8 +13,17 @@
 //                       8 e-stop, 16 missed), u32 fresh streams, each u32 stream + f64 per field,
 //                       u32 links with news, each u32 link + u8 health (1 degraded, 2 fault, 4 lost)
 //            2 outputs  u64 tick, u8 phase, u8 mode, f64 per command, u8 per motor (MotorCommand)
-//            3 end      u64 records dropped while recording
+//            3 end      u64 records dropped while recording (the queue was full); version 2 then:
+//                       u8 why the log ended (0 the recorder stopped, 1 a write failed), u32 the
+//                       failed write's error number (errno), u64 records not written after it
 // A reader refuses a truncated or corrupt log naming the offset and the field.
+//
+// A write that fails (a full disk, a file size limit, a read-only or vanished file system) is
+// noticed by the writer thread at once: recording stops, the file is cut back to its last whole
+// record and closed by an end record that names the error (backing off a few records if the disk
+// takes no more; Stop writes it over in place with the final counts), and the records queued after
+// it are counted as not written. The tick never waits for the disk. A log file removed while
+// recording (its directory deleted) is noticed too, within a second.
 #pragma once
 
 #include <atomic>
@@ -30,7 +39,10 @@
 
 namespace pbppo::loop {
 
-inline constexpr std::uint32_t kLogVersion = 1;
+inline constexpr std::uint32_t kLogVersion = 2;
+
+// Why a log ended (its end record).
+enum class LogEnd : std::uint8_t { kStopped = 0, kWriteFailed = 1 };
 
 enum class SourceKind : std::uint32_t { kNone = 0, kPolicy = 1, kTrajectory = 2 };
 
@@ -53,7 +65,8 @@ LogHeader MakeLogHeader(const robot::RobotModel& model, SourceKind source, std::
 
 class Recorder {
  public:
-  // Opens `path` for writing, writes the header, starts the writer thread.
+  // Opens `path` for writing, writes the header, starts the writer thread. Sets SIGXFSZ to be
+  // ignored (for the process): past a file size limit a write then fails instead of killing it.
   static Result<std::unique_ptr<Recorder>> Open(const std::string& path, const robot::RobotModel& model,
                                                 const LogHeader& header, std::size_t queue_records = 4096);
   ~Recorder();  // Stop()
@@ -64,11 +77,23 @@ class Recorder {
   void Inputs(const robot::RobotModel& model, const robot::RobotData& data, const rt::TickTiming& timing,
               const TickEvents& events) noexcept;
   void Outputs(const robot::RobotModel& model, const robot::RobotData& data, Phase phase) noexcept;
-  // Writes what is queued and the end record, closes the file. Idempotent; errors name the file.
+  // Writes what is queued and the end record, closes the file. Idempotent. An error names the file
+  // and what failed ("log run.log: write failed after 1359 records: No space left on device; ...").
   Status Stop();
 
+  // Records in the file (whole), dropped by the tick (the queue was full), and queued but not
+  // written because a write had failed.
   std::uint64_t records() const noexcept { return written_.load(std::memory_order_relaxed); }
   std::uint64_t dropped() const noexcept { return dropped_.load(std::memory_order_relaxed); }
+  std::uint64_t not_written() const noexcept { return not_written_.load(std::memory_order_relaxed); }
+  // Whether recording has stopped on a failure, and what failed (valid once failed() is true):
+  // "write failed after 1359 records: No space left on device", "the file was removed after 88 records".
+  bool failed() const noexcept { return failed_.load(std::memory_order_acquire); }
+  const std::string& failure() const noexcept { return failure_; }
+
+  // After a failed write, at most kBoundaries - 1 whole records are given back to make room for the
+  // end record.
+  static constexpr std::size_t kBoundaries = 8;
 
   struct Ring;
 
@@ -76,13 +101,25 @@ class Recorder {
   Recorder() = default;
   void Push(std::uint8_t type, const std::uint8_t* payload, std::size_t n) noexcept;
   void Run();
+  std::size_t Drain();  // writes (or, after a failure, counts as not written) what is queued
+  void Fail(int error, const std::string& what);
+  int WriteEnd(LogEnd why, int error);
+  std::vector<std::uint8_t> EndRecord(LogEnd why, int error) const;
   std::string path_;
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
   std::unique_ptr<Ring> ring_;
   std::vector<std::uint8_t> scratch_;  // the record being built (sized at Open)
-  std::atomic<std::uint64_t> written_{0}, dropped_{0};
-  std::atomic<bool> stop_{false};
-  bool write_failed_ = false;
+  // The writer thread's: a batch of records and their sizes, where the file's whole records end
+  // (the last few boundaries, to back off to), whether the end record is written.
+  std::vector<std::uint8_t> batch_;
+  std::vector<std::uint32_t> batch_sizes_;
+  std::uint64_t boundary_[kBoundaries] = {};  // file offset after record k (k mod kBoundaries)
+  std::uint64_t file_bytes_ = 0, end_at_ = 0;
+  bool ended_ = false;
+  int error_ = 0;  // the failed write's error number
+  std::atomic<std::uint64_t> written_{0}, dropped_{0}, not_written_{0};
+  std::atomic<bool> stop_{false}, failed_{false};
+  std::string failure_;  // written once, before failed_ is set
   std::thread thread_;
 };
 
@@ -111,10 +148,16 @@ struct LogRecord {
 };
 
 struct Log {
+  std::uint32_t version = kLogVersion;
   LogHeader header;
   std::vector<LogRecord> records;
   std::uint64_t dropped = 0;
   bool complete = false;  // an end record closes it
+  // Why it ended (version 2 end records; a version 1 log ends kStopped): a failed write's error
+  // number and the records not written after it.
+  LogEnd end = LogEnd::kStopped;
+  std::uint32_t end_error = 0;
+  std::uint64_t not_written = 0;
   // A log read with LogTail::kAcceptCut that ends without its end record: where its whole records
   // end (an offset in the file) and why the rest is not there ("the file ends inside record 1360
   // (inputs): it needs 95 bytes, 41 are left", "no end record after record 1359").
@@ -132,5 +175,9 @@ enum class LogTail : std::uint8_t { kStrict, kAcceptCut };
 // With a model, the counts are checked against it too (a log of another robot is refused).
 Result<Log> ParseLog(std::span<const std::uint8_t> bytes, const std::string& origin, LogTail tail = LogTail::kStrict);
 Result<Log> ReadLog(const std::string& path, LogTail tail = LogTail::kStrict);
+
+// How a log ends, in words: "stopped", "a write failed: No space left on device (28); 2000
+// records not written after it", or (a log cut short) the cut's reason.
+std::string DescribeEnd(const Log& log);
 
 }  // namespace pbppo::loop

@@ -11,7 +11,10 @@
 #   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause;
 #   6. record and replay: a lock-step run recorded (--record) replays (pbppo replay) to
 #      bit-identical commands; a log cut short replays up to its last whole record and says
-#      where it ends; a log cut inside its header or corrupted is refused naming the offset.
+#      where it ends; a log cut inside its header or corrupted is refused naming the offset;
+#   7. recording onto a file system that fills: the mission goes on, the failure is told at once and
+#      in the summary (exit 1), the log holds its whole records and an end record naming the error,
+#      and replays.
 # usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
@@ -151,4 +154,42 @@ rc=0
 [ "$rc" -eq 1 ] || fail "a corrupted log: exit $rc"
 expect "$work/replay3.log" "corrupt.log: offset [0-9]+: record [0-9]+"
 cat "$work/replay.log" "$work/replay_cut.log" "$work/replay2.log" "$work/replay3.log" | sed 's/^/   /'
+echo "== 7: recording onto a disk that fills (a 64 KiB file system; the log takes about 116 KiB)"
+# The controller runs in a mount namespace of its own with a small tmpfs on the log's directory
+# (mounting needs root, which the test command has); the log is copied out before it ends.
+[ "$(id -u)" = 0 ] || fail "step 7 mounts a small file system: run it as root (the test command does)"
+mkdir -p "$work/small"
+cat >"$work/on_small_fs.sh" <<'SH'
+dir=$1 out=$2
+shift 2
+mount -t tmpfs -o size=64k pbppo-small "$dir" || exit 97
+rc=0
+"$@" || rc=$?
+cp "$dir/run.log" "$out" || exit 98
+exit "$rc"
+SH
+"$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" --max-time 30 >"$work/full.hil.log" 2>&1 &
+hpid=$!
+rc=0
+unshare --mount --propagation private bash "$work/on_small_fs.sh" "$work/small" "$work/full.log" \
+  "$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet --record "$work/small/run.log" \
+  >"$work/full.ctl.log" 2>&1 || rc=$?
+wait "$hpid" || fail "disk full: pbppo-hil exited $?: $(cat "$work/full.hil.log")"
+# The run goes on to its end as step 6's did (lock-step: the same outcome, to the digit); the failure
+# is told at once, in the summary, and by the exit status.
+outcome() { grep -oE "[0-9]+/3 targets, return [-0-9.]+, min clearance [0-9.]+ m" "$1"; }
+[ -n "$(outcome "$work/rec.hil.log")" ] && [ "$(outcome "$work/full.hil.log")" = "$(outcome "$work/rec.hil.log")" ] ||
+  fail "disk full: the run differs from step 6's: '$(outcome "$work/full.hil.log")' against '$(outcome "$work/rec.hil.log")'"
+[ "$rc" -eq 1 ] || fail "disk full: the controller exited $rc (1 expected): $(cat "$work/full.ctl.log")"
+expect "$work/full.ctl.log" "tick [0-9]+: log .*small/run.log: write failed after [0-9]+ records: No space left on device; recording stopped, the control loop goes on"
+expect "$work/full.ctl.log" "log: .*run.log, [0-9]+ records, 0 dropped, recording stopped: write failed after [0-9]+ records: No space left on device, [0-9]+ records not written"
+expect "$work/full.ctl.log" "final mode nominal"
+[ "$(stat -c %s "$work/full.log")" -le 65536 ] || fail "disk full: the log is larger than its file system"
+# The log is whole up to where recording stopped: it replays, and says why it ends.
+"$pbppo" replay "$work/full.log" --robot "$robot" --policy "$blob" >"$work/replay_full.log" 2>&1 ||
+  fail "the log of a full disk: $(cat "$work/replay_full.log")"
+expect "$work/replay_full.log" "replay: .*full.log: [0-9]+ ticks, [0-9]+ commands compared, 0 different$"
+expect "$work/replay_full.log" "full.log ends where its recording stopped: a write failed: No space left on device \(28\); [0-9]+ records not written after it"
+grep -E "write failed|recording stopped" "$work/full.ctl.log" | sed 's/^/   /'
+sed 's/^/   /' "$work/replay_full.log"
 echo "auv end to end: all checks passed"

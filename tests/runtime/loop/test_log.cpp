@@ -1,16 +1,26 @@
 // Record and replay in memory: a recorded run (the AUV's robot, a policy, samples that go stale,
 // a stop) replays to bit-identical commands; a log of other files or another policy is refused
-// naming what differs; a truncated or corrupt log is refused naming the offset and the field.
+// naming what differs; a truncated or corrupt log is refused naming the offset and the field; a
+// write that fails or a file removed while recording stops the recording at once, the file valid.
 #include <doctest/doctest.h>
+#include <sys/resource.h>
 
+#include <atomic>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "runtime/core/alloc_probe.hpp"
+#include "runtime/core/crc32.hpp"
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/policy_source.hpp"
 #include "runtime/loop/replay.hpp"
@@ -26,7 +36,14 @@ struct Recorded {
   std::string path;
   std::vector<std::uint8_t> bytes;
   std::uint64_t source_hash = 0;
+  std::string stop_error;  // Recorder::Stop's, if it failed
+  std::string failure;     // Recorder::failure(), if it failed
+  std::uint64_t records = 0, not_written = 0;
 };
+
+// Called after each tick with the tick's number and the recorder (inside the count of the tick's
+// allocations: it allocates nothing).
+using EachTick = std::function<void(std::uint64_t, const loop::Recorder&)>;
 
 policy::PolicySpec Spec(const robot::RobotModel& m, std::uint64_t seed) {
   policy::PolicySpec s =
@@ -37,7 +54,7 @@ policy::PolicySpec Spec(const robot::RobotModel& m, std::uint64_t seed) {
 
 // 300 ticks of the AUV: a sample most ticks (a unicycle's pose), none from tick 200 (stale,
 // then lost), an e-stop never; the log and its bytes.
-Recorded Record(const std::string& name, std::uint64_t seed = 1) {
+Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick& each_tick = {}) {
   const robot::RobotModel& m = test::AuvRobot();
   auto policy = policy::PolicyModel::FromSpec(Spec(m, seed));
   REQUIRE(policy.ok());
@@ -78,6 +95,7 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1) {
       rt::TickTiming timing;
       timing.tick = k;
       if (loop::Tick(m, d, *l, ts, timing) != loop::TickStatus::kRunning) break;
+      if (each_tick) each_tick(k, **rec);
       yaw += t.command[1] * 0.1;
       x += t.command[0] * std::cos(yaw) * 0.1;
       y += t.command[0] * std::sin(yaw) * 0.1;
@@ -85,8 +103,13 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1) {
     allocations = scope.count();
   }
   CHECK(allocations == 0);
-  REQUIRE((*rec)->Stop().ok());
+  const Status stopped = (*rec)->Stop();
+  if (!stopped) r.stop_error = stopped.error().message;
+  if (!each_tick) REQUIRE_MESSAGE(stopped.ok(), r.stop_error);
   CHECK((*rec)->dropped() == 0);
+  r.records = (*rec)->records();
+  r.not_written = (*rec)->not_written();
+  if ((*rec)->failed()) r.failure = (*rec)->failure();
   std::ifstream f(r.path, std::ios::binary);
   r.bytes.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
   return r;
@@ -150,8 +173,10 @@ TEST_CASE("log: a truncated or corrupt log is refused naming the offset and the 
   bad[0] = 'X';
   CHECK(Refusal(bad) == "run.log: offset 0: header: field 'magic': not a pbppo log (PBPPOLOG)");
   bad = b;
-  bad[8] = 2;
-  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 2 (this reader knows 1)");
+  bad[8] = 3;
+  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 3 (this reader knows 1 to 2)");
+  bad[8] = 0;
+  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 0 (this reader knows 1 to 2)");
   bad = b;
   bad[20] ^= 0x40;  // inside the header's payload
   CHECK(Refusal(bad).find("header: CRC does not match its payload") != std::string::npos);
@@ -218,4 +243,142 @@ TEST_CASE("log: a log cut short (a full disk) is read up to its last whole recor
   REQUIRE_FALSE(refused.ok());
   CHECK(refused.error().message.find("record 50 (") != std::string::npos);
   CHECK(refused.error().message.find("CRC does not match the record") != std::string::npos);
+}
+
+namespace {
+
+// Replays a log's records against the policy of Record(seed 1): the number of commands compared.
+std::uint64_t ReplaysExactly(const loop::Log& log, std::uint64_t source_hash) {
+  const robot::RobotModel& m = test::AuvRobot();
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE(source.ok());
+  auto replay = loop::Replay(m, log, source->get(), source_hash);
+  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+  return replay->compared;
+}
+
+// Waits (at most 10 s) for the recorder's writer to notice a failure.
+bool WaitForFailure(const loop::Recorder& rec) {
+  for (int i = 0; i < 10000 && !rec.failed(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  return rec.failed();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "log: a write that fails (past a file size limit) stops recording at once - whole records, an end record naming "
+    "the error") {
+  const Recorded whole = Record("fsize_whole");
+  auto full = loop::ParseLog(whole.bytes, "run.log");
+  REQUIRE(full.ok());
+  const std::size_t n = full->records.size();
+  REQUIRE(n > 400);
+  // The limit falls inside record `mid`; the tick that queued it, and a later one where the test
+  // waits for the writer to notice (the run goes on after it).
+  const std::size_t mid = n / 2;
+  const loop::LogRecord& at = full->records[mid];
+  const std::uint64_t tick = at.type == 1 ? at.inputs.tick : at.outputs.tick;
+  const rlim_t limit = at.offset + 17;
+  rlimit old{};
+  REQUIRE(getrlimit(RLIMIT_FSIZE, &old) == 0);
+  rlimit lim = old;
+  lim.rlim_cur = limit;
+  REQUIRE(setrlimit(RLIMIT_FSIZE, &lim) == 0);
+  std::uint64_t noticed_at = ~std::uint64_t{0};
+  const Recorded r = Record("fsize", 1, [&](std::uint64_t k, const loop::Recorder& rec) {
+    if (k == tick + 5) WaitForFailure(rec);
+    if (rec.failed() && noticed_at == ~std::uint64_t{0}) noticed_at = k;
+  });
+  const std::string& failure = r.failure;
+  REQUIRE(setrlimit(RLIMIT_FSIZE, &old) == 0);
+  // Noticed while the loop ran (the ticks after it went on, allocating nothing: Record checks).
+  CHECK(noticed_at <= tick + 5);
+  CHECK(failure.rfind("write failed after ", 0) == 0);
+  CHECK(failure.find(std::string(" records: ") + std::strerror(EFBIG)) != std::string::npos);
+  CHECK(r.stop_error.rfind("log " + r.path + ": " + failure + "; ", 0) == 0);
+  CHECK(r.stop_error.find(std::strerror(EFBIG)) != std::string::npos);
+  CHECK(r.stop_error.find("records not written; the file holds " + std::to_string(r.records) +
+                          " whole records and its end record") != std::string::npos);
+  // The file: below the limit, read strictly, its whole records and the end record naming why.
+  CHECK(r.bytes.size() <= limit);
+  auto log = loop::ParseLog(r.bytes, "run.log");
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  CHECK(log->complete);
+  CHECK(log->end == loop::LogEnd::kWriteFailed);
+  CHECK(log->end_error == EFBIG);
+  CHECK(log->records.size() == r.records);
+  CHECK(r.records <= mid);
+  CHECK(r.records + loop::Recorder::kBoundaries > mid);  // at most a few records backed off for the end
+  CHECK(log->not_written == r.not_written);  // the final count, written over the first end record
+  CHECK(log->not_written > 0);
+  CHECK(r.records + r.not_written == n);  // every record is either in the file or counted
+  CHECK(loop::DescribeEnd(*log) == std::string("a write failed: ") + std::strerror(EFBIG) + " (" +
+                                       std::to_string(EFBIG) + "); " + std::to_string(log->not_written) +
+                                       " records not written after it");
+  // What is in the file replays bit for bit.
+  CHECK(ReplaysExactly(*log, r.source_hash) > 50);
+}
+
+TEST_CASE("log: a log whose directory is removed while recording is noticed - the loop goes on") {
+  const std::string dir = test::ScratchDir("log_removed");
+  // The directory is removed by another thread at tick 100 (the tick's thread allocates nothing).
+  std::atomic<bool> go{false}, removed{false};
+  std::thread remover([&] {
+    while (!go.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    std::filesystem::remove_all(dir);
+    removed.store(true);
+  });
+  bool noticed = false;
+  const Recorded r = Record("removed", 1, [&](std::uint64_t k, const loop::Recorder& rec) {
+    if (k != 100) return;
+    go.store(true);
+    while (!removed.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    noticed = WaitForFailure(rec);
+  });
+  remover.join();
+  CHECK(noticed);
+  CHECK(r.failure.rfind("the file was removed after ", 0) == 0);
+  CHECK(r.stop_error.find(": the file was removed after ") != std::string::npos);
+  CHECK(r.stop_error.find(", without its end record") != std::string::npos);
+  CHECK(r.not_written > 0);
+  CHECK_FALSE(std::filesystem::exists(r.path));
+}
+
+TEST_CASE("log: a log cannot be opened where nothing can be written - the error names the path and why") {
+  const robot::RobotModel& m = test::AuvRobot();
+  const std::string path = test::ScratchDir("log_nowhere") + "/no/such/dir/run.log";
+  auto rec = loop::Recorder::Open(path, m, loop::MakeLogHeader(m, loop::SourceKind::kNone, 0));
+  REQUIRE_FALSE(rec.ok());
+  CHECK(rec.error().message == "log " + path + ": cannot write: " + std::strerror(ENOENT));
+}
+
+TEST_CASE("log: a version 1 log (an end record of 8 bytes) is still read and replayed") {
+  const Recorded r = Record("version1");
+  std::vector<std::uint8_t> b = r.bytes;
+  // Version 2's end record (type, length, 21 bytes, CRC) becomes version 1's (8 bytes: dropped).
+  REQUIRE(b.size() > 30);
+  b.resize(b.size() - 30);
+  const std::uint32_t one = 1, len = 8;
+  std::memcpy(&b[8], &one, 4);
+  const std::size_t end = b.size();
+  b.push_back(3);
+  b.insert(b.end(), reinterpret_cast<const std::uint8_t*>(&len), reinterpret_cast<const std::uint8_t*>(&len) + 4);
+  b.insert(b.end(), 8, 0);
+  const std::uint32_t crc = Crc32(&b[end], b.size() - end);
+  b.insert(b.end(), reinterpret_cast<const std::uint8_t*>(&crc), reinterpret_cast<const std::uint8_t*>(&crc) + 4);
+  auto log = loop::ParseLog(b, "old.log");
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  CHECK(log->version == 1);
+  CHECK(log->complete);
+  CHECK(log->end == loop::LogEnd::kStopped);
+  CHECK(loop::DescribeEnd(*log) == "stopped");
+  CHECK(ReplaysExactly(*log, r.source_hash) > 100);
+  // Version 2's fields in a version 1 end record are refused (bytes after the last field).
+  std::vector<std::uint8_t> v2 = r.bytes;
+  std::memcpy(&v2[8], &one, 4);
+  CHECK(Refusal(v2).find("record " + std::to_string(log->records.size()) + " (end): 13 bytes after the last field") !=
+        std::string::npos);
 }
