@@ -312,7 +312,7 @@ TEST_CASE(
   CHECK(log->records.size() == r.records);
   CHECK(r.records <= mid);
   CHECK(r.records + loop::Recorder::kBoundaries > mid);  // at most a few records backed off for the end
-  CHECK(log->not_written == r.not_written);  // the final count, written over the first end record
+  CHECK(log->not_written == r.not_written);              // the final count, written over the first end record
   CHECK(log->not_written > 0);
   CHECK(r.records + r.not_written == n);  // every record is either in the file or counted
   CHECK(loop::DescribeEnd(*log) == std::string("a write failed: ") + std::strerror(EFBIG) + " (" +
