@@ -440,8 +440,14 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
     for (const auto& p : l.phase_changes())
       std::printf("phase: tick %llu: %s -> %s\n", static_cast<unsigned long long>(p.tick), loop::ToString(p.from),
                   loop::ToString(p.to));
+  if (robot.phases.enable_motors && l.phase_change_count() > l.phase_changes().size())
+    std::printf("phase: %llu changes in all, the first %zu above\n",
+                static_cast<unsigned long long>(l.phase_change_count()), l.phase_changes().size());
   for (const auto& m : l.mode_changes())
     std::printf("mode change: tick %llu: %s\n", static_cast<unsigned long long>(m.tick), m.reason);
+  if (l.mode_change_count() > l.mode_changes().size())
+    std::printf("mode change: %llu in all, the first %zu above\n",
+                static_cast<unsigned long long>(l.mode_change_count()), l.mode_changes().size());
   const char* end = r.ended                                            ? nullptr
                     : r.stopped                                        ? "a signal"
                     : safe_stop && r.status == loop::TickStatus::kDone ? "--safe-stop, its stop done"

@@ -106,8 +106,11 @@ class LoopData {
   const safety::Decision& decision() const noexcept { return sup_.last; }
   rt::TickProfiler& profiler() noexcept { return profiler_; }
   const rt::TickProfiler& profiler() const noexcept { return profiler_; }
+  // The first kMaxChanges mode and phase changes, and how many there were in all.
   std::span<const ModeChange> mode_changes() const noexcept { return Changes(modes_, mode_count_); }
   std::span<const PhaseChange> phase_changes() const noexcept { return Changes(phases_, phase_count_); }
+  std::uint64_t mode_change_count() const noexcept { return mode_count_; }
+  std::uint64_t phase_change_count() const noexcept { return phase_count_; }
   // Another thread's view (single reader).
   LoopStatus Status() const noexcept;
 
@@ -127,7 +130,7 @@ class LoopData {
   friend std::unique_ptr<LoopData> MakeLoopData(const robot::RobotModel&, CommandSource*, const LoopOptions&);
   friend struct TickImpl;
   template <typename T>
-  static std::span<const T> Changes(const std::array<T, kMaxChanges>& a, std::size_t n) noexcept {
+  static std::span<const T> Changes(const std::array<T, kMaxChanges>& a, std::uint64_t n) noexcept {
     return {a.data(), n < kMaxChanges ? n : kMaxChanges};
   }
 
@@ -145,9 +148,9 @@ class LoopData {
   safety::SupervisorState sup_;
   rt::TickProfiler profiler_;
   std::array<ModeChange, kMaxChanges> modes_{};
-  std::size_t mode_count_ = 0;
+  std::uint64_t mode_count_ = 0;
   std::array<PhaseChange, kMaxChanges> phases_{};
-  std::size_t phase_count_ = 0;
+  std::uint64_t phase_count_ = 0;
   mutable LatestMailbox<LoopStatus> status_;
   std::atomic<bool> arm_{false}, disarm_{false}, stop_{false}, estop_{false};
 };

@@ -22,7 +22,7 @@ bool FreeRunningClock::Wait(TickTiming& t) noexcept {
   if (tick_ > 0 && now >= deadline + period_ns_) {
     // The previous tick ran past this deadline's successor: start at once, skip the passed periods.
     missed = true;
-    ++consecutive_;
+    if (consecutive_ < 0xffffffffu) ++consecutive_;  // saturates (a run of 2^32 misses stays one)
     misses_.store(misses_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     const std::int64_t behind = (now - deadline) / period_ns_;
     skipped_.store(skipped_.load(std::memory_order_relaxed) + static_cast<std::uint64_t>(behind),

@@ -400,3 +400,50 @@ TEST_CASE("signals: gravity in the IMU's frame, wrapped angles, the least of fie
   CHECK(bad.error().message.find("signal 'base_ang_vel_w' is not provided (known: base_ang_vel_x") !=
         std::string::npos);
 }
+
+TEST_CASE("loop: more mode and phase changes than the lists keep - every one counted, the first kept in order") {
+  // The AUV: armed, its vehicle's samples come for 5 ticks and then stop, so it goes degraded,
+  // safe-stop and lost (mode changes); disarmed and reset, it is armed again (phase changes), 20
+  // times.
+  const robot::RobotModel& m = test::AuvRobot();
+  robot::RobotData d = robot::MakeRobotData(m);
+  auto l = loop::MakeLoopData(m, nullptr);
+  test::ScriptedTransport t(m);
+  robot::Transport* ts[] = {&t};
+  std::vector<double> sample(m.fields.size(), 0.0);
+  sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
+  for (std::uint32_t i = 0; i < 16; ++i)
+    sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0;
+  std::uint64_t modes = 0, tick = 0;
+  std::vector<std::uint64_t> mode_ticks;
+  auto step = [&](bool with_sample) {
+    if (with_sample) {
+      sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(tick);
+      t.Put(m, 0, sample);
+    }
+    const Mode before = l->supervisor().mode;
+    rt::TickTiming timing;
+    timing.tick = tick++;
+    loop::Tick(m, d, *l, ts, timing);
+    if (l->supervisor().mode != before) {
+      ++modes;
+      mode_ticks.push_back(d.tick);
+    }
+  };
+  for (int cycle = 0; cycle < 20; ++cycle) {
+    l->Arm();
+    for (int k = 0; k < 60; ++k) step(k < 5);
+    REQUIRE(l->phase() == Phase::kRun);
+    REQUIRE(l->supervisor().mode == Mode::kEStop);
+    l->Disarm();
+    step(false);
+    REQUIRE(l->phase() == Phase::kDisarmed);
+    REQUIRE(l->ResetSupervisor());
+  }
+  REQUIRE(modes > loop::LoopData::kMaxChanges);
+  CHECK(l->mode_change_count() == modes);
+  CHECK(l->phase_change_count() == 40);
+  REQUIRE(l->mode_changes().size() == loop::LoopData::kMaxChanges);
+  CHECK(l->phase_changes().size() == loop::LoopData::kMaxChanges);
+  for (std::size_t k = 0; k < loop::LoopData::kMaxChanges; ++k) CHECK(l->mode_changes()[k].tick == mode_ticks[k]);
+}
