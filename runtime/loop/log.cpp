@@ -14,6 +14,7 @@
 #include <iterator>
 
 #include "runtime/core/crc32.hpp"
+#include "runtime/core/write_all.hpp"
 
 namespace pbppo::loop {
 namespace {
@@ -34,25 +35,6 @@ struct Out {
     p += sizeof v;
   }
 };
-
-// Writes n bytes at the file's offset (retrying interrupted and short writes); how many were
-// written, and the error number of the write that failed (0 if none did).
-std::size_t WriteAll(int fd, const std::uint8_t* p, std::size_t n, int* error) noexcept {
-  std::size_t done = 0;
-  *error = 0;
-  while (done < n) {
-    const ssize_t w = ::write(fd, p + done, n - done);
-    if (w > 0) {
-      done += static_cast<std::size_t>(w);
-    } else if (w < 0 && errno == EINTR) {
-      continue;
-    } else {
-      *error = w < 0 ? errno : ENOSPC;  // a write of 0 bytes: the device takes no more
-      break;
-    }
-  }
-  return done;
-}
 
 std::vector<std::uint8_t> Frame(std::uint8_t type, const std::uint8_t* payload, std::size_t n) {
   std::vector<std::uint8_t> r(1 + 4 + n + 4);
@@ -221,12 +203,10 @@ void Recorder::Outputs(const robot::RobotModel&, const robot::RobotData& d, Phas
 }
 
 // Moves what is queued into the file (or, once a write has failed, counts it as not written).
-// Returns how many records it took from the queue.
-std::size_t Recorder::Drain() {
+void Recorder::Drain() {
   Ring& q = *ring_;
   std::size_t tail = q.tail.load(std::memory_order_relaxed);
   const std::size_t head = q.head.load(std::memory_order_acquire);
-  std::size_t taken = 0;
   while (tail != head) {
     std::size_t bytes = 0, n = 0;
     for (; tail != head && n < batch_sizes_.size(); ++tail, ++n) {
@@ -238,7 +218,6 @@ std::size_t Recorder::Drain() {
       batch_sizes_[n] = q.sizes[slot];
     }
     q.tail.store(tail, std::memory_order_release);  // the slots are free again
-    taken += n;
     if (failed_.load(std::memory_order_relaxed)) {
       not_written_.fetch_add(n, std::memory_order_relaxed);
       continue;
@@ -261,7 +240,6 @@ std::size_t Recorder::Drain() {
                       " records: " + std::strerror(error));
     }
   }
-  return taken;
 }
 
 // Stops recording on a failure: the file cut back to its last whole record, the end record naming

@@ -101,7 +101,7 @@ class Recorder {
   Recorder() = default;
   void Push(std::uint8_t type, const std::uint8_t* payload, std::size_t n) noexcept;
   void Run();
-  std::size_t Drain();  // writes (or, after a failure, counts as not written) what is queued
+  void Drain();  // writes (or, after a failure, counts as not written) what is queued
   void Fail(int error, const std::string& what);
   int WriteEnd(LogEnd why, int error);
   std::vector<std::uint8_t> EndRecord(LogEnd why, int error) const;

@@ -18,6 +18,7 @@
 #include <string_view>
 
 #include "runtime/core/crc32.hpp"
+#include "runtime/core/write_all.hpp"
 
 namespace pbppo::policy {
 namespace {
@@ -505,17 +506,10 @@ Result<std::string> WriteTemporary(const std::string& path, std::span<const std:
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return MakeError(ErrorCode::kIo, tmp + ": cannot create: " + std::strerror(errno));
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int e = errno;
-      ::close(fd);
-      ::unlink(tmp.c_str());
-      return MakeError(ErrorCode::kIo, tmp + ": write failed: " + std::strerror(e));
-    }
-    done += static_cast<std::size_t>(n);
+  if (int e = 0; WriteAll(fd, bytes.data(), bytes.size(), &e) != bytes.size()) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    return MakeError(ErrorCode::kIo, tmp + ": write failed: " + std::strerror(e));
   }
   if (::fsync(fd) != 0 || ::close(fd) != 0) {
     const int e = errno;
