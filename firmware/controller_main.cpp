@@ -26,7 +26,9 @@
 // service manager ($NOTIFY_SOCKET) it reports ready once the robot runs and feeds the watchdog only
 // while the loop's tick count advances (runtime/rt/service_notify.hpp). With --failure-record the
 // service's stop (--safe-stop) records a run that ended in failure, and the next start refuses to
-// arm (exit status 3) unless the robot file allows it (service.rearm_after_failure).
+// arm (exit status 3) unless the robot file allows it (service.rearm_after_failure). Within a run,
+// a robot the supervisor stopped runs again by the robot file's supervisor.recovery rule: on a
+// person's request (SIGUSR1) or by itself, once healthy (runtime/loop/loop.hpp).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
@@ -398,9 +400,29 @@ class StartupWatchdog {
 // a recording that stopped on a failure, once, as soon as the status thread sees it.
 loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o, ServiceState* service,
                                      const loop::Recorder* recorder) {
-  return [&robot, &o, service, recorder, phase = loop::Phase::kDisarmed, told = false](const loop::LoopStatus& st,
-                                                                                       bool published) mutable {
+  return [&robot, &o, service, recorder, phase = loop::Phase::kDisarmed, told = false, recoveries = std::uint64_t{0},
+          stopped = false](const loop::LoopStatus& st, bool published) mutable {
     service->Poll(robot, st, published);
+    // Stopped by the supervisor: what it takes to run again; then each re-arm or refused request.
+    const bool now_stopped = st.mode >= safety::Mode::kSafeStop && st.phase != loop::Phase::kDisarmed &&
+                             st.phase != loop::Phase::kDamping && st.phase != loop::Phase::kMotorOff &&
+                             st.phase != loop::Phase::kDone;
+    if (now_stopped && !stopped) {
+      const robot::RecoverySpec& r = robot.supervisor.recovery;
+      std::printf("pbppo-controller: tick %llu: %s%s%s; runs again %s once healthy for %g s\n",
+                  static_cast<unsigned long long>(st.tick), safety::ToString(st.mode), st.any_latched ? ": " : "",
+                  st.any_latched ? safety::ToString(st.latched) : "",
+                  r.automatic ? "by itself (supervisor.recovery: automatic, for its causes) or on request (SIGUSR1)"
+                              : "on request (SIGUSR1; supervisor.recovery: request)",
+                  r.healthy_s);
+      std::fflush(stdout);
+    }
+    stopped = now_stopped;
+    if (st.rearms + st.refused != recoveries) {
+      recoveries = st.rearms + st.refused;
+      std::printf("pbppo-controller: tick %llu: %s\n", static_cast<unsigned long long>(st.tick), st.recovery);
+      std::fflush(stdout);
+    }
     if (recorder != nullptr && !told && recorder->failed()) {
       told = true;
       std::fprintf(stderr, "\npbppo-controller: tick %llu: log %s: %s; recording stopped, the control loop goes on\n",
@@ -448,6 +470,11 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
   if (l.mode_change_count() > l.mode_changes().size())
     std::printf("mode change: %llu in all, the first %zu above\n",
                 static_cast<unsigned long long>(l.mode_change_count()), l.mode_changes().size());
+  if (const loop::RecoveryStatus& rec = l.recovery(); rec.automatic + rec.requested + rec.refused > 0)
+    std::printf("recovery: re-armed %llu times (%llu automatically, %llu on request), %llu requests refused\n",
+                static_cast<unsigned long long>(rec.automatic + rec.requested),
+                static_cast<unsigned long long>(rec.automatic), static_cast<unsigned long long>(rec.requested),
+                static_cast<unsigned long long>(rec.refused));
   const char* end = r.ended                                            ? nullptr
                     : r.stopped                                        ? "a signal"
                     : safe_stop && r.status == loop::TickStatus::kDone ? "--safe-stop, its stop done"
@@ -519,6 +546,7 @@ int Run(const Options& o) {
   const rt::RtSetupResult rs = rt::SetUpRealTime(ro);
   for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-controller: warning: %s\n", w.c_str());
   loop::InstallStopSignals();
+  loop::InstallRearmSignal();
   std::atomic<bool> done{false};
   auto clock = MakeClock(robot, o, ts, done);
   if (!clock) return Fail(clock.error().message);

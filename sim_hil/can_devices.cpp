@@ -10,7 +10,8 @@
 
 namespace pbppo::sim {
 namespace {
-constexpr std::uint32_t kErrBusOff = 0x40;  // the bus-off error class (linux/can/error.h CAN_ERR_BUSOFF)
+constexpr std::uint32_t kErrBusOff = 0x40;      // the bus-off error class (linux/can/error.h CAN_ERR_BUSOFF)
+constexpr std::uint32_t kErrRestarted = 0x100;  // the controller restarted (CAN_ERR_RESTARTED)
 }  // namespace
 
 Result<std::unique_ptr<CanDevices>> CanDevices::Make(const robot::RobotModel& model, const CanDevicesOptions& options,
@@ -83,6 +84,7 @@ Result<std::unique_ptr<CanDevices>> CanDevices::Make(const robot::RobotModel& mo
   }
   h->sent_last_.assign(map.buses.size(), 0);
   h->bus_off_.assign(map.buses.size(), 0);
+  h->bad_reply_.assign(h->motors_.size(), 0);
   if (!map.imus.empty()) {
     h->has_imu_ = true;
     h->imu_bus_ = map.imus[0].bus;
@@ -101,14 +103,15 @@ void CanDevices::DropFrames(double probability, std::uint32_t max_burst) noexcep
   }
 }
 
-void CanDevices::SetBusOff(std::size_t b) noexcept {
-  bus_off_[b] = 1;
+void CanDevices::SetBusOff(std::size_t b, bool off) noexcept {
+  if ((bus_off_[b] != 0) == off) return;
+  bus_off_[b] = off ? 1 : 0;
   if (network_ != nullptr) {
-    network_->SetBusOff(b, true);
-  } else {  // SocketCAN: the controller reads a bus-off error frame, then silence
+    network_->SetBusOff(b, off);
+  } else {  // SocketCAN: the controller reads a bus-off (then silence) or a restarted error frame
     can::CanFrame err;
     err.flags = can::kFlagError;
-    err.id = kErrBusOff;
+    err.id = off ? kErrBusOff : kErrRestarted;
     err.len = 8;
     (void)buses_[b]->Send({&err, 1});
   }
@@ -133,7 +136,8 @@ void CanDevices::Receive(const std::uint32_t* expect_per_bus, std::int64_t wait_
       const std::size_t m = e.index;
       const std::size_t j = joint_of_motor_[m];
       can::CanFrame reply;
-      if (MitMotorReceive(motors_[m], motor_state_[m], f, tick, q[j], dq[j], &reply)) tx_[b].push_back(reply);
+      const double reported = bad_reply_[m] != 0 ? motors_[m].range.p_max : q[j];
+      if (MitMotorReceive(motors_[m], motor_state_[m], f, tick, reported, dq[j], &reply)) tx_[b].push_back(reply);
     }
   }
 }

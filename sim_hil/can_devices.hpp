@@ -56,11 +56,15 @@ class CanDevices {
   // 3. The replies and, when the map has an IMU and it is not silent, its sample.
   void Send(const can::ImuSample& imu) noexcept;
 
-  // Faults.
+  // Faults, and their ends.
   void SilenceMotor(std::size_t motor, std::uint64_t tick) noexcept { motors_[motor].silent_from_tick = tick; }
+  void RestoreMotor(std::size_t motor) noexcept { motors_[motor].silent_from_tick = UINT64_MAX; }
+  // A motor whose replies report its position at the top of its MIT range (a broken encoder).
+  void BadReplies(std::size_t motor, bool on) noexcept { bad_reply_[motor] = on ? 1 : 0; }
   void DropFrames(double probability, std::uint32_t max_burst) noexcept;
-  void SetBusOff(std::size_t bus) noexcept;
-  void SilenceImu() noexcept { imu_silent_ = true; }
+  // A bus goes off (off) or is restarted (the controller reads the matching error frame).
+  void SetBusOff(std::size_t bus, bool off = true) noexcept;
+  void SilenceImu(bool silent = true) noexcept { imu_silent_ = silent; }
 
   // Lock-step: the frames the controller sends each tick on each bus (one per motor).
   const std::vector<std::uint32_t>& frames_per_tick() const noexcept { return per_bus_; }
@@ -85,7 +89,7 @@ class CanDevices {
   std::vector<std::size_t> joint_of_motor_;
   std::vector<std::vector<can::CanFrame>> rx_, tx_;
   std::vector<std::uint32_t> sent_last_, per_bus_;
-  std::vector<std::uint8_t> bus_off_;
+  std::vector<std::uint8_t> bus_off_, bad_reply_;
   std::uint32_t imu_bus_ = 0, imu_id_ = 0;
   bool has_imu_ = false, imu_silent_ = false;
   std::uint8_t imu_seq_ = 0;

@@ -8,6 +8,11 @@ const char* ToString(HilFaultKind kind) noexcept {
     case HilFaultKind::kImuSilent: return "imu-silent";
     case HilFaultKind::kDropFrames: return "drop-frames";
     case HilFaultKind::kBusOff: return "bus-off";
+    case HilFaultKind::kBusRestored: return "bus restored";
+    case HilFaultKind::kMotorBack: return "motor back";
+    case HilFaultKind::kImuBack: return "imu back";
+    case HilFaultKind::kBadReplies: return "bad replies";
+    case HilFaultKind::kGoodReplies: return "good replies";
     case HilFaultKind::kPush: return "push";
   }
   return "?";
@@ -36,10 +41,13 @@ Result<std::unique_ptr<QuadrupedHil>> QuadrupedHil::Make(const robot::RobotModel
     const std::string where = "quadruped HIL: faults[" + std::to_string(i) + "] (" + ToString(f.kind) + ")";
     if (i > 0 && f.tick < options.faults[i - 1].tick)
       return MakeError(ErrorCode::kInvalidValue, where + ": faults must be sorted by tick");
-    if (f.kind == HilFaultKind::kSilentMotor && (f.motor < 0 || static_cast<std::size_t>(f.motor) >= map.motors.size()))
+    const bool motor_fault = f.kind == HilFaultKind::kSilentMotor || f.kind == HilFaultKind::kMotorBack ||
+                             f.kind == HilFaultKind::kBadReplies || f.kind == HilFaultKind::kGoodReplies;
+    if (motor_fault && (f.motor < 0 || static_cast<std::size_t>(f.motor) >= map.motors.size()))
       return MakeError(ErrorCode::kInvalidValue,
                        where + ": motor " + std::to_string(f.motor) + " is not in the CAN map");
-    if (f.kind == HilFaultKind::kBusOff && (f.bus < 0 || static_cast<std::size_t>(f.bus) >= map.buses.size()))
+    if ((f.kind == HilFaultKind::kBusOff || f.kind == HilFaultKind::kBusRestored) &&
+        (f.bus < 0 || static_cast<std::size_t>(f.bus) >= map.buses.size()))
       return MakeError(ErrorCode::kInvalidValue, where + ": bus " + std::to_string(f.bus) + " is not in the CAN map");
     if (f.kind == HilFaultKind::kDropFrames && !(f.probability >= 0 && f.probability <= 1))
       return MakeError(ErrorCode::kInvalidValue,
@@ -57,9 +65,14 @@ void QuadrupedHil::ApplyFaults() noexcept {
     const HilFault& f = faults_[next_fault_++];
     switch (f.kind) {
       case HilFaultKind::kSilentMotor: devices_->SilenceMotor(static_cast<std::size_t>(f.motor), tick_); break;
-      case HilFaultKind::kImuSilent: devices_->SilenceImu(); break;
+      case HilFaultKind::kImuSilent: devices_->SilenceImu(true); break;
+      case HilFaultKind::kImuBack: devices_->SilenceImu(false); break;
+      case HilFaultKind::kMotorBack: devices_->RestoreMotor(static_cast<std::size_t>(f.motor)); break;
+      case HilFaultKind::kBadReplies: devices_->BadReplies(static_cast<std::size_t>(f.motor), true); break;
+      case HilFaultKind::kGoodReplies: devices_->BadReplies(static_cast<std::size_t>(f.motor), false); break;
       case HilFaultKind::kDropFrames: devices_->DropFrames(f.probability, f.max_burst); break;
-      case HilFaultKind::kBusOff: devices_->SetBusOff(static_cast<std::size_t>(f.bus)); break;
+      case HilFaultKind::kBusOff: devices_->SetBusOff(static_cast<std::size_t>(f.bus), true); break;
+      case HilFaultKind::kBusRestored: devices_->SetBusOff(static_cast<std::size_t>(f.bus), false); break;
       case HilFaultKind::kPush: plant_->Push(f.velocity_mps[0], f.velocity_mps[1], f.velocity_mps[2]); break;
     }
   }

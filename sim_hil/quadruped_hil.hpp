@@ -22,13 +22,26 @@
 
 namespace pbppo::sim {
 
-enum class HilFaultKind : std::uint8_t { kSilentMotor, kImuSilent, kDropFrames, kBusOff, kPush };
+// Each fault, and the event that ends it (a motor answers again, the IMU comes back, a bus is
+// restarted, a motor's replies are good again; frame drops end with drop_frames 0).
+enum class HilFaultKind : std::uint8_t {
+  kSilentMotor,
+  kImuSilent,
+  kDropFrames,
+  kBusOff,
+  kPush,
+  kBusRestored,
+  kMotorBack,
+  kImuBack,
+  kBadReplies,  // a motor reports its position at the top of its MIT range (out of the joint's bounds)
+  kGoodReplies,
+};
 
 struct HilFault {
   HilFaultKind kind = HilFaultKind::kSilentMotor;
   std::uint64_t tick = 0;              // from this tick on (a push: at it)
-  int motor = -1;                      // kSilentMotor: index in the CAN map
-  int bus = -1;                        // kBusOff: index in the CAN map
+  int motor = -1;                      // kSilentMotor, kMotorBack, kBadReplies, kGoodReplies: in the CAN map
+  int bus = -1;                        // kBusOff, kBusRestored: index in the CAN map
   double probability = 0;              // kDropFrames: of each frame a driver receives
   std::uint32_t max_burst = 0;         // kDropFrames: most consecutive drops (0: unbounded)
   double velocity_mps[3] = {0, 0, 0};  // kPush: added to the base

@@ -48,6 +48,7 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   r->transports_[0] = r->can_.get();
   r->transports_[1] = o.operator_transport != nullptr ? o.operator_transport : r->schedule_.get();
   r->supervise_deadlines_ = o.supervise_deadlines;
+  r->trace_every_ = o.trace_every;
   if (o.realtime)
     r->clock_ =
         std::make_unique<rt::FreeRunningClock>(static_cast<std::int64_t>(std::llround(model.tick_period_s * 1e9)));
@@ -57,6 +58,15 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
 }
 
 bool QuadrupedRig::Tick() noexcept {
+  TickController();
+  return TickPlant();
+}
+
+void QuadrupedRig::StartClock() noexcept {
+  if (clock_) clock_->Start();
+}
+
+void QuadrupedRig::TickController() noexcept {
   std::uint32_t from_hil[8] = {};
   for (std::size_t b = 0; b < hil_->bus_count() && b < 8; ++b) from_hil[b] = hil_->sent_last_tick(b);
   can_->Expect({from_hil, hil_->bus_count()});
@@ -68,10 +78,19 @@ bool QuadrupedRig::Tick() noexcept {
     timing.wake_ns = timing.deadline_ns = MonotonicNs();  // lock-step: the tick starts now
   }
   timing.tick = tick_;  // simulated time: one tick per tick, whatever the clock skipped
+  const std::int64_t t0 = MonotonicNs();
   status_ = loop::Tick(model_, data_, *loop_, transports_, timing);
+  last_tick_ns_ = MonotonicNs() - t0;
+}
+
+bool QuadrupedRig::TickPlant() noexcept {
   std::uint32_t from_ctl[8] = {};
   for (std::size_t b = 0; b < can_->bus_count() && b < 8; ++b) from_ctl[b] = can_->sent_last_tick(b);
   const bool ok = hil_->Tick(from_ctl, wait_ns_);
+  if (trace_every_ == 0 || tick_ % trace_every_ != 0) {
+    ++tick_;
+    return ok;
+  }
   // The trace.
   const QuadrupedPlant& p = hil_->plant();
   const BaseState& b = p.base();
@@ -111,7 +130,7 @@ bool QuadrupedRig::Tick() noexcept {
 bool QuadrupedRig::RunSchedule(double extra_s) {
   const auto total =
       static_cast<std::uint64_t>(std::llround((schedule_->schedule().duration_s() + extra_s) / model_.tick_period_s));
-  trace_.reserve(trace_.size() + total);
+  if (trace_every_ != 0) trace_.reserve(trace_.size() + total / trace_every_ + 1);
   loop_->Arm();
   if (clock_) clock_->Start();
   while (tick_ < total) {
@@ -137,10 +156,13 @@ RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedul
       rep.phases.push_back(t);
     }
   for (const RigSample& x : trace) {
-    // A fall: tilted beyond 60 degrees, or the body on the ground while the controller still
-    // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state).
+    // A fall: tilted beyond 60 degrees, or the body on the ground while the controller held or
+    // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state;
+    // re-armed, it gets up from there in arming and stand-up).
     const bool stopped = x.mode >= static_cast<std::uint8_t>(safety::Mode::kSafeStop);
-    if (!rep.fell && ((x.body_contact && !stopped) || x.tilt_rad > 1.047f)) {
+    const auto loop_phase = static_cast<loop::Phase>(x.loop_phase);
+    const bool getting_up = loop_phase == loop::Phase::kArming || loop_phase == loop::Phase::kStandUp;
+    if (!rep.fell && ((x.body_contact && !stopped && !getting_up) || x.tilt_rad > 1.047f)) {
       rep.fell = true;
       rep.fell_at_s = x.t_s;
     }

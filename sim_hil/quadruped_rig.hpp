@@ -46,6 +46,8 @@ struct RigOptions {
   // simulator, not the controller, makes ticks late; a run that only needs the wall clock (an
   // operator over DDS) turns this off.
   bool supervise_deadlines = true;
+  // Every how many ticks the trace keeps a sample (0: no trace; a run of days keeps it bounded).
+  std::uint32_t trace_every = 1;
 };
 
 // One tick of the trace.
@@ -85,8 +87,15 @@ class QuadrupedRig {
   ~QuadrupedRig();
 
   // One controller tick, then one HIL tick (realtime: first waits for the tick's deadline). False
-  // once the plant failed.
+  // once the plant failed. The same in two halves (a harness that measures the controller's tick
+  // alone): TickController(), then TickPlant().
   bool Tick() noexcept;
+  // Realtime: the clock's first deadline is now (RunSchedule does it; a harness of its own calls it).
+  void StartClock() noexcept;
+  void TickController() noexcept;
+  bool TickPlant() noexcept;
+  // The last controller tick's own time (loop::Tick, not the wait for its deadline), ns.
+  std::int64_t last_tick_ns() const noexcept { return last_tick_ns_; }
   // Arms, then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
   bool RunSchedule(double extra_s = 0);
   // Per schedule phase (`by_command`: per run of one command in force, as an operator over DDS
@@ -118,6 +127,8 @@ class QuadrupedRig {
   std::unique_ptr<loop::LoopData> loop_;
   robot::Transport* transports_[2] = {};
   std::vector<RigSample> trace_;
+  std::uint32_t trace_every_ = 1;
+  std::int64_t last_tick_ns_ = 0;
   std::int32_t cmd_field_[3] = {-1, -1, -1};
   std::int64_t wait_ns_ = 0;
   std::unique_ptr<rt::FreeRunningClock> clock_;  // realtime

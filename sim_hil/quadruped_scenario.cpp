@@ -79,33 +79,47 @@ Result<QuadrupedScenario> ParseQuadrupedScenario(const std::string& text, const 
     const YAML::Node& e = events[i];
     const std::string where = "events[" + std::to_string(i) + "]";
     if (!e.IsMap()) return y.Fail(where, "an event is a mapping");
-    PBPPO_TRY(y.Keys(e, where, {"at_s", "push", "silent_motor", "imu_silent", "drop_frames", "max_burst", "bus_off"}));
+    PBPPO_TRY(y.Keys(e, where,
+                     {"at_s", "push", "silent_motor", "imu_silent", "drop_frames", "max_burst", "bus_off",
+                      "bus_restored", "motor_back", "bad_replies", "good_replies"}));
     double at_s = 0;
     PBPPO_TRY(y.Number(e, "at_s", where, 0, 1e6, &at_s));
     HilFault f;
     f.tick = static_cast<std::uint64_t>(std::llround(at_s / tick_s));
     const int kinds = (e["push"] ? 1 : 0) + (e["silent_motor"] ? 1 : 0) + (e["imu_silent"] ? 1 : 0) +
-                      (e["drop_frames"] ? 1 : 0) + (e["bus_off"] ? 1 : 0);
-    if (kinds != 1) return y.Fail(where, "needs exactly one of push, silent_motor, imu_silent, drop_frames, bus_off");
+                      (e["drop_frames"] ? 1 : 0) + (e["bus_off"] ? 1 : 0) + (e["bus_restored"] ? 1 : 0) +
+                      (e["motor_back"] ? 1 : 0) + (e["bad_replies"] ? 1 : 0) + (e["good_replies"] ? 1 : 0);
+    if (kinds != 1)
+      return y.Fail(where,
+                    "needs exactly one of push, silent_motor, motor_back, bad_replies, good_replies, imu_silent, "
+                    "drop_frames, bus_off, bus_restored");
+    const char* motor_key = e["silent_motor"]   ? "silent_motor"
+                            : e["motor_back"]   ? "motor_back"
+                            : e["bad_replies"]  ? "bad_replies"
+                            : e["good_replies"] ? "good_replies"
+                                                : nullptr;
     if (e["push"]) {
       if (o.plant.mount != Mount::kGround) return y.Fail(YamlFields::Join(where, "push"), "a push needs mount: ground");
       std::array<double, 3> v{};
       PBPPO_TRY(y.Array<3>(e, "push", where, -10, 10, &v));
       f.kind = HilFaultKind::kPush;
       std::copy(v.begin(), v.end(), f.velocity_mps);
-    } else if (e["silent_motor"]) {
+    } else if (motor_key != nullptr) {
       std::string joint;
-      PBPPO_TRY(y.Text(e, "silent_motor", where, &joint));
-      f.kind = HilFaultKind::kSilentMotor;
+      PBPPO_TRY(y.Text(e, motor_key, where, &joint));
+      const std::string key = motor_key;
+      f.kind = key == "silent_motor"  ? HilFaultKind::kSilentMotor
+               : key == "motor_back"  ? HilFaultKind::kMotorBack
+               : key == "bad_replies" ? HilFaultKind::kBadReplies
+                                      : HilFaultKind::kGoodReplies;
       for (std::size_t m = 0; m < map.motors.size(); ++m)
         if (map.motors[m].joint == joint) f.motor = static_cast<int>(m);
       if (f.motor < 0)
-        return y.Fail(YamlFields::Join(where, "silent_motor"), "'" + joint + "' is not a motor of the CAN map");
+        return y.Fail(YamlFields::Join(where, motor_key), "'" + joint + "' is not a motor of the CAN map");
     } else if (e["imu_silent"]) {
       bool on = false;
       PBPPO_TRY(y.Bool(e, "imu_silent", where, &on));
-      if (!on) return y.Fail(YamlFields::Join(where, "imu_silent"), "only 'true' is an event");
-      f.kind = HilFaultKind::kImuSilent;
+      f.kind = on ? HilFaultKind::kImuSilent : HilFaultKind::kImuBack;  // false: the IMU comes back
     } else if (e["drop_frames"]) {
       f.kind = HilFaultKind::kDropFrames;
       PBPPO_TRY(y.Number(e, "drop_frames", where, 0, 1, &f.probability));
@@ -113,12 +127,13 @@ Result<QuadrupedScenario> ParseQuadrupedScenario(const std::string& text, const 
       if (e["max_burst"]) PBPPO_TRY(y.Count(e, "max_burst", where, 0, 1000000, &burst));
       f.max_burst = burst;
     } else {
+      const char* key = e["bus_off"] ? "bus_off" : "bus_restored";
       std::string bus;
-      PBPPO_TRY(y.Text(e, "bus_off", where, &bus));
-      f.kind = HilFaultKind::kBusOff;
+      PBPPO_TRY(y.Text(e, key, where, &bus));
+      f.kind = e["bus_off"] ? HilFaultKind::kBusOff : HilFaultKind::kBusRestored;
       for (std::size_t b = 0; b < map.buses.size(); ++b)
         if (map.buses[b].name == bus) f.bus = static_cast<int>(b);
-      if (f.bus < 0) return y.Fail(YamlFields::Join(where, "bus_off"), "'" + bus + "' is not a bus of the CAN map");
+      if (f.bus < 0) return y.Fail(YamlFields::Join(where, key), "'" + bus + "' is not a bus of the CAN map");
     }
     if (f.kind != HilFaultKind::kDropFrames && e["max_burst"])
       return y.Fail(YamlFields::Join(where, "max_burst"), "belongs to drop_frames");

@@ -10,9 +10,13 @@
 //   events:
 //     - {at_s: 6.0, push: [0.5, 0.0, 0.0]}
 //     - {at_s: 3.0, silent_motor: LF_KFE}
-//     - {at_s: 3.0, imu_silent: true}
+//     - {at_s: 3.2, motor_back: LF_KFE}     # it answers again
+//     - {at_s: 3.0, bad_replies: LF_KFE}    # replies at the top of its MIT range (out of bounds)
+//     - {at_s: 3.2, good_replies: LF_KFE}
+//     - {at_s: 3.0, imu_silent: true}       # false: the IMU comes back
 //     - {at_s: 3.0, drop_frames: 0.1, max_burst: 3}
 //     - {at_s: 3.0, bus_off: front}
+//     - {at_s: 3.5, bus_restored: front}   # the bus recovers (a "restarted" error frame)
 #pragma once
 
 #include <string>

@@ -164,7 +164,7 @@ void Recorder::Inputs(const robot::RobotModel& m, const robot::RobotData& d, con
   o.Put(d.tick);
   o.Put(t.consecutive_misses);
   o.Put(static_cast<std::uint8_t>((e.arm ? 1 : 0) | (e.disarm ? 2 : 0) | (e.stop ? 4 : 0) | (e.estop ? 8 : 0) |
-                                  (t.missed ? 16 : 0)));
+                                  (t.missed ? 16 : 0) | (e.rearm ? 32 : 0)));
   std::uint8_t* count = o.p;
   o.Put(std::uint32_t{0});
   std::uint32_t fresh = 0;

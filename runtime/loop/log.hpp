@@ -10,7 +10,7 @@
 //            u32 fields, u32 streams, u32 links, u32 commands, u32 motors, u16 + robot name
 //   records  u8 type, u32 n, n bytes of payload, u32 CRC-32 of type, n and payload:
 //            1 inputs   u64 tick, u32 consecutive misses, u8 flags (1 arm, 2 disarm, 4 stop,
-//                       8 e-stop, 16 missed), u32 fresh streams, each u32 stream + f64 per field,
+//                       8 e-stop, 16 missed, 32 re-arm request), u32 fresh streams, each u32 stream + f64 per field,
 //                       u32 links with news, each u32 link + u8 health (1 degraded, 2 fault, 4 lost)
 //            2 outputs  u64 tick, u8 phase, u8 mode, f64 per command, u8 per motor (MotorCommand)
 //            3 end      u64 records dropped while recording (the queue was full); version 2 then:

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 
 #include "runtime/core/clock.hpp"
 #include "runtime/loop/log.hpp"
@@ -53,6 +55,8 @@ LoopStatus LoopData::Status() const noexcept {
 bool LoopData::ResetSupervisor() noexcept {
   if (!safety::Reset(sup_, phase_ != Phase::kDisarmed)) return false;
   estop_.store(false, std::memory_order_relaxed);
+  stopped_by_ = 0;
+  healthy_ticks_ = 0;
   return true;
 }
 
@@ -79,10 +83,80 @@ struct TickImpl {
     return std::clamp(std::isfinite(v) ? v : 0.0, c.min, c.max);
   }
 
+  static bool Armed(const RobotModel& m, Phase p) noexcept {
+    return p == Phase::kRun || (m.phases.enable_motors && (p == Phase::kStandUp || p == Phase::kHold));
+  }
+
+  // "lost peer, stale sample" (the causes of `bits`) into buf.
+  static void CauseList(std::uint32_t bits, char* buf, std::size_t size) noexcept {
+    std::size_t at = 0;
+    buf[0] = '\0';
+    for (std::size_t c = 0; c < safety::kCauseCount && at < size; ++c) {
+      if (((bits >> c) & 1u) == 0) continue;
+      const int n = std::snprintf(buf + at, size - at, "%s%s", at > 0 ? ", " : "",
+                                  safety::ToString(static_cast<safety::Cause>(c)));
+      if (n < 0) break;
+      at += static_cast<std::size_t>(n);
+    }
+  }
+
+  // The robot file's recovery rule, at the start of a tick (Recovery in loop.hpp): a re-arm by
+  // request or automatically, or a refused request.
+  static void Recover(const RobotModel& m, const RobotData& d, LoopData& l, const TickEvents& ev) noexcept {
+    const robot::RecoverySpec& r = m.supervisor.recovery;
+    RecoveryStatus& st = l.recovery_;
+    const bool stopped = l.sup_.mode >= Mode::kSafeStop && Armed(m, l.phase_);
+    const bool healthy = l.healthy_ticks_ >= r.healthy_ticks;
+    const bool automatic =
+        r.automatic && stopped && healthy && (l.stopped_by_ & ~r.causes) == 0 && st.automatic < r.max_automatic;
+    char causes[96];
+    CauseList(l.stopped_by_, causes, sizeof causes);
+    if (ev.rearm && !automatic && !(stopped && healthy)) {
+      ++st.refused;
+      st.last_tick = d.tick;
+      st.last_refused = true;
+      if (!stopped) {
+        std::snprintf(st.last, sizeof st.last, "re-arm request refused: nothing to recover from (%s, %s)",
+                      ToString(l.phase_), safety::ToString(l.sup_.mode));
+      } else {
+        std::snprintf(st.last, sizeof st.last, "re-arm request refused: healthy for %u ticks, %u needed (%s: %s)",
+                      l.healthy_ticks_, r.healthy_ticks, safety::ToString(l.sup_.mode), causes);
+      }
+      return;
+    }
+    if (!automatic && !ev.rearm) return;
+    if (automatic) {
+      ++st.automatic;
+    } else {
+      ++st.requested;
+    }
+    st.last_tick = d.tick;
+    st.last_refused = false;
+    std::snprintf(st.last, sizeof st.last, "re-armed %s after %u healthy ticks (stopped by: %s)",
+                  automatic ? "automatically" : "on request", l.healthy_ticks_, causes);
+    if (l.mode_count_ < LoopData::kMaxChanges) {
+      ModeChange& c = l.modes_[l.mode_count_];
+      c.tick = d.tick;
+      c.mode = Mode::kNominal;
+      std::snprintf(c.reason, sizeof c.reason, "nominal: %.110s", st.last);
+    }
+    ++l.mode_count_;
+    Enter(l, Phase::kDisarmed, d.tick);
+    (void)safety::Reset(l.sup_, false);
+    l.stopped_by_ = 0;
+    l.healthy_ticks_ = 0;
+    l.source_done_ = false;
+  }
+
   // Arm / disarm / stop requests, then the phase's own transitions and its command.
-  static void Phases(const RobotModel& m, RobotData& d, LoopData& l, const TickEvents& ev) noexcept {
+  static void Phases(const RobotModel& m, RobotData& d, LoopData& l, TickEvents ev) noexcept {
     const std::uint64_t tick = d.tick;
     const bool motors = m.phases.enable_motors;
+    if (!ev.stop) {
+      const Phase before = l.phase_;
+      Recover(m, d, l, ev);
+      if (l.phase_ != before) ev.arm = true;  // re-armed: arm again from disarmed, below
+    }
     for (std::size_t k = 0; k < m.motors.size(); ++k)
       if (d.fresh[m.motors[k].stream] != 0) l.answered_[k] = 1;
     if (ev.disarm && !motors && l.phase_ == Phase::kRun) Enter(l, Phase::kDisarmed, tick);
@@ -112,7 +186,11 @@ struct TickImpl {
       case Phase::kArming:
         if (all) {
           for (std::size_t k = 0; k < m.motors.size(); ++k) {
-            l.q0_[k] = d.fields[m.motors[k].q_field];
+            // Stand-up starts from the measured pose, inside the commands' limits (a joint resting
+            // on its stop, a little past its limit, is commanded from the limit).
+            const robot::MotorSpec& mo = m.motors[k];
+            const double q = d.fields[mo.q_field];
+            l.q0_[k] = mo.velocity_commanded() ? q : std::clamp(q, m.commands[mo.q].min, m.commands[mo.q].max);
             d.streams[m.motors[k].stream].age_ticks = 0;
           }
           if (m.phases.stand_up_ticks > 0) {
@@ -186,6 +264,14 @@ struct TickImpl {
                                        .inference_status = failure != nullptr ? failure : "",
                                        .estop_request = ev.estop};
       const safety::Decision dec = safety::Supervise(m.supervisor_model, in, d.tick, l.sup_, d.command);
+      constexpr std::uint32_t kFine = (1u << static_cast<unsigned>(safety::Cause::kCommandLimit)) |
+                                      (1u << static_cast<unsigned>(safety::Cause::kRateLimit));
+      if ((dec.causes & ~kFine) != 0) {
+        l.healthy_ticks_ = 0;
+      } else if (l.healthy_ticks_ < 0xffffffffu) {
+        ++l.healthy_ticks_;
+      }
+      if (dec.transition && dec.cause_mode >= Mode::kSafeStop) l.stopped_by_ |= 1u << static_cast<unsigned>(dec.cause);
       if (dec.transition) {
         if (l.mode_count_ < LoopData::kMaxChanges) {
           ModeChange& c = l.modes_[l.mode_count_];
@@ -233,6 +319,9 @@ struct TickImpl {
     s.any_latched = mode != Mode::kNominal && l.sup_.entered[static_cast<std::size_t>(mode)].any;
     if (s.any_latched) s.latched = l.sup_.entered[static_cast<std::size_t>(mode)].cause;
     s.counts = l.sup_.counts;
+    s.rearms = l.recovery_.automatic + l.recovery_.requested;
+    s.refused = l.recovery_.refused;
+    std::memcpy(s.recovery, l.recovery_.last, sizeof s.recovery);
     l.status_.Write(s);
   }
 
@@ -291,6 +380,7 @@ TickStatus TickImpl::Tick(const RobotModel& m, RobotData& d, LoopData& l, std::s
   ev.disarm = l.disarm_.exchange(false, std::memory_order_relaxed);
   ev.stop = l.stop_.load(std::memory_order_relaxed);
   ev.estop = l.estop_.load(std::memory_order_relaxed);
+  ev.rearm = l.rearm_.exchange(false, std::memory_order_relaxed);
   if (l.recorder != nullptr) l.recorder->Inputs(m, d, timing, ev);
   CheckSample(m, d);
   const std::int64_t t1 = MonotonicNs();

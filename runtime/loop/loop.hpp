@@ -22,6 +22,19 @@
 // supervisor's safe-stop values), then switched off until each answers; a robot without motors
 // sends its e-stop command once (Shutdown). Every transition and every rise of the supervisor's
 // mode is logged with its tick and reason.
+//
+// Recovery (robot.yaml supervisor.recovery). The supervisor's modes latch; once it has stopped the
+// armed robot (safe-stop or e-stop), the robot runs again only by the robot file's rule, and only
+// after it has been healthy for healthy_s (no finding but command and rate limits: every stream
+// fresh and valid, every link healthy, no overrun, no signal out of range, no e-stop request):
+//   request    a person's RequestRearm() (pbppo-controller: SIGUSR1); one that comes too early or
+//              with nothing to recover from is refused, counted and said (RecoveryStatus)
+//   automatic  the same at once, if every cause that raised the mode to safe-stop or e-stop is one
+//              the robot file lists, at most max_automatic times a run (then only a request)
+// Re-arming is arming again at a tick boundary: the supervisor back to nominal (its counters kept),
+// then robots with motors arm, stand up from the measured pose and hold before the command source
+// starts again; robots without run the source at once. The source starts clean (a policy's history
+// and last action). The mode change list says "nominal: re-armed ..." with the rule and the causes.
 #pragma once
 
 #include <array>
@@ -72,7 +85,16 @@ struct LoopOptions {
 
 // The requests a tick consumed (LoopData::Arm ...), as the log records them.
 struct TickEvents {
-  bool arm = false, disarm = false, stop = false, estop = false;
+  bool arm = false, disarm = false, stop = false, estop = false, rearm = false;
+};
+
+// How the robot came back after the supervisor stopped it (see Recovery above).
+struct RecoveryStatus {
+  std::uint64_t automatic = 0, requested = 0;  // re-arms
+  std::uint64_t refused = 0;                   // requests refused
+  std::uint64_t last_tick = 0;                 // of the last re-arm or refusal
+  bool last_refused = false;
+  char last[160] = {};  // "re-armed on request after 1000 healthy ticks (stopped by: transport fault)"
 };
 
 struct ModeChange {
@@ -94,6 +116,8 @@ struct LoopStatus {
   safety::Cause latched = safety::Cause::kEStopRequest;
   bool any_latched = false;
   safety::CauseCounts counts;
+  std::uint64_t rearms = 0, refused = 0;  // RecoveryStatus: automatic + requested, refused
+  char recovery[160] = {};                // RecoveryStatus::last
 };
 
 class LoopData {
@@ -119,6 +143,11 @@ class LoopData {
   void Disarm() noexcept { disarm_.store(true, std::memory_order_relaxed); }
   void RequestStop() noexcept { stop_.store(true, std::memory_order_relaxed); }
   void RequestEStop() noexcept { estop_.store(true, std::memory_order_relaxed); }
+  // A person's request to run again after a safe-stop or e-stop (Recovery above).
+  void RequestRearm() noexcept { rearm_.store(true, std::memory_order_relaxed); }
+  const RecoveryStatus& recovery() const noexcept { return recovery_; }
+  // Consecutive healthy supervised ticks (saturating at 2^32 - 1).
+  std::uint32_t healthy_ticks() const noexcept { return healthy_ticks_; }
   // The run reached the robot's end field (LoopOptions::stop_at_end_field).
   bool ended() const noexcept { return ended_; }
   // Back to nominal, only while disarmed.
@@ -152,7 +181,10 @@ class LoopData {
   std::array<PhaseChange, kMaxChanges> phases_{};
   std::uint64_t phase_count_ = 0;
   mutable LatestMailbox<LoopStatus> status_;
-  std::atomic<bool> arm_{false}, disarm_{false}, stop_{false}, estop_{false};
+  std::atomic<bool> arm_{false}, disarm_{false}, stop_{false}, estop_{false}, rearm_{false};
+  std::uint32_t healthy_ticks_ = 0;
+  std::uint32_t stopped_by_ = 0;  // bit (1 << Cause) of each cause that raised the mode to safe-stop or e-stop
+  RecoveryStatus recovery_;
 };
 
 // The loop's data for a model and a command source (null: hold the default pose); the only

@@ -133,6 +133,7 @@ Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, Comm
       if ((in.flags & 2) != 0) loop->Disarm();
       if ((in.flags & 4) != 0) loop->RequestStop();
       if ((in.flags & 8) != 0) loop->RequestEStop();
+      if ((in.flags & 32) != 0) loop->RequestRearm();
       rt::TickTiming t;
       t.tick = in.tick;
       t.consecutive_misses = in.consecutive_misses;

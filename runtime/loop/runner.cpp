@@ -19,6 +19,10 @@ extern "C" void OnStopSignal(int) {
   RequestStop();
 }
 
+extern "C" void OnRearmSignal(int) {
+  if (LoopData* l = g_loop.load(std::memory_order_relaxed)) l->RequestRearm();
+}
+
 }  // namespace
 
 void RequestStop() noexcept {
@@ -41,6 +45,13 @@ void InstallStopSignals() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+}
+
+void InstallRearmSignal() {
+  struct sigaction sa{};
+  sa.sa_handler = OnRearmSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGUSR1, &sa, nullptr);
 }
 
 RunResult Run(const robot::RobotModel& m, robot::RobotData& d, LoopData& l,

@@ -31,6 +31,8 @@ struct RunResult {
 
 // SIGINT and SIGTERM call RequestStop.
 void InstallStopSignals();
+// SIGUSR1 asks the running loop to re-arm (LoopData::RequestRearm: the robot file's recovery rule).
+void InstallRearmSignal();
 // Async-signal-safe: the running loop stops (see above).
 void RequestStop() noexcept;
 bool StopRequested() noexcept;

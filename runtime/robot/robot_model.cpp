@@ -226,10 +226,58 @@ struct Loader : detail::Builder {
     return {};
   }
 
+  // supervisor.recovery (optional): {rule: request | automatic, healthy_s, causes, max_automatic}.
+  Status Recovery(const YAML::Node& sup) {
+    RecoverySpec& r = m.supervisor.recovery;
+    if (!sup["recovery"]) return {};
+    YAML::Node n;
+    const std::string w = "supervisor.recovery";
+    PBPPO_TRY(f.Map(sup, "recovery", "supervisor", &n));
+    PBPPO_TRY(f.Keys(n, w, {"rule", "healthy_s", "causes", "max_automatic"}));
+    std::string rule;
+    PBPPO_TRY(f.Text(n, "rule", w, &rule));
+    if (rule != "request" && rule != "automatic")
+      return f.Fail(w + ".rule", "'" + rule + "' is not request or automatic");
+    r.automatic = rule == "automatic";
+    PBPPO_TRY(f.OptionalNumber(n, "healthy_s", w, 0.0, 3600.0, &r.healthy_s));
+    if (!r.automatic) {
+      for (const char* k : {"causes", "max_automatic"})
+        if (n[k]) return f.Fail(w + "." + k, "only with rule: automatic");
+      return {};
+    }
+    if (n["max_automatic"]) PBPPO_TRY(f.Count(n, "max_automatic", w, 1, 1000000, &r.max_automatic));
+    YAML::Node list;
+    PBPPO_TRY(f.List(n, "causes", w, true, &list));
+    if (list.size() == 0) return f.Fail(w + ".causes", "empty: name the causes that may recover automatically");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string at = w + ".causes[" + std::to_string(i) + "]";
+      const std::string name = list[i].IsScalar() ? list[i].Scalar() : YamlFields::Quote(list[i]);
+      std::size_t c = 0;
+      while (c < safety::kCauseCount && name != safety::ToString(static_cast<safety::Cause>(c))) ++c;
+      if (c == safety::kCauseCount) {
+        std::string known;
+        for (std::size_t k = 0; k < safety::kCauseCount; ++k)
+          known += std::string(k ? ", " : "") + safety::ToString(static_cast<safety::Cause>(k));
+        return f.Fail(at, "'" + name + "' is not a cause (known: " + known + ")");
+      }
+      const auto cause = static_cast<safety::Cause>(c);
+      if (cause == safety::Cause::kEStopRequest || cause == safety::Cause::kCommandLimit ||
+          cause == safety::Cause::kRateLimit)
+        return f.Fail(at, "'" + name + "' cannot recover automatically (" +
+                              (cause == safety::Cause::kEStopRequest
+                                   ? std::string("an e-stop request is released by disarming and a reset")
+                                   : std::string("it never stops the robot")) +
+                              ")");
+      r.causes |= 1u << c;
+    }
+    return {};
+  }
+
   Status Supervisor(const YAML::Node& root) {
     YAML::Node n;
     PBPPO_TRY(f.Map(root, "supervisor", "", &n));
-    PBPPO_TRY(f.Keys(n, "supervisor", {"command_limit", "overrun", "signal_limits"}));
+    PBPPO_TRY(f.Keys(n, "supervisor", {"command_limit", "overrun", "signal_limits", "recovery"}));
+    PBPPO_TRY(Recovery(n));
     SupervisorSpec& s = m.supervisor;
     std::string limit;
     PBPPO_TRY(f.Text(n, "command_limit", "supervisor", &limit));
@@ -318,6 +366,7 @@ Status Derive(RobotModel& m, double tick_s) {
   p.hold_ticks = Ticks(p.hold_s, tick_s);
   p.damping_ticks = Ticks(p.damping_s, tick_s);
   p.motor_off_timeout_ticks = Ticks(p.motor_off_timeout_s, tick_s);
+  m.supervisor.recovery.healthy_ticks = std::max<std::uint32_t>(1, Ticks(m.supervisor.recovery.healthy_s, tick_s));
   return {};
 }
 

@@ -137,10 +137,21 @@ struct ServiceSpec {
   bool rearm_after_failure = false;
 };
 
+// What it takes to run again after the supervisor stopped the armed robot (safe-stop or e-stop)
+// and the cause went away (robot.yaml supervisor.recovery; runtime/loop/loop.hpp says how).
+struct RecoverySpec {
+  bool automatic = false;           // rule: automatic; else only a person's request (the default)
+  double healthy_s = 1.0;           // healthy this long first: no finding but command and rate limits
+  std::uint32_t causes = 0;         // automatic: bit (1 << Cause) of each cause allowed to stop and recover
+  std::uint32_t max_automatic = 3;  // automatic re-arms per run; then only a request
+  std::uint32_t healthy_ticks = 0;  // derived
+};
+
 struct SupervisorSpec {
   bool command_limit_degrades = false;  // command_limit: degraded (else: count)
   std::uint32_t overrun_degraded = 2, overrun_safe_stop = 5;
   std::vector<SignalLimitSpec> signal_limits;
+  RecoverySpec recovery;
 };
 
 // A file robot.yaml names that runtime/robot does not interpret itself, as read.

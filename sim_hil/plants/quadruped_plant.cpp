@@ -10,6 +10,11 @@
 namespace pbppo::sim {
 namespace {
 
+// Joint stops: 2000 Nm/rad (a 12 kg robot folded onto a stop sinks ~0.01 rad into it), with
+// Hunt-Crossley dissipation 1 s/rad (a leg that falls onto its stop does not bounce).
+constexpr double kStopStiffnessNmRad = 2000.0;
+constexpr double kStopDissipationSRad = 1.0;
+
 SimTK::Rotation FromRpy(const robot::Vec3d& rpy) {
   return SimTK::Rotation(SimTK::BodyOrSpaceType::SpaceRotationSequence, rpy[0], SimTK::XAxis, rpy[1], SimTK::YAxis,
                          rpy[2], SimTK::ZAxis);
@@ -222,6 +227,11 @@ Result<std::unique_ptr<QuadrupedPlant>> QuadrupedPlant::Make(const robot::RobotD
     SimTK::MobilizedBody::Pin pin(link_body[joint.parent], X_PJ * SimTK::Transform(R_JA), body, SimTK::Transform(R_JA));
     if (joint.damping_nm_s_rad > 0)
       SimTK::Force::MobilityLinearDamper(m.forces, pin, SimTK::MobilizerUIndex(0), joint.damping_nm_s_rad);
+    // The joint's mechanical stops at its URDF limits (a leg left limp folds against them, as the
+    // robot's would, instead of turning past them); no force inside the limits.
+    if (std::isfinite(joint.lower_rad) && std::isfinite(joint.upper_rad))
+      SimTK::Force::MobilityLinearStop(m.forces, pin, SimTK::MobilizerQIndex(0), kStopStiffnessNmRad,
+                                       kStopDissipationSRad, joint.lower_rad, joint.upper_rad);
     link_body[joint.child] = pin;
   }
   for (std::size_t i = 0; i < robot.joint_count(); ++i) m.joint_body.push_back(link_body[robot.joint_at(i).child]);

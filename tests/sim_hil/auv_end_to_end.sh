@@ -14,7 +14,10 @@
 #      where it ends; a log cut inside its header or corrupted is refused naming the offset;
 #   7. recording onto a file system that fills: the mission goes on, the failure is told at once and
 #      in the summary (exit 1), the log holds its whole records and an end record naming the error,
-#      and replays.
+#      and replays;
+#   8. the vehicle restarts mid-run (real time): the controller stops (e-stop, the peer lost), and
+#      runs again by the robot file's recovery rule: by itself once healthy (rule automatic), or
+#      only when a person asks (rule request, SIGUSR1), the new vehicle then driven by the policy.
 # usage: auv_end_to_end.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5
@@ -192,4 +195,54 @@ expect "$work/replay_full.log" "replay: .*full.log: [0-9]+ ticks, [0-9]+ command
 expect "$work/replay_full.log" "full.log ends where its recording stopped: a write failed: No space left on device \(28\); [0-9]+ records not written after it"
 grep -E "write failed|recording stopped" "$work/full.ctl.log" | sed 's/^/   /'
 sed 's/^/   /' "$work/replay_full.log"
+echo "== 8: the vehicle restarts mid-run (real time): the robot file's recovery rule, both ways"
+mkdir -p "$work/rearm"
+cp -r models/auv "$work/rearm/auv"
+cp models/dds_profile.xml "$work/rearm/"
+sed -i 's/recovery: {rule: request, healthy_s: 2.0}/recovery: {rule: automatic, healthy_s: 1.0, causes: [stale sample, lost peer]}/' \
+  "$work/rearm/auv/robot.yaml"
+grep -q "rule: automatic" "$work/rearm/auv/robot.yaml" || fail "step 8: the AUV's recovery line is not the one this step edits"
+# A vehicle killed after 3 s; 3 s later (the peer lost after 2 s: e-stop) a new one, for 8 s of real
+# time; with `request`, a person's SIGUSR1 to the controller 4 s after the new vehicle started.
+vehicle_restarts() {  # vehicle_restarts NAME ROBOT_FILE [request]
+  local name=$1 robot_file=$2 request=${3:-}
+  "$hil" auv --layout hard --seed 2 --realtime --domain "$domain" >"$work/$name.hil1.log" 2>&1 &
+  local h1=$!
+  "$ctl" --robot "$robot_file" --policy "$blob" --domain "$domain" --quiet >"$work/$name.ctl.log" 2>&1 &
+  local c=$!
+  sleep 3
+  kill -KILL "$h1"
+  wait "$h1" 2>/dev/null || true
+  sleep 3
+  "$hil" auv --layout easy --seed 1 --realtime --domain "$domain" --max-time 8 --trajectory "$work/$name.csv" \
+    >"$work/$name.hil2.log" 2>&1 &
+  local h2=$!
+  if [ -n "$request" ]; then
+    sleep 4
+    kill -USR1 "$c"
+  fi
+  wait "$h2" || fail "$name: the second pbppo-hil exited $?: $(cat "$work/$name.hil2.log")"
+  kill -TERM "$c"
+  local rc=0
+  wait "$c" || rc=$?
+  [ "$rc" -eq 0 ] || fail "$name: the controller exited $rc: $(cat "$work/$name.ctl.log")"
+  grep -E "pbppo-controller: tick|mode change|recovery:|final mode" "$work/$name.ctl.log" | sed 's/^/   /'
+}
+# Seconds of the new vehicle's run with a forward speed command, and the first of them.
+driven() { awk -F, 'NR > 1 && $5 > 0 { n++; if (!t) t = $1 } END { printf "%d %.1f\n", n / 10, t }' "$1"; }
+vehicle_restarts automatic "$work/rearm/auv/robot.yaml"
+expect "$work/automatic.ctl.log" "tick [0-9]+: safe-stop: stale sample; runs again by itself"
+expect "$work/automatic.ctl.log" "tick [0-9]+: re-armed automatically after 10 healthy ticks \(stopped by: stale sample, lost peer\)"
+expect "$work/automatic.ctl.log" "recovery: re-armed 1 times \(1 automatically, 0 on request\), 0 requests refused"
+read -r secs first <<<"$(driven "$work/automatic.csv")"
+echo "   the new vehicle driven for ${secs} s of its 8 s, from ${first} s"
+[ "$secs" -ge 4 ] || fail "automatic: the new vehicle was driven for only $secs s"
+vehicle_restarts request "$robot" request
+expect "$work/request.ctl.log" "tick [0-9]+: safe-stop: stale sample; runs again on request \(SIGUSR1; supervisor.recovery: request\)"
+expect "$work/request.ctl.log" "tick [0-9]+: re-armed on request after [0-9]+ healthy ticks \(stopped by: stale sample, lost peer\)"
+expect "$work/request.ctl.log" "recovery: re-armed 1 times \(0 automatically, 1 on request\), 0 requests refused"
+read -r secs first <<<"$(driven "$work/request.csv")"
+echo "   the new vehicle driven for ${secs} s of its 8 s, from ${first} s"
+[ "$secs" -ge 2 ] || fail "request: the new vehicle was driven for only $secs s"
+awk "BEGIN { exit !($first >= 3.0) }" || fail "request: the new vehicle was driven from $first s, before the request"
 echo "auv end to end: all checks passed"

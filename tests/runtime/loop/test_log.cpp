@@ -15,6 +15,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <numbers>
 #include <string>
 #include <thread>
 #include <vector>
@@ -53,8 +54,10 @@ policy::PolicySpec Spec(const robot::RobotModel& m, std::uint64_t seed) {
 }
 
 // 300 ticks of the AUV: a sample most ticks (a unicycle's pose), none from tick 200 (stale,
-// then lost), an e-stop never; the log and its bytes.
-Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick& each_tick = {}) {
+// then lost), an e-stop never; the log and its bytes. `come_back`: the samples come again from
+// tick 230 and a person asks to re-arm at tick 262.
+Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick& each_tick = {},
+                bool come_back = false) {
   const robot::RobotModel& m = test::AuvRobot();
   auto policy = policy::PolicyModel::FromSpec(Spec(m, seed));
   REQUIRE(policy.ok());
@@ -78,11 +81,14 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
   {
     AllocationScope scope;
     for (std::uint64_t k = 0; k < 300; ++k) {
-      if (k < 200 && k % 7 != 3) {  // some samples missed: stale for a tick
+      if ((k < 200 || (come_back && k >= 230)) && k % 7 != 3) {  // some samples missed: stale for a tick
         sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(k);
         sample[static_cast<std::size_t>(m.FieldIndex("x_m"))] = x;
         sample[static_cast<std::size_t>(m.FieldIndex("y_m"))] = y;
-        sample[static_cast<std::size_t>(m.FieldIndex("yaw_rad"))] = yaw;
+        // (come_back: wrapped, as the vehicle reports it; else the heading leaves its bounds:
+        // invalid samples before the silence)
+        sample[static_cast<std::size_t>(m.FieldIndex("yaw_rad"))] =
+            come_back ? std::remainder(yaw, 2 * std::numbers::pi) : yaw;
         sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
         for (std::uint32_t i = 0; i < 16; ++i)
           sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0 + (k + i) % 9;
@@ -92,6 +98,7 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
       if (k == 150) t.SetHealth(0, {true, false, false});  // one tick of a degraded link
       if (k == 151) t.SetHealth(0, {});
       if (k == 280) l->RequestStop();
+      if (come_back && k == 262) l->RequestRearm();
       rt::TickTiming timing;
       timing.tick = k;
       if (loop::Tick(m, d, *l, ts, timing) != loop::TickStatus::kRunning) break;
@@ -103,6 +110,9 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
     allocations = scope.count();
   }
   CHECK(allocations == 0);
+  if (come_back)
+    CHECK(std::string(l->recovery().last) ==
+          "re-armed on request after 32 healthy ticks (stopped by: stale sample, lost peer)");
   const Status stopped = (*rec)->Stop();
   if (!stopped) r.stop_error = stopped.error().message;
   if (!each_tick) REQUIRE_MESSAGE(stopped.ok(), r.stop_error);
@@ -113,6 +123,19 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
   std::ifstream f(r.path, std::ios::binary);
   r.bytes.assign(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
   return r;
+}
+
+// Replays a log against the policy of Record(seed 1); every command must match.
+loop::ReplayResult ReplayOf(const loop::Log& log, std::uint64_t source_hash) {
+  const robot::RobotModel& m = test::AuvRobot();
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE(source.ok());
+  auto replay = loop::Replay(m, log, source->get(), source_hash);
+  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+  return std::move(*replay);
 }
 
 std::string Refusal(std::vector<std::uint8_t> bytes) {
@@ -161,6 +184,26 @@ TEST_CASE("log: a recorded run replays to bit-identical commands - phases, modes
   refused = loop::Replay(changed, *log, source->get(), r.source_hash);
   REQUIRE_FALSE(refused.ok());
   CHECK(refused.error().message.find("the robot's files changed since the recording") != std::string::npos);
+}
+
+TEST_CASE("log: a run the supervisor stopped and a person re-armed replays bit for bit, the request recorded") {
+  const Recorded r = Record("rearm", 1, {}, true);
+  auto log = loop::ReadLog(r.path);
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  std::uint64_t requests = 0;
+  for (const loop::LogRecord& rec : log->records)
+    if (rec.type == 1 && (rec.inputs.flags & 32) != 0) {
+      ++requests;
+      CHECK(rec.inputs.tick == 262);
+    }
+  CHECK(requests == 1);
+  const loop::ReplayResult replay = ReplayOf(*log, r.source_hash);
+  CHECK(replay.compared == replay.ticks);
+  // Lost (e-stop), then re-armed at the request: the policy drives again, in the replay too.
+  const std::string csv = loop::FormatOutputs(test::AuvRobot(), replay.outputs);
+  CHECK(csv.find(",e-stop,") != std::string::npos);
+  CHECK(csv.find("\n262,run,nominal,") != std::string::npos);
+  CHECK(csv.find("\n261,run,e-stop,") != std::string::npos);
 }
 
 TEST_CASE("log: a truncated or corrupt log is refused naming the offset and the field") {
@@ -249,15 +292,7 @@ namespace {
 
 // Replays a log's records against the policy of Record(seed 1): the number of commands compared.
 std::uint64_t ReplaysExactly(const loop::Log& log, std::uint64_t source_hash) {
-  const robot::RobotModel& m = test::AuvRobot();
-  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
-  REQUIRE(policy.ok());
-  auto source = loop::PolicySource::Create(m, *policy);
-  REQUIRE(source.ok());
-  auto replay = loop::Replay(m, log, source->get(), source_hash);
-  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
-  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
-  return replay->compared;
+  return ReplayOf(log, source_hash).compared;
 }
 
 // Waits (at most 10 s) for the recorder's writer to notice a failure.

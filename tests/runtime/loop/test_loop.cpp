@@ -447,3 +447,207 @@ TEST_CASE("loop: more mode and phase changes than the lists keep - every one cou
   CHECK(l->phase_changes().size() == loop::LoopData::kMaxChanges);
   for (std::size_t k = 0; k < loop::LoopData::kMaxChanges; ++k) CHECK(l->mode_changes()[k].tick == mode_ticks[k]);
 }
+
+namespace {
+
+// The AUV with a recovery rule, its vehicle's samples scripted tick by tick.
+struct AuvBench {
+  robot::RobotModel m;
+  robot::RobotData d;
+  std::unique_ptr<loop::LoopData> l;
+  test::ScriptedTransport t;
+  robot::Transport* ts[1];
+  std::vector<double> sample;
+  std::uint64_t tick = 0;
+
+  explicit AuvBench(const robot::RecoverySpec& recovery)
+      : m(WithRecovery(recovery)), d(robot::MakeRobotData(m)), l(loop::MakeLoopData(m, nullptr)), t(m), ts{&t} {
+    sample.assign(m.fields.size(), 0.0);
+    sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
+    for (std::uint32_t i = 0; i < 16; ++i)
+      sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0;
+  }
+  static robot::RobotModel WithRecovery(const robot::RecoverySpec& r) {
+    robot::RobotModel m = test::AuvRobot();
+    m.supervisor.recovery = r;
+    return m;
+  }
+  // One tick; `with_sample`: the vehicle's sample arrived (`bad`: its depth NaN).
+  void Step(bool with_sample, bool bad = false) {
+    if (with_sample) {
+      sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(tick);
+      sample[static_cast<std::size_t>(m.FieldIndex("depth_m"))] = bad ? std::nan("") : 5.0;
+      t.Put(m, 0, sample);
+    }
+    rt::TickTiming timing;
+    timing.tick = tick++;
+    loop::Tick(m, d, *l, ts, timing);
+  }
+  // The vehicle falls silent for `silent` ticks (lost: e-stop), then answers every tick.
+  void LoseAndComeBack(int silent) {
+    for (int k = 0; k < silent; ++k) Step(false);
+    REQUIRE(l->supervisor().mode == Mode::kEStop);
+  }
+  std::string LastModeChange() const { return l->mode_changes().back().reason; }
+};
+
+robot::RecoverySpec Automatic(std::uint32_t healthy_ticks, std::uint32_t max,
+                              std::initializer_list<safety::Cause> causes) {
+  robot::RecoverySpec r;
+  r.automatic = true;
+  r.healthy_ticks = healthy_ticks;
+  r.max_automatic = max;
+  for (safety::Cause c : causes) r.causes |= 1u << static_cast<unsigned>(c);
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("loop recovery: automatic - a vehicle that comes back is run again after the healthy time, at most N times") {
+  using safety::Cause;
+  AuvBench b(Automatic(10, 2, {Cause::kStaleSample, Cause::kLostPeer}));
+  b.l->Arm();
+  for (int k = 0; k < 5; ++k) b.Step(true);
+  REQUIRE(b.l->phase() == Phase::kRun);
+  REQUIRE(b.l->supervisor().mode == Mode::kNominal);
+  for (int round = 1; round <= 2; ++round) {
+    b.LoseAndComeBack(30);
+    // Back: healthy from its first sample on; the 10th healthy tick lets the next tick re-arm.
+    for (int k = 0; k < 10; ++k) {
+      b.Step(true);
+      CHECK(b.l->supervisor().mode == Mode::kEStop);
+    }
+    CHECK(b.l->healthy_ticks() == 10);
+    const std::uint64_t rearm_tick = b.tick;
+    b.Step(true);
+    CHECK(b.l->supervisor().mode == Mode::kNominal);
+    CHECK(b.l->phase() == Phase::kRun);
+    CHECK(b.l->recovery().automatic == static_cast<std::uint64_t>(round));
+    CHECK(b.l->recovery().last_tick == rearm_tick);
+    CHECK(b.LastModeChange() ==
+          "nominal: re-armed automatically after 10 healthy ticks (stopped by: stale sample, lost peer)");
+    // The phase list: run -> disarmed -> run on the re-arming tick.
+    const auto phases = b.l->phase_changes();
+    REQUIRE(phases.size() >= 2);
+    CHECK(phases[phases.size() - 2].to == Phase::kDisarmed);
+    CHECK(phases.back().to == Phase::kRun);
+    CHECK(phases.back().tick == rearm_tick);
+    for (int k = 0; k < 20; ++k) b.Step(true);
+    CHECK(b.l->supervisor().mode == Mode::kNominal);
+  }
+  // The third time: max_automatic (2) reached, it stays stopped until a person asks.
+  b.LoseAndComeBack(30);
+  for (int k = 0; k < 50; ++k) b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kEStop);
+  CHECK(b.l->recovery().automatic == 2);
+  b.l->RequestRearm();
+  b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kNominal);
+  CHECK(b.l->recovery().requested == 1);
+  CHECK(b.LastModeChange() ==
+        "nominal: re-armed on request after 50 healthy ticks (stopped by: stale sample, lost peer)");
+  // The supervisor's counters are kept across re-arms.
+  CHECK(b.l->supervisor().counts[Cause::kLostPeer] > 0);
+}
+
+TEST_CASE("loop recovery: request (the default) - nothing runs again until a person asks, and not too early") {
+  AuvBench b(robot::RecoverySpec{});
+  REQUIRE_FALSE(b.m.supervisor.recovery.automatic);
+  b.m.supervisor.recovery.healthy_ticks = 10;
+  b.l->Arm();
+  for (int k = 0; k < 5; ++k) b.Step(true);
+  // A request with nothing to recover from is refused and said.
+  b.l->RequestRearm();
+  b.Step(true);
+  CHECK(b.l->recovery().refused == 1);
+  CHECK(std::string(b.l->recovery().last) == "re-arm request refused: nothing to recover from (run, nominal)");
+  b.LoseAndComeBack(30);
+  for (int k = 0; k < 200; ++k) b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kEStop);  // healthy for long, but no request
+  CHECK(b.l->recovery().automatic == 0);
+  // A NaN depth: unhealthy again; a request 3 ticks later is too early.
+  b.Step(true, true);
+  for (int k = 0; k < 3; ++k) b.Step(true);
+  b.l->RequestRearm();
+  b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kEStop);
+  CHECK(b.l->recovery().refused == 2);
+  CHECK(std::string(b.l->recovery().last) ==
+        "re-arm request refused: healthy for 3 ticks, 10 needed (e-stop: stale sample, lost peer)");
+  for (int k = 0; k < 10; ++k) b.Step(true);
+  b.l->RequestRearm();
+  b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kNominal);
+  CHECK(b.l->phase() == Phase::kRun);
+  CHECK(b.l->recovery().requested == 1);
+  // The loop's status (another thread's view) tells it.
+  const loop::LoopStatus st = b.l->Status();
+  CHECK(st.rearms == 1);
+  CHECK(st.refused == 2);
+  CHECK(std::string(st.recovery).find("re-armed on request") == 0);
+}
+
+TEST_CASE("loop recovery: automatic only for the causes the robot file lists - an invalid sample waits for a request") {
+  using safety::Cause;
+  AuvBench b(Automatic(10, 3, {Cause::kStaleSample, Cause::kLostPeer}));
+  b.m.supervisor.recovery.healthy_ticks = 10;
+  b.l->Arm();
+  for (int k = 0; k < 5; ++k) b.Step(true);
+  for (int k = 0; k < 3; ++k) b.Step(true, true);  // invalid_safe_stop 3: safe-stop
+  REQUIRE(b.l->supervisor().mode == Mode::kSafeStop);
+  for (int k = 0; k < 100; ++k) b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kSafeStop);
+  CHECK(b.l->recovery().automatic == 0);
+  // An e-stop request is never healthy: it is released by disarming and a reset only.
+  b.l->RequestEStop();
+  for (int k = 0; k < 20; ++k) b.Step(true);
+  b.l->RequestRearm();
+  b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kEStop);
+  CHECK(std::string(b.l->recovery().last).find("re-arm request refused: healthy for 0 ticks") == 0);
+  b.l->Disarm();
+  b.Step(true);
+  REQUIRE(b.l->ResetSupervisor());
+  b.l->Arm();
+  for (int k = 0; k < 5; ++k) b.Step(true);
+  CHECK(b.l->supervisor().mode == Mode::kNominal);
+  CHECK(b.l->phase() == Phase::kRun);
+}
+
+TEST_CASE("loop recovery: the quadruped re-arms through arming, stand-up and hold, allocating nothing") {
+  using safety::Cause;
+  robot::RobotModel m = test::QuadrupedRobot();
+  m.supervisor.recovery = Automatic(200, 3, {Cause::kStaleSample});
+  auto trajectory = loop::RobotTrajectory(m);
+  REQUIRE_MESSAGE(trajectory.ok(), trajectory.error().message);
+  loop::TrajectorySource source(m, *trajectory);
+  Bench b(m, &source);
+  b.loop->Arm();
+  b.Until(Phase::kRun, 2500);
+  for (int k = 0; k < 50; ++k) b.Step();
+  // A motor silent for 5 ticks: safe-stop (stale), then it answers again.
+  b.silent = 3;
+  b.silent_from = b.tick;
+  b.Step();
+  b.Step();
+  b.Step();
+  b.Step();
+  REQUIRE(b.loop->supervisor().mode == Mode::kSafeStop);
+  b.silent_from = ~0ull;
+  std::uint64_t rearmed_at = 0;
+  {
+    AllocationScope scope;
+    for (int k = 0; k < 400 && b.loop->recovery().automatic == 0; ++k) b.Step();
+    rearmed_at = b.tick - 1;
+    CHECK(b.loop->phase() == Phase::kArming);
+    b.Until(Phase::kStandUp, 10);
+    b.Until(Phase::kHold, 1100);
+    b.Until(Phase::kRun, 300);
+    CHECK(scope.count() == 0);
+  }
+  CHECK(b.loop->recovery().automatic == 1);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  CHECK(b.loop->recovery().last_tick == rearmed_at);
+  CHECK(std::string(b.loop->recovery().last) ==
+        "re-armed automatically after 200 healthy ticks (stopped by: stale sample)");
+}

@@ -195,6 +195,49 @@ TEST_CASE("robot model: service.rearm_after_failure - false unless the robot fil
   CHECK(edits.Error("robot: auv", "robot: auv\nservice: {restart: always}") == p + ": service.restart: unknown field");
 }
 
+TEST_CASE("robot model: supervisor.recovery - a person's request unless automatic with its causes, bad values named") {
+  const RobotModel& auv = test::AuvRobot();
+  CHECK_FALSE(auv.supervisor.recovery.automatic);
+  CHECK(auv.supervisor.recovery.healthy_ticks == 20);  // 2 s of 0.1 s ticks
+  CHECK(test::QuadrupedRobot().supervisor.recovery.healthy_ticks == 500);
+  const test::RobotFileEdits edits("auv", "robot_model_recovery");
+  const std::string original = test::ReadText(test::SourcePath("models/auv/robot.yaml"));
+  const std::string shipped = "recovery: {rule: request, healthy_s: 2.0}";
+  std::ofstream(edits.path()) << test::ReplaceOnce(
+      original, shipped,
+      "recovery: {rule: automatic, healthy_s: 0.5, causes: [stale sample, lost peer, transport fault], "
+      "max_automatic: 7}");
+  auto m = LoadRobotModel(edits.path());
+  REQUIRE_MESSAGE(m.ok(), m.error().message);
+  const robot::RecoverySpec& r = m->supervisor.recovery;
+  CHECK(r.automatic);
+  CHECK(r.healthy_ticks == 5);
+  CHECK(r.max_automatic == 7);
+  using safety::Cause;
+  CHECK(r.causes ==
+        ((1u << static_cast<unsigned>(Cause::kStaleSample)) | (1u << static_cast<unsigned>(Cause::kLostPeer)) |
+         (1u << static_cast<unsigned>(Cause::kTransportFault))));
+  const std::string& p = edits.path();
+  auto err = [&](const std::string& to) { return edits.Error(shipped, to); };
+  CHECK(err("recovery: {rule: sometimes}") ==
+        p + ": supervisor.recovery.rule: 'sometimes' is not request or automatic");
+  CHECK(err("recovery: {rule: request, causes: [lost peer]}") ==
+        p + ": supervisor.recovery.causes: only with rule: automatic");
+  CHECK(err("recovery: {rule: automatic}") == p + ": supervisor.recovery: missing field 'causes'");
+  CHECK(err("recovery: {rule: automatic, causes: []}") ==
+        p + ": supervisor.recovery.causes: empty: name the causes that may recover automatically");
+  CHECK(
+      err("recovery: {rule: automatic, causes: [lost peer, power failure]}")
+          .starts_with(p + ": supervisor.recovery.causes[1]: 'power failure' is not a cause (known: command limit, "));
+  CHECK(err("recovery: {rule: automatic, causes: [e-stop request]}") ==
+        p + ": supervisor.recovery.causes[0]: 'e-stop request' cannot recover automatically (an e-stop request is "
+            "released by disarming and a reset)");
+  CHECK(err("recovery: {rule: automatic, causes: [lost peer], max_automatic: 0}")
+            .starts_with(p + ": supervisor.recovery.max_automatic: '0' is outside"));
+  CHECK(err("recovery: {rule: request, healthy_s: -1}").starts_with(p + ": supervisor.recovery.healthy_s: '-1'"));
+  CHECK(err("recovery: {rule: request, after: 3}") == p + ": supervisor.recovery.after: unknown field");
+}
+
 TEST_CASE("robot model: DDS messages - declared once in IDL, mapped onto fields and commands by the robot file") {
   const RobotModel& auv = test::AuvRobot();
   REQUIRE(auv.transports.size() == 1);
