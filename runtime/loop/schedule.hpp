@@ -60,6 +60,8 @@ class ScheduleTransport final : public robot::Transport {
   bool finished() const noexcept { return finished_; }
   // Silences the source from now on (a test's dead operator).
   void Kill() noexcept { killed_ = true; }
+  // The operator comes back (its samples go on at the schedule's time).
+  void Revive() noexcept { killed_ = false; }
   std::uint64_t samples() const noexcept { return samples_; }
 
  private:
