@@ -7,19 +7,27 @@
 #     sim_hil/quadruped_soak.hpp, resident memory, the controller's tick per tenth of the run) and
 #     plots: resident memory over the run, the tick's p50/p99/max per tenth, the mode per second;
 #  2. the same in real time for REALTIME_S seconds (default 3600; 0: skip): the controller on its
-#     own 1 kHz clock, deadline misses acted on as on the robot.
+#     own 1 kHz clock, deadline misses acted on as on the robot;
+#  3. the AUV over DDS, two processes: one pbppo-controller in lock-step through VEHICLES vehicles
+#     (default 1600: about 10^6 ticks) that come and go, with NaN and out-of-range bursts and
+#     vehicles killed mid-run (tests/soak/auv_soak.sh), and a plot of the controller's resident
+#     memory.
 # Quiet the machine first: other load shows up in the latency figures. Writes into OUT_DIR
 # (default build/results/soak). Exit 1 when a promise broke or the latency tail drifted.
-# Usage: bench/soak.sh [OUT_DIR]   (TICKS=1000000, SEED=1, REALTIME_S=3600)
+# Usage: bench/soak.sh [OUT_DIR]   (TICKS=1000000, SEED=1, REALTIME_S=3600, VEHICLES=1600 (0: skip))
 set -euo pipefail
 source "$(dirname "$0")/../tools/common.sh"
 out="${1:-$root/build/results/soak}"
 ticks="${TICKS:-1000000}"
 seed="${SEED:-1}"
 realtime_s="${REALTIME_S:-3600}"
+vehicles="${VEHICLES:-1600}"
 positive_int TICKS "$ticks"
 non_negative_int SEED "$seed"
 non_negative_int REALTIME_S "$realtime_s"
+non_negative_int VEHICLES "$vehicles"
+hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
+ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
 soak="$(program PBPPO_BENCH_SOAK build/default/bench/pbppo_bench_soak)"
 command -v gnuplot >/dev/null || fail "gnuplot not found (apt-get install gnuplot-nox)"
 cd "$root"
@@ -64,5 +72,20 @@ if [ "$realtime_s" -gt 0 ]; then
   "$soak" --ticks $((realtime_s * 1000)) --seed "$seed" --realtime --out "$out/realtime" || rc=1
   plots "$out/realtime" "soak, real time"
   echo "   plots: $out/realtime/{rss,latency,modes}.png"
+fi
+if [ "$vehicles" -gt 0 ]; then
+  echo "== 3: the AUV over DDS, lock-step, $vehicles vehicles that come and go, seed $seed"
+  bash tests/soak/auv_soak.sh "$hil" "$ctl" "$root" "$out/auv" "$vehicles" "$seed" | tee "$out/auv_report.txt" || rc=1
+  gnuplot <<GP || rc=1
+set datafile separator ","
+set terminal pngcairo size 900,420
+set grid
+set output "$out/auv/rss.png"
+set title "AUV soak: the controller's resident memory (5 samples a second)"
+set xlabel "sample"
+set ylabel "KiB"
+plot "$out/auv/rss.csv" using 1:2 with lines title "resident"
+GP
+  echo "   plot: $out/auv/rss.png"
 fi
 exit "$rc"

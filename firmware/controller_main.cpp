@@ -1,7 +1,7 @@
 // pbppo-controller: the controller program of every robot, over runtime/loop.
 //
 //   pbppo-controller --robot NAME|ROBOT.yaml [--policy BLOB [--commands SCHEDULE] | --trajectory FILE | --safe-stop]
-//       [--lockstep [--lockstep-timeout-ms MS]] [--lockstep-wait-ms MS] [--period-ms MS]
+//       [--lockstep [--lockstep-timeout-ms MS] [--lockstep-through-ends]] [--lockstep-wait-ms MS] [--period-ms MS]
 //       DDS:  [--domain D] [--dds-profile FILE] [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]
 //             [--peer-timeout-s S] [--lost-after-s S] [--writer-poll-us N] [--status-every-s S]
 //       CAN:  [--can IF0,IF1] [--candump FILE] [--receive-all]
@@ -72,6 +72,7 @@ struct Options {
   std::string dds_security, dds_identity = "controller";
   std::string failure_record;  // the service's record of a run that ended in failure
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
+  bool lockstep_through_ends = false;
   bool safe_stop = false;
   double period_ms = 0, duration_s = 0, peer_timeout_s = 30, status_every_s = 1.0, lost_after_s = 0;
   int domain = 0, rt_priority = 80, cpu = -1, lockstep_timeout_ms = 500, lockstep_wait_ms = 0;
@@ -145,6 +146,8 @@ void AddOptions(CLI::App& app, Options& o) {
                "One tick per sample of the robot's timing.lockstep stream (a simulator in lock-step)");
   app.add_option("--lockstep-timeout-ms", o.lockstep_timeout_ms, "--lockstep: tick anyway after this long")
       ->check(CLI::Range(1, 600000));
+  app.add_flag("--lockstep-through-ends", o.lockstep_through_ends,
+               "--lockstep: the simulator's episode end does not end the run (simulators that come and go)");
   app.add_option("--lockstep-wait-ms", o.lockstep_wait_ms, "CAN lock-step: each tick waits this long for replies")
       ->check(CLI::Range(0, 600000));
   app.add_option("--period-ms", o.period_ms, "Free-running tick period (default: the robot's)")
@@ -470,11 +473,13 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
   if (l.mode_change_count() > l.mode_changes().size())
     std::printf("mode change: %llu in all, the first %zu above\n",
                 static_cast<unsigned long long>(l.mode_change_count()), l.mode_changes().size());
-  if (const loop::RecoveryStatus& rec = l.recovery(); rec.automatic + rec.requested + rec.refused > 0)
-    std::printf("recovery: re-armed %llu times (%llu automatically, %llu on request), %llu requests refused\n",
-                static_cast<unsigned long long>(rec.automatic + rec.requested),
-                static_cast<unsigned long long>(rec.automatic), static_cast<unsigned long long>(rec.requested),
-                static_cast<unsigned long long>(rec.refused));
+  if (const loop::RecoveryStatus& rec = l.recovery(); rec.stops + rec.refused > 0)
+    std::printf(
+        "recovery: stopped %llu times, re-armed %llu (%llu automatically, %llu on request), %llu requests "
+        "refused\n",
+        static_cast<unsigned long long>(rec.stops), static_cast<unsigned long long>(rec.automatic + rec.requested),
+        static_cast<unsigned long long>(rec.automatic), static_cast<unsigned long long>(rec.requested),
+        static_cast<unsigned long long>(rec.refused));
   const char* end = r.ended                                            ? nullptr
                     : r.stopped                                        ? "a signal"
                     : safe_stop && r.status == loop::TickStatus::kDone ? "--safe-stop, its stop done"
@@ -503,6 +508,7 @@ int Run(const Options& o) {
   StartupWatchdog startup(*notifier);
   if (o.safe_stop && (!o.policy.empty() || !o.trajectory.empty() || !o.commands.empty() || o.lockstep))
     return Fail("--safe-stop: takes no --policy, --trajectory, --commands or --lockstep (it only stops the robot)");
+  if (o.lockstep_through_ends && !o.lockstep) return Fail("--lockstep-through-ends: only with --lockstep");
   auto loaded = robot::LoadRobotModel(o.robot);
   if (!loaded) return Fail(loaded.error().message);
   if (!o.failure_record.empty()) {
@@ -523,22 +529,30 @@ int Run(const Options& o) {
   if (source->policy)
     std::printf("pbppo-controller: policy %s %s\n", o.policy.c_str(),
                 policy::KernelNote(*source->policy, o.skip_self_test).c_str());
-  auto opened = OpenTransports(robot, o, *source);
-  if (!opened) return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
-  Transports& ts = *opened;
-
   loop::LoopOptions lopt;
   lopt.shutdown_after_source = false;
-  lopt.stop_at_end_field = o.lockstep && robot.lockstep_end_field >= 0;
-  robot::RobotData data = robot::MakeRobotData(robot);
-  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
+  lopt.stop_at_end_field = o.lockstep && robot.lockstep_end_field >= 0 && !o.lockstep_through_ends;
+  // The log before the transports: a log that cannot be written is refused at once, not after
+  // the wait for a peer; if the transports then fail, the empty log is removed.
   std::unique_ptr<loop::Recorder> recorder;
   if (!o.record.empty()) {
     auto r = loop::Recorder::Open(o.record, robot, loop::MakeLogHeader(robot, source->kind, source->hash, lopt));
     if (!r) return Fail(r.error().message, 1);
     recorder = std::move(*r);
-    loop->recorder = recorder.get();
   }
+  auto opened = OpenTransports(robot, o, *source);
+  if (!opened) {
+    if (recorder) {
+      (void)recorder->Stop();
+      std::error_code ec;
+      std::filesystem::remove(o.record, ec);
+    }
+    return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
+  }
+  Transports& ts = *opened;
+  robot::RobotData data = robot::MakeRobotData(robot);
+  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
+  loop->recorder = recorder.get();
   rt::RtOptions ro;
   ro.lock_memory = !o.no_mlock;
   ro.fifo_priority = o.rt_priority;

@@ -296,7 +296,8 @@ int RunAuvHil(const AuvHilOptions& o, const std::atomic<bool>& stop) {
     task.FillSensorFields(fields);
     fields[fi.tick] = static_cast<double>(tick);
     if (last) fields[fi.episode_end] = 1.0;
-    if (!o.fault.empty() && task.vehicle().time_s >= o.fault_time_s) {
+    const double t_s = task.vehicle().time_s;
+    if (!o.fault.empty() && t_s >= o.fault_time_s && t_s < o.fault_time_s + o.fault_duration_s) {
       ++sum.faulty_samples;
       if (o.fault == "nan") {
         fields[fi.yaw] = std::nan("");

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -40,6 +41,7 @@ struct AuvHilOptions {
   // speed 99 m/s, beyond any plausible value). Empty: none.
   std::string fault;
   double fault_time_s = 0.0;
+  double fault_duration_s = HUGE_VAL;  // the fault ends after this long (inf: never)
 };
 
 enum class AuvHilOutcome { kSuccess, kCollision, kTimeLimit, kMaxTime, kStopped, kControllerLost, kError };

@@ -88,13 +88,21 @@ void AddAuvOptions(CLI::App& app, pbppo::sim::AuvHilOptions& o) {
         const std::string kind = v.substr(0, at);
         char* end = nullptr;
         const double t = at == std::string::npos ? -1 : std::strtod(v.c_str() + at + 1, &end);
-        if (at == std::string::npos || (kind != "nan" && kind != "range") || end == v.c_str() + at + 1 ||
-            *end != '\0' || !(t >= 0))
-          throw CLI::ValidationError("--fault", "'" + v + "' is not KIND@SECONDS with KIND nan or range");
+        double d = HUGE_VAL;
+        bool ok = at != std::string::npos && (kind == "nan" || kind == "range") && end != v.c_str() + at + 1 && t >= 0;
+        if (ok && *end == '+') {
+          const char* from = end + 1;
+          d = std::strtod(from, &end);
+          ok = end != from && d > 0 && std::isfinite(d);
+        }
+        if (!ok || *end != '\0')
+          throw CLI::ValidationError("--fault", "'" + v + "' is not KIND@SECONDS[+DURATION] with KIND nan or range");
         o.fault = kind;
         o.fault_time_s = t;
+        o.fault_duration_s = d;
       },
-      "From this simulated time on, every sample carries the fault: nan@S or range@S");
+      "From this simulated time on (for DURATION s, or to the end), every sample carries the fault: nan@S[+D] or "
+      "range@S[+D]");
 }
 
 int Usage(const char* why) {

@@ -271,7 +271,10 @@ struct TickImpl {
       } else if (l.healthy_ticks_ < 0xffffffffu) {
         ++l.healthy_ticks_;
       }
-      if (dec.transition && dec.cause_mode >= Mode::kSafeStop) l.stopped_by_ |= 1u << static_cast<unsigned>(dec.cause);
+      if (dec.transition && dec.cause_mode >= Mode::kSafeStop) {
+        if (l.stopped_by_ == 0) ++l.recovery_.stops;  // the first rise to safe-stop or e-stop of this run
+        l.stopped_by_ |= 1u << static_cast<unsigned>(dec.cause);
+      }
       if (dec.transition) {
         if (l.mode_count_ < LoopData::kMaxChanges) {
           ModeChange& c = l.modes_[l.mode_count_];

@@ -90,6 +90,7 @@ struct TickEvents {
 
 // How the robot came back after the supervisor stopped it (see Recovery above).
 struct RecoveryStatus {
+  std::uint64_t stops = 0;                     // rises to safe-stop or e-stop from below (while supervised)
   std::uint64_t automatic = 0, requested = 0;  // re-arms
   std::uint64_t refused = 0;                   // requests refused
   std::uint64_t last_tick = 0;                 // of the last re-arm or refusal

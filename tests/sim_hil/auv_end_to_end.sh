@@ -14,7 +14,7 @@
 #      where it ends; a log cut inside its header or corrupted is refused naming the offset;
 #   7. recording onto a file system that fills: the mission goes on, the failure is told at once and
 #      in the summary (exit 1), the log holds its whole records and an end record naming the error,
-#      and replays;
+#      and replays; onto a read-only one: refused at once, before the wait for a peer;
 #   8. the vehicle restarts mid-run (real time): the controller stops (e-stop, the peer lost), and
 #      runs again by the robot file's recovery rule: by itself once healthy (rule automatic), or
 #      only when a person asks (rule request, SIGUSR1), the new vehicle then driven by the policy.
@@ -195,6 +195,23 @@ expect "$work/replay_full.log" "replay: .*full.log: [0-9]+ ticks, [0-9]+ command
 expect "$work/replay_full.log" "full.log ends where its recording stopped: a write failed: No space left on device \(28\); [0-9]+ records not written after it"
 grep -E "write failed|recording stopped" "$work/full.ctl.log" | sed 's/^/   /'
 sed 's/^/   /' "$work/replay_full.log"
+# A read-only file system: refused before anything else (no vehicle runs: it is not waited for).
+mkdir -p "$work/ro"
+cat >"$work/on_ro_fs.sh" <<'SH'
+dir=$1
+shift
+mount -t tmpfs -o ro,size=64k pbppo-ro "$dir" || exit 97
+"$@"
+SH
+rc=0
+SECONDS=0
+unshare --mount --propagation private bash "$work/on_ro_fs.sh" "$work/ro" \
+  "$ctl" --robot "$robot" --policy "$blob" --domain "$domain" --quiet --record "$work/ro/run.log" \
+  --peer-timeout-s 20 >"$work/ro.ctl.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "read-only: the controller exited $rc (1 expected): $(cat "$work/ro.ctl.log")"
+expect "$work/ro.ctl.log" "log .*ro/run.log: cannot write: Read-only file system"
+[ "$SECONDS" -lt 15 ] || fail "read-only: refused only after ${SECONDS} s (the wait for the peer came first)"
+sed 's/^/   /' "$work/ro.ctl.log"
 echo "== 8: the vehicle restarts mid-run (real time): the robot file's recovery rule, both ways"
 mkdir -p "$work/rearm"
 cp -r models/auv "$work/rearm/auv"
@@ -233,14 +250,14 @@ driven() { awk -F, 'NR > 1 && $5 > 0 { n++; if (!t) t = $1 } END { printf "%d %.
 vehicle_restarts automatic "$work/rearm/auv/robot.yaml"
 expect "$work/automatic.ctl.log" "tick [0-9]+: safe-stop: stale sample; runs again by itself"
 expect "$work/automatic.ctl.log" "tick [0-9]+: re-armed automatically after 10 healthy ticks \(stopped by: stale sample, lost peer\)"
-expect "$work/automatic.ctl.log" "recovery: re-armed 1 times \(1 automatically, 0 on request\), 0 requests refused"
+expect "$work/automatic.ctl.log" "recovery: stopped 2 times, re-armed 1 \(1 automatically, 0 on request\), 0 requests refused"
 read -r secs first <<<"$(driven "$work/automatic.csv")"
 echo "   the new vehicle driven for ${secs} s of its 8 s, from ${first} s"
 [ "$secs" -ge 4 ] || fail "automatic: the new vehicle was driven for only $secs s"
 vehicle_restarts request "$robot" request
 expect "$work/request.ctl.log" "tick [0-9]+: safe-stop: stale sample; runs again on request \(SIGUSR1; supervisor.recovery: request\)"
 expect "$work/request.ctl.log" "tick [0-9]+: re-armed on request after [0-9]+ healthy ticks \(stopped by: stale sample, lost peer\)"
-expect "$work/request.ctl.log" "recovery: re-armed 1 times \(0 automatically, 1 on request\), 0 requests refused"
+expect "$work/request.ctl.log" "recovery: stopped 2 times, re-armed 1 \(0 automatically, 1 on request\), 0 requests refused"
 read -r secs first <<<"$(driven "$work/request.csv")"
 echo "   the new vehicle driven for ${secs} s of its 8 s, from ${first} s"
 [ "$secs" -ge 2 ] || fail "request: the new vehicle was driven for only $secs s"

@@ -213,6 +213,8 @@ TEST_CASE("auv hil: bad flags are refused naming the flag and the value") {
       {{"--layout", "easy", "--seed", "1", "--domain", "300"}, "--domain: Value 300"},
       {{"--layout", "easy", "--seed", "1", "--max-time", "abc"}, "--max-time: 'abc'"},
       {{"--layout", "easy", "--seed", "1", "--fault", "nan@x"}, "--fault: 'nan@x'"},
+      {{"--layout", "easy", "--seed", "1", "--fault", "nan@3+"}, "--fault: 'nan@3+' is not KIND@SECONDS[+DURATION]"},
+      {{"--layout", "easy", "--seed", "1", "--fault", "range@3+-1"}, "--fault: 'range@3+-1'"},
       {{"--layout", "easy", "--seed", "1", "--dds-naming", "ros3"}, "--dds-naming: 'ros3'"},
       {{"--layout", "easy"}, "--seed is required"},
       {{"--layout", "easy", "--seed", "1", "--frobnicate", "2"}, "--frobnicate"},

@@ -540,6 +540,7 @@ TEST_CASE("loop recovery: automatic - a vehicle that comes back is run again aft
   for (int k = 0; k < 50; ++k) b.Step(true);
   CHECK(b.l->supervisor().mode == Mode::kEStop);
   CHECK(b.l->recovery().automatic == 2);
+  CHECK(b.l->recovery().stops == 3);  // once per loss (safe-stop, then e-stop: one stop)
   b.l->RequestRearm();
   b.Step(true);
   CHECK(b.l->supervisor().mode == Mode::kNominal);
