@@ -51,7 +51,7 @@ struct ControllerOptions {
 // The quadruped's model (loaded once per process), the stand HIL and the controller: runtime/loop
 // over the CAN transport, with the stand trajectory as its command source or none.
 struct Rig {
-  const robot::RobotModel& model = test::QuadrupedRobot();
+  const robot::RobotModel& model;
   std::unique_ptr<sim::QuadrupedHil> hil;
   std::unique_ptr<loop::TrajectorySource> source;
   std::unique_ptr<can::CanTransport> can;
@@ -63,7 +63,8 @@ struct Rig {
   std::uint64_t ctl_allocations = 0;
   bool count_allocations = false;
 
-  Rig(sim::QuadrupedHilOptions h, const ControllerOptions& c) : data(robot::MakeRobotData(model)) {
+  Rig(sim::QuadrupedHilOptions h, const ControllerOptions& c, const robot::RobotModel& m = test::QuadrupedRobot())
+      : model(m), data(robot::MakeRobotData(model)) {
     h.interfaces = {Vcan(0), Vcan(1)};
     auto hr = sim::QuadrupedHil::Make(model, h);
     REQUIRE_MESSAGE(hr.ok(), hr.error().message);
@@ -436,6 +437,43 @@ TEST_CASE("stand HIL: bus-off on one bus (an error frame) - safe-stop naming the
   CHECK(sup.entered[2].subject == 1);
   CHECK(rig.model.supervisor_model.transport_names[1] == "can/hind");
   CHECK(rig.can->bus_stats(1).is_bus_off);
+}
+
+TEST_CASE("stand HIL: bus-off, then the bus restarted - the robot file's automatic rule: armed, stood up, holding") {
+  static const robot::RobotModel automatic = [] {
+    robot::RobotModel m = test::QuadrupedRobot();
+    m.supervisor.recovery.automatic = true;
+    m.supervisor.recovery.causes = 1u << static_cast<unsigned>(Cause::kTransportFault);
+    return m;
+  }();
+  Rig rig({}, {}, automatic);
+  auto inj = Injector(1);
+  rig.RunUntil(Phase::kHold, 2000);
+  REQUIRE(rig.supervisor().mode == Mode::kNominal);
+  can::CanFrame e;
+  e.flags = can::kFlagError;
+  e.id = 0x40;  // CAN_ERR_BUSOFF
+  e.len = 8;
+  REQUIRE(inj->Send({&e, 1}) == 1);
+  for (int k = 0; k < 5; ++k) rig.Tick();
+  REQUIRE(rig.supervisor().mode == Mode::kSafeStop);
+  for (int k = 0; k < 600; ++k) rig.Tick();  // still off: no re-arm however long
+  CHECK(rig.loop->recovery().automatic == 0);
+  e.id = 0x100;  // CAN_ERR_RESTARTED
+  REQUIRE(inj->Send({&e, 1}) == 1);
+  const std::uint64_t restarted_at = rig.tick;
+  rig.RunUntil(Phase::kArming, 700);
+  CHECK(rig.loop->recovery().automatic == 1);
+  CHECK(rig.loop->recovery().last_tick >= restarted_at + automatic.supervisor.recovery.healthy_ticks);
+  CHECK_FALSE(rig.can->bus_stats(1).is_bus_off);
+  rig.RunUntil(Phase::kHold, 2500);
+  REQUIRE(rig.loop->phase() == Phase::kHold);
+  for (int k = 0; k < 100; ++k) rig.Tick();
+  std::printf("stand HIL: bus restarted at tick %llu: %s; holding from tick %llu, pose error %.3f rad\n",
+              static_cast<unsigned long long>(restarted_at), rig.loop->recovery().last,
+              static_cast<unsigned long long>(rig.loop->phase_start(Phase::kHold)), rig.MaxPoseError());
+  CHECK(rig.supervisor().mode == Mode::kNominal);
+  CHECK(rig.MaxPoseError() < 0.05);
 }
 
 TEST_CASE("stand HIL: shutdown request - damping - then every motor out of motor mode") {

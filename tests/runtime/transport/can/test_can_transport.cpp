@@ -273,7 +273,7 @@ TEST_CASE("a CAN tick over vcan: 12 replies decoded - unknown ids and wrong leng
   CHECK(replies == kTicks * 12);
 }
 
-TEST_CASE("error frames injected on vcan are received and decoded (bus-off - controller error-passive)") {
+TEST_CASE("error frames injected on vcan are received and decoded (bus-off - controller error-passive - restarted)") {
   auto rx = OpenBus(Opts(0, false, {0x123}));
   auto tx = OpenBus(Opts(0, false, {}));
   CanFrame e;
@@ -295,6 +295,17 @@ TEST_CASE("error frames injected on vcan are received and decoded (bus-off - con
   char text[96];
   DescribeErrorFrame(out[0].id, out[0].data, text, sizeof text);
   CHECK(std::string(text) == "controller: tx error-passive, bus-off");
+  CHECK(rx->stats().is_bus_off);
+  // The controller restarted: the bus is on again (what lets a robot file's recovery rule re-arm).
+  CanFrame restarted;
+  restarted.flags = kFlagError;
+  restarted.id = 0x100;  // CAN_ERR_RESTARTED
+  restarted.len = 8;
+  REQUIRE(tx->Send({&restarted, 1}) == 1);
+  REQUIRE(rx->Receive(out) == 1);
+  CHECK(rx->stats().restarted == 1);
+  CHECK_FALSE(rx->stats().is_bus_off);
+  CHECK(rx->stats().bus_off == 1);
 }
 
 TEST_CASE("opening a missing interface names it") {
