@@ -415,16 +415,28 @@ TEST_CASE("stand HIL: unknown identifiers and wrong lengths are counted and igno
   CHECK(rig.MaxPoseError() < 0.045);
 }
 
-TEST_CASE("stand HIL: bus-off on one bus (an error frame) - safe-stop naming the bus") {
-  Rig rig({}, {});
+namespace {
+
+constexpr std::uint32_t kErrBusOff = 0x40, kErrRestarted = 0x100;  // CAN_ERR_BUSOFF, CAN_ERR_RESTARTED
+
+// Holding on its stand, then an error frame of class `id` on bus 1 (as the bus's controller sends it).
+std::unique_ptr<can::SocketCanBus> HoldThenError(Rig& rig, std::uint32_t id) {
   auto inj = Injector(1);
   rig.RunUntil(Phase::kHold, 2000);
   REQUIRE(rig.supervisor().mode == Mode::kNominal);
   can::CanFrame e;
   e.flags = can::kFlagError;
-  e.id = 0x40;  // CAN_ERR_BUSOFF
+  e.id = id;
   e.len = 8;
   REQUIRE(inj->Send({&e, 1}) == 1);
+  return inj;
+}
+
+}  // namespace
+
+TEST_CASE("stand HIL: bus-off on one bus (an error frame) - safe-stop naming the bus") {
+  Rig rig({}, {});
+  auto inj = HoldThenError(rig, kErrBusOff);
   const std::uint64_t sent_at = rig.tick;
   for (int k = 0; k < 5; ++k) rig.Tick();
   const auto& sup = rig.supervisor();
@@ -447,19 +459,15 @@ TEST_CASE("stand HIL: bus-off, then the bus restarted - the robot file's automat
     return m;
   }();
   Rig rig({}, {}, automatic);
-  auto inj = Injector(1);
-  rig.RunUntil(Phase::kHold, 2000);
-  REQUIRE(rig.supervisor().mode == Mode::kNominal);
-  can::CanFrame e;
-  e.flags = can::kFlagError;
-  e.id = 0x40;  // CAN_ERR_BUSOFF
-  e.len = 8;
-  REQUIRE(inj->Send({&e, 1}) == 1);
+  auto inj = HoldThenError(rig, kErrBusOff);
   for (int k = 0; k < 5; ++k) rig.Tick();
   REQUIRE(rig.supervisor().mode == Mode::kSafeStop);
   for (int k = 0; k < 600; ++k) rig.Tick();  // still off: no re-arm however long
   CHECK(rig.loop->recovery().automatic == 0);
-  e.id = 0x100;  // CAN_ERR_RESTARTED
+  can::CanFrame e;
+  e.flags = can::kFlagError;
+  e.id = kErrRestarted;
+  e.len = 8;
   REQUIRE(inj->Send({&e, 1}) == 1);
   const std::uint64_t restarted_at = rig.tick;
   rig.RunUntil(Phase::kArming, 700);
