@@ -1,4 +1,6 @@
-// The walking quadruped's soak (sim_hil/quadruped_soak.hpp) at full length, for bench/soak.sh:
+// The walking quadruped's soak (sim_hil/quadruped_soak.hpp) at full length, for bench/soak.sh (with
+// --realtime on its own 1 kHz clock, set up as pbppo-controller sets itself up: memory locked,
+// SCHED_FIFO 80; the plant shares the thread):
 //
 //   pbppo_bench_soak --ticks 1000000 --seed 1 --out DIR [--realtime] [--policy BLOB] [--robot quadruped]
 //
@@ -16,6 +18,7 @@
 
 #include "runtime/robot/find_robot.hpp"
 #include "runtime/robot/robot_model.hpp"
+#include "runtime/rt/rt_setup.hpp"
 #include "sim_hil/quadruped_soak.hpp"
 
 using namespace pbppo;
@@ -57,6 +60,10 @@ int main(int argc, char** argv) {
   if (ec) {
     std::fprintf(stderr, "pbppo_bench_soak: --out %s: %s\n", out.c_str(), ec.message().c_str());
     return 2;
+  }
+  if (realtime) {  // as pbppo-controller sets itself up: memory locked, SCHED_FIFO 80
+    const rt::RtSetupResult rs = rt::SetUpRealTime(rt::RtOptions{});
+    for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo_bench_soak: warning: %s\n", w.c_str());
   }
   sim::SoakOptions o;
   o.ticks = ticks;
