@@ -105,17 +105,20 @@ struct TickImpl {
   static void Recover(const RobotModel& m, const RobotData& d, LoopData& l, const TickEvents& ev) noexcept {
     const robot::RecoverySpec& r = m.supervisor.recovery;
     RecoveryStatus& st = l.recovery_;
-    const bool stopped = l.sup_.mode >= Mode::kSafeStop && Armed(m, l.phase_);
+    const bool armed = Armed(m, l.phase_), stopped = l.sup_.mode >= Mode::kSafeStop && armed;
     const bool healthy = l.healthy_ticks_ >= r.healthy_ticks;
     const bool automatic =
         r.automatic && stopped && healthy && (l.stopped_by_ & ~r.causes) == 0 && st.automatic < r.max_automatic;
+    if (!automatic && !ev.rearm) return;  // the common tick: nothing to do
     char causes[96];
     CauseList(l.stopped_by_, causes, sizeof causes);
     if (ev.rearm && !automatic && !(stopped && healthy)) {
       ++st.refused;
       st.last_tick = d.tick;
       st.last_refused = true;
-      if (!stopped) {
+      if (!armed) {
+        std::snprintf(st.last, sizeof st.last, "re-arm request refused: not armed (%s)", ToString(l.phase_));
+      } else if (!stopped) {
         std::snprintf(st.last, sizeof st.last, "re-arm request refused: nothing to recover from (%s, %s)",
                       ToString(l.phase_), safety::ToString(l.sup_.mode));
       } else {
@@ -124,7 +127,6 @@ struct TickImpl {
       }
       return;
     }
-    if (!automatic && !ev.rearm) return;
     if (automatic) {
       ++st.automatic;
     } else {

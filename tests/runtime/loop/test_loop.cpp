@@ -608,6 +608,9 @@ TEST_CASE("loop recovery: automatic only for the causes the robot file lists - a
   CHECK(std::string(b.l->recovery().last).find("re-arm request refused: healthy for 0 ticks") == 0);
   b.l->Disarm();
   b.Step(true);
+  b.l->RequestRearm();  // disarmed: a reset and an arm, not a re-arm
+  b.Step(true);
+  CHECK(std::string(b.l->recovery().last) == "re-arm request refused: not armed (disarmed)");
   REQUIRE(b.l->ResetSupervisor());
   b.l->Arm();
   for (int k = 0; k < 5; ++k) b.Step(true);
