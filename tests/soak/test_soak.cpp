@@ -4,7 +4,7 @@
 // Every promise of sim_hil/quadruped_soak.hpp holds: no allocation in the controller's ticks, every
 // command inside its limits, every stopping fault at the safe state within 3 ticks of being
 // detectable, the others not stopping the robot, every stop recovered only by the rule; resident
-// memory flat.
+// memory flat (in the default build; under AddressSanitizer, the same run without memory errors).
 #include <doctest/doctest.h>
 
 #include <cstdio>
@@ -54,7 +54,11 @@ TEST_CASE("soak: the walking quadruped, 150,000 ticks under seeded faults - ever
   CHECK(stopped >= 8);
   CHECK(r->rearms == r->stops);
   CHECK(r->command_phases > 20);
-  // Resident memory flat: after the first tenth, it grows by less than 1 MiB.
+  // Resident memory flat: after the first tenth, it grows by less than 1 MiB. Not under
+  // AddressSanitizer, whose quarantine keeps freed memory resident by design (hundreds of MiB):
+  // there the run checks memory errors instead; the default build checks the growth.
   REQUIRE(r->rss_kib.size() > 10);
+#if !defined(__SANITIZE_ADDRESS__)
   CHECK(r->rss_kib.back().second <= r->rss_kib[r->rss_kib.size() / 10].second + 1024);
+#endif
 }
