@@ -12,9 +12,12 @@
 #     (default 1600: about 10^6 ticks) that come and go, with NaN and out-of-range bursts and
 #     vehicles killed mid-run (tests/soak/auv_soak.sh), and a plot of the controller's resident
 #     memory.
+# Both quadruped runs are recorded as pbppo-controller records (--record), rotated in files of
+# RECORD_MB MiB (default 64; 0: no recording), the newest 4 kept; the newest is replayed on its own.
 # Quiet the machine first: other load shows up in the latency figures. Writes into OUT_DIR
 # (default build/results/soak). Exit 1 when a promise broke or the latency tail drifted.
-# Usage: bench/soak.sh [OUT_DIR]   (TICKS=1000000, SEED=1, REALTIME_S=3600, VEHICLES=1600 (0: skip))
+# Usage: bench/soak.sh [OUT_DIR]   (TICKS=1000000, SEED=1, REALTIME_S=3600, VEHICLES=1600 (0: skip),
+#                                   RECORD_MB=64 (0: none))
 set -euo pipefail
 source "$(dirname "$0")/../tools/common.sh"
 out="${1:-$root/build/results/soak}"
@@ -22,10 +25,17 @@ ticks="${TICKS:-1000000}"
 seed="${SEED:-1}"
 realtime_s="${REALTIME_S:-3600}"
 vehicles="${VEHICLES:-1600}"
+record_mb="${RECORD_MB:-64}"
 positive_int TICKS "$ticks"
 non_negative_int SEED "$seed"
 non_negative_int REALTIME_S "$realtime_s"
 non_negative_int VEHICLES "$vehicles"
+non_negative_int RECORD_MB "$record_mb"
+record() {  # record DIR: the soak's recording flags
+  [ "$record_mb" -gt 0 ] || return 0
+  rm -rf "$1/log" && mkdir -p "$1/log"
+  echo --record "$1/log/soak.log" --record-max-mb "$record_mb" --record-rotate 4
+}
 hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
 ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
 soak="$(program PBPPO_BENCH_SOAK build/default/bench/pbppo_bench_soak)"
@@ -64,12 +74,16 @@ GP
 
 rc=0
 echo "== 1: the walking quadruped, lock-step, $ticks ticks, seed $seed"
-"$soak" --ticks "$ticks" --seed "$seed" --out "$out/lockstep" || rc=1
+mkdir -p "$out/lockstep" "$out/realtime"
+# shellcheck disable=SC2046
+"$soak" --ticks "$ticks" --seed "$seed" --out "$out/lockstep" $(record "$out/lockstep") || rc=1
 plots "$out/lockstep" "soak, lock-step"
 echo "   plots: $out/lockstep/{rss,latency,modes}.png"
 if [ "$realtime_s" -gt 0 ]; then
   echo "== 2: the walking quadruped, real time at 1 kHz, $realtime_s s, seed $seed"
-  "$soak" --ticks $((realtime_s * 1000)) --seed "$seed" --realtime --out "$out/realtime" || rc=1
+  # shellcheck disable=SC2046
+  "$soak" --ticks $((realtime_s * 1000)) --seed "$seed" --realtime --out "$out/realtime" $(record "$out/realtime") ||
+    rc=1
   plots "$out/realtime" "soak, real time"
   echo "   plots: $out/realtime/{rss,latency,modes}.png"
 fi

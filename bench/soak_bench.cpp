@@ -3,19 +3,25 @@
 // SCHED_FIFO 80; the plant shares the thread):
 //
 //   pbppo_bench_soak --ticks 1000000 --seed 1 --out DIR [--realtime] [--policy BLOB] [--robot quadruped]
+//                    [--record LOG [--record-max-mb MB [--record-rotate N]]]
 //
 // A progress line every 10,000 ticks; then the report (stdout and DIR/report.txt) and, for the
 // plots, DIR/rss.csv (tick, resident KiB), DIR/latency.csv (tenth of the run, p50, p99, p99.9,
 // max of the controller's tick, us), DIR/faults.csv (one row per fault), DIR/modes.csv (the
 // highest mode in each simulated second). Exit 0 when every promise held and the latency tail
 // did not drift (the last tenth's p99 within 1.25 x the first's + 10 us), 1 otherwise, 2 on bad
-// arguments.
+// arguments. With --record the controller's ticks are recorded as pbppo-controller records them
+// (rotated by size with --record-max-mb); the newest file is then replayed on its own, against the
+// soak's robot (its recovery rule is the soak's), and must match bit for bit.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "runtime/loop/record_cli.hpp"
+#include "runtime/loop/replay.hpp"
+#include "runtime/loop/source_files.hpp"
 #include "runtime/robot/find_robot.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/rt/rt_setup.hpp"
@@ -42,6 +48,8 @@ int main(int argc, char** argv) {
   app.add_option("--policy", policy, "The walking policy (default: the robot's shipped flat-ground policy)");
   bool realtime = false;
   app.add_flag("--realtime", realtime, "The controller on its own clock at the robot's period (else lock-step)");
+  loop::RecordCli record;
+  loop::AddRecordOptions(app, record);
   CLI11_PARSE(app, argc, argv);
   auto robot_path = robot::FindRobot(robot_arg);
   if (!robot_path) {
@@ -71,6 +79,8 @@ int main(int argc, char** argv) {
   o.policy = policy;
   o.progress_every = 10'000;
   o.realtime = realtime;
+  o.record = record.path;
+  o.record_options = record.options();
   o.progress = [&](std::uint64_t t, const sim::SoakReport& r) {
     std::fprintf(stderr, "\rsoak: tick %llu of %llu (%.0f %%), %llu stops, %llu re-arms, %llu violations   ",
                  static_cast<unsigned long long>(t), static_cast<unsigned long long>(ticks),
@@ -150,11 +160,35 @@ int main(int argc, char** argv) {
   add(line);
   std::snprintf(line, sizeof line, "violations: %llu", static_cast<unsigned long long>(r->violation_count));
   add(line);
+  bool replayed = true;
+  if (!record.path.empty()) {
+    // The newest file, replayed on its own from its snapshot.
+    const std::string newest = loop::RotatedPath(record.path, r->record_files - 1);
+    std::string how;
+    auto log = loop::ReadLog(newest);
+    auto source = loop::LoadSource(sim::SoakModel(*model), {policy, "", false, policy::Kernel::kAuto});
+    if (!log || !source) {
+      how = !log ? log.error().message : source.error().message;
+    } else if (auto rp = loop::Replay(sim::SoakModel(*model), *log, source->source.get(), source->hash); !rp) {
+      how = rp.error().message;
+    } else {
+      how = std::to_string(rp->ticks) + " ticks from tick " + std::to_string(log->records.front().inputs.tick) + ", " +
+            std::to_string(rp->mismatches) + " different" + (rp->mismatches != 0 ? ": " + rp->first_mismatch : "");
+      replayed = rp->mismatches == 0 && rp->compared > 0;
+    }
+    replayed = replayed && r->record_error.empty() && r->records_dropped == 0;
+    std::snprintf(line, sizeof line, "log: %llu records in %u files of at most %.0f MiB (%u deleted), %llu dropped%s%s",
+                  static_cast<unsigned long long>(r->records), r->record_files, record.max_mb, r->record_files_deleted,
+                  static_cast<unsigned long long>(r->records_dropped), r->record_error.empty() ? "" : "; ",
+                  r->record_error.c_str());
+    add(line);
+    add("log: the newest file, " + newest + ", replayed alone: " + how);
+  }
   for (const std::string& v : r->violations) add("  " + v);
   for (const std::string& s : r->summary) add("  " + s);
   std::printf("%s", rep.c_str());
   std::ofstream(out + "/report.txt") << rep;
   const bool ok = r->violation_count == 0 && r->allocations == 0 && r->commands_outside_limits == 0 && !drift &&
-                  rss_last <= rss_first + 1024;
+                  rss_last <= rss_first + 1024 && replayed;
   return ok ? 0 : 1;
 }

@@ -5,7 +5,8 @@
 //       DDS:  [--domain D] [--dds-profile FILE] [--dds-naming native|ros2] [--dds-security DIR [--dds-identity NAME]]
 //             [--peer-timeout-s S] [--lost-after-s S] [--writer-poll-us N] [--status-every-s S]
 //       CAN:  [--can IF0,IF1] [--candump FILE] [--receive-all]
-//       [--ticks N] [--duration S] [--record LOG] [--profile out.json] [--profile-plot out.png]
+//       [--ticks N] [--duration S] [--record LOG [--record-max-mb MB [--record-rotate N]]]
+//       [--profile out.json] [--profile-plot out.png]
 //       [--rt-priority P] [--cpu C] [--no-mlock] [--skip-self-test] [--kernel K] [--quiet] [--inject-stall-at-tick N]
 //       [--failure-record FILE]
 //
@@ -51,6 +52,7 @@
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/core/cli_checks.hpp"
 #include "runtime/loop/log.hpp"
+#include "runtime/loop/record_cli.hpp"
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
@@ -66,11 +68,12 @@ namespace {
 using namespace pbppo;
 
 struct Options {
-  std::string robot, policy, trajectory, record, profile_json, profile_png, dds_profile, can, candump, commands;
+  std::string robot, policy, trajectory, profile_json, profile_png, dds_profile, can, candump, commands;
   std::string kernel = "auto";
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
   std::string failure_record;  // the service's record of a run that ended in failure
+  loop::RecordCli record;      // --record, --record-max-mb, --record-rotate
   bool lockstep = false, no_mlock = false, quiet = false, receive_all = false, skip_self_test = false;
   bool lockstep_through_ends = false;
   bool safe_stop = false;
@@ -175,7 +178,7 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--lost-after-s", o.lost_after_s,
                  "DDS: a peer is lost after this long without a sample (default: the robot file's lost_after_s)")
       ->check(CLI::Range(0.001, 3600.0));
-  app.add_option("--record", o.record, "Record every input and command to a log (pbppo replay)");
+  loop::AddRecordOptions(app, o.record);
   app.add_option("--profile", o.profile_json, "Write the latency profile as JSON");
   app.add_option("--profile-plot", o.profile_png, "Write the latency histograms as PNG");
   app.add_option("--rt-priority", o.rt_priority, "SCHED_FIFO priority (0: keep the scheduler)")
@@ -399,6 +402,16 @@ class StartupWatchdog {
   std::thread thread_;
 };
 
+// ", in 5 files (run.log to run.4.log; the 3 oldest deleted)" for a rotated log.
+std::string Files(const loop::Recorder& r) {
+  const std::uint32_t n = r.files(), deleted = r.files_deleted();
+  if (n == 1) return "";
+  std::string s = ", in " + std::to_string(n) + " files (" + loop::RotatedPath(r.path(), 0) + " to " +
+                  loop::RotatedPath(r.path(), n - 1);
+  if (deleted > 0) s += "; the " + std::to_string(deleted) + " oldest deleted";
+  return s + ")";
+}
+
 // The phase as it changes (robots with phases) or a progress line every status period (others);
 // a recording that stopped on a failure, once, as soon as the status thread sees it.
 loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Options& o, ServiceState* service,
@@ -429,7 +442,7 @@ loop::StatusPublisher::Poll Progress(const robot::RobotModel& robot, const Optio
     if (recorder != nullptr && !told && recorder->failed()) {
       told = true;
       std::fprintf(stderr, "\npbppo-controller: tick %llu: log %s: %s; recording stopped, the control loop goes on\n",
-                   static_cast<unsigned long long>(st.tick), o.record.c_str(), recorder->failure().c_str());
+                   static_cast<unsigned long long>(st.tick), o.record.path.c_str(), recorder->failure().c_str());
       std::fflush(stderr);
       service->note = ", recording stopped (a failed write)";
     }
@@ -535,24 +548,30 @@ int Run(const Options& o) {
   // The log before the transports: a log that cannot be written is refused at once, not after
   // the wait for a peer; if the transports then fail, the empty log is removed.
   std::unique_ptr<loop::Recorder> recorder;
-  if (!o.record.empty()) {
-    auto r = loop::Recorder::Open(o.record, robot, loop::MakeLogHeader(robot, source->kind, source->hash, lopt));
+  if (!o.record.path.empty()) {
+    auto r = loop::Recorder::Open(o.record.path, robot, loop::MakeLogHeader(robot, source->kind, source->hash, lopt),
+                                  o.record.options());
     if (!r) return Fail(r.error().message, 1);
     recorder = std::move(*r);
+  }
+  robot::RobotData data = robot::MakeRobotData(robot);
+  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
+  if (auto st = loop::AttachRecorder(robot, data, *loop, recorder.get()); !st) {
+    (void)recorder->Stop();
+    std::error_code ec;
+    std::filesystem::remove(o.record.path, ec);
+    return Fail("--record-max-mb: " + st.error().message, 2);
   }
   auto opened = OpenTransports(robot, o, *source);
   if (!opened) {
     if (recorder) {
       (void)recorder->Stop();
       std::error_code ec;
-      std::filesystem::remove(o.record, ec);
+      std::filesystem::remove(o.record.path, ec);
     }
     return Fail(opened.error().message, opened.error().code == ErrorCode::kIo ? 1 : 2);
   }
   Transports& ts = *opened;
-  robot::RobotData data = robot::MakeRobotData(robot);
-  auto loop = loop::MakeLoopData(robot, source->source.get(), lopt);
-  loop->recorder = recorder.get();
   rt::RtOptions ro;
   ro.lock_memory = !o.no_mlock;
   ro.fifo_priority = o.rt_priority;
@@ -611,9 +630,10 @@ int Run(const Options& o) {
                 static_cast<unsigned long long>(source->trajectory->ticks()));
   if (recorder)
     std::printf(
-        "log: %s, %llu records, %llu dropped%s%s%s\n", o.record.c_str(),
-        static_cast<unsigned long long>(recorder->records()), static_cast<unsigned long long>(recorder->dropped()),
-        recorder->failed() ? ", recording stopped: " : "", recorder->failed() ? recorder->failure().c_str() : "",
+        "log: %s, %llu records%s, %llu dropped%s%s%s\n", o.record.path.c_str(),
+        static_cast<unsigned long long>(recorder->records()), Files(*recorder).c_str(),
+        static_cast<unsigned long long>(recorder->dropped()), recorder->failed() ? ", recording stopped: " : "",
+        recorder->failed() ? recorder->failure().c_str() : "",
         recorder->failed() ? (", " + std::to_string(recorder->not_written()) + " records not written").c_str() : "");
   std::printf("%s\n%s", rs.Summary().c_str(), rt::FormatText(report).c_str());
   if (!o.profile_json.empty()) {

@@ -107,6 +107,7 @@ class QuadrupedRig {
   can::CanTransport& can() noexcept { return *can_; }
   loop::ScheduleTransport& operator_source() noexcept { return *schedule_; }
   const policy::PolicyModel* policy() const noexcept { return source_.policy.get(); }  // null: no blob
+  const loop::LoadedSource& source() const noexcept { return source_; }
   loop::LoopData& loop() noexcept { return *loop_; }
   const loop::LoopData& loop() const noexcept { return *loop_; }
   const robot::RobotData& data() const noexcept { return data_; }

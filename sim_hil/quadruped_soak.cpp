@@ -25,20 +25,6 @@ using safety::Mode;
 
 constexpr std::size_t kKeptViolations = 100;
 
-// The soak's robot: the model with an automatic recovery rule for every cause its faults raise.
-robot::RobotModel SoakModel(const robot::RobotModel& m) {
-  robot::RobotModel r = m;
-  robot::RecoverySpec& rec = r.supervisor.recovery;
-  rec.automatic = true;
-  rec.causes = 0;
-  for (Cause c : {Cause::kStaleSample, Cause::kLostPeer, Cause::kTransportFault, Cause::kInvalidSample})
-    rec.causes |= 1u << static_cast<unsigned>(c);
-  rec.max_automatic = 0xffffffffu;
-  rec.healthy_s = 0.5;
-  rec.healthy_ticks = static_cast<std::uint32_t>(std::llround(0.5 / m.tick_period_s));
-  return r;
-}
-
 // Velocity commands: a stand, then phases of random commands (a fifth of them standing), long
 // enough for the run.
 std::string CommandSchedule(const SoakOptions& o, double total_s, Rng& rng, std::uint64_t* phases) {
@@ -223,6 +209,19 @@ const char* ToString(SoakFaultKind kind) noexcept {
   return "?";
 }
 
+robot::RobotModel SoakModel(const robot::RobotModel& m) {
+  robot::RobotModel r = m;
+  robot::RecoverySpec& rec = r.supervisor.recovery;
+  rec.automatic = true;
+  rec.causes = 0;
+  for (Cause c : {Cause::kStaleSample, Cause::kLostPeer, Cause::kTransportFault, Cause::kInvalidSample})
+    rec.causes |= 1u << static_cast<unsigned>(c);
+  rec.max_automatic = 0xffffffffu;
+  rec.healthy_s = 0.5;
+  rec.healthy_ticks = static_cast<std::uint32_t>(std::llround(0.5 / m.tick_period_s));
+  return r;
+}
+
 std::uint64_t ResidentKiB() noexcept {
   const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
   if (fd < 0) return 0;
@@ -261,6 +260,14 @@ Result<SoakReport> RunQuadrupedSoak(const robot::RobotModel& shipped, const Soak
   QuadrupedRig& rig = **made;
   loop::LoopData& l = rig.loop();
   const robot::RobotData& d = rig.data();
+  std::unique_ptr<loop::Recorder> recorder;
+  if (!o.record.empty()) {
+    auto rec = loop::Recorder::Open(o.record, m, loop::MakeLogHeader(m, rig.source().kind, rig.source().hash),
+                                    o.record_options);
+    if (!rec) return std::move(rec).error();
+    recorder = std::move(*rec);
+    if (auto st = loop::AttachRecorder(m, d, l, recorder.get()); !st) return st.error();
+  }
   const auto& limits = m.supervisor_model.commands;
   const std::uint64_t healthy = m.supervisor.recovery.healthy_ticks;
   std::array<rt::LatencyHistogram, 10> latency;
@@ -347,6 +354,14 @@ Result<SoakReport> RunQuadrupedSoak(const robot::RobotModel& shipped, const Soak
     if (o.progress_every != 0 && (t + 1) % o.progress_every == 0 && o.progress) o.progress(t + 1, r);
   }
   if (current >= 0) judge.Close(r.faults[static_cast<std::size_t>(current)], o.ticks, healthy, fallen, true);
+  if (recorder) {
+    if (auto st = recorder->Stop(); !st) r.record_error = st.error().message;
+    r.records = recorder->records();
+    r.records_dropped = recorder->dropped();
+    r.record_files = recorder->files();
+    r.record_files_deleted = recorder->files_deleted();
+    (void)loop::AttachRecorder(m, d, l, nullptr);
+  }
   r.rss_kib.emplace_back(o.ticks, ResidentKiB());
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   for (std::size_t k = 0; k < latency.size(); ++k) r.tick_latency[k] = latency[k].Snapshot().Stats();

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "runtime/core/result.hpp"
+#include "runtime/loop/log.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/rt/latency_histogram.hpp"
 
@@ -69,6 +70,9 @@ struct SoakOptions {
   // Real time: the controller ticks on its own clock at the robot's period (deadline misses acted
   // on, as on the robot); else lock-step, as fast as the plant allows.
   bool realtime = false;
+  // A log of the controller's ticks ("": none; runtime/loop/log.hpp), rotated as record_options say.
+  std::string record;
+  loop::RecordOptions record_options;
   // Called every progress_every ticks (0: never) with the tick and the report so far.
   std::uint64_t progress_every = 0;
   std::function<void(std::uint64_t, const SoakReport&)> progress;
@@ -89,7 +93,15 @@ struct SoakReport {
   std::uint64_t violation_count = 0;
   std::vector<std::uint8_t> mode_by_second;  // the highest mode in each simulated second
   std::vector<std::string> summary;          // the loop's mode changes (the first 32) and counts
+  // The log (SoakOptions::record): records, dropped, files begun and deleted, the recorder's error.
+  std::uint64_t records = 0, records_dropped = 0;
+  std::uint32_t record_files = 0, record_files_deleted = 0;
+  std::string record_error;
 };
+
+// The soak's robot: `model` with an automatic recovery rule for every cause the faults raise (what
+// RunQuadrupedSoak runs, and what a replay of its log loads).
+robot::RobotModel SoakModel(const robot::RobotModel& model);
 
 // The soak of `model` (a walking quadruped with a CAN map; its recovery rule is replaced by an
 // automatic one for the faults' causes). Errors: the model, the policy, the rig's set-up.

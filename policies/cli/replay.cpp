@@ -20,7 +20,9 @@ int Fail(const std::string& msg) {
 
 CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
   auto* c = app.add_subcommand("replay", "Replay a recorded controller log and compare the commands bit for bit");
-  c->add_option("log", o.log, "Log written by pbppo-controller --record")->required();
+  c->add_option("log", o.logs,
+                "Log written by pbppo-controller --record; several: files of one rotated recording, in order")
+      ->required();
   c->add_option("--robot", o.robot, "The robot of the recording: a name or its robot.yaml")->required();
   c->add_option("--policy", o.policy, "The recording's policy blob");
   c->add_option("--trajectory", o.trajectory, "The recording's joint trajectory file");
@@ -31,40 +33,76 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
 }
 
 int Replay(const ReplayOptions& o) {
-  // A recording cut short (a full disk, a crash) replays up to its last whole record.
-  auto log = loop::ReadLog(o.log, loop::LogTail::kAcceptCut);
-  if (!log) return Fail(log.error().message);
   auto robot = robot::LoadRobotModel(o.robot);
   if (!robot) return Fail(robot.error().message);
-  const loop::SourceKind kind = log->header.source;
-  if (kind == loop::SourceKind::kPolicy && o.policy.empty())
-    return Fail(o.log + ": recorded with a policy: give it with --policy");
-  if (kind == loop::SourceKind::kTrajectory && o.trajectory.empty())
-    return Fail(o.log + ": recorded with a trajectory: give it with --trajectory");
-  if (kind == loop::SourceKind::kNone && !(o.policy.empty() && o.trajectory.empty()))
-    return Fail(o.log + ": recorded without a command source: no --policy or --trajectory");
-  // The self-test ran when the recording armed; a replay compares the commands instead.
-  auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
-  if (!source) return Fail(source.error().message);
-  auto r = loop::Replay(*robot, *log, source->source.get(), source->hash);
-  if (!r) return Fail(r.error().message);
+  std::string outputs;
+  bool differs = false;
+  std::uint64_t run = 0, next_tick = 0;
+  std::uint32_t sequence = 0;
+  for (std::size_t k = 0; k < o.logs.size(); ++k) {
+    const std::string& path = o.logs[k];
+    // A recording cut short (a full disk, a crash) replays up to its last whole record.
+    auto log = loop::ReadLog(path, loop::LogTail::kAcceptCut);
+    if (!log) return Fail(log.error().message);
+    const loop::SourceKind kind = log->header.source;
+    if (kind == loop::SourceKind::kPolicy && o.policy.empty())
+      return Fail(path + ": recorded with a policy: give it with --policy");
+    if (kind == loop::SourceKind::kTrajectory && o.trajectory.empty())
+      return Fail(path + ": recorded with a trajectory: give it with --trajectory");
+    if (kind == loop::SourceKind::kNone && !(o.policy.empty() && o.trajectory.empty()))
+      return Fail(path + ": recorded without a command source: no --policy or --trajectory");
+    // Several files: one recording, one after another.
+    const loop::LogHeader& h = log->header;
+    const std::uint64_t first_tick = log->records.empty()        ? next_tick
+                                     : log->records[0].type == 1 ? log->records[0].inputs.tick
+                                                                 : log->records[0].outputs.tick;
+    if (k > 0 && h.run != run)
+      return Fail(path + ": another recording than " + o.logs[0] + "'s (run " + std::to_string(h.run) + ", not " +
+                  std::to_string(run) + ")");
+    if (k > 0 && h.sequence != sequence + 1)
+      return Fail(path + ": file " + std::to_string(h.sequence) + " of the recording does not follow file " +
+                  std::to_string(sequence) + " (" + o.logs[k - 1] + ")");
+    if (k > 0 && first_tick != next_tick)
+      return Fail(path + ": begins at tick " + std::to_string(first_tick) + ", " + o.logs[k - 1] +
+                  " ended before tick " + std::to_string(next_tick));
+    run = h.run;
+    sequence = h.sequence;
+    // The self-test ran when the recording armed; a replay compares the commands instead.
+    auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
+    if (!source) return Fail(source.error().message);
+    auto r = loop::Replay(*robot, *log, source->source.get(), source->hash);
+    if (!r) return Fail(path + ": " + r.error().message);
+    if (!r->outputs.empty()) next_tick = r->outputs.back().tick + 1;
+    if (!o.out.empty()) {
+      std::string text = loop::FormatOutputs(*robot, r->outputs);
+      if (k > 0) text.erase(0, text.find('\n') + 1);  // one header line
+      outputs += text;
+    }
+    std::printf("replay: %s: %llu ticks, %llu commands compared, %llu different%s%s\n", path.c_str(),
+                static_cast<unsigned long long>(r->ticks), static_cast<unsigned long long>(r->compared),
+                static_cast<unsigned long long>(r->mismatches), r->mismatches != 0 ? "; first: " : "",
+                r->first_mismatch.c_str());
+    if (!log->snapshot.empty())
+      std::printf("replay: %s is file %u of a rotated recording: replayed from its snapshot at tick %llu\n",
+                  path.c_str(), h.sequence, static_cast<unsigned long long>(first_tick));
+    if (!log->complete)
+      std::printf("replay: %s ends early, at offset %zu: %s; the %zu whole records before it were replayed\n",
+                  path.c_str(), log->cut_at, log->cut_reason.c_str(), log->records.size());
+    else if (log->end == loop::LogEnd::kRotated)
+      std::printf("replay: %s ends where the recording went on in the next file (%s)\n", path.c_str(),
+                  log->next.c_str());
+    else if (log->end != loop::LogEnd::kStopped)
+      std::printf("replay: %s ends where its recording stopped: %s; the %zu whole records before it were replayed\n",
+                  path.c_str(), loop::DescribeEnd(*log).c_str(), log->records.size());
+    if (r->compared == 0) return Fail(path + ": no command to compare (no whole tick recorded)");
+    differs = differs || r->mismatches != 0;
+  }
   if (!o.out.empty()) {
     std::ofstream f(o.out);
-    f << loop::FormatOutputs(*robot, r->outputs);
+    f << outputs;
     if (!f) return Fail("--out: cannot write '" + o.out + "'");
   }
-  std::printf("replay: %s: %llu ticks, %llu commands compared, %llu different%s%s\n", o.log.c_str(),
-              static_cast<unsigned long long>(r->ticks), static_cast<unsigned long long>(r->compared),
-              static_cast<unsigned long long>(r->mismatches), r->mismatches != 0 ? "; first: " : "",
-              r->first_mismatch.c_str());
-  if (!log->complete)
-    std::printf("replay: %s ends early, at offset %zu: %s; the %zu whole records before it were replayed\n",
-                o.log.c_str(), log->cut_at, log->cut_reason.c_str(), log->records.size());
-  else if (log->end != loop::LogEnd::kStopped)
-    std::printf("replay: %s ends where its recording stopped: %s; the %zu whole records before it were replayed\n",
-                o.log.c_str(), loop::DescribeEnd(*log).c_str(), log->records.size());
-  if (r->compared == 0) return Fail(o.log + ": no command to compare (no whole tick recorded)");
-  return r->mismatches == 0 ? 0 : 1;
+  return differs ? 1 : 0;
 }
 
 }  // namespace pbppo::cli

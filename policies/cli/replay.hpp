@@ -1,11 +1,15 @@
-// `pbppo replay LOG --robot models/<robot>/robot.yaml [--policy BLOB | --trajectory FILE]`: runs
+// `pbppo replay LOG... --robot models/<robot>/robot.yaml [--policy BLOB | --trajectory FILE]`: runs
 // the robot's loop tick over a log recorded by pbppo-controller --record (runtime/loop/replay.hpp)
-// and compares every command with the recorded one, bit for bit. Exit 0: identical; 1: a
-// difference (the first one named), or a log, robot or source refused (naming the offset and
-// field, or what differs from the recording); 2: usage.
+// and compares every command with the recorded one, bit for bit. The files of a rotated recording
+// (--record-max-mb) each replay on their own from the snapshot they begin with; given several,
+// each is replayed and they must follow one another (one recording, consecutive files, the ticks
+// continuing). Exit 0: identical; 1: a difference (the first one named), files that do not follow
+// one another, or a log, robot or source refused (naming the offset and field, or what differs
+// from the recording); 2: usage.
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace CLI {
 class App;
@@ -14,7 +18,8 @@ class App;
 namespace pbppo::cli {
 
 struct ReplayOptions {
-  std::string log, robot, policy, trajectory, out;
+  std::vector<std::string> logs;
+  std::string robot, policy, trajectory, out;
   std::string kernel = "auto";  // the recording's forward kernel
 };
 

@@ -45,6 +45,8 @@
 #include <vector>
 
 #include "runtime/core/latest_mailbox.hpp"
+#include "runtime/core/result.hpp"
+#include "runtime/loop/state_bytes.hpp"
 #include "runtime/robot/robot_data.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/robot/signals.hpp"
@@ -74,6 +76,14 @@ class CommandSource {
                        std::span<double> desired) noexcept = 0;
   // The inference status to supervise (a policy's Forward); nullptr: fine.
   virtual const char* failure() const noexcept { return nullptr; }
+  // What Compute carries from one tick to the next (a policy's history and last action), for a
+  // log's snapshot (SaveState below): written without allocation; read back into a source made
+  // from the same files, false (the reader's error set) where it does not fit.
+  virtual void SaveState(StateWriter& out) const noexcept { (void)out; }
+  virtual bool LoadState(StateReader& in) {
+    (void)in;
+    return true;
+  }
 };
 
 struct LoopOptions {
@@ -159,6 +169,7 @@ class LoopData {
  private:
   friend std::unique_ptr<LoopData> MakeLoopData(const robot::RobotModel&, CommandSource*, const LoopOptions&);
   friend struct TickImpl;
+  friend struct StateImpl;
   template <typename T>
   static std::span<const T> Changes(const std::array<T, kMaxChanges>& a, std::uint64_t n) noexcept {
     return {a.data(), n < kMaxChanges ? n : kMaxChanges};
@@ -192,6 +203,19 @@ class LoopData {
 // allocation. The source must outlive it.
 std::unique_ptr<LoopData> MakeLoopData(const robot::RobotModel& model, CommandSource* source,
                                        const LoopOptions& options = {});
+
+// Everything a tick carries to the next, at a tick boundary (after the tick's Read): the robot's
+// data (fields, the streams' ages and checks, the last command), the loop's (phase, stand-up pose,
+// the supervisor's state and counters, recovery, the mode and phase changes) and the command
+// source's. A log's snapshot (runtime/loop/log.hpp) holds it, so that a log rotated mid-run
+// replays on its own. SaveState allocates nothing (a StateWriter without a buffer only counts);
+// LoadState puts it back into data and loop made for the same model and source, refusing what
+// does not fit, naming the field. Not included: the profiler's timings (a replay does not compare
+// them) and the inference status's text in the supervisor's decisions (a static string).
+void SaveState(const robot::RobotModel& model, const robot::RobotData& data, const LoopData& loop,
+               StateWriter& out) noexcept;
+Status LoadState(const robot::RobotModel& model, robot::RobotData& data, LoopData& loop,
+                 std::span<const std::uint8_t> bytes);
 
 enum class TickStatus : std::uint8_t {
   kRunning,  // keep ticking

@@ -104,6 +104,30 @@ bool PolicySource::Compute(const robot::RobotModel& m, const robot::RobotData& d
   return true;
 }
 
+void PolicySource::SaveState(StateWriter& o) const noexcept {
+  o.Put(start_tick_);
+  o.Put(runs_);
+  o.Put(first_);
+  o.Put(have_action_);
+  o.Put(status_);
+  o.PutSpan<float>(builder_.history());
+  o.PutSpan<float>(obs_);
+  o.PutSpan<float>(action_);
+  o.PutSpan<float>(last_action_);
+  for (std::uint64_t v : {data_.forward_calls, data_.nonfinite_observations, data_.nonfinite_actions}) o.Put(v);
+}
+
+bool PolicySource::LoadState(StateReader& in) {
+  return in.Get(start_tick_, "policy.start_tick") && in.Get(runs_, "policy.runs") &&
+         in.GetBool(first_, "policy.first") && in.GetBool(have_action_, "policy.have_action") &&
+         in.GetBelow(status_, policy::kForwardStatusCount, "policy.status") &&
+         in.GetSpan<float>(builder_.history(), "policy.history") && in.GetSpan<float>(obs_, "policy.observation") &&
+         in.GetSpan<float>(action_, "policy.action") && in.GetSpan<float>(last_action_, "policy.last_action") &&
+         in.Get(data_.forward_calls, "policy.forward_calls") &&
+         in.Get(data_.nonfinite_observations, "policy.nonfinite_observations") &&
+         in.Get(data_.nonfinite_actions, "policy.nonfinite_actions");
+}
+
 const char* PolicySource::failure() const noexcept {
   return status_ == policy::ForwardStatus::kOk ? nullptr : policy::ToString(status_);
 }

@@ -34,6 +34,9 @@ class PolicySource final : public CommandSource {
   bool Compute(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop,
                std::span<double> desired) noexcept override;
   const char* failure() const noexcept override;
+  // The observation's history, the last observation and action, when the next run is due.
+  void SaveState(StateWriter& out) const noexcept override;
+  bool LoadState(StateReader& in) override;
 
   std::span<const float> observation() const noexcept { return obs_; }
   std::uint64_t runs() const noexcept { return runs_; }

@@ -115,6 +115,12 @@ Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, Comm
   options.shutdown_after_source = (h.options & 1u) != 0;
   options.stop_at_end_field = (h.options & 2u) != 0;
   auto loop = MakeLoopData(m, source, options);
+  // A later file of a rotated recording starts from the loop's state where the one before ended.
+  if (!log.snapshot.empty()) {
+    if (auto st = LoadState(m, data, *loop, log.snapshot); !st) return refuse(st.error().message);
+  } else if (h.sequence != 0) {
+    return refuse("file " + std::to_string(h.sequence) + " of a rotated recording has no snapshot to start from");
+  }
   ReplayTransport replay;
   robot::Transport* transports[] = {&replay};
   ReplayResult r;

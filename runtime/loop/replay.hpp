@@ -3,7 +3,8 @@
 // misses, requests) and the commands Tick writes are compared, bit for bit, with the recorded
 // ones. The robot model, the source (policy blob or trajectory) and the tick period must be the
 // recorded run's: a log of another robot, files that changed, or another policy are refused
-// naming what differs.
+// naming what differs. A later file of a rotated recording starts from its snapshot (the loop's
+// state at the tick it begins with) and replays on its own.
 #pragma once
 
 #include <cstdint>

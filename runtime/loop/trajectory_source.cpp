@@ -159,4 +159,18 @@ bool TrajectorySource::Compute(const robot::RobotModel& m, const robot::RobotDat
   return t < trajectory_.duration_s;
 }
 
+void TrajectorySource::SaveState(StateWriter& o) const noexcept {
+  o.Put(start_tick_);
+  o.Put(track_n_);
+  o.Put(track_sq_);
+  o.Put(speed_sq_);
+  o.PutSpan<double>(track_max_);
+}
+
+bool TrajectorySource::LoadState(StateReader& in) {
+  return in.Get(start_tick_, "trajectory.start_tick") && in.Get(track_n_, "trajectory.ticks") &&
+         in.Get(track_sq_, "trajectory.track_sq") && in.Get(speed_sq_, "trajectory.speed_sq") &&
+         in.GetSpan<double>(track_max_, "trajectory.track_max");
+}
+
 }  // namespace pbppo::loop

@@ -44,6 +44,9 @@ class TrajectorySource final : public CommandSource {
   void Start(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop) noexcept override;
   bool Compute(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop,
                std::span<double> desired) noexcept override;
+  // When it started and its tracking so far.
+  void SaveState(StateWriter& out) const noexcept override;
+  bool LoadState(StateReader& in) override;
 
   const Trajectory& trajectory() const noexcept { return trajectory_; }
   // Tracking while it ran: the largest |q - q_des| per motor (velocity-commanded: |dq - dq_des|,

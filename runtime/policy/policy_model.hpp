@@ -70,6 +70,7 @@ enum class ForwardStatus : std::uint8_t {
   kNonFiniteAction,       // the non-finite elements are NaN, the others are valid
   kWrongModel,            // the data was made for another model; nothing computed
 };
+inline constexpr std::uint32_t kForwardStatusCount = 4;
 const char* ToString(ForwardStatus s) noexcept;
 
 class PolicyData {

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,10 @@ class ObservationBuilder {
   std::uint32_t signal_count() const noexcept { return signal_count_; }
   // The signal index each element reads.
   const std::vector<std::uint32_t>& signal_of_element() const noexcept { return signal_; }
+  // The previous observation, which the history slots shift through (a log's snapshot saves and
+  // restores it).
+  std::span<float> history() noexcept { return history_; }
+  std::span<const float> history() const noexcept { return history_; }
 
  private:
   struct Element {

@@ -12,6 +12,9 @@
 #   6. record and replay: a lock-step run recorded (--record) replays (pbppo replay) to
 #      bit-identical commands; a log cut short replays up to its last whole record and says
 #      where it ends; a log cut inside its header or corrupted is refused naming the offset;
+#   6b. a rotated recording (--record-max-mb, --record-rotate): the newest files kept, each no
+#      larger than the size, replaying on its own from its snapshot and in order with the others;
+#      files out of order and bad rotation flags refused;
 #   7. recording onto a file system that fills: the mission goes on, the failure is told at once and
 #      in the summary (exit 1), the log holds its whole records and an end record naming the error,
 #      and replays; onto a read-only one: refused at once, before the wait for a peer;
@@ -157,6 +160,46 @@ rc=0
 [ "$rc" -eq 1 ] || fail "a corrupted log: exit $rc"
 expect "$work/replay3.log" "corrupt.log: offset [0-9]+: record [0-9]+"
 cat "$work/replay.log" "$work/replay_cut.log" "$work/replay2.log" "$work/replay3.log" | sed 's/^/   /'
+echo "== 6b: a rotated recording (files of 30 KiB, the newest 3 kept): each file replays on its own"
+"$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" --max-time 30 >"$work/rot.hil.log" 2>&1 &
+hpid=$!
+mkdir -p "$work/rot"
+"$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet --record "$work/rot/run.log" \
+  --record-max-mb 0.03 --record-rotate 3 >"$work/rot.ctl.log" 2>&1 || fail "rotated recording: $(cat "$work/rot.ctl.log")"
+wait "$hpid" || fail "rotated recording: pbppo-hil exited $?"
+expect "$work/rot.ctl.log" "log: .*run.log, [0-9]+ records, in [0-9]+ files \(.*run.log to .*run.[0-9]+.log; the [0-9]+ oldest deleted\), 0 dropped"
+files=$(grep -oE "in [0-9]+ files" "$work/rot.ctl.log" | grep -oE "[0-9]+")
+[ "$files" -ge 4 ] || fail "rotated recording: $files files (4 or more expected)"
+kept=("$work/rot/run.$((files - 3)).log" "$work/rot/run.$((files - 2)).log" "$work/rot/run.$((files - 1)).log")
+[ "$(ls "$work/rot" | wc -l)" -eq 3 ] || fail "rotated recording: $(ls "$work/rot") (the newest 3 expected)"
+for f in "${kept[@]}"; do
+  [ "$(stat -c %s "$f")" -le 31457 ] || fail "rotated recording: $f is larger than 0.03 MiB"
+done
+"$pbppo" replay "${kept[@]}" --robot "$robot" --policy "$blob" >"$work/replay_rot.log" 2>&1 ||
+  fail "rotated recording: $(cat "$work/replay_rot.log")"
+[ "$(grep -cE "replay: .*: [0-9]+ ticks, [0-9]+ commands compared, 0 different$" "$work/replay_rot.log")" -eq 3 ] ||
+  fail "rotated recording: $(cat "$work/replay_rot.log")"
+expect "$work/replay_rot.log" "run.$((files - 2)).log is file $((files - 2)) of a rotated recording: replayed from its snapshot at tick [0-9]+"
+expect "$work/replay_rot.log" "run.$((files - 3)).log ends where the recording went on in the next file \(run.$((files - 2)).log\)"
+# Out of order: refused, naming the file.
+rc=0
+"$pbppo" replay "${kept[1]}" "${kept[0]}" --robot "$robot" --policy "$blob" >"$work/replay_order.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "files out of order: exit $rc"
+expect "$work/replay_order.log" "run.$((files - 3)).log: file $((files - 3)) of the recording does not follow file $((files - 2))"
+# Bad rotation flags: refused before anything runs (a file too small for the loop's state is
+# refused too, naming the size it needs: tests/runtime/loop/test_log.cpp).
+for flags in "--record-max-mb 0.001" "--record-rotate 3" "--record-max-mb 1 --record-rotate 0"; do
+  rc=0
+  # shellcheck disable=SC2086
+  "$ctl" --robot "$robot" --policy "$blob" --record "$work/bad.log" $flags >"$work/bad.ctl.log" 2>&1 || rc=$?
+  [ "$rc" -eq 2 ] || fail "$flags: exit $rc: $(cat "$work/bad.ctl.log")"
+  [ ! -e "$work/bad.log" ] || fail "$flags: a log was written"
+done
+rc=0
+"$ctl" --robot "$robot" --policy "$blob" --record-max-mb 1 >"$work/bad.ctl.log" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "--record-max-mb without --record: exit $rc"
+expect "$work/bad.ctl.log" "--record-max-mb requires --record"
+sed 's/^/   /' "$work/replay_rot.log"
 echo "== 7: recording onto a disk that fills (a 64 KiB file system; the log takes about 116 KiB)"
 # The controller runs in a mount namespace of its own with a small tmpfs on the log's directory
 # (mounting needs root, which the test command has); the log is copied out before it ends.
@@ -168,7 +211,7 @@ shift 2
 mount -t tmpfs -o size=64k pbppo-small "$dir" || exit 97
 rc=0
 "$@" || rc=$?
-cp "$dir/run.log" "$out" || exit 98
+cp "$dir"/run*.log "$out" || exit 98
 exit "$rc"
 SH
 "$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" --max-time 30 >"$work/full.hil.log" 2>&1 &
@@ -195,6 +238,23 @@ expect "$work/replay_full.log" "replay: .*full.log: [0-9]+ ticks, [0-9]+ command
 expect "$work/replay_full.log" "full.log ends where its recording stopped: a write failed: No space left on device \(28\); [0-9]+ records not written after it"
 grep -E "write failed|recording stopped" "$work/full.ctl.log" | sed 's/^/   /'
 sed 's/^/   /' "$work/replay_full.log"
+# The same small file system with rotation (files of 20 KiB, the newest 2 kept): the disk never
+# fills, the recording goes on to the end, and the newest files replay.
+mkdir -p "$work/small_rot"
+"$hil" auv --layout hard --seed 3 --lockstep --domain "$domain" --max-time 30 >"$work/keep.hil.log" 2>&1 &
+hpid=$!
+rc=0
+unshare --mount --propagation private bash "$work/on_small_fs.sh" "$work/small" "$work/small_rot" \
+  "$ctl" --robot "$robot" --policy "$blob" --lockstep --domain "$domain" --quiet --record "$work/small/run.log" \
+  --record-max-mb 0.02 --record-rotate 2 >"$work/keep.ctl.log" 2>&1 || rc=$?
+wait "$hpid" || fail "disk full, rotated: pbppo-hil exited $?: $(cat "$work/keep.hil.log")"
+[ "$rc" -eq 0 ] || fail "disk full, rotated: the controller exited $rc: $(cat "$work/keep.ctl.log")"
+expect "$work/keep.ctl.log" "log: .*run.log, [0-9]+ records, in [0-9]+ files \(.*; the [0-9]+ oldest deleted\), 0 dropped$"
+mapfile -t kept < <(ls -v "$work/small_rot"/run.*.log)
+[ "${#kept[@]}" -eq 2 ] || fail "disk full, rotated: ${kept[*]} (2 files expected)"
+"$pbppo" replay "${kept[@]}" --robot "$robot" --policy "$blob" >"$work/replay_keep.log" 2>&1 ||
+  fail "disk full, rotated: $(cat "$work/replay_keep.log")"
+grep -E "^log: " "$work/keep.ctl.log" | sed 's/^/   /'
 # A read-only file system: refused before anything else (no vehicle runs: it is not waited for).
 mkdir -p "$work/ro"
 cat >"$work/on_ro_fs.sh" <<'SH'

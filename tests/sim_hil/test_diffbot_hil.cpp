@@ -65,7 +65,7 @@ struct Rig {
                                     loop::MakeLogHeader(model, loop::SourceKind::kTrajectory, kTrajectoryHash));
       REQUIRE_MESSAGE(r.ok(), r.error().message);
       recorder = std::move(*r);
-      loop->recorder = recorder.get();
+      REQUIRE(loop::AttachRecorder(model, data, *loop, recorder.get()).ok());
     }
     loop->Arm();
   }

@@ -40,6 +40,7 @@ struct Recorded {
   std::string stop_error;  // Recorder::Stop's, if it failed
   std::string failure;     // Recorder::failure(), if it failed
   std::uint64_t records = 0, not_written = 0;
+  std::uint32_t files = 0, deleted = 0;  // rotation
 };
 
 // Called after each tick with the tick's number and the recorder (inside the count of the tick's
@@ -56,8 +57,8 @@ policy::PolicySpec Spec(const robot::RobotModel& m, std::uint64_t seed) {
 // 300 ticks of the AUV: a sample most ticks (a unicycle's pose), none from tick 200 (stale,
 // then lost), an e-stop never; the log and its bytes. `come_back`: the samples come again from
 // tick 230 and a person asks to re-arm at tick 262.
-Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick& each_tick = {},
-                bool come_back = false) {
+Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick& each_tick = {}, bool come_back = false,
+                const loop::RecordOptions& options = {}) {
   const robot::RobotModel& m = test::AuvRobot();
   auto policy = policy::PolicyModel::FromSpec(Spec(m, seed));
   REQUIRE(policy.ok());
@@ -71,9 +72,10 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
   r.path = test::ScratchDir("log_" + name) + "/run.log";
   r.source_hash = seed;
   const loop::LogHeader h = loop::MakeLogHeader(m, loop::SourceKind::kPolicy, r.source_hash);
-  auto rec = loop::Recorder::Open(r.path, m, h);
+  auto rec = loop::Recorder::Open(r.path, m, h, options);
   REQUIRE_MESSAGE(rec.ok(), rec.error().message);
-  l->recorder = rec->get();
+  const Status attached = loop::AttachRecorder(m, d, *l, rec->get());
+  REQUIRE_MESSAGE(attached.ok(), attached.error().message);
   l->Arm();
   std::vector<double> sample(m.fields.size(), 0.0);
   double x = 0, y = 0, yaw = 0;
@@ -118,6 +120,8 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
   if (!each_tick) REQUIRE_MESSAGE(stopped.ok(), r.stop_error);
   CHECK((*rec)->dropped() == 0);
   r.records = (*rec)->records();
+  r.files = (*rec)->files();
+  r.deleted = (*rec)->files_deleted();
   r.not_written = (*rec)->not_written();
   if ((*rec)->failed()) r.failure = (*rec)->failure();
   std::ifstream f(r.path, std::ios::binary);
@@ -216,10 +220,10 @@ TEST_CASE("log: a truncated or corrupt log is refused naming the offset and the 
   bad[0] = 'X';
   CHECK(Refusal(bad) == "run.log: offset 0: header: field 'magic': not a pbppo log (PBPPOLOG)");
   bad = b;
-  bad[8] = 3;
-  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 3 (this reader knows 1 to 2)");
+  bad[8] = 4;
+  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 4 (this reader knows 1 to 3)");
   bad[8] = 0;
-  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 0 (this reader knows 1 to 2)");
+  CHECK(Refusal(bad) == "run.log: offset 8: header: field 'version': 0 (this reader knows 1 to 3)");
   bad = b;
   bad[20] ^= 0x40;  // inside the header's payload
   CHECK(Refusal(bad).find("header: CRC does not match its payload") != std::string::npos);
@@ -390,30 +394,251 @@ TEST_CASE("log: a log cannot be opened where nothing can be written - the error 
   CHECK(rec.error().message == "log " + path + ": cannot write: " + std::strerror(ENOENT));
 }
 
-TEST_CASE("log: a version 1 log (an end record of 8 bytes) is still read and replayed") {
-  const Recorded r = Record("version1");
-  std::vector<std::uint8_t> b = r.bytes;
-  // Version 2's end record (type, length, 21 bytes, CRC) becomes version 1's (8 bytes: dropped).
-  REQUIRE(b.size() > 30);
-  b.resize(b.size() - 30);
-  const std::uint32_t one = 1, len = 8;
-  std::memcpy(&b[8], &one, 4);
+namespace {
+
+// A version 3 log (one file, no snapshot) as an older recorder wrote it: the header without the
+// sequence and the run, the end record of `end_bytes` (version 1: 8, dropped; version 2: 21).
+std::vector<std::uint8_t> AsVersion(const std::vector<std::uint8_t>& v3, std::uint32_t version, std::size_t end_bytes) {
+  auto log = loop::ParseLog(v3, "v3.log");
+  REQUIRE(log.ok());
+  REQUIRE(log->snapshot.empty());
+  std::uint32_t n = 0;
+  std::memcpy(&n, &v3[12], 4);
+  const std::uint32_t shorter = n - 12;  // without u32 sequence, u64 run
+  std::vector<std::uint8_t> b(v3.begin(), v3.begin() + 16 + shorter);
+  std::memcpy(&b[8], &version, 4);
+  std::memcpy(&b[12], &shorter, 4);
+  const std::uint32_t hcrc = Crc32(&b[16], shorter);
+  b.insert(b.end(), reinterpret_cast<const std::uint8_t*>(&hcrc), reinterpret_cast<const std::uint8_t*>(&hcrc) + 4);
+  // The records, then the end record (32 bytes in version 3: no next file).
+  const std::size_t first = 16 + n + 4;
+  b.insert(b.end(), v3.begin() + static_cast<long>(first), v3.end() - 32);
   const std::size_t end = b.size();
+  const auto len = static_cast<std::uint32_t>(end_bytes);
   b.push_back(3);
   b.insert(b.end(), reinterpret_cast<const std::uint8_t*>(&len), reinterpret_cast<const std::uint8_t*>(&len) + 4);
-  b.insert(b.end(), 8, 0);
+  b.insert(b.end(), end_bytes, 0);
   const std::uint32_t crc = Crc32(&b[end], b.size() - end);
   b.insert(b.end(), reinterpret_cast<const std::uint8_t*>(&crc), reinterpret_cast<const std::uint8_t*>(&crc) + 4);
-  auto log = loop::ParseLog(b, "old.log");
-  REQUIRE_MESSAGE(log.ok(), log.error().message);
-  CHECK(log->version == 1);
-  CHECK(log->complete);
-  CHECK(log->end == loop::LogEnd::kStopped);
-  CHECK(loop::DescribeEnd(*log) == "stopped");
-  CHECK(ReplaysExactly(*log, r.source_hash) > 100);
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("log: version 1 and 2 logs (no sequence or run, shorter end records) are still read and replayed") {
+  const Recorded r = Record("version1");
+  for (const auto& [version, end_bytes] : {std::pair<std::uint32_t, std::size_t>{1, 8}, {2, 21}}) {
+    CAPTURE(version);
+    auto log = loop::ParseLog(AsVersion(r.bytes, version, end_bytes), "old.log");
+    REQUIRE_MESSAGE(log.ok(), log.error().message);
+    CHECK(log->version == version);
+    CHECK(log->complete);
+    CHECK(log->end == loop::LogEnd::kStopped);
+    CHECK(log->header.sequence == 0);
+    CHECK(loop::DescribeEnd(*log) == "stopped");
+    CHECK(ReplaysExactly(*log, r.source_hash) > 100);
+  }
   // Version 2's fields in a version 1 end record are refused (bytes after the last field).
-  std::vector<std::uint8_t> v2 = r.bytes;
-  std::memcpy(&v2[8], &one, 4);
-  CHECK(Refusal(v2).find("record " + std::to_string(log->records.size()) + " (end): 13 bytes after the last field") !=
+  auto v1 = loop::ParseLog(AsVersion(r.bytes, 1, 8), "old.log");
+  REQUIRE(v1.ok());
+  CHECK(Refusal(AsVersion(r.bytes, 1, 21))
+            .find("record " + std::to_string(v1->records.size()) + " (end): 13 bytes after the last field") !=
         std::string::npos);
+}
+
+// ---- rotation --------------------------------------------------------------------------------
+
+namespace {
+
+std::vector<std::uint8_t> Bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+TEST_CASE("log: a rotated recording - every file at most the size, each replays on its own, together the whole run") {
+  const Recorded whole = Record("rotate_whole", 1, {}, true);
+  auto all = loop::ParseLog(whole.bytes, "whole.log");
+  REQUIRE(all.ok());
+  loop::RecordOptions ro;
+  ro.max_file_bytes = whole.bytes.size() / 5;
+  const Recorded r = Record("rotate", 1, {}, true, ro);
+  INFO("whole log ", whole.bytes.size(), " bytes, files of at most ", ro.max_file_bytes);
+  CHECK(r.stop_error.empty());
+  CHECK(r.files >= 6);
+  CHECK(r.deleted == 0);
+  CHECK(r.records == whole.records);
+  // File by file: its own sequence, the same run, an end record naming the next; the replay of each
+  // alone matches the commands the whole run's replay gave at the same ticks.
+  const loop::ReplayResult reference = ReplayOf(*all, whole.source_hash);
+  std::uint64_t run = 0, records = 0, next_tick = 0;
+  std::size_t at = 0;  // in the reference's outputs
+  for (std::uint32_t k = 0; k < r.files; ++k) {
+    CAPTURE(k);
+    const std::string path = loop::RotatedPath(r.path, k);
+    const std::vector<std::uint8_t> bytes = Bytes(path);
+    CHECK(bytes.size() <= ro.max_file_bytes);
+    auto log = loop::ParseLog(bytes, path);
+    REQUIRE_MESSAGE(log.ok(), log.error().message);
+    CHECK(log->complete);
+    CHECK(log->header.sequence == k);
+    if (k == 0) run = log->header.run;
+    CHECK(log->header.run == run);
+    CHECK(log->snapshot.empty() == (k == 0));
+    if (k + 1 < r.files) {
+      CHECK(log->end == loop::LogEnd::kRotated);
+      CHECK(log->next == loop::RotatedPath("run.log", k + 1));
+      CHECK(loop::DescribeEnd(*log) == "rotated: the recording goes on in " + log->next);
+    } else {
+      CHECK(log->end == loop::LogEnd::kStopped);
+    }
+    REQUIRE_FALSE(log->records.empty());
+    CHECK(log->records.front().type == 1);  // a file begins at a tick boundary
+    CHECK(log->records.front().inputs.tick == next_tick);
+    next_tick = log->records.back().outputs.tick + 1;
+    records += log->records.size();
+    const loop::ReplayResult replay = ReplayOf(*log, r.source_hash);
+    REQUIRE(at + replay.outputs.size() <= reference.outputs.size());
+    for (const loop::LogOutputs& o : replay.outputs) {
+      const loop::LogOutputs& want = reference.outputs[at++];
+      CHECK(o.tick == want.tick);
+      CHECK(std::memcmp(o.commands.data(), want.commands.data(), 8 * o.commands.size()) == 0);
+    }
+  }
+  CHECK(records == all->records.size());
+  CHECK(at == reference.outputs.size());
+  CHECK_FALSE(std::filesystem::exists(loop::RotatedPath(r.path, r.files)));
+  // The same run rotates at the same ticks: the tick decides, from the bytes it queued.
+  const Recorded again = Record("rotate_again", 1, {}, true, ro);
+  CHECK(again.files == r.files);
+  for (std::uint32_t k = 0; k < r.files; ++k) {
+    auto a = loop::ParseLog(Bytes(loop::RotatedPath(r.path, k)), "a");
+    auto b = loop::ParseLog(Bytes(loop::RotatedPath(again.path, k)), "b");
+    REQUIRE((a.ok() && b.ok()));
+    CHECK(a->records.front().inputs.tick == b->records.front().inputs.tick);
+    CHECK(a->snapshot == b->snapshot);
+  }
+}
+
+TEST_CASE("log: a rotated recording keeps the newest files - the oldest deleted as new ones begin") {
+  const Recorded whole = Record("keep_whole");
+  loop::RecordOptions ro;
+  ro.max_file_bytes = whole.bytes.size() / 6;
+  ro.keep_files = 3;
+  const Recorded r = Record("keep", 1, {}, false, ro);
+  CHECK(r.stop_error.empty());
+  REQUIRE(r.files > 3);
+  CHECK(r.deleted == r.files - 3);
+  for (std::uint32_t k = 0; k < r.files; ++k) {
+    CAPTURE(k);
+    const std::string path = loop::RotatedPath(r.path, k);
+    CHECK(std::filesystem::exists(path) == (k + 3 >= r.files));
+    if (k + 3 < r.files) continue;
+    auto log = loop::ReadLog(path);
+    REQUIRE_MESSAGE(log.ok(), log.error().message);
+    CHECK(ReplaysExactly(*log, r.source_hash) > 10);
+  }
+}
+
+TEST_CASE("log: rotation refused where a file cannot hold a snapshot, and stopped where the next file cannot begin") {
+  const robot::RobotModel& m = test::AuvRobot();
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE(source.ok());
+  robot::RobotData d = robot::MakeRobotData(m);
+  auto l = loop::MakeLoopData(m, source->get());
+  const std::string dir = test::ScratchDir("log_rotate_small");
+  loop::RecordOptions ro;
+  ro.max_file_bytes = 1000;
+  auto rec = loop::Recorder::Open(dir + "/run.log", m, loop::MakeLogHeader(m, loop::SourceKind::kPolicy, 1), ro);
+  REQUIRE(rec.ok());
+  const Status st = loop::AttachRecorder(m, d, *l, rec->get());
+  REQUIRE_FALSE(st.ok());
+  CHECK(st.error().message.rfind("log " + dir +
+                                     "/run.log: a file of at most 1000 bytes cannot hold a header, a "
+                                     "snapshot of the loop (",
+                                 0) == 0);
+  CHECK(st.error().message.find(" bytes), an end record and four ticks (") != std::string::npos);
+  CHECK(l->recorder == nullptr);
+  REQUIRE((*rec)->Stop().ok());
+
+  // The next file's name is taken by a directory: recording stops at the rotation, the file before
+  // it ends with an end record naming the error and replays; the loop went on.
+  const Recorded whole = Record("blocked_whole");
+  ro.max_file_bytes = whole.bytes.size() / 4;
+  // (Made by another thread at the first tick: the tick's thread allocates nothing.)
+  std::atomic<const loop::Recorder*> go{nullptr};
+  std::atomic<bool> made{false};
+  std::thread maker([&] {
+    while (go.load() == nullptr) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    std::filesystem::create_directories(loop::RotatedPath(go.load()->path(), 1));
+    made.store(true);
+  });
+  const Recorded r = Record(
+      "blocked", 1,
+      [&](std::uint64_t k, const loop::Recorder& rec) {
+        if (k != 0) return;
+        go.store(&rec);
+        while (!made.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      },
+      false, ro);
+  maker.join();
+  CHECK(r.files == 1);
+  CHECK(r.failure.rfind("cannot begin the next file " + loop::RotatedPath(r.path, 1) + " after ", 0) == 0);
+  CHECK(r.failure.find(std::strerror(EISDIR)) != std::string::npos);
+  CHECK(r.not_written > 0);
+  auto log = loop::ParseLog(r.bytes, "run.log");
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  CHECK(log->end == loop::LogEnd::kWriteFailed);
+  CHECK(log->end_error == EISDIR);
+  CHECK(r.bytes.size() <= ro.max_file_bytes);
+  CHECK(ReplaysExactly(*log, r.source_hash) > 10);
+}
+
+TEST_CASE("log: a later file whose snapshot is damaged or missing is refused naming what is wrong") {
+  const Recorded whole = Record("snap_whole");
+  loop::RecordOptions ro;
+  ro.max_file_bytes = whole.bytes.size() / 3;
+  const Recorded r = Record("snap", 1, {}, false, ro);
+  REQUIRE(r.files >= 2);
+  const std::vector<std::uint8_t> b = Bytes(loop::RotatedPath(r.path, 1));
+  auto log = loop::ParseLog(b, "run.1.log");
+  REQUIRE(log.ok());
+  REQUIRE_FALSE(log->snapshot.empty());
+  const robot::RobotModel& m = test::AuvRobot();
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  auto source = loop::PolicySource::Create(m, *policy);
+  // Cut short by 8 bytes (the CRC made anew: damage the CRC does not see).
+  loop::Log cut = *log;
+  cut.snapshot.resize(cut.snapshot.size() - 8);
+  auto refused = loop::Replay(m, cut, source->get(), r.source_hash);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message.rfind("replay: snapshot: field 'policy.", 0) == 0);
+  CHECK(refused.error().message.find("': truncated (needs 8 bytes, 0 left)") != std::string::npos);
+  // Bytes left over.
+  loop::Log bad = *log;
+  bad.snapshot.push_back(0);
+  refused = loop::Replay(m, bad, source->get(), r.source_hash);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message == "replay: snapshot: 1 bytes after the last field");
+  // A later file without its snapshot.
+  loop::Log none = *log;
+  none.snapshot.clear();
+  refused = loop::Replay(m, none, source->get(), r.source_hash);
+  REQUIRE_FALSE(refused.ok());
+  CHECK(refused.error().message == "replay: file 1 of a rotated recording has no snapshot to start from");
+  // A snapshot record anywhere but first is refused by the reader.
+  std::vector<std::uint8_t> twice = b;
+  const std::size_t snap_at = 16 + [&] {
+    std::uint32_t n = 0;
+    std::memcpy(&n, &b[12], 4);
+    return n + 4;
+  }();
+  const std::size_t snap_len = 9 + log->snapshot.size();
+  const std::size_t second = log->records[1].offset;
+  twice.insert(twice.begin() + static_cast<long>(second), b.begin() + static_cast<long>(snap_at),
+               b.begin() + static_cast<long>(snap_at + snap_len));
+  CHECK(Refusal(twice).find(": record 2 (snapshot): a snapshot is only the first record") != std::string::npos);
 }
