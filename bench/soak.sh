@@ -39,6 +39,7 @@ record() {  # record DIR: the soak's recording flags
 hil="$(program PBPPO_HIL build/default/sim_hil/pbppo-hil)"
 ctl="$(program PBPPO_CONTROLLER build/default/firmware/pbppo-controller)"
 soak="$(program PBPPO_BENCH_SOAK build/default/bench/pbppo_bench_soak)"
+pbppo="$(program PBPPO build/default/policies/pbppo)"
 command -v gnuplot >/dev/null || fail "gnuplot not found (apt-get install gnuplot-nox)"
 cd "$root"
 mkdir -p "$out"
@@ -89,7 +90,8 @@ if [ "$realtime_s" -gt 0 ]; then
 fi
 if [ "$vehicles" -gt 0 ]; then
   echo "== 3: the AUV over DDS, lock-step, $vehicles vehicles that come and go, seed $seed"
-  bash tests/soak/auv_soak.sh "$hil" "$ctl" "$root" "$out/auv" "$vehicles" "$seed" | tee "$out/auv_report.txt" || rc=1
+  bash tests/soak/auv_soak.sh "$hil" "$ctl" "$pbppo" "$root" "$out/auv" "$vehicles" "$seed" |
+    tee "$out/auv_report.txt" || rc=1
   gnuplot <<GP || rc=1
 set datafile separator ","
 set terminal pngcairo size 900,420

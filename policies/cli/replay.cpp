@@ -1,8 +1,12 @@
 #include "policies/cli/replay.hpp"
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <memory>
 
 #include "runtime/loop/replay.hpp"
 #include "runtime/loop/source_files.hpp"
@@ -27,6 +31,11 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
   c->add_option("--policy", o.policy, "The recording's policy blob");
   c->add_option("--trajectory", o.trajectory, "The recording's joint trajectory file");
   c->add_option("--out", o.out, "Write the replayed commands (one line per tick, hexadecimal floats)");
+  auto* trace = c->add_option("--trace", o.trace,
+                              "Write a CSV row per tick: tick, phase, mode and the robot's fields as it held them");
+  c->add_option("--trace-fields", o.trace_fields, "The fields of --trace (default: every field)")
+      ->delimiter(',')
+      ->needs(trace);
   policy::AddKernelOption(*c, o.kernel)
       ->description("The recording's forward kernel (pbppo-controller --kernel; auto: this CPU's fastest)");
   return c;
@@ -35,6 +44,37 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
 int Replay(const ReplayOptions& o) {
   auto robot = robot::LoadRobotModel(o.robot);
   if (!robot) return Fail(robot.error().message);
+  // The trace: its fields, then one row per tick as it is replayed.
+  std::vector<std::uint32_t> traced;
+  for (const std::string& name : o.trace_fields) {
+    const int f = robot->FieldIndex(name);
+    if (f < 0) return Fail("--trace-fields: '" + name + "' is not a field of robot '" + robot->name + "'");
+    traced.push_back(static_cast<std::uint32_t>(f));
+  }
+  if (o.trace_fields.empty())
+    for (std::uint32_t f = 0; f < robot->fields.size(); ++f) traced.push_back(f);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
+  if (!o.trace.empty()) {
+    trace.reset(std::fopen(o.trace.c_str(), "w"));
+    if (!trace) return Fail("--trace: cannot write '" + o.trace + "': " + std::strerror(errno));
+    std::fprintf(trace.get(), "tick,phase,mode");
+    for (std::uint32_t f : traced) std::fprintf(trace.get(), ",%s", robot->fields[f].name.c_str());
+    std::fprintf(trace.get(), "\n");
+  }
+  const loop::ReplayTick each_tick = [&](const robot::RobotData& d, const loop::LoopData& l) {
+    std::FILE* t = trace.get();
+    std::fprintf(t, "%llu,%s,%s", static_cast<unsigned long long>(d.tick), loop::ToString(l.phase()),
+                 safety::ToString(d.mode));
+    for (std::uint32_t f : traced) {
+      const double v = d.fields[f];
+      if (std::isnan(v)) {
+        std::fputs(",nan", t);
+      } else {
+        std::fprintf(t, ",%.17g", v);
+      }
+    }
+    std::fputc('\n', t);
+  };
   std::string outputs;
   bool differs = false;
   std::uint64_t run = 0, next_tick = 0;
@@ -70,7 +110,7 @@ int Replay(const ReplayOptions& o) {
     // The self-test ran when the recording armed; a replay compares the commands instead.
     auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
     if (!source) return Fail(source.error().message);
-    auto r = loop::Replay(*robot, *log, source->source.get(), source->hash);
+    auto r = loop::Replay(*robot, *log, source->source.get(), source->hash, trace ? each_tick : loop::ReplayTick{});
     if (!r) return Fail(path + ": " + r.error().message);
     if (!r->outputs.empty()) next_tick = r->outputs.back().tick + 1;
     if (!o.out.empty()) {
@@ -102,6 +142,8 @@ int Replay(const ReplayOptions& o) {
     f << outputs;
     if (!f) return Fail("--out: cannot write '" + o.out + "'");
   }
+  if (trace && (std::ferror(trace.get()) != 0 || std::fclose(trace.release()) != 0))
+    return Fail("--trace: writing '" + o.trace + "' failed");
   return differs ? 1 : 0;
 }
 

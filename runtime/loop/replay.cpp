@@ -92,7 +92,7 @@ std::string Difference(const robot::RobotModel& m, const LogOutputs& got, const 
 }  // namespace
 
 Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, CommandSource* source,
-                            std::uint64_t source_hash) {
+                            std::uint64_t source_hash, const ReplayTick& each_tick) {
   const LogHeader& h = log.header;
   auto refuse = [&](const std::string& what) { return MakeError(ErrorCode::kMismatch, "replay: " + what); };
   if (h.robot != robot.name) return refuse("the log is of robot '" + h.robot + "', not '" + robot.name + "'");
@@ -148,9 +148,11 @@ Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, Comm
       replay.inputs = &in;
       (void)Tick(m, data, *loop, transports, t);
       ++r.ticks;
+      if (each_tick) each_tick(data, *loop);
       if (i + 1 < log.records.size() && log.records[i + 1].type == 2) compare(log.records[++i].outputs);
     } else {  // outputs with no inputs before them: the stop command of a robot whose clock stopped
       Shutdown(m, data, *loop, transports, rec.outputs.tick);
+      if (each_tick) each_tick(data, *loop);
       compare(rec.outputs);
     }
   }

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,10 +26,13 @@ struct ReplayResult {
   std::vector<LogOutputs> outputs;  // what the replay wrote, in order
 };
 
+// Called after every replayed tick with what the tick saw and did (a trace: pbppo replay --trace).
+using ReplayTick = std::function<void(const robot::RobotData&, const LoopData&)>;
+
 // `robot` is the model as loaded (at its own tick period); `source` as the recorded run made it
 // (nullptr: none), `source_hash` LogHash of its bytes. The loop's options are the log's.
 Result<ReplayResult> Replay(const robot::RobotModel& robot, const Log& log, CommandSource* source,
-                            std::uint64_t source_hash);
+                            std::uint64_t source_hash, const ReplayTick& each_tick = {});
 
 // One line per output: tick, phase, mode, every command as a hexadecimal float (exact), the
 // motors; the same text for the same bits.

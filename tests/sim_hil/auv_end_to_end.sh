@@ -10,8 +10,9 @@
 #      then holds a safe-stop, and its counters show it;
 #   5. the simulator is killed mid-run (real time): safe-stop within 3 periods, naming the cause;
 #   6. record and replay: a lock-step run recorded (--record) replays (pbppo replay) to
-#      bit-identical commands; a log cut short replays up to its last whole record and says
-#      where it ends; a log cut inside its header or corrupted is refused naming the offset;
+#      bit-identical commands (and traces each tick with --trace); a log cut short replays up to
+#      its last whole record and says where it ends; a log cut inside its header or corrupted is
+#      refused naming the offset;
 #   6b. a rotated recording (--record-max-mb, --record-rotate): the newest files kept, each no
 #      larger than the size, replaying on its own from its snapshot and in order with the others;
 #      files out of order and bad rotation flags refused;
@@ -141,6 +142,16 @@ expect "$work/rec.ctl.log" "log: .*run.log, [0-9]+ records, 0 dropped"
   fail "replay: $(cat "$work/replay.log")"
 expect "$work/replay.log" "replay: .*run.log: [0-9]+ ticks, [0-9]+ commands compared, 0 different$"
 [ "$(wc -l <"$work/replayed.txt")" -gt 290 ] || fail "replay: short output"
+# A trace of what each tick saw: one row per tick, the fields named; an unknown field refused.
+"$pbppo" replay "$work/run.log" --robot "$robot" --policy "$blob" --trace "$work/trace.csv" \
+  --trace-fields tick,yaw_rad >/dev/null 2>&1 || fail "replay --trace failed"
+[ "$(head -1 "$work/trace.csv")" = "tick,phase,mode,tick,yaw_rad" ] || fail "trace header: $(head -1 "$work/trace.csv")"
+[ "$(wc -l <"$work/trace.csv")" -gt 290 ] || fail "replay --trace: short trace"
+rc=0
+"$pbppo" replay "$work/run.log" --robot "$robot" --policy "$blob" --trace "$work/trace.csv" \
+  --trace-fields yaw >"$work/trace_bad.log" 2>&1 || rc=$?
+[ "$rc" -eq 1 ] || fail "an unknown trace field: exit $rc"
+expect "$work/trace_bad.log" "--trace-fields: 'yaw' is not a field of robot 'auv'"
 # A recording cut short (a full disk): its whole records replay, and the replay says where it ends.
 head -c 20000 "$work/run.log" >"$work/cut.log"
 "$pbppo" replay "$work/cut.log" --robot "$robot" --policy "$blob" >"$work/replay_cut.log" 2>&1 ||

@@ -10,15 +10,19 @@
 # (stops = re-arms + 1: the last vehicle's end is the last stop), no request refused; every
 # vehicle that ran to its end was driven by the policy after its re-arm; every command the
 # vehicles received inside the robot's limits; the controller's resident memory flat (less than 1
-# MiB of growth after the first quarter of the run; five samples a second, at least 40).
-# usage: auv_soak.sh HIL CONTROLLER SOURCE_DIR WORK_DIR [VEHICLES] [SEED]
+# MiB of growth after the first quarter of the run; five samples a second, at least 40). The
+# controller records the run (rotated in files of 64 MiB); pbppo replay replays every file bit for
+# bit and traces each tick's mode and samples, from which every burst of NaN or out-of-range
+# samples that began while the vehicle was driven must reach safe-stop within 3 ticks (the robot
+# file's invalid_safe_stop: the third invalid sample in a row).
+# usage: auv_soak.sh HIL CONTROLLER PBPPO SOURCE_DIR WORK_DIR [VEHICLES] [SEED]
 set -euo pipefail
-hil=$1 ctl=$2 src=$3 work=$4 vehicles=${5:-40} seed=${6:-1}
+hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5 vehicles=${6:-40} seed=${7:-1}
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 blob=policies/frozen/auv_nav/auv_nav.blob
 domain=$((200 + $$ % 30))
-mkdir -p "$work/robot"
+mkdir -p "$work/robot" "$work/log"
 cp -r models/auv "$work/robot/auv"
 cp models/dds_profile.xml "$work/robot/"
 robot=$work/robot/auv/robot.yaml
@@ -42,7 +46,7 @@ start_vehicle() {  # start_vehicle I: starts vehicle I in the background; sets v
 }
 start_vehicle 1
 "$ctl" --robot "$robot" --policy "$blob" --lockstep --lockstep-through-ends --lockstep-timeout-ms 100 \
-  --domain "$domain" --quiet >"$work/ctl.log" 2>&1 &
+  --domain "$domain" --quiet --record "$work/log/run.log" --record-max-mb 64 >"$work/ctl.log" 2>&1 &
 cpid=$!
 # The controller's resident memory, five times a second.
 (
@@ -100,4 +104,25 @@ awk -F, 'NR > 1 { r[n++] = $2 } END { if (n < 40) { printf "   only %d samples o
   a = r[int(n / 4)]; b = r[n - 1];
   printf "   controller resident memory: %d KiB after the first quarter, %d KiB at the end (%+d KiB, %d samples)\n", a, b, b - a, n;
   exit !(b <= a + 1024) }' "$work/rss.csv" || fail "the controller's resident memory: too few samples (a short run) or it grew"
+# Every burst of NaN or out-of-range samples (surge NaN or 99: sim_hil/auv_hil.cpp) that began while
+# the vehicle was driven (run phase, below safe-stop): safe-stop within 3 ticks of its first sample.
+mapfile -t logs < <(ls -v "$work/log"/run*.log)
+"$pbppo" replay "${logs[@]}" --robot "$robot" --policy "$blob" --trace "$work/trace.csv" \
+  --trace-fields surge_mps >"$work/replay.log" 2>&1 || fail "the recording does not replay: $(cat "$work/replay.log")"
+[ "$(grep -cE ": [0-9]+ ticks, [0-9]+ commands compared, 0 different$" "$work/replay.log")" -eq "${#logs[@]}" ] ||
+  fail "the recording does not replay bit for bit: $(cat "$work/replay.log")"
+faulty=0  # vehicles with a burst (start_vehicle: the first and second of every four)
+for i in $(seq 1 "$vehicles"); do case $((i % 4)) in 1 | 2) faulty=$((faulty + 1)) ;; esac; done
+awk -F, -v want="$faulty" '
+  function stopped(m) { return m == "safe-stop" || m == "e-stop" }
+  NR == 1 { next }
+  { bad = ($4 == "nan" || $4 == 99) }
+  bad && !was_bad && $2 == "run" && !stopped(prev_mode) { open_at = $1; bursts++ }
+  open_at != "" && stopped($3) { d = $1 - open_at; if (d > worst) worst = d; if (d > 2) late++; open_at = "" }
+  open_at != "" && !bad { late++; printf "   burst at tick %d ended without a stop\n", open_at; open_at = "" }
+  { was_bad = bad; prev_mode = $3 }
+  END {
+    printf "   %d bursts of invalid samples while driven (%d vehicles with a fault): safe-stop within %d ticks of the first at worst, %d late\n", bursts, want, worst + 1, late
+    exit !(late == 0 && bursts >= 0.9 * want)
+  }' "$work/trace.csv" || fail "a burst of invalid samples did not reach safe-stop within 3 ticks, or too few bursts were seen"
 echo "auv soak: all checks passed"
