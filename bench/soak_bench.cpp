@@ -109,8 +109,9 @@ int main(int argc, char** argv) {
   std::ofstream(out + "/latency.csv") << lat;
   std::string faults =
       "kind,start_tick,end_tick,subject,while_walking,safe_tick,detection_ticks,bound_ticks,rearm_tick\n";
-  std::uint64_t stopping = 0, worst = 0;
+  std::uint64_t stopping = 0, worst = 0, stopped_before = 0;
   for (const sim::SoakFault& f : r->faults) {
+    if (!f.while_walking) ++stopped_before;  // the robot was not walking when it began
     const long long det = f.safe_tick >= 0 ? f.safe_tick - static_cast<long long>(f.start) : -1;
     if (f.bound > 0 && f.while_walking && det >= 0) {
       ++stopping;
@@ -137,12 +138,15 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(r->ticks), static_cast<double>(r->ticks) * model->tick_period_s,
                 realtime ? "real time" : "lock-step", r->wall_s, static_cast<unsigned long long>(seed));
   add(line);
-  std::snprintf(line, sizeof line,
-                "faults: %zu (%llu stopping faults while walking, detected within %llu ticks at worst); stops %llu, "
-                "re-arms %llu, falls %llu; %llu command phases",
-                r->faults.size(), static_cast<unsigned long long>(stopping), static_cast<unsigned long long>(worst),
-                static_cast<unsigned long long>(r->stops), static_cast<unsigned long long>(r->rearms),
-                static_cast<unsigned long long>(r->falls), static_cast<unsigned long long>(r->command_phases));
+  std::snprintf(
+      line, sizeof line,
+      "faults: %zu (%llu stopping faults while walking, detected within %llu ticks at worst; %llu began while "
+      "the robot was not walking); stops %llu, "
+      "re-arms %llu, falls %llu; %llu command phases",
+      r->faults.size(), static_cast<unsigned long long>(stopping), static_cast<unsigned long long>(worst),
+      static_cast<unsigned long long>(stopped_before), static_cast<unsigned long long>(r->stops),
+      static_cast<unsigned long long>(r->rearms), static_cast<unsigned long long>(r->falls),
+      static_cast<unsigned long long>(r->command_phases));
   add(line);
   std::snprintf(
       line, sizeof line, "controller: %llu allocations in its ticks, %llu ticks with a command outside its limits",
@@ -166,10 +170,11 @@ int main(int argc, char** argv) {
     const std::string newest = loop::RotatedPath(record.path, r->record_files - 1);
     std::string how;
     auto log = loop::ReadLog(newest);
-    auto source = loop::LoadSource(sim::SoakModel(*model), {policy, "", false, policy::Kernel::kAuto});
+    auto source = loop::LoadSource(sim::SoakModel(*model, realtime), {policy, "", false, policy::Kernel::kAuto});
     if (!log || !source) {
       how = !log ? log.error().message : source.error().message;
-    } else if (auto rp = loop::Replay(sim::SoakModel(*model), *log, source->source.get(), source->hash); !rp) {
+    } else if (auto rp = loop::Replay(sim::SoakModel(*model, realtime), *log, source->source.get(), source->hash);
+               !rp) {
       how = rp.error().message;
     } else {
       how = std::to_string(rp->ticks) + " ticks from tick " + std::to_string(log->records.front().inputs.tick) + ", " +
@@ -177,8 +182,14 @@ int main(int argc, char** argv) {
       replayed = rp->mismatches == 0 && rp->compared > 0;
     }
     replayed = replayed && r->record_error.empty() && r->records_dropped == 0;
-    std::snprintf(line, sizeof line, "log: %llu records in %u files of at most %.0f MiB (%u deleted), %llu dropped%s%s",
-                  static_cast<unsigned long long>(r->records), r->record_files, record.max_mb, r->record_files_deleted,
+    std::string files = std::to_string(r->record_files) + (r->record_files == 1 ? " file" : " files");
+    if (record.max_mb > 0) {
+      char mib[48];
+      std::snprintf(mib, sizeof mib, " of at most %g MiB (%u deleted)", record.max_mb, r->record_files_deleted);
+      files += mib;
+    }
+    std::snprintf(line, sizeof line, "log: %llu records in %s, %llu dropped%s%s",
+                  static_cast<unsigned long long>(r->records), files.c_str(),
                   static_cast<unsigned long long>(r->records_dropped), r->record_error.empty() ? "" : "; ",
                   r->record_error.c_str());
     add(line);

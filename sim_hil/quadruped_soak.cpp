@@ -209,13 +209,14 @@ const char* ToString(SoakFaultKind kind) noexcept {
   return "?";
 }
 
-robot::RobotModel SoakModel(const robot::RobotModel& m) {
+robot::RobotModel SoakModel(const robot::RobotModel& m, bool realtime) {
   robot::RobotModel r = m;
   robot::RecoverySpec& rec = r.supervisor.recovery;
   rec.automatic = true;
   rec.causes = 0;
   for (Cause c : {Cause::kStaleSample, Cause::kLostPeer, Cause::kTransportFault, Cause::kInvalidSample})
     rec.causes |= 1u << static_cast<unsigned>(c);
+  if (realtime) rec.causes |= 1u << static_cast<unsigned>(Cause::kDeadlineOverrun);
   rec.max_automatic = 0xffffffffu;
   rec.healthy_s = 0.5;
   rec.healthy_ticks = static_cast<std::uint32_t>(std::llround(0.5 / m.tick_period_s));
@@ -240,7 +241,7 @@ Result<SoakReport> RunQuadrupedSoak(const robot::RobotModel& shipped, const Soak
                                                ": the soak needs a walking quadruped (CAN map, base_imu, "
                                                "velocity_command)");
   if (o.ticks == 0) return MakeError(ErrorCode::kInvalidValue, "soak: ticks must be > 0");
-  const robot::RobotModel m = SoakModel(shipped);
+  const robot::RobotModel m = SoakModel(shipped, o.realtime);
   SoakReport r;
   Rng rng(o.seed);
   const double total_s = static_cast<double>(o.ticks) * m.tick_period_s;
