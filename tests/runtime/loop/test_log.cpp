@@ -578,9 +578,9 @@ TEST_CASE("log: rotation refused where a file cannot hold a snapshot, and stoppe
   });
   const Recorded r = Record(
       "blocked", 1,
-      [&](std::uint64_t k, const loop::Recorder& rec) {
+      [&](std::uint64_t k, const loop::Recorder& recording) {
         if (k != 0) return;
-        go.store(&rec);
+        go.store(&recording);
         while (!made.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
       },
       false, ro);
