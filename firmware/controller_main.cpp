@@ -406,8 +406,7 @@ class StartupWatchdog {
 std::string Files(const loop::Recorder& r) {
   const std::uint32_t n = r.files(), deleted = r.files_deleted();
   if (n == 1) return "";
-  std::string s = ", in " + std::to_string(n) + " files (" + loop::RotatedPath(r.path(), 0) + " to " +
-                  loop::RotatedPath(r.path(), n - 1);
+  std::string s = ", in " + std::to_string(n) + " files (" + r.path() + " to " + loop::RotatedPath(r.path(), n - 1);
   if (deleted > 0) s += "; the " + std::to_string(deleted) + " oldest deleted";
   return s + ")";
 }

@@ -122,12 +122,11 @@ class Recorder {
   // "write failed after 1359 records: No space left on device", "the file was removed after 88 records".
   bool failed() const noexcept { return failed_.load(std::memory_order_acquire); }
   const std::string& failure() const noexcept { return failure_; }
-  // Rotation: files begun (1 without rotation), files deleted (keep_files), the file being written
-  // (any thread: the sequence; the writer thread and after Stop: its name).
+  // Rotation: files begun (1 without rotation; file k is RotatedPath(path(), k)), files deleted
+  // (keep_files).
   std::uint32_t files() const noexcept { return sequence_.load(std::memory_order_relaxed) + 1; }
   std::uint32_t files_deleted() const noexcept { return deleted_.load(std::memory_order_relaxed); }
   const std::string& path() const noexcept { return path_; }  // the first file's
-  std::string current_path() const { return RotatedPath(path_, sequence_.load(std::memory_order_relaxed)); }
 
   // After a failed write, at most kBoundaries - 1 whole records are given back to make room for the
   // end record.
