@@ -13,13 +13,12 @@
 #include <thread>
 
 #include "report/plots.hpp"
+#include "runtime/core/clock.hpp"
 #include "runtime/transport/dds/dds_link.hpp"
 #include "sim_hil/scenarios/auv_nav_task.hpp"
 
 namespace pbppo::sim {
 namespace {
-
-constexpr std::int64_t kNsPerS = 1'000'000'000;
 
 struct Row {
   double t_s, x_m, y_m, yaw_rad, v_cmd, w_cmd, u_mps, r_radps;
@@ -131,12 +130,6 @@ Status WritePlot(const AuvHilOptions& o, const AuvTaskConfig& cfg, const AuvNavT
   for (const Row& r : rows) m.paths.back().xy.push_back({r.x_m, r.y_m});
   if (auto s = report::PlotMap(m, o.plot_png); !s) return MakeError(s.error().code, "--plot: " + s.error().message);
   return {};
-}
-
-void AddNs(timespec* t, std::int64_t ns) {
-  std::int64_t n = t->tv_nsec + ns;
-  t->tv_sec += static_cast<time_t>(n / kNsPerS);
-  t->tv_nsec = static_cast<long>(n % kNsPerS);
 }
 
 }  // namespace

@@ -27,6 +27,13 @@
 // clock (--realtime: its tick latency). --operator dds: the velocity commands come over DDS from
 // another process (pbppo-operator, a ROS 2 node with --dds-naming ros2), at real time.
 //
+//   pbppo-hil go2 [--robot models/go2/robot.yaml] [--commands SCHEDULE] [--realtime] [--domain D]
+//             [--duration S] [--fault KIND@S[+D][:MOTOR]]... [--report out.json] [--trace out.csv]
+//
+// A legged robot whose motors speak DDS (the Go2's rt/lowstate and rt/lowcmd) on flat ground,
+// behind an emulation of its low-level interface (sim_hil/legged_dds_hil.hpp), for a
+// pbppo-controller --lockstep in another process.
+//
 //   pbppo-hil rotors --robot ROBOT.yaml [--can IF0[,IF1...]] [--lockstep] [--duration S]
 //
 // Any robot of a CAN map on a stand (sim_hil/rotor_hil.hpp): every actuated joint a free rotor
@@ -44,6 +51,7 @@
 #include "runtime/core/cli_checks.hpp"
 #include "runtime/transport/dds/dds_endpoint.hpp"
 #include "sim_hil/auv_hil.hpp"
+#include "sim_hil/legged_dds_hil.hpp"
 #include "sim_hil/quadruped_main.hpp"
 #include "sim_hil/rotor_hil.hpp"
 
@@ -105,10 +113,42 @@ void AddAuvOptions(CLI::App& app, pbppo::sim::AuvHilOptions& o) {
       "range@S[+D]");
 }
 
+// pbppo-hil go2's flags into `o`.
+void AddLeggedDdsOptions(CLI::App& app, pbppo::sim::LeggedDdsHilOptions& o) {
+  app.add_option("--robot", o.robot, "The robot: a name or its robot.yaml (default go2)");
+  app.add_option("--commands", o.commands, "The controller's velocity schedule: per-phase tracking in the report");
+  app.add_flag_callback("--realtime", [&o] { o.lockstep = false; }, "One robot period per period of wall time");
+  app.add_option("--domain", o.domain_id, "DDS domain id")->check(CLI::Range(0, 232));
+  const auto positive = pbppo::cli_checks::PositiveSeconds();
+  app.add_option("--duration", o.duration_s,
+                 "Simulated seconds (default: the schedule's end + 3 s, else until the "
+                 "controller leaves)")
+      ->check(positive);
+  app.add_option("--settle-s", o.settle_s, "Tracking is judged this long after each phase starts")
+      ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--peer-timeout", o.peer_timeout_s, "Longest wait for the controller to appear (s)")->check(positive);
+  app.add_option("--command-timeout", o.command_timeout_s, "Lock-step: longest wait for the next command (s)")
+      ->check(positive);
+  app.add_option("--report", o.report, "Write the run's report (JSON)");
+  app.add_option("--trace", o.trace, "Write the base's trace, every 10 periods (CSV)");
+  app.add_option_function<std::string>(
+         "--fault",
+         [&o](const std::string& v) {
+           pbppo::sim::LeggedDdsFault f;
+           std::string why;
+           if (!pbppo::sim::ParseLeggedDdsFault(v, &f, &why)) throw CLI::ValidationError("--fault", why);
+           o.faults.push_back(f);
+         },
+         "A fault from SECONDS on (for DURATION s): stop (no state), crc (bad checksums), nan or range (MOTOR's "
+         "position); repeatable")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+}
+
 int Usage(const char* why) {
   std::fprintf(stderr,
                "pbppo-hil: %s\nusage: pbppo-hil auv ... (pbppo-hil auv --help)\n"
                "       pbppo-hil quadruped ... (pbppo-hil quadruped --help)\n"
+               "       pbppo-hil go2 ... (pbppo-hil go2 --help)\n"
                "       pbppo-hil rotors ... (pbppo-hil rotors --help)\n",
                why);
   return 2;
@@ -131,9 +171,23 @@ int main(int argc, char** argv) {
     signal(SIGTERM, OnSignal);
     return sim::RunAuvHil(o, g_stop);
   }
+  if (argc >= 2 && std::strcmp(argv[1], "go2") == 0) {
+    CLI::App app{
+        "pbppo-hil go2: a legged robot whose motors speak DDS (the Go2), the robot's side of its low-level link"};
+    sim::LeggedDdsHilOptions o;
+    AddLeggedDdsOptions(app, o);
+    try {
+      app.parse(argc - 1, argv + 1);
+    } catch (const CLI::ParseError& e) {
+      return app.exit(e) == 0 ? 0 : 2;
+    }
+    signal(SIGINT, OnSignal);
+    signal(SIGTERM, OnSignal);
+    return sim::RunLeggedDdsHil(o, g_stop);
+  }
   const bool rotors = argc >= 2 && std::strcmp(argv[1], "rotors") == 0;
   if (argc < 2 || (!rotors && std::strcmp(argv[1], "quadruped") != 0))
-    return Usage("the first argument must be 'auv', 'quadruped' or 'rotors'");
+    return Usage("the first argument must be 'auv', 'quadruped', 'go2' or 'rotors'");
   signal(SIGINT, OnSignal);
   signal(SIGTERM, OnSignal);
   return rotors ? sim::RunRotorHil(argc - 1, argv + 1, g_stop) : sim::RunQuadrupedHil(argc - 1, argv + 1, g_stop);

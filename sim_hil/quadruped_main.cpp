@@ -49,17 +49,6 @@ std::string PngStem(const std::string& png) {
   return png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
 }
 
-void PrintReport(const RigReport& r) {
-  std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
-              "|e| vx", "|e| vy", "|e| wz");
-  for (const PhaseTracking& p : r.phases)
-    std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %8.3f %8.3f %8.3f\n", p.name.c_str(), p.start_s, p.end_s,
-                p.command[0], p.command[1], p.command[2], p.mean_abs_error[0], p.mean_abs_error[1],
-                p.mean_abs_error[2]);
-  std::printf("walked %.2f m; %s\n", r.distance_m,
-              r.fell ? ("FELL at " + std::to_string(r.fell_at_s) + " s").c_str() : "no fall");
-}
-
 Status WriteReportJson(const RigReport& r, double rtf, const std::string& path) {
   nlohmann::json j = {{"fell", r.fell},
                       {"fell_at_s", r.fell_at_s},
@@ -186,7 +175,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
   const RigReport rep = (*rig)->Report(o.settle_s, dds_operator);
-  PrintReport(rep);
+  PrintRigReport(rep);
   const safety::SupervisorState& sup = (*rig)->loop().supervisor();
   std::printf("controller: phase %s, mode %s; %llu IMU samples, %llu commands per motor\n",
               loop::ToString((*rig)->loop().phase()), safety::ToString(sup.mode),

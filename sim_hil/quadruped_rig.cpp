@@ -93,23 +93,9 @@ bool QuadrupedRig::TickPlant() noexcept {
   }
   // The trace.
   const QuadrupedPlant& p = hil_->plant();
-  const BaseState& b = p.base();
-  const double w = b.quat_wxyz[0], x = b.quat_wxyz[1], y = b.quat_wxyz[2], z = b.quat_wxyz[3];
-  // Rows of R (base to world): world = R base; base = R^T world.
-  const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - w * z);
-  const double r10 = 2 * (x * y + w * z), r11 = 1 - 2 * (x * x + z * z);
-  const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
-  const double* v = b.velocity_mps;
   RigSample t;
   t.t_s = static_cast<double>(tick_ + 1) * model_.tick_period_s;
-  t.x_m = static_cast<float>(b.position_m[0]);
-  t.y_m = static_cast<float>(b.position_m[1]);
-  t.z_m = static_cast<float>(b.position_m[2] - p.TerrainHeightAt(b.position_m[0], b.position_m[1]));
-  t.yaw_rad = static_cast<float>(std::atan2(r10, r00));
-  t.vx_mps = static_cast<float>(r00 * v[0] + r10 * v[1] + r20 * v[2]);
-  t.vy_mps = static_cast<float>(r01 * v[0] + r11 * v[1] + r21 * v[2]);
-  t.yaw_rate_radps = static_cast<float>(b.angular_radps[2]);
-  t.tilt_rad = static_cast<float>(std::acos(std::clamp(r22, -1.0, 1.0)));
+  FillBaseSample(p, &t);
   for (int k = 0; k < 3; ++k) {
     const double c =
         cmd_field_[k] >= 0 && data_.streams[model_.fields[static_cast<std::size_t>(cmd_field_[k])].stream].seen
@@ -120,8 +106,6 @@ bool QuadrupedRig::TickPlant() noexcept {
   t.schedule_phase = schedule_->schedule().PhaseAt(static_cast<double>(tick_) * model_.tick_period_s);
   t.loop_phase = static_cast<std::uint8_t>(loop_->phase());
   t.mode = static_cast<std::uint8_t>(loop_->supervisor().mode);
-  t.feet = static_cast<std::uint8_t>(p.foot_contacts());
-  t.body_contact = p.body_contact();
   trace_.push_back(t);  // the harness's (RunSchedule reserves it); the controller's tick is above
   ++tick_;
   return ok;
@@ -142,6 +126,37 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
 
 RigReport QuadrupedRig::Report(double settle_s, bool by_command) const {
   return ReportOfTrace(trace_, schedule_->schedule(), settle_s, by_command);
+}
+
+void FillBaseSample(const QuadrupedPlant& p, RigSample* t) noexcept {
+  const BaseState& b = p.base();
+  const double w = b.quat_wxyz[0], x = b.quat_wxyz[1], y = b.quat_wxyz[2], z = b.quat_wxyz[3];
+  // Rows of R (base to world): world = R base; base = R^T world.
+  const double r00 = 1 - 2 * (y * y + z * z), r01 = 2 * (x * y - w * z);
+  const double r10 = 2 * (x * y + w * z), r11 = 1 - 2 * (x * x + z * z);
+  const double r20 = 2 * (x * z - w * y), r21 = 2 * (y * z + w * x), r22 = 1 - 2 * (x * x + y * y);
+  const double* v = b.velocity_mps;
+  t->x_m = static_cast<float>(b.position_m[0]);
+  t->y_m = static_cast<float>(b.position_m[1]);
+  t->z_m = static_cast<float>(b.position_m[2] - p.TerrainHeightAt(b.position_m[0], b.position_m[1]));
+  t->yaw_rad = static_cast<float>(std::atan2(r10, r00));
+  t->vx_mps = static_cast<float>(r00 * v[0] + r10 * v[1] + r20 * v[2]);
+  t->vy_mps = static_cast<float>(r01 * v[0] + r11 * v[1] + r21 * v[2]);
+  t->yaw_rate_radps = static_cast<float>(b.angular_radps[2]);
+  t->tilt_rad = static_cast<float>(std::acos(std::clamp(r22, -1.0, 1.0)));
+  t->feet = static_cast<std::uint8_t>(p.foot_contacts());
+  t->body_contact = p.body_contact();
+}
+
+void PrintRigReport(const RigReport& r) {
+  std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
+              "|e| vx", "|e| vy", "|e| wz");
+  for (const PhaseTracking& p : r.phases)
+    std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %8.3f %8.3f %8.3f\n", p.name.c_str(), p.start_s, p.end_s,
+                p.command[0], p.command[1], p.command[2], p.mean_abs_error[0], p.mean_abs_error[1],
+                p.mean_abs_error[2]);
+  std::printf("walked %.2f m; %s\n", r.distance_m,
+              r.fell ? ("FELL at " + std::to_string(r.fell_at_s) + " s").c_str() : "no fall");
 }
 
 RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedule& s, double settle_s,

@@ -139,6 +139,12 @@ class QuadrupedRig {
   loop::TickStatus status_ = loop::TickStatus::kRunning;
 };
 
+// Prints the report: per phase the commands and mean |error|, the distance walked, a fall.
+void PrintRigReport(const RigReport& report);
+
+// The base's part of a trace sample (pose, base-frame velocity, tilt, contacts) from the plant.
+void FillBaseSample(const QuadrupedPlant& plant, RigSample* sample) noexcept;
+
 // The report of a trace: per phase of `schedule` (`by_command`: per run of one command in force)
 // the mean |velocity error| after `settle_s`, falls and distance (QuadrupedRig::Report).
 RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedule& schedule, double settle_s,

@@ -54,6 +54,7 @@ struct QuadrupedWalk::Shared {
   std::vector<std::uint8_t> motor_id;
   robot::ImuFormat imu_format = robot::ImuFormat::kClassic;
   std::uint32_t imu_field = 0;
+  bool float_devices = false;  // no CAN map: the devices report float32 (a DDS robot's messages)
   std::array<std::uint32_t, 3> command_field{};
   mjModel* model = nullptr;
   std::vector<int> qpos_adr, dof_adr;  // per actuated joint
@@ -79,18 +80,21 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     return MakeError(ErrorCode::kInvalidValue,
                      "blocks fraction: " + std::to_string(options.blocks_fraction) + " is not in [0, 1]");
   // The robot as the controller and the HIL read it (robot.yaml: the URDF description, the IO
-  // layout, the CAN map, the policy's PD gains), and the training task it names (walk.yaml).
-  const std::string dir = (options.models_dir.empty() ? DefaultModelsDir() : options.models_dir) + "/quadruped/";
+  // layout, its motors and IMU, the policy's PD gains), and the training task it names (walk.yaml).
+  const bool path = options.robot.find('/') != std::string::npos || options.robot.ends_with(".yaml");
+  const std::string file = path ? options.robot
+                                : (options.models_dir.empty() ? DefaultModelsDir() : options.models_dir) + "/" +
+                                      options.robot + "/robot.yaml";
   std::shared_ptr<const robot::RobotModel> robot_model = options.robot_model;
   if (!robot_model) {
-    auto loaded = robot::LoadRobotModel(dir + "robot.yaml");
+    auto loaded = robot::LoadRobotModel(file);
     if (!loaded) return std::move(loaded).error();
     robot_model = std::make_shared<const robot::RobotModel>(std::move(loaded).value());
   }
-  if (!robot_model->body || !robot_model->io || !robot_model->can || robot_model->motors.empty())
+  if (!robot_model->body || !robot_model->io || robot_model->motors.empty())
     return MakeError(ErrorCode::kMismatch, robot_model->path +
                                                ": quadruped-walk needs files.description, files.io_layout, "
-                                               "files.can_map and the motors' policy_gains");
+                                               "motors and their policy_gains");
   sh->robot_model = robot_model;
   auto task = robot_model->Document("walk_task");
   if (!task) return std::move(task).error();
@@ -118,13 +122,12 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     sh->params.zero_planar_share = 0.0;
     sh->params.single_axis_share = 0.0;
   }
-  const robot::CanMap* map = &*robot_model->can;
+  // A CAN map's motors and IMU report through their codecs; other devices (DDS) as float32.
+  const robot::CanMap* map = robot_model->can ? &*robot_model->can : nullptr;
 
   const robot::RobotDescription& r = sh->robot();
   const robot::IoLayout& l = sh->layout();
   const std::size_t n = r.joint_count();
-  if (l.robot != "quadruped")
-    return MakeError(ErrorCode::kMismatch, "io_layout.yaml: robot is '" + l.robot + "', expected 'quadruped'");
   if (l.actions.size() != n)
     return MakeError(ErrorCode::kMismatch, "io_layout.yaml: " + std::to_string(l.actions.size()) +
                                                " actions, the robot has " + std::to_string(n) + " joints");
@@ -134,13 +137,13 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     const std::string where = "io_layout.yaml: actions[" + std::to_string(i) + "] '" + a.name + "'";
     if (a.command != "q_des_" + r.joint_names[i])
       return MakeError(ErrorCode::kMismatch, where + ": command '" + a.command + "' is not q_des_" + r.joint_names[i] +
-                                                 " (joint " + std::to_string(i) + " of quadruped.yaml's joint order)");
+                                                 " (joint " + std::to_string(i) + " of the description's joint order)");
     if (!(std::fabs(a.scale) > 0))
       return MakeError(ErrorCode::kInvalidValue, where + ": scale 0 leaves the joint at its default pose");
     if (std::fabs(a.offset - r.default_q_rad[i]) > 1e-9)
       return MakeError(ErrorCode::kMismatch, where + ": offset " + std::to_string(a.offset) +
                                                  " is not the default pose " + std::to_string(r.default_q_rad[i]) +
-                                                 " of quadruped.yaml");
+                                                 " of the description");
     if (a.low < j.lower_rad - 1e-9 || a.high > j.upper_rad + 1e-9)
       return MakeError(ErrorCode::kMismatch, where + ": [" + std::to_string(a.low) + ", " + std::to_string(a.high) +
                                                  "] leaves the URDF limits [" + std::to_string(j.lower_rad) + ", " +
@@ -169,26 +172,33 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
       if (it != names.end()) sh->noise_order.push_back(static_cast<std::size_t>(it - names.begin()));
     }
   sh->mapper = robot::ActionMapper::Create(l);
-  // The motors (the CAN map's, in the robot model's order) and their joints.
+  // The motors (in the robot model's order) and their joints.
   std::vector<bool> have(n, false);
   for (std::size_t k = 0; k < robot_model->motors.size(); ++k) {
     const robot::MotorSpec& mo = robot_model->motors[k];
     const auto it = std::find(r.joint_names.begin(), r.joint_names.end(), mo.joint);
     if (it == r.joint_names.end())
-      return MakeError(ErrorCode::kMismatch, "can_map.yaml: motor '" + mo.joint + "' is not a joint of quadruped.yaml");
+      return MakeError(ErrorCode::kMismatch,
+                       robot_model->path + ": motor '" + mo.joint + "' is not a joint of the description");
     const auto j = static_cast<std::size_t>(it - r.joint_names.begin());
     sh->motor_joint.push_back(j);
-    sh->motor_range.push_back(map->range_of(map->motors[k]));
-    sh->motor_id.push_back(static_cast<std::uint8_t>(map->motors[k].id));
+    if (map != nullptr) {
+      sh->motor_range.push_back(map->range_of(map->motors[k]));
+      sh->motor_id.push_back(static_cast<std::uint8_t>(map->motors[k].id));
+    }
     have[j] = true;
   }
   for (std::size_t j = 0; j < n; ++j)
-    if (!have[j]) return MakeError(ErrorCode::kMismatch, "can_map.yaml: no motor for joint '" + r.joint_names[j] + "'");
-  if (map->imus.empty()) return MakeError(ErrorCode::kMismatch, "can_map.yaml: quadruped-walk needs the base IMU");
-  const int imu_qw = robot_model->FieldIndex(map->imus[0].name + "_qw");
-  if (imu_qw < 0) return MakeError(ErrorCode::kMismatch, robot_model->path + ": no field " + map->imus[0].name + "_qw");
-  sh->imu_field = static_cast<std::uint32_t>(imu_qw);
-  sh->imu_format = map->imus[0].format;
+    if (!have[j])
+      return MakeError(ErrorCode::kMismatch, robot_model->path + ": no motor for joint '" + r.joint_names[j] + "'");
+  // The base IMU: the robot's first IMU stream.
+  const auto imu = std::find_if(robot_model->streams.begin(), robot_model->streams.end(),
+                                [](const robot::StreamSpec& st) { return st.kind == robot::StreamKind::kImu; });
+  if (imu == robot_model->streams.end())
+    return MakeError(ErrorCode::kMismatch, robot_model->path + ": quadruped-walk needs the base IMU");
+  sh->imu_field = imu->first_field;
+  if (map != nullptr && !map->imus.empty()) sh->imu_format = map->imus[0].format;
+  sh->float_devices = map == nullptr;
   const char* command_names[3] = {"command_vx", "command_vy", "command_yaw_rate"};
   for (std::size_t k = 0; k < 3; ++k) {
     const int f = robot_model->FieldIndex(command_names[k]);
@@ -529,23 +539,12 @@ void QuadrupedWalk::Contacts() noexcept {
 }
 
 // The robot model's fields as the devices report them: each motor's MIT reply and the base IMU's
-// sample through their codecs (what the CAN transport decodes), the operator's command as sent.
+// sample through their codecs (what the CAN transport decodes), or as float32 (a DDS robot's
+// messages); the operator's command as sent.
 void QuadrupedWalk::WriteFields() noexcept {
   const Shared& s = *shared_;
   const robot::RobotModel& m = *s.robot_model;
   double* f = fields_.data();
-  for (std::size_t k = 0; k < m.motors.size(); ++k) {
-    const robot::MotorSpec& mo = m.motors[k];
-    const std::size_t j = s.motor_joint[k];
-    const can::MitReply sent{s.motor_id[k], d_->qpos[s.qpos_adr[j]], d_->qvel[s.dof_adr[j]], torque_[j]};
-    std::uint8_t frame[can::kMitReplyLen];
-    (void)can::EncodeMitReply(s.motor_range[k], sent, frame);
-    can::MitReply got;
-    (void)can::DecodeMitReply(s.motor_range[k], frame, can::kMitReplyLen, &got);
-    f[mo.q_field] = got.q_rad;
-    f[mo.dq_field] = got.dq_rad_s;
-    f[mo.tau_field] = got.tau_nm;
-  }
   // The base IMU: orientation (base to world), angular velocity in the base frame, and the
   // specific force in the base frame, R^T (a - g), from the last step's acceleration.
   can::ImuSample imu;
@@ -561,14 +560,40 @@ void QuadrupedWalk::WriteFields() noexcept {
   }
   imu.status = can::kImuOrientationValid;
   can::ImuSample got;
-  if (s.imu_format == robot::ImuFormat::kFd) {
-    std::uint8_t frame[can::kImuFdLen];
-    can::EncodeImuFd(imu, frame);
-    (void)can::DecodeImuFd(frame, can::kImuFdLen, &got);
+  if (s.float_devices) {
+    const auto f32 = [](double v) { return static_cast<double>(static_cast<float>(v)); };
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const robot::MotorSpec& mo = m.motors[k];
+      const std::size_t j = s.motor_joint[k];
+      f[mo.q_field] = f32(d_->qpos[s.qpos_adr[j]]);
+      f[mo.dq_field] = f32(d_->qvel[s.dof_adr[j]]);
+      f[mo.tau_field] = f32(torque_[j]);
+    }
+    for (int k = 0; k < 4; ++k) got.quat_wxyz[k] = f32(imu.quat_wxyz[k]);
+    for (int k = 0; k < 3; ++k) got.gyro_rad_s[k] = f32(imu.gyro_rad_s[k]);
+    for (int k = 0; k < 3; ++k) got.accel_m_s2[k] = f32(imu.accel_m_s2[k]);
   } else {
-    std::uint8_t frames[3][can::kImuClassicLen];
-    can::EncodeImuClassic(imu, frames[0], frames[1], frames[2]);
-    for (unsigned k = 0; k < 3; ++k) (void)can::DecodeImuClassicFrame(k, frames[k], can::kImuClassicLen, &got);
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const robot::MotorSpec& mo = m.motors[k];
+      const std::size_t j = s.motor_joint[k];
+      const can::MitReply sent{s.motor_id[k], d_->qpos[s.qpos_adr[j]], d_->qvel[s.dof_adr[j]], torque_[j]};
+      std::uint8_t frame[can::kMitReplyLen];
+      (void)can::EncodeMitReply(s.motor_range[k], sent, frame);
+      can::MitReply reply;
+      (void)can::DecodeMitReply(s.motor_range[k], frame, can::kMitReplyLen, &reply);
+      f[mo.q_field] = reply.q_rad;
+      f[mo.dq_field] = reply.dq_rad_s;
+      f[mo.tau_field] = reply.tau_nm;
+    }
+    if (s.imu_format == robot::ImuFormat::kFd) {
+      std::uint8_t frame[can::kImuFdLen];
+      can::EncodeImuFd(imu, frame);
+      (void)can::DecodeImuFd(frame, can::kImuFdLen, &got);
+    } else {
+      std::uint8_t frames[3][can::kImuClassicLen];
+      can::EncodeImuClassic(imu, frames[0], frames[1], frames[2]);
+      for (unsigned k = 0; k < 3; ++k) (void)can::DecodeImuClassicFrame(k, frames[k], can::kImuClassicLen, &got);
+    }
   }
   double* i = f + s.imu_field;  // qw qx qy qz, gyro x y z, accel x y z (the robot model's IMU stream)
   for (int k = 0; k < 4; ++k) i[k] = got.quat_wxyz[k];

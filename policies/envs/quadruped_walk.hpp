@@ -52,8 +52,10 @@ namespace pbppo::envs {
 inline constexpr double kWalkEvalResampleS = 10.0;
 
 struct QuadrupedWalkOptions {
-  std::string models_dir;  // holding quadruped/; empty: DefaultModelsDir()
-  // The robot the controller runs (robot::LoadRobotModel of models/quadruped/robot.yaml); null:
+  std::string models_dir;  // holding <robot>/; empty: DefaultModelsDir()
+  // The legged robot: a folder of models_dir (quadruped, go2) or a robot.yaml path.
+  std::string robot = "quadruped";
+  // The robot the controller runs (robot::LoadRobotModel of models/<robot>/robot.yaml); null:
   // loaded from models_dir. Its fields, signals and IO layout make the observation.
   std::shared_ptr<const robot::RobotModel> robot_model;
   std::string terrain = "flat";  // flat | mixed

@@ -212,6 +212,8 @@ EnvSpec QuadrupedWalkEnv() {
     });
   };
   s.flags = {
+      Flag("robot", EnvFlag::kBoth, K::kText, "quadruped", "walks a legged robot",
+           "the legged robot: a folder of the models (quadruped, go2) or its robot.yaml", {}, true),
       Flag("terrain", EnvFlag::kBoth, K::kText, "flat", "has terrains to choose",
            "flat, or mixed (flat and block episodes 1:1)", OneOf({"flat", "mixed"}), true),
       Flag("commands", EnvFlag::kBoth, K::kText, "", "has velocity commands",
@@ -241,6 +243,7 @@ EnvSpec QuadrupedWalkEnv() {
   s.make = [](const EnvOptions& o) -> Result<std::unique_ptr<Env>> {
     QuadrupedWalkOptions q;
     q.models_dir = ModelsDir(o);
+    q.robot = FlagText(o, "robot");
     q.terrain = FlagText(o, "terrain");
     q.commands = FlagText(o, "commands");
     q.command_shares = FlagText(o, "command-shares");

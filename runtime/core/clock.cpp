@@ -21,4 +21,10 @@ std::int64_t RealtimeNs() noexcept {
   return Read(CLOCK_REALTIME);
 }
 
+void AddNs(timespec* t, std::int64_t ns) noexcept {
+  const std::int64_t n = t->tv_nsec + ns;
+  t->tv_sec += static_cast<time_t>(n / 1'000'000'000);
+  t->tv_nsec = static_cast<long>(n % 1'000'000'000);
+}
+
 }  // namespace pbppo

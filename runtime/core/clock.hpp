@@ -4,12 +4,17 @@
 #pragma once
 
 #include <cstdint>
+#include <ctime>
 
 namespace pbppo {
 
 // CLOCK_MONOTONIC in nanoseconds: durations, deadlines, ages.
+inline constexpr std::int64_t kNsPerS = 1'000'000'000;
+
 std::int64_t MonotonicNs() noexcept;
 // CLOCK_REALTIME in nanoseconds: time stamps meant for people and other machines (candump logs).
 std::int64_t RealtimeNs() noexcept;
+// Advances an absolute CLOCK_MONOTONIC deadline by `ns` (a sleeper's next period).
+void AddNs(timespec* t, std::int64_t ns) noexcept;
 
 }  // namespace pbppo

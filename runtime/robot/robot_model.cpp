@@ -458,7 +458,7 @@ Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
     return f.Fail("files.can_map", "the CAN map is for robot '" + m.can->robot + "', not '" + m.name + "'");
   PBPPO_TRY(l.Transports(root));
   PBPPO_TRY(l.DeclaredStreams(root));
-  PBPPO_TRY(l.CanDevices(root));
+  PBPPO_TRY(l.Devices(root));
   PBPPO_TRY(l.DeclaredCommands(root));
   PBPPO_TRY(l.Signals(root));
   PBPPO_TRY(l.DdsMessages(root, [&files](const std::string& path) { return files.Read(path); }, m.dir));

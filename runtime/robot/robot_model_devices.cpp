@@ -44,12 +44,80 @@ Status Builder::StartStream(StreamSpec s, const std::string& where) {
   return {};
 }
 
-// Streams, fields, commands and motors of the CAN map's MIT motors and IMUs.
-Status Builder::CanDevices(const YAML::Node& root) {
-  if (!m.can) return {};
-  if (!m.body) return f.Fail("files", "can_map needs a description (the URDF gives the joints' limits)");
-  const CanMap& map = *m.can;
+// The motors section's settings every motor shares; *motors: the section.
+Status Builder::MotorSection(const YAML::Node& root, MotorSettings* ms, YAML::Node* motors) {
+  PBPPO_TRY(f.Map(root, "motors", "", motors));
+  const bool can = m.can.has_value();
+  if (can)
+    PBPPO_TRY(f.Keys(*motors, "motors",
+                     {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor", "policy_gains"}));
+  else
+    PBPPO_TRY(f.Keys(*motors, "motors",
+                     {"transport", "stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor",
+                      "torque_factor", "gain_limits", "policy_gains"}));
+  if (motors->operator[]("policy_gains")) {
+    YAML::Node g;
+    PBPPO_TRY(f.Map(*motors, "policy_gains", "motors", &g));
+    PBPPO_TRY(f.Keys(g, "motors.policy_gains", {"kp_nm_rad", "kd_nm_s_rad"}));
+    PBPPO_TRY(f.Number(g, "kp_nm_rad", "motors.policy_gains", 0.0, 1e4, &ms->policy_kp));
+    PBPPO_TRY(f.Number(g, "kd_nm_s_rad", "motors.policy_gains", 0.0, 1e3, &ms->policy_kd));
+  }
+  ms->proto.period_s = m.tick_period_s;
+  ms->proto.kind = StreamKind::kMotor;
+  PBPPO_TRY(ReadStale(*motors, "motors", &ms->proto.stale_after));
+  PBPPO_TRY(f.Count(*motors, "invalid_safe_stop", "motors", 1, 1000000, &ms->proto.invalid_safe_stop));
+  PBPPO_TRY(f.Number(*motors, "position_margin_rad", "motors", 0.0, 10.0, &ms->margin));
+  PBPPO_TRY(f.Number(*motors, "velocity_factor", "motors", 1.0, 100.0, &ms->factor));
+  if (!can) PBPPO_TRY(f.OptionalNumber(*motors, "torque_factor", "motors", 1.0, 100.0, &ms->torque_factor));
+  return {};
+}
+
+// Streams, fields, commands and motors: the CAN map's MIT motors and IMUs; or, without a CAN map,
+// a motor per actuated joint of the description and the IMUs the imus section names, all
+// delivered by the transport `motors.transport` names (a DDS message maps their fields).
+Status Builder::Devices(const YAML::Node& root) {
+  if (!m.can && !(root["motors"] && root["motors"].IsMap() && root["motors"]["transport"])) return {};
+  if (!m.body)
+    return f.Fail(m.can ? "files" : "motors", "motors need a description (the URDF gives the joints' limits)");
   const RobotDescription& body = *m.body;
+  MotorSettings ms;
+  YAML::Node motors;
+  PBPPO_TRY(MotorSection(root, &ms, &motors));
+  if (!m.can) {
+    PBPPO_TRY(f.Text(motors, "transport", "motors", &ms.proto.transport, Rule::kToken));
+    const int t = m.TransportIndex(ms.proto.transport);
+    if (t < 0) return f.Fail("motors.transport", "'" + ms.proto.transport + "' is not a transport of the robot");
+    if (m.transports[static_cast<std::size_t>(t)].kind == "can")
+      return f.Fail("motors.transport", "motors on a transport of kind can come from files.can_map");
+    DriverLimits limits;
+    limits.name = "motors.gain_limits";
+    YAML::Node g;
+    PBPPO_TRY(f.Map(motors, "gain_limits", "motors", &g));
+    PBPPO_TRY(f.Keys(g, "motors.gain_limits", {"kp_max", "kd_max"}));
+    PBPPO_TRY(f.Number(g, "kp_max", "motors.gain_limits", 0.0, 1e4, &limits.kp_max));
+    PBPPO_TRY(f.Number(g, "kd_max", "motors.gain_limits", 0.0, 1e3, &limits.kd_max));
+    for (std::size_t j = 0; j < body.joint_count(); ++j)
+      PBPPO_TRY(Motor(body.joint_names[j], static_cast<std::uint32_t>(j), limits, ms,
+                      "motors: joint '" + body.joint_names[j] + "'"));
+    if (!root["imus"]) return {};
+    YAML::Node imus;
+    PBPPO_TRY(f.Map(root, "imus", "", &imus));
+    PBPPO_TRY(f.Keys(imus, "imus", {"names", "stale_after", "invalid_safe_stop"}));
+    StreamSpec proto = ms.proto;
+    proto.kind = StreamKind::kImu;
+    PBPPO_TRY(ReadStale(imus, "imus", &proto.stale_after));
+    PBPPO_TRY(f.Count(imus, "invalid_safe_stop", "imus", 1, 1000000, &proto.invalid_safe_stop));
+    YAML::Node names;
+    PBPPO_TRY(f.List(imus, "names", "imus", true, &names));
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      const std::string w = "imus.names[" + std::to_string(k) + "]";
+      if (!names[k].IsScalar()) return f.Fail(w, "expected an IMU's name");
+      // A DDS IMU's floats carry what the sensor measures: a gyro's 2000 deg/s, 16 g.
+      PBPPO_TRY(ImuStream(names[k].as<std::string>(), static_cast<std::uint32_t>(k), proto, 35.0, 160.0, w));
+    }
+    return {};
+  }
+  const CanMap& map = *m.can;
   int can_transport = -1;
   for (std::size_t t = 0; t < m.transports.size(); ++t)
     if (m.transports[t].kind == "can") can_transport = static_cast<int>(t);
@@ -58,65 +126,65 @@ Status Builder::CanDevices(const YAML::Node& root) {
     return f.Fail("files.can_map", "the CAN map has " + std::to_string(map.motors.size()) +
                                        " motors, the description " + std::to_string(body.joint_count()) +
                                        " actuated joints");
-  YAML::Node motors;
-  PBPPO_TRY(f.Map(root, "motors", "", &motors));
-  PBPPO_TRY(f.Keys(motors, "motors",
-                   {"stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor", "policy_gains"}));
-  MotorSettings ms;
-  if (motors["policy_gains"]) {
-    YAML::Node g;
-    PBPPO_TRY(f.Map(motors, "policy_gains", "motors", &g));
-    PBPPO_TRY(f.Keys(g, "motors.policy_gains", {"kp_nm_rad", "kd_nm_s_rad"}));
-    PBPPO_TRY(f.Number(g, "kp_nm_rad", "motors.policy_gains", 0.0, 1e4, &ms.policy_kp));
-    PBPPO_TRY(f.Number(g, "kd_nm_s_rad", "motors.policy_gains", 0.0, 1e3, &ms.policy_kd));
-  }
   ms.proto.transport = m.transports[static_cast<std::size_t>(can_transport)].name;
-  ms.proto.period_s = m.tick_period_s;
-  ms.proto.kind = StreamKind::kMotor;
-  PBPPO_TRY(ReadStale(motors, "motors", &ms.proto.stale_after));
-  PBPPO_TRY(f.Count(motors, "invalid_safe_stop", "motors", 1, 1000000, &ms.proto.invalid_safe_stop));
-  PBPPO_TRY(f.Number(motors, "position_margin_rad", "motors", 0.0, 10.0, &ms.margin));
-  PBPPO_TRY(f.Number(motors, "velocity_factor", "motors", 1.0, 100.0, &ms.factor));
-  for (std::size_t k = 0; k < map.motors.size(); ++k) PBPPO_TRY(MitMotor(k, ms));
-  return CanImus(root, ms.proto);
+  for (std::size_t k = 0; k < map.motors.size(); ++k) {
+    const CanMotor& cm = map.motors[k];
+    const MitRange& r = map.range_of(cm);
+    DriverLimits limits{
+        r.p_min,  r.p_max, std::min(r.v_max, -r.v_min),    r.t_min, r.t_max, r.kp_min, r.kp_max, r.kd_min,
+        r.kd_max, true,    map.actuators[cm.actuator].name};
+    PBPPO_TRY(Motor(cm.joint, static_cast<std::uint32_t>(k), limits, ms,
+                    "files.can_map: motors[" + std::to_string(k) + "] '" + cm.joint + "'"));
+  }
+  if (map.imus.empty()) return {};
+  YAML::Node imus;
+  PBPPO_TRY(f.Map(root, "imus", "", &imus));
+  PBPPO_TRY(f.Keys(imus, "imus", {"stale_after", "invalid_safe_stop"}));
+  StreamSpec proto = ms.proto;
+  proto.kind = StreamKind::kImu;
+  PBPPO_TRY(ReadStale(imus, "imus", &proto.stale_after));
+  PBPPO_TRY(f.Count(imus, "invalid_safe_stop", "imus", 1, 1000000, &proto.invalid_safe_stop));
+  // The codecs' ranges: a quaternion component within 1, 32.8 rad/s, 163.8 m/s^2.
+  for (std::size_t k = 0; k < map.imus.size(); ++k)
+    PBPPO_TRY(ImuStream(map.imus[k].name, static_cast<std::uint32_t>(k), proto, 32.8, 163.9,
+                        "files.can_map: imus[" + std::to_string(k) + "] '" + map.imus[k].name + "'"));
+  return {};
 }
 
-// Motor k of the CAN map: its stream, its reply's fields and its commands.
-Status Builder::MitMotor(std::size_t k, const MotorSettings& ms) {
-  const CanMap& map = *m.can;
+// The motor of `joint` (device: its index in the CAN map or the description): its stream, its
+// reply's fields and its commands.
+Status Builder::Motor(const std::string& joint, std::uint32_t device, const DriverLimits& r, const MotorSettings& ms,
+                      const std::string& where) {
   const RobotDescription& body = *m.body;
-  const CanMotor& cm = map.motors[k];
-  const std::string where = "files.can_map: motors[" + std::to_string(k) + "] '" + cm.joint + "'";
-  const auto it = std::find(body.joint_names.begin(), body.joint_names.end(), cm.joint);
+  const auto it = std::find(body.joint_names.begin(), body.joint_names.end(), joint);
   if (it == body.joint_names.end()) return f.Fail(where, "is not a joint of " + body.urdf_path);
   const auto j = static_cast<std::size_t>(it - body.joint_names.begin());
   const UrdfJoint& uj = body.joint_at(j);
-  const MitRange& r = map.range_of(cm);
   const double tau = std::min({uj.effort_nm, r.t_max, -r.t_min});
-  const double v = std::min({uj.velocity_rad_s, r.v_max, -r.v_min});
+  const double v = std::min(uj.velocity_rad_s, r.v_max);
   const bool velocity = body.velocity_commanded(j);
   if (velocity && r.kp_min > 0)
-    return f.Fail(where, "actuator '" + map.actuators[cm.actuator].name + "' has kp_min " + YamlFields::Num(r.kp_min) +
-                             ": velocity-commanded joint '" + cm.joint + "' needs kp 0 exactly");
-  if (uj.continuous()) {
+    return f.Fail(where, "actuator '" + r.name + "' has kp_min " + YamlFields::Num(r.kp_min) +
+                             ": velocity-commanded joint '" + joint + "' needs kp 0 exactly");
+  if (uj.continuous() && r.mit) {
     // The multi-turn angle is unwrapped from one reply to the next: the joint must turn less than
     // half the MIT position range between two replies the supervisor still accepts.
     const double gap_s = (ms.proto.stale_after.lost + 1) * ms.proto.period_s, turn = gap_s * ms.factor * v;
     if (!(turn < 0.5 * (r.p_max - r.p_min)))
       return f.Fail("motors.stale_after.lost",
                     YamlFields::Num(ms.proto.stale_after.lost) + " periods without a reply let continuous joint '" +
-                        cm.joint + "' turn up to " + YamlFields::Num(turn) + " rad (" + YamlFields::Num(ms.factor) +
+                        joint + "' turn up to " + YamlFields::Num(turn) + " rad (" + YamlFields::Num(ms.factor) +
                         " x " + YamlFields::Num(v) + " rad/s for " + YamlFields::Num(gap_s) +
                         " s) between two replies, not less than half its MIT position range [" +
                         YamlFields::Num(r.p_min) + ", " + YamlFields::Num(r.p_max) +
                         "]: its multi-turn angle could not be unwrapped");
   }
   StreamSpec s = ms.proto;
-  s.name = cm.joint;
-  s.device = static_cast<std::uint32_t>(k);
+  s.name = joint;
+  s.device = device;
   PBPPO_TRY(StartStream(std::move(s), where));
   MotorSpec mo;
-  mo.joint = cm.joint;
+  mo.joint = joint;
   mo.stream = static_cast<std::uint32_t>(m.streams.size() - 1);
   mo.control = body.control[j];
   mo.continuous = uj.continuous();
@@ -125,15 +193,18 @@ Status Builder::MitMotor(std::size_t k, const MotorSettings& ms) {
   mo.policy_kd = velocity ? -1 : ms.policy_kd;
   mo.q_field = static_cast<std::uint32_t>(m.fields.size());
   // A continuous joint has no position bound: its field is only checked for being finite.
-  PBPPO_TRY(AddField("q_" + cm.joint, uj.lower_rad - ms.margin, uj.upper_rad + ms.margin, where));
+  PBPPO_TRY(AddField("q_" + joint, uj.lower_rad - ms.margin, uj.upper_rad + ms.margin, where));
   mo.dq_field = mo.q_field + 1;
-  PBPPO_TRY(AddField("dq_" + cm.joint, -ms.factor * v, ms.factor * v, where));
+  PBPPO_TRY(AddField("dq_" + joint, -ms.factor * v, ms.factor * v, where));
   mo.tau_field = mo.q_field + 2;
-  PBPPO_TRY(AddField("tau_" + cm.joint, std::min(r.t_min, -tau), std::max(r.t_max, tau), where));
+  // An MIT reply cannot leave its range; another driver's estimate is bounded by the effort limit.
+  const double tau_lo = r.mit ? std::min(r.t_min, -tau) : -ms.torque_factor * tau;
+  const double tau_hi = r.mit ? std::max(r.t_max, tau) : ms.torque_factor * tau;
+  PBPPO_TRY(AddField("tau_" + joint, tau_lo, tau_hi, where));
   const auto motor = static_cast<std::int32_t>(m.motors.size());
   auto command = [&](const char* prefix, double lo, double hi, double neutral, safety::StopKind stop, double stop_value,
                      std::uint32_t* index) {
-    return MotorCommand({prefix + cm.joint, lo, hi, neutral, stop, stop_value, motor,
+    return MotorCommand({prefix + joint, lo, hi, neutral, stop, stop_value, motor,
                          stop == safety::StopKind::kHoldInput ? static_cast<std::int32_t>(mo.q_field) : -1},
                         where, index);
   };
@@ -173,28 +244,17 @@ Status Builder::MotorCommand(const MotorCommandSpec& c, const std::string& where
   return AddCommand(std::move(s), where);
 }
 
-// The CAN map's IMUs: a stream each, its quaternion, gyro and acceleration fields.
-Status Builder::CanImus(const YAML::Node& root, StreamSpec proto) {
-  const CanMap& map = *m.can;
-  if (map.imus.empty()) return {};
-  YAML::Node imus;
-  PBPPO_TRY(f.Map(root, "imus", "", &imus));
-  PBPPO_TRY(f.Keys(imus, "imus", {"stale_after", "invalid_safe_stop"}));
-  proto.kind = StreamKind::kImu;
-  PBPPO_TRY(ReadStale(imus, "imus", &proto.stale_after));
-  PBPPO_TRY(f.Count(imus, "invalid_safe_stop", "imus", 1, 1000000, &proto.invalid_safe_stop));
-  for (std::size_t k = 0; k < map.imus.size(); ++k) {
-    const std::string& n = map.imus[k].name;
-    const std::string where = "files.can_map: imus[" + std::to_string(k) + "] '" + n + "'";
-    StreamSpec s = proto;
-    s.name = n;
-    s.device = static_cast<std::uint32_t>(k);
-    PBPPO_TRY(StartStream(std::move(s), where));
-    // The codecs' ranges: a quaternion component within 1, 32.8 rad/s, 163.8 m/s^2.
-    for (const char* q : {"_qw", "_qx", "_qy", "_qz"}) PBPPO_TRY(AddField(n + q, -1.001, 1.001, where));
-    for (const char* g : {"_gyro_x", "_gyro_y", "_gyro_z"}) PBPPO_TRY(AddField(n + g, -32.8, 32.8, where));
-    for (const char* a : {"_accel_x", "_accel_y", "_accel_z"}) PBPPO_TRY(AddField(n + a, -163.9, 163.9, where));
-  }
+// An IMU's stream: its quaternion, gyro (rad/s) and acceleration (m/s^2) fields, each component
+// within 1.001, `gyro` and `accel`.
+Status Builder::ImuStream(const std::string& n, std::uint32_t device, const StreamSpec& proto, double gyro,
+                          double accel, const std::string& where) {
+  StreamSpec s = proto;
+  s.name = n;
+  s.device = device;
+  PBPPO_TRY(StartStream(std::move(s), where));
+  for (const char* q : {"_qw", "_qx", "_qy", "_qz"}) PBPPO_TRY(AddField(n + q, -1.001, 1.001, where));
+  for (const char* g : {"_gyro_x", "_gyro_y", "_gyro_z"}) PBPPO_TRY(AddField(n + g, -gyro, gyro, where));
+  for (const char* a : {"_accel_x", "_accel_y", "_accel_z"}) PBPPO_TRY(AddField(n + a, -accel, accel, where));
   return {};
 }
 

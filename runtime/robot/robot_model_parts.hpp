@@ -9,11 +9,21 @@
 
 namespace pbppo::robot::detail {
 
-// The motors section's settings every motor of the CAN map shares.
+// The motors section's settings every motor shares.
 struct MotorSettings {
   StreamSpec proto;  // its stream: transport, period, staleness, invalid samples
   double margin = 0, factor = 0;
+  double torque_factor = 1.5;  // motors without a CAN map: a reported torque beyond this x the effort limit is a fault
   double policy_kp = -1, policy_kd = -1;
+};
+
+// What a motor's driver accepts besides the joint's own limits (an MIT range; a motor without a
+// CAN map: the robot file's gain limits, nothing else).
+struct DriverLimits {
+  double p_min = -HUGE_VAL, p_max = HUGE_VAL, v_max = HUGE_VAL, t_min = -HUGE_VAL, t_max = HUGE_VAL;
+  double kp_min = 0, kp_max = 0, kd_min = 0, kd_max = 0;
+  bool mit = false;  // an MIT range (its torque bounds the reported torque; continuous joints unwrap in it)
+  std::string name;  // for errors: the actuator
 };
 
 // One command of a motor: its limits, its neutral value and what safe-stop sends.
@@ -34,8 +44,10 @@ struct Builder {
   Status AddCommand(CommandSpec c, const std::string& where);
   // A stream's stale_after: {degraded, safe_stop, lost} (sample periods, increasing).
   Status ReadStale(const YAML::Node& parent, const std::string& where, StaleLimits* out) const;
-  // Streams, fields, commands and motors of the CAN map's MIT motors and IMUs (the motors and imus sections).
-  Status CanDevices(const YAML::Node& root);
+  // Streams, fields, commands and motors of the CAN map's MIT motors and IMUs, or of the
+  // description's joints and the imus section's IMUs on another transport (the motors and imus
+  // sections).
+  Status Devices(const YAML::Node& root);
   // The signals section.
   Status Signals(const YAML::Node& root);
   // The transports section: names, kinds and settings (before the streams that name them).
@@ -49,11 +61,18 @@ struct Builder {
  private:
   Status SignalFields(SignalSpec::Op op, const std::string& arg, const std::string& where,
                       std::vector<std::uint32_t>* out);
-  Status MitMotor(std::size_t k, const MotorSettings& settings);
+  Status MotorSection(const YAML::Node& root, MotorSettings* ms, YAML::Node* motors);
+  Status Motor(const std::string& joint, std::uint32_t device, const DriverLimits& limits,
+               const MotorSettings& settings, const std::string& where);
+  Status ImuStream(const std::string& name, std::uint32_t device, const StreamSpec& proto, double gyro, double accel,
+                   const std::string& where);
   Status MotorCommand(const MotorCommandSpec& command, const std::string& where, std::uint32_t* index);
   Status CanImus(const YAML::Node& root, StreamSpec proto);
+  // Entries with "{joint}" or "{motor}" in the key or the value, once per motor; others as they are.
+  std::vector<std::pair<std::string, std::string>> PerMotor(const YAML::Node& map) const;
   Status InMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, DdsMessageSpec* out);
   Status OutMessage(const YAML::Node& n, const std::string& where, DdsMessageSpec* out);
+  Status Checksum(const YAML::Node& n, const std::string& where, DdsMessageSpec* out);
   Status DdsMessage(const YAML::Node& n, const std::string& where, std::uint32_t transport, const IdlFileReader& read,
                     const std::string& dir);
   // A value of an outgoing (status: a status) message's leaf: terms joined by " + ".

@@ -30,6 +30,19 @@ int CauseIndex(const std::string& name) {
   return -1;
 }
 
+int MotorIndex(const RobotModel& m, const std::string& joint) {
+  for (std::size_t k = 0; k < m.motors.size(); ++k)
+    if (m.motors[k].joint == joint) return static_cast<int>(k);
+  return -1;
+}
+
+// Every "{key}" in `s` replaced by `value`.
+std::string Replace(std::string s, const std::string& key, const std::string& value) {
+  for (std::size_t at = s.find(key); at != std::string::npos; at = s.find(key, at + value.size()))
+    s.replace(at, key.size(), value);
+  return s;
+}
+
 std::string Trim(const std::string& s) {
   const std::size_t a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
   return a == std::string::npos ? "" : s.substr(a, b - a + 1);
@@ -105,11 +118,14 @@ Result<std::vector<ValueTerm>> Builder::Value(const std::string& text, bool stat
       v.kind = Kind::kSamples;
     } else if (head == "count" && (index = CauseIndex(name)) >= 0) {
       v.kind = Kind::kCount;
+    } else if (head == "motor" && !status && (index = MotorIndex(m, name)) >= 0) {
+      v.kind = Kind::kMotorOn;
     } else {
       return f.Fail(where, "'" + term +
                                "' is not a value (a number, tick, mode, clock_ns, sequence, command.<name>, "
-                               "field.<name>, samples.<stream>; in status messages also phase, cause, "
-                               "count.<cause>, deadline_misses, tick_median_us, tick_max_us)");
+                               "field.<name>, samples.<stream>; in out messages also motor.<joint>; in status "
+                               "messages also phase, cause, count.<cause>, deadline_misses, tick_median_us, "
+                               "tick_max_us)");
     }
     const bool status_only = v.kind == Kind::kPhase || v.kind == Kind::kCause || v.kind == Kind::kCount ||
                              v.kind == Kind::kDeadlineMisses || v.kind == Kind::kTickMedianUs ||
@@ -124,15 +140,63 @@ Result<std::vector<ValueTerm>> Builder::Value(const std::string& text, bool stat
   return terms;
 }
 
+std::vector<std::pair<std::string, std::string>> Builder::PerMotor(const YAML::Node& map) const {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>(), value = kv.second.IsScalar() ? kv.second.as<std::string>() : "";
+    const auto per_motor = [](const std::string& t) {
+      return t.find("{joint}") != std::string::npos || t.find("{motor}") != std::string::npos;
+    };
+    if (!per_motor(key) && !per_motor(value)) {
+      out.emplace_back(key, value);
+      continue;
+    }
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const auto expand = [&](const std::string& t) {
+        return Replace(Replace(t, "{joint}", m.motors[k].joint), "{motor}", std::to_string(k));
+      };
+      out.emplace_back(expand(key), expand(value));
+    }
+  }
+  return out;
+}
+
 Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32_t transport, DdsMessageSpec* out) {
-  std::string stream;
-  PBPPO_TRY(f.Text(n, "stream", w, &stream, Rule::kToken));
-  const int s = m.StreamIndex(stream);
-  if (s < 0) return f.Fail(w + ".stream", "'" + stream + "' is not a stream of the robot");
-  const StreamSpec& spec = m.streams[static_cast<std::size_t>(s)];
-  if (spec.transport != m.transports[transport].name)
-    return f.Fail(w + ".stream", "stream '" + stream + "' is delivered by transport '" + spec.transport + "'");
-  out->stream = static_cast<std::uint32_t>(s);
+  // stream: a name, or a list of names ("motors": every motor's stream, in the robot's order).
+  std::vector<std::string> names;
+  if (!n["stream"]) return f.Fail(w, "missing field 'stream'");
+  if (n["stream"].IsSequence()) {
+    for (const YAML::Node& e : n["stream"]) {
+      if (!e.IsScalar()) return f.Fail(w + ".stream", "expected stream names, got " + YamlFields::Quote(e));
+      names.push_back(e.as<std::string>());
+    }
+  } else {
+    std::string one;
+    PBPPO_TRY(f.Text(n, "stream", w, &one, Rule::kToken));
+    names.push_back(one);
+  }
+  if (names.empty()) return f.Fail(w + ".stream", "names no stream");
+  for (const std::string& name : names) {
+    std::vector<std::uint32_t> add;
+    if (name == "motors" && m.StreamIndex(name) < 0) {
+      if (m.motors.empty()) return f.Fail(w + ".stream", "'motors': the robot has no motors");
+      for (const MotorSpec& mo : m.motors) add.push_back(mo.stream);
+    } else {
+      const int s = m.StreamIndex(name);
+      if (s < 0) return f.Fail(w + ".stream", "'" + name + "' is not a stream of the robot");
+      add.push_back(static_cast<std::uint32_t>(s));
+    }
+    for (const std::uint32_t s : add) {
+      const StreamSpec& spec = m.streams[s];
+      if (spec.transport != m.transports[transport].name)
+        return f.Fail(w + ".stream", "stream '" + spec.name + "' is delivered by transport '" + spec.transport + "'");
+      if (std::find(out->streams.begin(), out->streams.end(), s) != out->streams.end())
+        return f.Fail(w + ".stream", "stream '" + spec.name + "' is named twice");
+      out->streams.push_back(s);
+    }
+  }
+  out->stream = out->streams.front();
+  const std::string stream = names.size() == 1 ? names.front() : "the message's streams";
   PBPPO_TRY(f.OptionalNumber(n, "lost_after_s", w, 0.0, 3600.0, &out->lost_after_s));
   std::string durability = "transient_local";
   PBPPO_TRY(f.OptionalText(n, "durability", w, &durability, Rule::kToken));
@@ -140,21 +204,38 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
     return f.Fail(w + ".durability", "'" + durability + "' is not transient_local or volatile");
   out->transient_local = durability == "transient_local";
   const IdlMessage& type = out->type;
-  std::vector<int> leaf_of(spec.field_count, -1);  // per field of the stream
+  // The message's fields, stream by stream; the leaf that fills each.
+  std::vector<std::uint32_t> field_list;
+  for (const std::uint32_t s : out->streams)
+    for (std::uint32_t k = 0; k < m.streams[s].field_count; ++k) field_list.push_back(m.streams[s].first_field + k);
+  std::vector<int> leaf_of(field_list.size(), -1);
+  const auto slot_of = [&](int fi) -> int {
+    const auto at = std::find(field_list.begin(), field_list.end(), static_cast<std::uint32_t>(fi));
+    return at == field_list.end() ? -1 : static_cast<int>(at - field_list.begin());
+  };
+  // The checksum's field is filled by the checksum, not by a leaf.
+  PBPPO_TRY(Checksum(n, w, out));
+  if (out->checksum.present && out->checksum.field >= 0) {
+    const int slot = slot_of(out->checksum.field);
+    if (slot < 0)
+      return f.Fail(w + ".checksum.field", "'" + m.fields[static_cast<std::size_t>(out->checksum.field)].name +
+                                               "' is not a field of " + stream);
+    leaf_of[static_cast<std::size_t>(slot)] = static_cast<int>(out->checksum.leaf);
+  }
   auto bind = [&](const std::string& field, const std::string& leaf, const std::string& fw) -> Status {
     const int fi = m.FieldIndex(field), li = type.LeafIndex(leaf);
-    if (fi < 0 || m.fields[static_cast<std::size_t>(fi)].stream != out->stream)
-      return f.Fail(fw, "'" + field + "' is not a field of stream '" + stream + "'");
+    const int slot = fi < 0 ? -1 : slot_of(fi);
+    if (slot < 0)
+      return f.Fail(fw,
+                    "'" + field + "' is not a field of " + (names.size() == 1 ? "stream '" + stream + "'" : stream));
     if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
-    int& slot = leaf_of[static_cast<std::size_t>(fi) - spec.first_field];
-    if (slot >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
-    slot = li;
+    if (leaf_of[static_cast<std::size_t>(slot)] >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
+    leaf_of[static_cast<std::size_t>(slot)] = li;
     return {};
   };
   if (const YAML::Node map = n["fields"]) {
     if (!map.IsMap()) return f.Fail(w + ".fields", "expected a mapping of fields to members");
-    for (const auto& kv : map) {
-      const std::string field = kv.first.as<std::string>(), leaf = kv.second.as<std::string>();
+    for (const auto& [field, leaf] : PerMotor(map)) {
       const std::string fw = w + ".fields." + field;
       if (field.find("{i}") == std::string::npos) {
         PBPPO_TRY(bind(field, leaf, fw));
@@ -166,13 +247,15 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
       if (i == 0) return f.Fail(fw, "no field matches '" + field + "'");
     }
   }
-  for (std::uint32_t k = 0; k < spec.field_count; ++k) {
-    const std::string& name = m.fields[spec.first_field + k].name;
-    if (leaf_of[k] < 0) leaf_of[k] = type.LeafIndex(name);
+  for (std::size_t k = 0; k < field_list.size(); ++k) {
+    const FieldSpec& field = m.fields[field_list[k]];
+    if (leaf_of[k] < 0) leaf_of[k] = type.LeafIndex(field.name);
     if (leaf_of[k] < 0)
-      return f.Fail(w, "field '" + name + "' of stream '" + stream + "' is filled by no member of " + type.type_name +
-                           " (name it under fields)");
-    out->fields.push_back({spec.first_field + k, static_cast<std::uint32_t>(leaf_of[k])});
+      return f.Fail(w, "field '" + field.name + "' of stream '" + m.streams[field.stream].name +
+                           "' is filled by no member of " + type.type_name + " (name it under fields)");
+    // The checksum's field is set by the transport, not decoded from a leaf.
+    if (static_cast<std::int32_t>(field_list[k]) == out->checksum.field) continue;
+    out->fields.push_back({field_list[k], static_cast<std::uint32_t>(leaf_of[k])});
   }
   if (const YAML::Node map = n["peer"]) {
     if (!map.IsMap()) return f.Fail(w + ".peer", "expected a mapping of members to clock_ns or sequence");
@@ -192,13 +275,18 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
 Status Builder::OutMessage(const YAML::Node& n, const std::string& w, DdsMessageSpec* out) {
   YAML::Node map;
   PBPPO_TRY(f.Map(n, "values", w, &map));
-  for (const auto& kv : map) {
-    const std::string leaf = kv.first.as<std::string>();
+  for (const auto& kv : map)
+    if (!kv.second.IsScalar())
+      return f.Fail(w + ".values." + kv.first.as<std::string>(),
+                    "expected a value, got " + YamlFields::Quote(kv.second));
+  PBPPO_TRY(Checksum(n, w, out));
+  for (const auto& [leaf, value] : PerMotor(map)) {
     const std::string vw = w + ".values." + leaf;
     const int li = out->type.LeafIndex(leaf);
     if (li < 0) return f.Fail(vw, "'" + leaf + "' is not a member of " + out->type.type_name);
-    if (!kv.second.IsScalar()) return f.Fail(vw, "expected a value, got " + YamlFields::Quote(kv.second));
-    auto terms = Value(kv.second.as<std::string>(), out->direction == MessageDirection::kStatus, vw);
+    if (out->checksum.present && static_cast<std::uint32_t>(li) == out->checksum.leaf)
+      return f.Fail(vw, "'" + leaf + "' carries the checksum");
+    auto terms = Value(value, out->direction == MessageDirection::kStatus, vw);
     if (!terms) return std::move(terms).error();
     for (const LeafValue& v : out->values)
       if (v.leaf == static_cast<std::uint32_t>(li)) return f.Fail(vw, "'" + leaf + "' is given twice");
@@ -207,10 +295,48 @@ Status Builder::OutMessage(const YAML::Node& n, const std::string& w, DdsMessage
   return {};
 }
 
+Status Builder::Checksum(const YAML::Node& n, const std::string& w, DdsMessageSpec* out) {
+  if (!n["checksum"]) return {};
+  const std::string cw = w + ".checksum";
+  YAML::Node c;
+  PBPPO_TRY(f.Map(n, "checksum", w, &c));
+  const bool in = out->direction == MessageDirection::kIn;
+  if (in)
+    PBPPO_TRY(f.Keys(c, cw, {"leaf", "field", "algorithm"}));
+  else
+    PBPPO_TRY(f.Keys(c, cw, {"leaf", "algorithm"}));
+  std::string leaf, algorithm = "crc32_mpeg2_words", field;
+  PBPPO_TRY(f.Text(c, "leaf", cw, &leaf, Rule::kToken));
+  PBPPO_TRY(f.OptionalText(c, "algorithm", cw, &algorithm, Rule::kToken));
+  if (algorithm != "crc32_mpeg2_words")
+    return f.Fail(cw + ".algorithm", "'" + algorithm + "' is not crc32_mpeg2_words");
+  const IdlMessage& type = out->type;
+  const int li = type.LeafIndex(leaf);
+  if (li < 0) return f.Fail(cw + ".leaf", "'" + leaf + "' is not a member of " + type.type_name);
+  const IdlLeaf& l = type.leaves[static_cast<std::size_t>(li)];
+  if (l.type != IdlScalar::kUint32 || l.c_offset + 4 != type.c_size || type.c_size % 4 != 0)
+    return f.Fail(cw + ".leaf", "'" + leaf + "' is not a uint32 in the last word of " + type.type_name + " (a " +
+                                    ToString(l.type) + " at byte " + std::to_string(l.c_offset) + " of " +
+                                    std::to_string(type.c_size) + ")");
+  out->checksum.present = true;
+  out->checksum.leaf = static_cast<std::uint32_t>(li);
+  if (in) {
+    PBPPO_TRY(f.Text(c, "field", cw, &field, Rule::kToken));
+    out->checksum.field = m.FieldIndex(field);
+    if (out->checksum.field < 0) return f.Fail(cw + ".field", "'" + field + "' is not a field of the robot");
+    const FieldSpec& fs = m.fields[static_cast<std::size_t>(out->checksum.field)];
+    if (!(fs.min > 0 && fs.max < 2))
+      return f.Fail(cw + ".field", "'" + field + "' must accept 1 and refuse 0 (min 1, max 1), not [" +
+                                       YamlFields::Num(fs.min) + ", " + YamlFields::Num(fs.max) + "]");
+  }
+  return {};
+}
+
 Status Builder::DdsMessage(const YAML::Node& n, const std::string& w, std::uint32_t t, const IdlFileReader& read,
                            const std::string& dir) {
-  PBPPO_TRY(f.Keys(
-      n, w, {"topic", "idl", "type", "direction", "stream", "fields", "peer", "lost_after_s", "durability", "values"}));
+  PBPPO_TRY(f.Keys(n, w,
+                   {"topic", "idl", "type", "direction", "stream", "fields", "peer", "lost_after_s", "durability",
+                    "values", "checksum"}));
   DdsMessageSpec msg;
   std::string idl, type, direction;
   PBPPO_TRY(f.Text(n, "topic", w, &msg.topic, Rule::kToken));
@@ -256,7 +382,7 @@ Status Builder::DdsMessages(const YAML::Node& root, const IdlFileReader& read, c
     if (t < 0 || m.transports[static_cast<std::size_t>(t)].kind != "dds") continue;
     int carriers = 0;
     for (const DdsMessageSpec& msg : m.transports[static_cast<std::size_t>(t)].dds.messages)
-      carriers += msg.direction == MessageDirection::kIn && msg.stream == s ? 1 : 0;
+      carriers += msg.direction == MessageDirection::kIn && std::count(msg.streams.begin(), msg.streams.end(), s) > 0;
     if (carriers != 1)
       return f.Fail("streams", "stream '" + m.streams[s].name + "' arrives in " + std::to_string(carriers) +
                                    " messages of transport '" + m.streams[s].transport + "' (one expected)");

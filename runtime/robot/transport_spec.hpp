@@ -17,24 +17,40 @@
 //           type: pbppo_idl::auv::SensorState # the struct (default: the file's last)
 //           direction: in                     # in: the robot reads it; out: writes it every tick;
 //                                             # status: writes it from the status thread
-//           stream: sensor                    # in: the stream whose fields its leaves fill
+//           stream: sensor                    # in: the stream whose fields its leaves fill, or a
+//                                             # list of them ("motors": every motor's stream)
 //           fields: {"sonar_{i}_m": "sonar_m[{i}]"}  # field: leaf; a field named like a leaf
-//                                             # needs no entry; every field of the stream is filled
+//                                             # needs no entry; every field of the streams is filled;
+//                                             # "{joint}" and "{motor}" repeat an entry per motor
+//                                             # (its joint's name, its index in the robot's order)
 //           peer: {stamp_ns: clock_ns}        # in: what the other side writes in leaves no field reads
 //           lost_after_s: 2.0                 # in: the link is lost when its writer is gone or silent
 //           durability: transient_local       # in: or volatile (matches ROS 2's default publishers)
+//           checksum: {leaf: crc, field: crc_ok}  # in: the sample's checksum (below); field: 1 when
+//                                             # it matches, 0 when not (then no other field is taken)
 //         - topic: command
 //           idl: idl/AuvCommand.idl
 //           direction: out
 //           values: {tick: tick, answers: field.tick, surge_speed_mps: command.surge_speed, mode: mode}
+//           checksum: {leaf: crc}             # out: computed into the leaf before each write
 //
 // Values a leaf of an outgoing or status message takes (several joined by " + " are added):
 //   a number; tick; mode (0 nominal ... 3 e-stop); clock_ns (CLOCK_MONOTONIC); sequence (1, 2 ...
 //   per message written); command.<name>; field.<name>; samples.<stream> (samples taken);
 //   status messages also: phase (runtime/loop's phase index), cause (1 << the latched cause, 0:
 //   none), count.<cause> (the supervisor's count of a cause: stale_sample, invalid_sample, ...),
-//   deadline_misses, tick_median_us, tick_max_us.
+//   deadline_misses, tick_median_us, tick_max_us; out messages also motor.<joint> (1 while the loop
+//   switches the motor on or commands it, 0 while it is off). A motor's commands (command.q_des_<joint>
+//   ...) are sent as 0 while the loop does not command the motor (before arming, at arming, after
+//   shutdown): a message that carries motors holds them passive then.
 // Leaves of an outgoing message that no value names are sent as 0.
+//
+// Checksums (`checksum.algorithm`, default crc32_mpeg2_words): CRC-32/MPEG-2 (polynomial
+// 0x04C11DB7, initial 0xFFFFFFFF, no reflection, no final XOR) over the message laid out as a
+// little-endian C struct with natural alignment (IdlLeaf::c_offset; padding zero), taken as 32-bit
+// words, each fed most significant bit first, every word but the last; the last word is the
+// checksum leaf itself (a uint32 at the end of the struct), as some robots' low-level messages
+// carry it.
 #pragma once
 
 #include <cstdint>
@@ -62,6 +78,8 @@ struct ValueTerm {
     kDeadlineMisses,
     kTickMedianUs,
     kTickMaxUs,
+    // Out messages only:
+    kMotorOn,  // index: the motor
   };
   Kind kind = Kind::kConstant;
   std::uint32_t index = 0;
@@ -91,13 +109,22 @@ struct PeerLeaf {
 enum class MessageDirection : std::uint8_t { kIn, kOut, kStatus };
 const char* ToString(MessageDirection direction) noexcept;
 
+// A message's checksum (crc32_mpeg2_words, the only algorithm so far).
+struct ChecksumSpec {
+  bool present = false;
+  std::uint32_t leaf = 0;   // the uint32 leaf that carries it, the C struct's last word
+  std::int32_t field = -1;  // in: the field that takes 1 (match) or 0 (mismatch)
+};
+
 struct DdsMessageSpec {
   std::string topic;  // after the transport's prefix
   MessageDirection direction = MessageDirection::kIn;
   IdlMessage type;
   std::string type_stem;  // the IDL file's name without .idl (the ROS 2 message name)
-  // kIn:
+  ChecksumSpec checksum;
+  // kIn: the streams its leaves fill (the first as `stream`).
   std::uint32_t stream = 0;
+  std::vector<std::uint32_t> streams;
   std::vector<FieldLeaf> fields;
   std::vector<PeerLeaf> peer;
   double lost_after_s = 0;  // > 0: the link's health follows this message

@@ -12,13 +12,21 @@
 namespace pbppo::test {
 
 // A fresh copy of a shipped robot's folder (or of `folder`, relative to the source tree) to edit:
-// <scratch dir `scratch`>/<name>, with the robots' shared files beside it (models/dds_profile.xml).
+// <scratch dir `scratch`>/<name>, with the robots' shared files beside it (models/dds_profile.xml,
+// the quadruped's operator messages).
 // Returns the copy's folder.
 inline std::string CopyRobotFolder(const std::string& name, const std::string& scratch, std::string folder = "") {
   if (folder.empty()) folder = "models/" + name;
   const std::string root = ScratchDir(scratch), dir = root + "/" + name;
   std::filesystem::copy(SourcePath(folder), dir, std::filesystem::copy_options::recursive);
   std::filesystem::copy_file(SourcePath("models/dds_profile.xml"), root + "/dds_profile.xml");
+  // The operator's message files another robot names from beside it (../quadruped/idl).
+  if (name != "quadruped") {
+    std::filesystem::create_directories(root + "/quadruped/idl");
+    for (const auto& e : std::filesystem::directory_iterator(SourcePath("models/quadruped/idl")))
+      std::filesystem::copy_file(e.path(), root + "/quadruped/idl/" + e.path().filename().string(),
+                                 std::filesystem::copy_options::overwrite_existing);
+  }
   return dir;
 }
 
@@ -33,6 +41,11 @@ inline const robot::RobotModel& LoadShipped(const std::string& name) {
 
 inline const robot::RobotModel& AuvRobot() {
   static const robot::RobotModel& m = LoadShipped("auv");
+  return m;
+}
+
+inline const robot::RobotModel& Go2Robot() {
+  static const robot::RobotModel& m = LoadShipped("go2");
   return m;
 }
 

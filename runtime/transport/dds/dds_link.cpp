@@ -113,6 +113,8 @@ Result<std::unique_ptr<DdsLink>> DdsLink::Open(const robot::RobotModel& model, c
     link->writers_.push_back(std::move(writer));
     link->topics_.push_back(topic);
     link->sequence_.push_back(0);
+    link->checksums_.push_back(m.checksum.present ? std::make_unique<MessageChecksum>(m.type, m.checksum.leaf)
+                                                  : nullptr);
   }
   return link;
 }
@@ -180,11 +182,28 @@ int DdsLink::domain_id() const noexcept {
 void DdsLink::FillFromFields(std::size_t message, std::span<const double> fields, DdsSample* sample) noexcept {
   const robot::DdsMessageSpec& m = spec_->dds.messages[message];
   for (const robot::FieldLeaf& fl : m.fields) sample->Set(fl.leaf, fields[fl.field]);
-  if (m.peer.empty()) return;
-  const std::uint64_t seq = ++sequence_[message];
-  for (const robot::PeerLeaf& p : m.peer)
-    sample->Set(p.leaf, p.kind == robot::PeerLeaf::Kind::kSequence ? static_cast<double>(seq)
-                                                                   : static_cast<double>(MonotonicNs()));
+  if (!m.peer.empty()) {
+    const std::uint64_t seq = ++sequence_[message];
+    for (const robot::PeerLeaf& p : m.peer)
+      sample->Set(p.leaf, p.kind == robot::PeerLeaf::Kind::kSequence ? static_cast<double>(seq)
+                                                                     : static_cast<double>(MonotonicNs()));
+  }
+  Seal(message, sample);
+}
+
+void DdsLink::Seal(std::size_t message, DdsSample* sample) noexcept {
+  MessageChecksum* c = checksums_[message].get();
+  if (c == nullptr) return;
+  sample->Set(spec_->dds.messages[message].checksum.leaf, static_cast<double>(c->Compute(sample->bytes(), false)));
+}
+
+bool DdsLink::ChecksumMatches(std::size_t message, const DdsSample& sample) noexcept {
+  MessageChecksum* c = checksums_[message].get();
+  if (c == nullptr) return true;
+  bool big_endian = false;
+  if (!ReadCdrHeader(sample.bytes(), &big_endian)) return false;
+  return c->Compute(sample.bytes(), big_endian) ==
+         static_cast<std::uint32_t>(sample.Get(spec_->dds.messages[message].checksum.leaf));
 }
 
 int DdsLink::LeafOf(std::size_t message, robot::ValueTerm::Kind kind, std::uint32_t index) const noexcept {

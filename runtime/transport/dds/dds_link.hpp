@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "runtime/robot/robot_model.hpp"
+#include "runtime/transport/dds/checksum.hpp"
 #include "runtime/transport/dds/dds_endpoint.hpp"
 
 namespace pbppo::dds {
@@ -92,9 +93,15 @@ class DdsLink {
   DdsLinkCounters counters() const noexcept;
   int domain_id() const noexcept;
 
-  // kPeer: fills an in message's leaves from the fields of its stream (the robot file's mapping)
-  // and its peer leaves (sequence: 1, 2 ... per call; clock_ns: CLOCK_MONOTONIC).
+  // kPeer: fills an in message's leaves from the fields of its streams (the robot file's mapping)
+  // and its peer leaves (sequence: 1, 2 ... per call; clock_ns: CLOCK_MONOTONIC), then seals it.
   void FillFromFields(std::size_t message, std::span<const double> fields, DdsSample* sample) noexcept;
+  // Writes message i's checksum (robot.yaml checksum) into the sample; nothing without one. A peer
+  // that sets leaves itself seals before it writes.
+  void Seal(std::size_t message, DdsSample* sample) noexcept;
+  // Whether a sample of message i carries its checksum (true without one; false for a sample that
+  // is not plain CDR).
+  bool ChecksumMatches(std::size_t message, const DdsSample& sample) noexcept;
   // The leaf of message i that carries exactly `term` (status and out values: tick, phase,
   // field.<name> ...); -1 when none does.
   int LeafOf(std::size_t message, robot::ValueTerm::Kind kind, std::uint32_t index = 0) const noexcept;
@@ -107,7 +114,8 @@ class DdsLink {
   std::vector<std::unique_ptr<DdsReader>> readers_;
   std::vector<std::unique_ptr<DdsWriter>> writers_;
   std::vector<std::string> topics_;
-  std::vector<std::uint64_t> sequence_;  // kPeer: per in message
+  std::vector<std::uint64_t> sequence_;                      // kPeer: per in message
+  std::vector<std::unique_ptr<MessageChecksum>> checksums_;  // per message, null without one
 };
 
 // A DDS transport's participant options from the robot (its dds_profile document, the

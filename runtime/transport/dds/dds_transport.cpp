@@ -49,16 +49,24 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
     WriteCdrHeader(sample.data());
     if (m.direction == MessageDirection::kIn) {
       const double lost_s = m.lost_after_s > 0 && options.lost_after_s > 0 ? options.lost_after_s : m.lost_after_s;
-      In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, {}};
+      In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, m.streams, {}, {}, -1, 0};
       for (const robot::FieldLeaf& fl : m.fields)
         in.steps.push_back({fl.field, m.type.leaves[fl.leaf].cdr_offset, m.type.leaves[fl.leaf].type});
+      if (m.checksum.present) {
+        in.checksum.emplace(m.type, m.checksum.leaf);
+        in.checksum_field = m.checksum.field;
+        in.checksum_stream = model.fields[static_cast<std::size_t>(m.checksum.field)].stream;
+      }
       t->in_.push_back(std::move(in));
       continue;
     }
-    Out out{i, std::move(sample), 0, {}};
+    Out out{i, std::move(sample), 0, {}, {}};
+    if (m.checksum.present) out.checksum.emplace(m.type, m.checksum.leaf);
     for (const robot::LeafValue& v : m.values) {
       const robot::IdlLeaf& leaf = m.type.leaves[v.leaf];
-      for (const robot::ValueTerm& term : v.terms) out.steps.push_back({term, leaf.cdr_offset, leaf.type, false});
+      for (const robot::ValueTerm& term : v.terms)
+        out.steps.push_back({term, leaf.cdr_offset, leaf.type, false,
+                             term.kind == Kind::kCommand ? model.commands[term.index].motor : -1});
       if (v.terms.empty()) out.steps.push_back({robot::ValueTerm{}, leaf.cdr_offset, leaf.type, false});  // 0
       out.steps.back().last = true;
     }
@@ -82,11 +90,14 @@ template <typename TermValue>
 void DdsTransport::Encode(Out& out, TermValue term) noexcept {
   double sum = 0;
   for (const EncodeStep& s : out.steps) {
-    sum += term(s.term);
+    sum += term(s);
     if (!s.last) continue;
     EncodeScalar(s.type, s.offset, sum, out.sample.data());
     sum = 0;
   }
+  if (out.checksum)
+    EncodeScalar(robot::IdlScalar::kUint32, out.checksum->cdr_offset(), out.checksum->Compute(out.sample.data(), false),
+                 out.sample.data());
 }
 
 void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept {
@@ -98,9 +109,25 @@ void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept 
     bool big_endian = false;
     if (v != 0 && v != in.version && ReadCdrHeader(in.sample.data(), &big_endian)) {
       in.version = v;
-      for (const DecodeStep& s : in.steps)
-        d.fields[s.field] = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
-      d.fresh[in.stream] = 1;
+      bool take = true;
+      if (in.checksum) {
+        // A sample whose checksum does not match is not trusted: its checksum field says 0 (the
+        // sample check then names it) and no other field takes its values.
+        const std::uint32_t sent = static_cast<std::uint32_t>(
+            DecodeScalar(robot::IdlScalar::kUint32, in.checksum->cdr_offset(), in.sample.data(), big_endian));
+        const bool match = in.checksum->Compute(in.sample.data(), big_endian) == sent;
+        d.fields[static_cast<std::size_t>(in.checksum_field)] = match ? 1.0 : 0.0;
+        if (!match) {
+          d.fresh[in.checksum_stream] = 1;
+          checksum_mismatches_.fetch_add(1, std::memory_order_relaxed);
+          take = false;
+        }
+      }
+      if (take) {
+        for (const DecodeStep& s : in.steps)
+          d.fields[s.field] = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
+        for (const std::uint32_t s : in.streams) d.fresh[s] = 1;
+      }
     }
     if (in.lost_after_ns > 0) {
       const std::int64_t last = r.last_receive_ns();
@@ -120,6 +147,10 @@ double DdsTransport::Term(const robot::ValueTerm& t, const robot::RobotData& d, 
   if (const auto v = CommonTerm(t, d.tick, d.mode, sequence)) return *v;
   switch (t.kind) {
     case Kind::kCommand: return d.command[t.index];
+    case Kind::kMotorOn:
+      return d.motors[t.index] == robot::MotorCommand::kEnable || d.motors[t.index] == robot::MotorCommand::kCommand
+                 ? 1.0
+                 : 0.0;
     case Kind::kField: return d.fields[t.index];
     case Kind::kSamples: return static_cast<double>(d.samples[t.index]);
     default: return 0;  // status terms: not in out messages (the robot file's reader refuses them)
@@ -129,7 +160,10 @@ double DdsTransport::Term(const robot::ValueTerm& t, const robot::RobotData& d, 
 void DdsTransport::Write(const robot::RobotModel&, robot::RobotData& d) noexcept {
   for (Out& out : out_) {
     out.sequence += 1;
-    Encode(out, [&](const robot::ValueTerm& t) { return Term(t, d, out.sequence); });
+    Encode(out, [&](const EncodeStep& s) {
+      const bool passive = s.motor >= 0 && d.motors[static_cast<std::size_t>(s.motor)] != robot::MotorCommand::kCommand;
+      return passive ? 0.0 : Term(s.term, d, out.sequence);
+    });
     if (!link_->writer(out.message)->Push(out.sample.data())) send_failures_.fetch_add(1, std::memory_order_relaxed);
   }
   for (std::size_t k = 0; k < snapshot_terms_.size(); ++k)
@@ -144,12 +178,14 @@ Status DdsTransport::Connect(std::int64_t timeout_ns) {
 }
 
 bool DdsTransport::Paces(std::uint32_t stream) const noexcept {
-  return std::any_of(in_.begin(), in_.end(), [&](const In& in) { return in.stream == stream; });
+  return std::any_of(in_.begin(), in_.end(), [&](const In& in) {
+    return std::find(in.streams.begin(), in.streams.end(), stream) != in.streams.end();
+  });
 }
 
 bool DdsTransport::WaitForSample(std::uint32_t stream, std::uint64_t* version, std::int64_t timeout_ns) {
   for (const In& in : in_) {
-    if (in.stream != stream) continue;
+    if (std::find(in.streams.begin(), in.streams.end(), stream) == in.streams.end()) continue;
     DdsReader& r = *link_->reader(in.message);
     if (!r.WaitNewer(*version, timeout_ns)) return false;
     *version = r.version();
@@ -182,7 +218,7 @@ double DdsTransport::StatusTerm(const robot::ValueTerm& t, const robot::Controll
 void DdsTransport::PublishStatus(const robot::ControllerStatus& s) {
   for (Out& out : status_) {
     out.sequence += 1;
-    Encode(out, [&](const robot::ValueTerm& t) { return StatusTerm(t, s, out.sequence); });
+    Encode(out, [&](const EncodeStep& step) { return StatusTerm(step.term, s, out.sequence); });
     (void)link_->writer(out.message)->Write(out.sample.data());  // counted by the writer
   }
 }
@@ -201,7 +237,10 @@ std::string DdsTransport::Summary() const {
                 static_cast<unsigned long long>(c.malformed), static_cast<unsigned long long>(c.written),
                 static_cast<unsigned long long>(c.write_failed),
                 static_cast<unsigned long long>(send_failures_.load(std::memory_order_relaxed)));
-  return line;
+  std::string out = line;
+  if (std::any_of(in_.begin(), in_.end(), [](const In& in) { return in.checksum.has_value(); }))
+    out += ", checksum mismatches " + std::to_string(checksum_mismatches());
+  return out;
 }
 
 }  // namespace pbppo::dds

@@ -16,10 +16,12 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "runtime/robot/robot_data.hpp"
+#include "runtime/transport/dds/checksum.hpp"
 #include "runtime/transport/dds/dds_link.hpp"
 
 namespace pbppo::dds {
@@ -42,6 +44,8 @@ class DdsTransport final : public robot::Transport {
 
   DdsLink& link() noexcept { return *link_; }
   std::uint64_t send_failures() const noexcept { return send_failures_.load(std::memory_order_relaxed); }
+  // Samples of in messages whose checksum did not match (taken as invalid: the checksum's field 0).
+  std::uint64_t checksum_mismatches() const noexcept { return checksum_mismatches_.load(std::memory_order_relaxed); }
 
  private:
   // The messages' mappings flattened at Open, so that a tick reads a few contiguous cache lines
@@ -56,6 +60,7 @@ class DdsTransport final : public robot::Transport {
     std::uint32_t offset = 0;  // the value's leaf
     robot::IdlScalar type = robot::IdlScalar::kDouble;
     bool last = false;
+    std::int32_t motor = -1;  // a motor's command: sent as 0 while the loop does not command the motor
   };
   struct In {
     std::size_t message = 0;
@@ -63,13 +68,18 @@ class DdsTransport final : public robot::Transport {
     std::uint64_t version = 0;
     std::int64_t lost_after_ns = 0;
     std::uint32_t stream = 0;
+    std::vector<std::uint32_t> streams;  // every stream it fills (the first: `stream`)
     std::vector<DecodeStep> steps;
+    std::optional<MessageChecksum> checksum;
+    std::int32_t checksum_field = -1;
+    std::uint32_t checksum_stream = 0;  // the checksum field's: fresh when the checksum does not match
   };
   struct Out {
     std::size_t message = 0;
     std::vector<std::byte> sample;
     std::uint64_t sequence = 0;
     std::vector<EncodeStep> steps;
+    std::optional<MessageChecksum> checksum;
   };
   DdsTransport() = default;
   // Each value of `out` (the sum of its terms; term(t) gives one) encoded into its sample.
@@ -87,6 +97,7 @@ class DdsTransport final : public robot::Transport {
   std::vector<robot::ValueTerm> snapshot_terms_;
   std::unique_ptr<std::atomic<double>[]> snapshot_;
   std::uint64_t malformed_ = 0, dropped_ = 0;
+  std::atomic<std::uint64_t> checksum_mismatches_{0};
   std::atomic<std::uint64_t> send_failures_{0};
   std::string summary_name_;
 };

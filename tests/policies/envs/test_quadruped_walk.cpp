@@ -292,14 +292,14 @@ TEST_CASE("quadruped-walk: bad inputs are refused at start naming the value") {
   // An IO layout whose actions are not the joints in order, or not around the default pose.
   o.models_dir = ModelsWith("walk_order", "io_layout.yaml", "command: q_des_LF_HFE", "command: q_des_LF_KFE");
   CHECK(ErrorOf(o) ==
-        "io_layout.yaml: actions[1] 'LF_HFE': command 'q_des_LF_KFE' is not q_des_LF_HFE (joint 1 of quadruped.yaml's "
+        "io_layout.yaml: actions[1] 'LF_HFE': command 'q_des_LF_KFE' is not q_des_LF_HFE (joint 1 of the description's "
         "joint order)");
   o.models_dir =
       ModelsWith("walk_offset", "io_layout.yaml", "command: q_des_LF_HFE, unit: rad, scale: 0.25, offset: 0.4",
                  "command: q_des_LF_HFE, unit: rad, scale: 0.25, offset: 0.5");
   CHECK(ErrorOf(o) ==
         "io_layout.yaml: actions[1] 'LF_HFE': offset 0.500000 is not the default pose 0.400000 of "
-        "quadruped.yaml");
+        "the description");
   o.models_dir = ModelsWith("walk_signal", "io_layout.yaml", "signal: base_ang_vel_x", "signal: base_lin_vel_x");
   CHECK(ErrorOf(o).find("signal 'base_lin_vel_x' is not provided") != std::string::npos);
   o.models_dir = ModelsWith("walk_yaml", "walk.yaml", "decimation: 4", "decimation: four");

@@ -306,8 +306,8 @@ TEST_CASE("robot model: bad DDS message declarations are refused naming the mess
             .find(m0 + ".idl: AuvSensorState.idl: no struct 'pbppo_idl::auv::Nothing' (known: ") == 0);
   CHECK(err("answers: field.tick", "answers: field.tock") ==
         m1 + ".values.answers: 'field.tock' is not a value (a number, tick, mode, clock_ns, sequence, command.<name>, "
-             "field.<name>, samples.<stream>; in status messages also phase, cause, count.<cause>, deadline_misses, "
-             "tick_median_us, tick_max_us)");
+             "field.<name>, samples.<stream>; in out messages also motor.<joint>; in status messages also phase, "
+             "cause, count.<cause>, deadline_misses, tick_median_us, tick_max_us)");
   CHECK(err("answers: field.tick", "answers: deadline_misses") ==
         m1 + ".values.answers: 'deadline_misses' is the controller's status: only status messages carry it");
   CHECK(err("answers: field.tick", "answer: field.tick") ==
@@ -388,4 +388,94 @@ TEST_CASE("robot model: continuous joints and velocity-commanded motors - bad da
   CHECK(edits.ErrorIn("diffbot.yaml", "  head_pan: 0.3", "  head_pan: 0.3\n  right_wheel: 0") ==
         "diffbot.yaml: default_pose.right_wheel: '0': joint 'right_wheel' is continuous and velocity-commanded: it "
         "takes no position target (it holds zero speed where others hold their default pose)");
+}
+
+TEST_CASE("robot model: the Go2 - motors of the description over DDS, one message fills several streams") {
+  const RobotModel m = Load("models/go2/robot.yaml");
+  CHECK(m.tick_period_s == 0.002);
+  CHECK(m.policy_period_ticks == 10);
+  CHECK_FALSE(m.can.has_value());
+  REQUIRE(m.motors.size() == 12);
+  CHECK(m.motors[0].joint == "FR_hip");
+  CHECK(m.motors[11].joint == "RL_calf");
+  const MotorSpec& calf = m.motors[2];
+  CHECK(m.streams[calf.stream].transport == "lowlevel");
+  CHECK(m.streams[calf.stream].kind == StreamKind::kMotor);
+  CHECK(Command(m, "kp_FR_calf").max == 100.0);
+  CHECK(Command(m, "kd_FR_calf").max == 10.0);
+  const UrdfJoint& uj = m.body->joint_at(2);
+  CHECK(Command(m, "tau_ff_FR_calf").max == uj.effort_nm);
+  CHECK(Command(m, "q_des_FR_calf").min == uj.lower_rad);
+  CHECK(Field(m, "tau_FR_calf").max == doctest::Approx(1.5 * uj.effort_nm));
+  CHECK(Field(m, "q_FR_calf").min == doctest::Approx(uj.lower_rad - 0.2));
+  CHECK(m.streams[static_cast<std::size_t>(m.StreamIndex("imu"))].kind == StreamKind::kImu);
+  CHECK(Field(m, "imu_gyro_x").max == 35.0);
+  // rt/lowstate fills the state stream, every motor's and the IMU's; its CRC's verdict is crc_ok.
+  const TransportSpec& t = m.transports[static_cast<std::size_t>(m.TransportIndex("lowlevel"))];
+  CHECK(t.dds.topic_prefix == "rt/");
+  REQUIRE(t.dds.messages.size() == 2);
+  const DdsMessageSpec& state = t.dds.messages[0];
+  CHECK(state.type.type_name == "unitree_go::msg::dds_::LowState_");
+  CHECK(state.streams.size() == 14);
+  CHECK(state.stream == static_cast<std::uint32_t>(m.StreamIndex("state")));
+  REQUIRE(state.checksum.present);
+  CHECK(state.checksum.field == m.FieldIndex("crc_ok"));
+  CHECK(state.type.leaves[state.checksum.leaf].path == "crc");
+  bool mapped = false;
+  for (const FieldLeaf& fl : state.fields) {
+    CHECK(static_cast<int>(fl.field) != m.FieldIndex("crc_ok"));  // the checksum's field is no leaf's
+    if (m.fields[fl.field].name == "dq_RR_thigh") mapped = state.type.leaves[fl.leaf].path == "motor_state[7].dq";
+  }
+  CHECK(mapped);
+  CHECK(state.fields.size() == m.fields.size() - 3 - 1);  // all but the operator's three and crc_ok
+  // rt/lowcmd: per motor its mode and five commands, and the CRC.
+  const DdsMessageSpec& cmd = t.dds.messages[1];
+  CHECK(cmd.checksum.present);
+  CHECK(cmd.type.leaves[cmd.checksum.leaf].path == "crc");
+  int modes = 0;
+  for (const LeafValue& v : cmd.values)
+    if (v.terms.size() == 1 && v.terms[0].kind == ValueTerm::Kind::kMotorOn) {
+      CHECK(cmd.type.leaves[v.leaf].path == "motor_cmd[" + std::to_string(v.terms[0].index) + "].mode");
+      ++modes;
+    }
+  CHECK(modes == 12);
+  CHECK(cmd.values.size() == 3 + 12 * 6);
+}
+
+TEST_CASE("robot model: motors over DDS, several streams per message, checksums - bad data refused naming it") {
+  const test::RobotFileEdits edits("go2", "robot_model_go2");
+  const std::string& p = edits.path();
+  auto err = [&](const std::string& from, const std::string& to) { return edits.Error(from, to); };
+  const std::string m0 = p + ": transports[0].messages[0]", m1 = p + ": transports[0].messages[1]";
+  CHECK(err("checksum: {leaf: crc, field: crc_ok}", "checksum: {leaf: tick, field: crc_ok}") ==
+        m0 + ".checksum.leaf: 'tick' is not a uint32 in the last word of unitree_go::msg::dds_::LowState_ (a uint32 "
+             "at byte 1100 of 1180)");
+  CHECK(err("checksum: {leaf: crc, field: crc_ok}", "checksum: {leaf: crc, field: tick}") ==
+        m0 + ".checksum.field: 'tick' must accept 1 and refuse 0 (min 1, max 1), not [0, 4.2949673e+09]");
+  CHECK(err("checksum: {leaf: crc, field: crc_ok}", "checksum: {leaf: crc, field: crc_ok, algorithm: crc16}") ==
+        m0 + ".checksum.algorithm: 'crc16' is not crc32_mpeg2_words");
+  CHECK(err("checksum: {leaf: crc, field: crc_ok}", "checksum: {leaf: crcc, field: crc_ok}") ==
+        m0 + ".checksum.leaf: 'crcc' is not a member of unitree_go::msg::dds_::LowState_");
+  CHECK(err("checksum: {leaf: crc}", "checksum: {leaf: crc, field: crc_ok}") == m1 + ".checksum.field: unknown field");
+  CHECK(err("\"q_{joint}\": \"motor_state[{motor}].q\"", "\"q_{joint}\": \"motor_state[{motor}].qq\"") ==
+        m0 + ".fields.q_FR_hip: 'motor_state[0].qq' is not a member of unitree_go::msg::dds_::LowState_");
+  CHECK(err("          \"dq_{joint}\": \"motor_state[{motor}].dq\"\n", "") ==
+        m0 + ": field 'dq_FR_hip' of stream 'FR_hip' is filled by no member of unitree_go::msg::dds_::LowState_ (name "
+             "it under fields)");
+  CHECK(err("stream: [state, motors, imu]", "stream: [state, motors, imu, state]") ==
+        m0 + ".stream: stream 'state' is named twice");
+  CHECK(err("stream: [state, motors, imu]", "stream: [state, motors, imu, velocity_command]") ==
+        m0 + ".stream: stream 'velocity_command' is delivered by transport 'operator'");
+  CHECK(err("stream: [state, motors, imu]", "stream: [state, imu]") ==
+        m0 + ".fields.q_FR_hip: 'q_FR_hip' is not a field of the message's streams");
+  CHECK(err("\"motor_cmd[{motor}].mode\": \"motor.{joint}\"", "\"motor_cmd[{motor}].mode\": \"motor.knee\"") ==
+        m1 + ".values.motor_cmd[0].mode: 'motor.knee' is not a value (a number, tick, mode, clock_ns, sequence, "
+             "command.<name>, field.<name>, samples.<stream>; in out messages also motor.<joint>; in status messages "
+             "also phase, cause, count.<cause>, deadline_misses, tick_median_us, tick_max_us)");
+  CHECK(err("        \"head[0]\": 254", "        crc: 254") == m1 + ".values.crc: 'crc' carries the checksum");
+  CHECK(err("  transport: lowlevel\n  stale_after", "  transport: operators\n  stale_after") ==
+        p + ": motors.transport: 'operators' is not a transport of the robot");
+  CHECK(err("gain_limits: {kp_max: 100.0, kd_max: 10.0}", "gain_limits: {kp_max: 10.0, kd_max: 10.0}")
+            .find("command 'kp_FR_hip': its neutral value") != std::string::npos);
+  CHECK(err("  names: [imu]", "  names: [imu, imu]") == p + ": imus.names[1]: stream 'imu' appears twice");
 }

@@ -354,3 +354,95 @@ TEST_CASE("dds transport: the tick's calls (Read, Write) do not allocate in the 
     return c.written == 2000 - p.controller->send_failures();
   }));
 }
+
+TEST_CASE("dds transport: the Go2's LowState_ fills the state, motor and IMU streams, and its CRC is checked") {
+  const robot::RobotModel& m = test::Go2Robot();
+  const int domain = test::TestDomain(9);
+  auto c = DdsTransport::Open(m, "lowlevel", Options(domain));
+  REQUIRE_MESSAGE(c.ok(), c.error().message);
+  auto robot_side = DdsLink::Open(m, "lowlevel", DdsSide::kPeer, Options(domain));
+  REQUIRE_MESSAGE(robot_side.ok(), robot_side.error().message);
+  DdsTransport& controller = **c;
+  DdsLink& go2 = **robot_side;
+  REQUIRE(controller.Connect(10 * kSecond).ok());
+  REQUIRE(go2.WaitForPeer(10 * kSecond));
+  robot::RobotData d = robot::MakeRobotData(m);
+  const std::size_t si = Message(go2, "lowstate"), ci = Message(go2, "lowcmd");
+  const robot::DdsMessageSpec& spec = go2.message(si);
+  std::vector<double> fields(m.fields.size(), 0.0);
+  for (std::size_t k = 0; k < m.motors.size(); ++k) {
+    fields[m.motors[k].q_field] = 0.125 * static_cast<double>(k) - 0.5;
+    fields[m.motors[k].dq_field] = 0.5;
+    fields[m.motors[k].tau_field] = -1.25;
+  }
+  fields[FieldOf(m, "imu_qw")] = 1.0;
+  fields[FieldOf(m, "tick")] = 41;
+  fields[FieldOf(m, "foot_force_2")] = 37;
+  fields[FieldOf(m, "remote_5")] = 200;
+  DdsSample s(spec.type);
+  go2.FillFromFields(si, fields, &s);
+  CHECK(go2.ChecksumMatches(si, s));
+  std::uint64_t version = 0;
+  const auto state = FieldOf(m, "crc_ok");
+  const std::uint32_t state_stream = m.fields[state].stream;
+  REQUIRE(go2.writer(si)->Write(s.bytes()).ok());
+  REQUIRE(controller.WaitForSample(state_stream, &version, 5 * kSecond));
+  controller.Read(m, d);
+  for (const std::uint32_t st : spec.streams) CHECK(d.fresh[st] == 1);
+  CHECK(d.fields[state] == 1.0);
+  CHECK(d.fields[FieldOf(m, "tick")] == 41);
+  CHECK(d.fields[FieldOf(m, "foot_force_2")] == 37);
+  CHECK(d.fields[FieldOf(m, "remote_5")] == 200);
+  CHECK(d.fields[m.motors[7].q_field] == 0.375);
+  CHECK(d.fields[m.motors[7].tau_field] == -1.25);
+
+  // One bit of the CRC wrong: crc_ok says 0 (the sample check names it), the state stream alone is
+  // fresh and no other field takes the sample's values.
+  std::fill(d.fresh.begin(), d.fresh.end(), std::uint8_t{0});
+  fields[m.motors[7].q_field] = 1.0;
+  go2.FillFromFields(si, fields, &s);
+  const auto crc = static_cast<std::uint32_t>(s.Get("crc").value());
+  REQUIRE(s.Set("crc", static_cast<double>(crc ^ 0x80000000u)).ok());
+  CHECK_FALSE(go2.ChecksumMatches(si, s));
+  REQUIRE(go2.writer(si)->Write(s.bytes()).ok());
+  REQUIRE(controller.WaitForSample(state_stream, &version, 5 * kSecond));
+  controller.Read(m, d);
+  CHECK(d.fields[state] == 0.0);
+  CHECK(d.fresh[state_stream] == 1);
+  CHECK(d.fresh[m.motors[7].stream] == 0);
+  CHECK(d.fields[m.motors[7].q_field] == 0.375);
+  CHECK(controller.checksum_mismatches() == 1);
+  CHECK(controller.Summary().find("checksum mismatches 1") != std::string::npos);
+
+  // LowCmd_: passive (mode 0, every command 0) while the loop does not command a motor; its mode
+  // and commands once it does; a CRC the robot accepts either way.
+  for (std::size_t k = 0; k < d.command.size(); ++k) d.command[k] = 0.5 + static_cast<double>(k % 7);
+  d.motors.assign(m.motors.size(), robot::MotorCommand::kNone);
+  d.motors[3] = robot::MotorCommand::kEnable;
+  d.motors[4] = robot::MotorCommand::kCommand;
+  controller.Write(m, d);
+  DdsSample cmd(go2.message(ci).type);
+  REQUIRE(go2.reader(ci)->WaitPop(cmd.bytes(), nullptr, 5 * kSecond));
+  CHECK(go2.ChecksumMatches(ci, cmd));
+  CHECK(cmd.Get("head[0]").value() == 0xFE);
+  CHECK(cmd.Get("head[1]").value() == 0xEF);
+  CHECK(cmd.Get("level_flag").value() == 0xFF);
+  CHECK(cmd.Get("motor_cmd[0].mode").value() == 0);
+  CHECK(cmd.Get("motor_cmd[0].kp").value() == 0);
+  CHECK(cmd.Get("motor_cmd[3].mode").value() == 1);  // switched on: servo mode, no gains yet
+  CHECK(cmd.Get("motor_cmd[3].kd").value() == 0);
+  CHECK(cmd.Get("motor_cmd[4].mode").value() == 1);
+  const robot::MotorSpec& mo = m.motors[4];
+  CHECK(cmd.Get("motor_cmd[4].q").value() == static_cast<float>(d.command[mo.q]));
+  CHECK(cmd.Get("motor_cmd[4].kp").value() == static_cast<float>(d.command[mo.kp]));
+  CHECK(cmd.Get("motor_cmd[4].kd").value() == static_cast<float>(d.command[mo.kd]));
+  CHECK(cmd.Get("motor_cmd[4].tau").value() == static_cast<float>(d.command[mo.tau]));
+  CHECK(cmd.Get("motor_cmd[12].mode").value() == 0);  // the robot's 8 motors beyond the legs: untouched
+  // The tick's calls allocate nothing.
+  {
+    AllocationScope scope;
+    controller.Read(m, d);
+    controller.Write(m, d);
+    CHECK(scope.count() == 0);
+  }
+}
