@@ -144,6 +144,20 @@ void AddLeggedDdsOptions(CLI::App& app, pbppo::sim::LeggedDdsHilOptions& o) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
 }
 
+// Parses a subcommand's flags (after its name; 2 on a bad one), then runs it with SIGINT and
+// SIGTERM asking it to stop.
+template <typename Run>
+int ParseAndRun(CLI::App& app, int argc, char** argv, Run run) {
+  try {
+    app.parse(argc - 1, argv + 1);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  signal(SIGINT, OnSignal);
+  signal(SIGTERM, OnSignal);
+  return run();
+}
+
 int Usage(const char* why) {
   std::fprintf(stderr,
                "pbppo-hil: %s\nusage: pbppo-hil auv ... (pbppo-hil auv --help)\n"
@@ -162,28 +176,14 @@ int main(int argc, char** argv) {
     CLI::App app{"pbppo-hil auv: the AUV navigation task over DDS, the vehicle side of the controller's link"};
     sim::AuvHilOptions o;
     AddAuvOptions(app, o);
-    try {
-      app.parse(argc - 1, argv + 1);
-    } catch (const CLI::ParseError& e) {
-      return app.exit(e) == 0 ? 0 : 2;
-    }
-    signal(SIGINT, OnSignal);
-    signal(SIGTERM, OnSignal);
-    return sim::RunAuvHil(o, g_stop);
+    return ParseAndRun(app, argc, argv, [&o] { return sim::RunAuvHil(o, g_stop); });
   }
   if (argc >= 2 && std::strcmp(argv[1], "go2") == 0) {
     CLI::App app{
         "pbppo-hil go2: a legged robot whose motors speak DDS (the Go2), the robot's side of its low-level link"};
     sim::LeggedDdsHilOptions o;
     AddLeggedDdsOptions(app, o);
-    try {
-      app.parse(argc - 1, argv + 1);
-    } catch (const CLI::ParseError& e) {
-      return app.exit(e) == 0 ? 0 : 2;
-    }
-    signal(SIGINT, OnSignal);
-    signal(SIGTERM, OnSignal);
-    return sim::RunLeggedDdsHil(o, g_stop);
+    return ParseAndRun(app, argc, argv, [&o] { return sim::RunLeggedDdsHil(o, g_stop); });
   }
   const bool rotors = argc >= 2 && std::strcmp(argv[1], "rotors") == 0;
   if (argc < 2 || (!rotors && std::strcmp(argv[1], "quadruped") != 0))

@@ -217,7 +217,7 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
     link.FillFromFields(static_cast<std::size_t>(state), fields, &state_sample);
     if (corrupt && has_crc)
       state_sample.Set(crc_leaf, static_cast<double>(static_cast<std::uint32_t>(state_sample.Get(crc_leaf)) ^ 0x1u));
-    if (corrupt || std::any_of(o.faults.begin(), o.faults.end(), [&](const LeggedDdsFault& f) { return active(f, t); }))
+    if (std::any_of(o.faults.begin(), o.faults.end(), [&](const LeggedDdsFault& f) { return active(f, t); }))
       ++faulty_samples;
     ++published;
     return link.writer(static_cast<std::size_t>(state))->Write(state_sample.bytes()).ok();
