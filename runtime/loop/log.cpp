@@ -489,9 +489,12 @@ void Recorder::Run() {
 }
 
 Status Recorder::Stop() {
+  // Until it is joined, the writer owns fd_ (a rotation replaces it): nothing of it is read before.
+  if (thread_.joinable()) {
+    stop_.store(true, std::memory_order_release);
+    thread_.join();
+  }
   if (fd_ < 0) return {};
-  stop_.store(true, std::memory_order_release);
-  if (thread_.joinable()) thread_.join();
   if (!failed_.load(std::memory_order_relaxed)) {
     struct stat st{};
     if (::fstat(fd_, &st) == 0 && st.st_nlink == 0)
