@@ -27,7 +27,8 @@ bool ParseLeggedDdsFault(const std::string& text, LeggedDdsFault* out, std::stri
   f.kind = text.substr(0, at);
   const char* p = at == std::string::npos ? nullptr : text.c_str() + at + 1;
   char* end = nullptr;
-  bool ok = p != nullptr && (f.kind == "stop" || f.kind == "crc" || f.kind == "nan" || f.kind == "range");
+  bool ok =
+      p != nullptr && (f.kind == "stop" || f.kind == "crc" || f.kind == "nan" || f.kind == "range" || f.kind == "lost");
   if (ok) {
     f.start_s = std::strtod(p, &end);
     ok = end != p && std::isfinite(f.start_s) && f.start_s >= 0;
@@ -44,7 +45,7 @@ bool ParseLeggedDdsFault(const std::string& text, LeggedDdsFault* out, std::stri
     f.motor = static_cast<int>(m);
   }
   if (!ok || *end != '\0') {
-    *error = "'" + text + "' is not KIND@SECONDS[+DURATION][:MOTOR] with KIND stop, crc, nan or range";
+    *error = "'" + text + "' is not KIND@SECONDS[+DURATION][:MOTOR] with KIND stop, crc, nan, range or lost";
     return false;
   }
   *out = f;
@@ -126,9 +127,14 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
   std::vector<int> foot_field;
   for (int i = 0; m.FieldIndex("foot_force_" + std::to_string(i)) >= 0; ++i)
     foot_field.push_back(m.FieldIndex("foot_force_" + std::to_string(i)));
-  for (const LeggedDdsFault& f : o.faults)
+  for (const LeggedDdsFault& f : o.faults) {
     if (f.motor >= static_cast<int>(n))
       return Fail("--fault " + f.kind + ": motor " + std::to_string(f.motor) + ", the robot has " + std::to_string(n));
+    if (f.kind == "lost" && m.motors[static_cast<std::size_t>(f.motor)].lost_field < 0)
+      return Fail("--fault lost: motor " + std::to_string(f.motor) + " (" +
+                  m.motors[static_cast<std::size_t>(f.motor)].joint + ") reports no lost frames in " + m.path +
+                  " (motors.lost_per_sample_max)");
+  }
 
   // The schedule the controller plays: the commands per phase of the report.
   std::optional<loop::Schedule> schedule;
@@ -192,6 +198,7 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
       fields[m.motors[k].q_field] = plant.q_rad(j);
       fields[m.motors[k].dq_field] = plant.dq_rad_s(j);
       fields[m.motors[k].tau_field] = plant.tau_nm(j);
+      if (m.motors[k].lost_field >= 0) fields[static_cast<std::size_t>(m.motors[k].lost_field)] = 0.0;
     }
     double q[4], g[3], a[3];
     plant.BaseImu(q, g, a);
@@ -212,6 +219,7 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
       if (f.kind == "crc") corrupt = true;
       if (f.kind == "nan") fields[mo.q_field] = std::nan("");
       if (f.kind == "range") fields[mo.q_field] = 10.0;
+      if (f.kind == "lost") fields[static_cast<std::size_t>(mo.lost_field)] = 1.0;  // its counter grows by one
     }
     if (skip) return true;
     link.FillFromFields(static_cast<std::size_t>(state), fields, &state_sample);

@@ -94,7 +94,10 @@ struct MotorSpec {
   std::string joint;
   std::uint32_t stream = 0;
   std::uint32_t q_field = 0, dq_field = 0, tau_field = 0;  // its reply
-  std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;    // its commands (q, kp: kNoCommand when velocity)
+  // Without a CAN map, with motors.lost_per_sample_max: lost_<joint>, how much the driver's count
+  // of lost frames grew since the previous sample (in [0, that max]); else -1.
+  std::int32_t lost_field = -1;
+  std::uint32_t q = 0, dq = 0, kp = 0, kd = 0, tau = 0;  // its commands (q, kp: kNoCommand when velocity)
   JointControl control = JointControl::kPosition;
   // A continuous joint: no position bound anywhere; q_<joint> is the multi-turn angle the transport
   // unwraps from the driver's position, which wraps in the MIT range [p_min, p_max).

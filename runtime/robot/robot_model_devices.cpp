@@ -54,7 +54,7 @@ Status Builder::MotorSection(const YAML::Node& root, MotorSettings* ms, YAML::No
   else
     PBPPO_TRY(f.Keys(*motors, "motors",
                      {"transport", "stale_after", "invalid_safe_stop", "position_margin_rad", "velocity_factor",
-                      "torque_factor", "gain_limits", "policy_gains"}));
+                      "torque_factor", "gain_limits", "policy_gains", "lost_per_sample_max"}));
   if (motors->operator[]("policy_gains")) {
     YAML::Node g;
     PBPPO_TRY(f.Map(*motors, "policy_gains", "motors", &g));
@@ -69,6 +69,8 @@ Status Builder::MotorSection(const YAML::Node& root, MotorSettings* ms, YAML::No
   PBPPO_TRY(f.Number(*motors, "position_margin_rad", "motors", 0.0, 10.0, &ms->margin));
   PBPPO_TRY(f.Number(*motors, "velocity_factor", "motors", 1.0, 100.0, &ms->factor));
   if (!can) PBPPO_TRY(f.OptionalNumber(*motors, "torque_factor", "motors", 1.0, 100.0, &ms->torque_factor));
+  if (!can && motors->operator[]("lost_per_sample_max"))
+    PBPPO_TRY(f.Number(*motors, "lost_per_sample_max", "motors", 0.0, 4294967295.0, &ms->lost_max));
   return {};
 }
 
@@ -201,6 +203,12 @@ Status Builder::Motor(const std::string& joint, std::uint32_t device, const Driv
   const double tau_lo = r.mit ? std::min(r.t_min, -tau) : -ms.torque_factor * tau;
   const double tau_hi = r.mit ? std::max(r.t_max, tau) : ms.torque_factor * tau;
   PBPPO_TRY(AddField("tau_" + joint, tau_lo, tau_hi, where));
+  // The frames its driver lost since the previous sample (a transport maps it to the increase of
+  // the driver's counter): beyond the robot file's allowance, the sample is invalid.
+  if (ms.lost_max >= 0) {
+    mo.lost_field = static_cast<std::int32_t>(m.fields.size());
+    PBPPO_TRY(AddField("lost_" + joint, 0.0, ms.lost_max, where));
+  }
   const auto motor = static_cast<std::int32_t>(m.motors.size());
   auto command = [&](const char* prefix, double lo, double hi, double neutral, safety::StopKind stop, double stop_value,
                      std::uint32_t* index) {

@@ -15,6 +15,7 @@ struct MotorSettings {
   double margin = 0, factor = 0;
   double torque_factor = 1.5;  // motors without a CAN map: a reported torque beyond this x the effort limit is a fault
   double policy_kp = -1, policy_kd = -1;
+  double lost_max = -1;  // motors without a CAN map: lost_<joint>'s largest value per sample (-1: no such field)
 };
 
 // What a motor's driver accepts besides the joint's own limits (an MIT range; a motor without a

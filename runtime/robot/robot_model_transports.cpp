@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <span>
+#include <string_view>
 
 #include "runtime/core/enum_name.hpp"
 #include "runtime/robot/robot_model_parts.hpp"
@@ -209,6 +210,7 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
   for (const std::uint32_t s : out->streams)
     for (std::uint32_t k = 0; k < m.streams[s].field_count; ++k) field_list.push_back(m.streams[s].first_field + k);
   std::vector<int> leaf_of(field_list.size(), -1);
+  std::vector<std::uint8_t> increase_of(field_list.size(), 0);
   const auto slot_of = [&](int fi) -> int {
     const auto at = std::find(field_list.begin(), field_list.end(), static_cast<std::uint32_t>(fi));
     return at == field_list.end() ? -1 : static_cast<int>(at - field_list.begin());
@@ -222,7 +224,11 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
                                                "' is not a field of " + stream);
     leaf_of[static_cast<std::size_t>(slot)] = static_cast<int>(out->checksum.leaf);
   }
-  auto bind = [&](const std::string& field, const std::string& leaf, const std::string& fw) -> Status {
+  auto bind = [&](const std::string& field, const std::string& member, const std::string& fw) -> Status {
+    // "increase(LEAF)": how much a counter grew since the previous sample.
+    static constexpr std::string_view kIncrease = "increase(";
+    const bool increase = member.starts_with(kIncrease) && member.ends_with(")");
+    const std::string leaf = increase ? member.substr(kIncrease.size(), member.size() - kIncrease.size() - 1) : member;
     const int fi = m.FieldIndex(field), li = type.LeafIndex(leaf);
     const int slot = fi < 0 ? -1 : slot_of(fi);
     if (slot < 0)
@@ -230,7 +236,14 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
                     "'" + field + "' is not a field of " + (names.size() == 1 ? "stream '" + stream + "'" : stream));
     if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
     if (leaf_of[static_cast<std::size_t>(slot)] >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
+    if (increase) {
+      const IdlScalar t = type.leaves[static_cast<std::size_t>(li)].type;
+      if (t != IdlScalar::kUint8 && t != IdlScalar::kUint16 && t != IdlScalar::kUint32)
+        return f.Fail(
+            fw, "'" + member + "': " + leaf + " is a " + ToString(t) + ", not a counter (uint8, uint16 or uint32)");
+    }
     leaf_of[static_cast<std::size_t>(slot)] = li;
+    increase_of[static_cast<std::size_t>(slot)] = increase ? 1 : 0;
     return {};
   };
   if (const YAML::Node map = n["fields"]) {
@@ -255,7 +268,7 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
                            "' is filled by no member of " + type.type_name + " (name it under fields)");
     // The checksum's field is set by the transport, not decoded from a leaf.
     if (static_cast<std::int32_t>(field_list[k]) == out->checksum.field) continue;
-    out->fields.push_back({field_list[k], static_cast<std::uint32_t>(leaf_of[k])});
+    out->fields.push_back({field_list[k], static_cast<std::uint32_t>(leaf_of[k]), increase_of[k] != 0});
   }
   if (const YAML::Node map = n["peer"]) {
     if (!map.IsMap()) return f.Fail(w + ".peer", "expected a mapping of members to clock_ns or sequence");

@@ -92,10 +92,13 @@ struct LeafValue {
   std::vector<ValueTerm> terms;
 };
 
-// A field of an incoming message's stream and the leaf that fills it.
+// A field of an incoming message's stream and the leaf that fills it: its value, or (`increase`,
+// mapped as "increase(LEAF)" of an unsigned leaf of at most 32 bits: a device's counter) how much
+// the leaf grew since the previous sample, modulo its range (a wrap is a step; 0 at the first).
 struct FieldLeaf {
   std::uint32_t field = 0;
   std::uint32_t leaf = 0;
+  bool increase = false;
 };
 
 // What the other side writes in a leaf that no field reads (a simulator or an operator speaking

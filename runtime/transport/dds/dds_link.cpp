@@ -1,6 +1,8 @@
 #include "runtime/transport/dds/dds_link.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "runtime/core/clock.hpp"
@@ -181,7 +183,19 @@ int DdsLink::domain_id() const noexcept {
 
 void DdsLink::FillFromFields(std::size_t message, std::span<const double> fields, DdsSample* sample) noexcept {
   const robot::DdsMessageSpec& m = spec_->dds.messages[message];
-  for (const robot::FieldLeaf& fl : m.fields) sample->Set(fl.leaf, fields[fl.field]);
+  for (const robot::FieldLeaf& fl : m.fields) {
+    if (!fl.increase) {
+      sample->Set(fl.leaf, fields[fl.field]);
+      continue;
+    }
+    // A counter's increase: added to the count the sample holds (modulo the leaf's range).
+    const std::uint32_t bits = 8 * robot::IdlScalarSize(m.type.leaves[fl.leaf].type);
+    const std::uint64_t range = std::uint64_t{1} << bits;
+    const double add = fields[fl.field];
+    const std::uint64_t step =
+        std::isfinite(add) && add > 0 ? static_cast<std::uint64_t>(std::min(add, 4294967295.0)) : 0;
+    sample->Set(fl.leaf, static_cast<double>((static_cast<std::uint64_t>(sample->Get(fl.leaf)) + step) % range));
+  }
   if (!m.peer.empty()) {
     const std::uint64_t seq = ++sequence_[message];
     for (const robot::PeerLeaf& p : m.peer)

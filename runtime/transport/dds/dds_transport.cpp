@@ -50,8 +50,12 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
     if (m.direction == MessageDirection::kIn) {
       const double lost_s = m.lost_after_s > 0 && options.lost_after_s > 0 ? options.lost_after_s : m.lost_after_s;
       In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, m.streams, {}, {}, -1, 0};
-      for (const robot::FieldLeaf& fl : m.fields)
-        in.steps.push_back({fl.field, m.type.leaves[fl.leaf].cdr_offset, m.type.leaves[fl.leaf].type});
+      for (const robot::FieldLeaf& fl : m.fields) {
+        const robot::IdlScalar type = m.type.leaves[fl.leaf].type;
+        const std::uint32_t bits = 8 * robot::IdlScalarSize(type);
+        const std::uint32_t mask = !fl.increase ? 0 : bits >= 32 ? 0xffffffffu : (1u << bits) - 1;
+        in.steps.push_back({fl.field, m.type.leaves[fl.leaf].cdr_offset, type, mask});
+      }
       if (m.checksum.present) {
         in.checksum.emplace(m.type, m.checksum.leaf);
         in.checksum_field = m.checksum.field;
@@ -124,8 +128,19 @@ void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept 
         }
       }
       if (take) {
-        for (const DecodeStep& s : in.steps)
-          d.fields[s.field] = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
+        for (DecodeStep& s : in.steps) {
+          const double value = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
+          if (s.mask == 0) {
+            d.fields[s.field] = value;
+            continue;
+          }
+          // A counter: how much it grew since the sample before (modulo its range: a wrap is a
+          // step, a restart from 0 a large one).
+          const auto now_count = static_cast<std::uint32_t>(value);
+          d.fields[s.field] = s.primed ? static_cast<double>((now_count - s.last) & s.mask) : 0.0;
+          s.last = now_count;
+          s.primed = true;
+        }
         for (const std::uint32_t s : in.streams) d.fresh[s] = 1;
       }
     }

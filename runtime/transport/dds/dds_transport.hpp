@@ -54,6 +54,10 @@ class DdsTransport final : public robot::Transport {
     std::uint32_t field = 0;
     std::uint32_t offset = 0;  // the leaf's CDR offset
     robot::IdlScalar type = robot::IdlScalar::kDouble;
+    // A counter's increase (FieldLeaf::increase): the leaf's range as a mask, its previous value.
+    std::uint32_t mask = 0;  // 0: the leaf's value itself
+    std::uint32_t last = 0;
+    bool primed = false;  // a previous value was taken
   };
   struct EncodeStep {  // a term of an out or status message's value; `last` closes the sum
     robot::ValueTerm term;

@@ -4,6 +4,7 @@
 // bad robot files refused naming the file, the field and the value.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -428,6 +429,18 @@ TEST_CASE("robot model: the Go2 - motors of the description over DDS, one messag
   }
   CHECK(mapped);
   CHECK(state.fields.size() == m.fields.size() - 3 - 1);  // all but the operator's three and crc_ok
+  // Each motor's count of lost frames arrives as its growth per sample, none allowed.
+  REQUIRE(m.motors[7].lost_field >= 0);
+  CHECK(m.fields[static_cast<std::size_t>(m.motors[7].lost_field)].name == "lost_RR_thigh");
+  CHECK(Field(m, "lost_RR_thigh").min == 0.0);
+  CHECK(Field(m, "lost_RR_thigh").max == 0.0);
+  const auto lost = std::find_if(state.fields.begin(), state.fields.end(), [&](const FieldLeaf& fl) {
+    return static_cast<int>(fl.field) == m.motors[7].lost_field;
+  });
+  REQUIRE(lost != state.fields.end());
+  CHECK(lost->increase);
+  CHECK(state.type.leaves[lost->leaf].path == "motor_state[7].lost");
+  CHECK(std::count_if(state.fields.begin(), state.fields.end(), [](const FieldLeaf& fl) { return fl.increase; }) == 12);
   // rt/lowcmd: per motor its mode and five commands, and the CRC.
   const DdsMessageSpec& cmd = t.dds.messages[1];
   CHECK(cmd.checksum.present);
@@ -478,4 +491,16 @@ TEST_CASE("robot model: motors over DDS, several streams per message, checksums 
   CHECK(err("gain_limits: {kp_max: 100.0, kd_max: 10.0}", "gain_limits: {kp_max: 10.0, kd_max: 10.0}")
             .find("command 'kp_FR_hip': its neutral value") != std::string::npos);
   CHECK(err("  names: [imu]", "  names: [imu, imu]") == p + ": imus.names[1]: stream 'imu' appears twice");
+  // A counter's increase: of an unsigned leaf only; an allowance that is a count.
+  CHECK(err("\"increase(motor_state[{motor}].lost)\"", "\"increase(motor_state[{motor}].q)\"") ==
+        m0 + ".fields.lost_FR_hip: 'increase(motor_state[0].q)': motor_state[0].q is a float, not a counter "
+             "(uint8, uint16 or uint32)");
+  CHECK(err("\"increase(motor_state[{motor}].lost)\"", "\"increase(motor_state[{motor}].lostt)\"") ==
+        m0 + ".fields.lost_FR_hip: 'motor_state[0].lostt' is not a member of unitree_go::msg::dds_::LowState_");
+  CHECK(err("lost_per_sample_max: 0", "lost_per_sample_max: -1") ==
+        p + ": motors.lost_per_sample_max: '-1' is outside [0, 4.2949673e+09]");
+  CHECK(err("lost_per_sample_max: 0", "lost_per_sample_max: many") ==
+        p + ": motors.lost_per_sample_max: 'many' is not a number");
+  CHECK(err("  lost_per_sample_max: 0\n", "") ==
+        m0 + ".fields.lost_FR_hip: 'lost_FR_hip' is not a field of the message's streams");
 }

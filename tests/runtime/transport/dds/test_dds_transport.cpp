@@ -96,6 +96,23 @@ struct Pair {
   }
 };
 
+// The Go2's controller side and the robot's side of its low-level transport on one domain, matched.
+struct Go2Pair {
+  const robot::RobotModel& m = test::Go2Robot();
+  std::unique_ptr<DdsTransport> controller;
+  std::unique_ptr<DdsLink> robot;
+  explicit Go2Pair(int domain) {
+    auto c = DdsTransport::Open(m, "lowlevel", Options(domain));
+    REQUIRE_MESSAGE(c.ok(), c.error().message);
+    controller = std::move(*c);
+    auto r = DdsLink::Open(m, "lowlevel", DdsSide::kPeer, Options(domain));
+    REQUIRE_MESSAGE(r.ok(), r.error().message);
+    robot = std::move(*r);
+    REQUIRE(controller->Connect(10 * kSecond).ok());
+    REQUIRE(robot->WaitForPeer(10 * kSecond));
+  }
+};
+
 }  // namespace
 
 TEST_CASE("dds transport: a sample fills the stream's fields, commands and status carry the robot file's values") {
@@ -356,16 +373,10 @@ TEST_CASE("dds transport: the tick's calls (Read, Write) do not allocate in the 
 }
 
 TEST_CASE("dds transport: the Go2's LowState_ fills the state, motor and IMU streams, and its CRC is checked") {
-  const robot::RobotModel& m = test::Go2Robot();
-  const int domain = test::TestDomain(9);
-  auto c = DdsTransport::Open(m, "lowlevel", Options(domain));
-  REQUIRE_MESSAGE(c.ok(), c.error().message);
-  auto robot_side = DdsLink::Open(m, "lowlevel", DdsSide::kPeer, Options(domain));
-  REQUIRE_MESSAGE(robot_side.ok(), robot_side.error().message);
-  DdsTransport& controller = **c;
-  DdsLink& go2 = **robot_side;
-  REQUIRE(controller.Connect(10 * kSecond).ok());
-  REQUIRE(go2.WaitForPeer(10 * kSecond));
+  const Go2Pair pair(test::TestDomain(9));
+  const robot::RobotModel& m = pair.m;
+  DdsTransport& controller = *pair.controller;
+  DdsLink& go2 = *pair.robot;
   robot::RobotData d = robot::MakeRobotData(m);
   const std::size_t si = Message(go2, "lowstate"), ci = Message(go2, "lowcmd");
   const robot::DdsMessageSpec& spec = go2.message(si);
@@ -445,4 +456,51 @@ TEST_CASE("dds transport: the Go2's LowState_ fills the state, motor and IMU str
     controller.Write(m, d);
     CHECK(scope.count() == 0);
   }
+}
+
+TEST_CASE("dds transport: a motor's count of lost frames arrives as its growth per sample, a wrap one step") {
+  const Go2Pair pair(test::TestDomain(10));
+  const robot::RobotModel& m = pair.m;
+  DdsTransport& controller = *pair.controller;
+  DdsLink& go2 = *pair.robot;
+  robot::RobotData d = robot::MakeRobotData(m);
+  const std::size_t si = Message(go2, "lowstate");
+  const std::uint32_t state_stream = m.fields[FieldOf(m, "crc_ok")].stream;
+  REQUIRE(m.motors[7].lost_field >= 0);
+  const auto lost = static_cast<std::size_t>(m.motors[7].lost_field);
+  std::vector<double> fields(m.fields.size(), 0.0);
+  fields[FieldOf(m, "imu_qw")] = 1.0;
+  DdsSample s(go2.message(si).type);
+  std::uint64_t version = 0;
+  // The robot's counter says COUNT (a correct CRC unless `corrupt`); what the controller reads.
+  auto send = [&](double count, bool corrupt = false) {
+    REQUIRE(s.Set("motor_state[7].lost", count).ok());
+    go2.FillFromFields(si, fields, &s);  // adds 0 to the count, computes the CRC
+    if (corrupt) REQUIRE(s.Set("crc", static_cast<double>(static_cast<std::uint32_t>(s.Get("crc").value()) ^ 1u)).ok());
+    REQUIRE(go2.writer(si)->Write(s.bytes()).ok());
+    REQUIRE(controller.WaitForSample(state_stream, &version, 5 * kSecond));
+    controller.Read(m, d);
+    return d.fields[lost];
+  };
+  CHECK(send(5) == 0.0);  // the first sample: the baseline, no growth yet
+  CHECK(send(5) == 0.0);
+  CHECK(send(7) == 2.0);
+  CHECK(send(7) == 0.0);
+  // A sample whose CRC does not match moves neither the field nor the baseline.
+  CHECK(send(100, true) == 0.0);
+  CHECK(d.fields[FieldOf(m, "crc_ok")] == 0.0);
+  CHECK(send(8) == 1.0);
+  // The counter wraps at 2^32: one step, not a huge one; a counter that restarts from 0 is a large
+  // growth (the sample is then outside its bounds).
+  CHECK(send(4294967295.0) == 4294967287.0);
+  CHECK(send(0) == 1.0);
+  CHECK(send(0) == 0.0);
+  // The simulator's side: the field is how much to add to the count the sample holds.
+  fields[lost] = 3;
+  REQUIRE(s.Set("motor_state[7].lost", 4294967294.0).ok());
+  go2.FillFromFields(si, fields, &s);
+  CHECK(s.Get("motor_state[7].lost").value() == 4294967294.0 + 3 - 4294967296.0);
+  CHECK(go2.ChecksumMatches(si, s));
+  // Other motors' counters stay where they were.
+  CHECK(s.Get("motor_state[6].lost").value() == 0.0);
 }
