@@ -140,7 +140,8 @@ void AddLeggedDdsOptions(CLI::App& app, pbppo::sim::LeggedDdsHilOptions& o) {
            o.faults.push_back(f);
          },
          "A fault from SECONDS on (for DURATION s): stop (no state), crc (bad checksums), nan or range (MOTOR's "
-         "position), lost (MOTOR's lost-frame counter grows by one per state); repeatable")
+         "position), lost (MOTOR's lost-frame counter grows by one per state), silent (MOTOR stops "
+         "answering: no torque, its state held, its lost counter growing); repeatable")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
 }
 

@@ -1,6 +1,7 @@
 #include "sim_hil/legged_dds_hil.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -27,8 +28,8 @@ bool ParseLeggedDdsFault(const std::string& text, LeggedDdsFault* out, std::stri
   f.kind = text.substr(0, at);
   const char* p = at == std::string::npos ? nullptr : text.c_str() + at + 1;
   char* end = nullptr;
-  bool ok =
-      p != nullptr && (f.kind == "stop" || f.kind == "crc" || f.kind == "nan" || f.kind == "range" || f.kind == "lost");
+  bool ok = p != nullptr && (f.kind == "stop" || f.kind == "crc" || f.kind == "nan" || f.kind == "range" ||
+                             f.kind == "lost" || f.kind == "silent");
   if (ok) {
     f.start_s = std::strtod(p, &end);
     ok = end != p && std::isfinite(f.start_s) && f.start_s >= 0;
@@ -45,7 +46,7 @@ bool ParseLeggedDdsFault(const std::string& text, LeggedDdsFault* out, std::stri
     f.motor = static_cast<int>(m);
   }
   if (!ok || *end != '\0') {
-    *error = "'" + text + "' is not KIND@SECONDS[+DURATION][:MOTOR] with KIND stop, crc, nan, range or lost";
+    *error = "'" + text + "' is not KIND@SECONDS[+DURATION][:MOTOR] with KIND stop, crc, nan, range, lost or silent";
     return false;
   }
   *out = f;
@@ -191,6 +192,13 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
   bool plant_ok = true, controller_left = false, controller_lost = false;
 
   const auto active = [&](const LeggedDdsFault& f, double t) { return t >= f.start_s && t < f.start_s + f.duration_s; };
+  // A motor that stops answering: what it reported last (q, dq, tau), held while the fault lasts.
+  std::vector<std::optional<std::array<double, 3>>> held(o.faults.size());
+  const auto silent = [&](std::size_t motor, double t) {
+    return std::any_of(o.faults.begin(), o.faults.end(), [&](const LeggedDdsFault& f) {
+      return f.kind == "silent" && static_cast<std::size_t>(f.motor) == motor && active(f, t);
+    });
+  };
   const auto publish = [&](double t) {
     bool skip = false, corrupt = false;
     for (std::size_t k = 0; k < n; ++k) {
@@ -212,14 +220,25 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
       fields[static_cast<std::size_t>(foot_field[i])] =
           (feet >> i & 1u) != 0 ? std::round(weight_n / std::max(down, 1)) : 0.0;
     if (tick_field >= 0) fields[static_cast<std::size_t>(tick_field)] = static_cast<double>(published % 4294967296ull);
-    for (const LeggedDdsFault& f : o.faults) {
-      if (!active(f, t)) continue;
+    for (std::size_t i = 0; i < o.faults.size(); ++i) {
+      const LeggedDdsFault& f = o.faults[i];
+      if (!active(f, t)) {
+        held[i].reset();
+        continue;
+      }
       const robot::MotorSpec& mo = m.motors[static_cast<std::size_t>(f.motor)];
       if (f.kind == "stop") skip = true;
       if (f.kind == "crc") corrupt = true;
       if (f.kind == "nan") fields[mo.q_field] = std::nan("");
       if (f.kind == "range") fields[mo.q_field] = 10.0;
       if (f.kind == "lost") fields[static_cast<std::size_t>(mo.lost_field)] = 1.0;  // its counter grows by one
+      if (f.kind == "silent") {
+        if (!held[i]) held[i] = std::array<double, 3>{fields[mo.q_field], fields[mo.dq_field], fields[mo.tau_field]};
+        fields[mo.q_field] = (*held[i])[0];
+        fields[mo.dq_field] = (*held[i])[1];
+        fields[mo.tau_field] = (*held[i])[2];
+        if (mo.lost_field >= 0) fields[static_cast<std::size_t>(mo.lost_field)] = 1.0;
+      }
     }
     if (skip) return true;
     link.FillFromFields(static_cast<std::size_t>(state), fields, &state_sample);
@@ -314,7 +333,7 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
         const std::size_t j = joint[k];
         const MotorCmd& x = cmd[k];
         double v = 0;
-        if (x.mode != 0) {
+        if (x.mode != 0 && !silent(k, t)) {
           v = x.tau;
           if (std::fabs(x.q) < kPosStop) v += x.kp * (x.q - plant.q_rad(j));
           if (std::fabs(x.dq) < kVelStop) v += x.kd * (x.dq - plant.dq_rad_s(j));

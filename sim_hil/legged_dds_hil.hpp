@@ -18,7 +18,9 @@
 //
 // Faults as data (--fault KIND@SECONDS[+DURATION][:MOTOR]): stop (no state sample), crc (samples
 // whose checksum does not match), nan (the motor's position NaN), range (its position 10 rad,
-// beyond every joint's limits), lost (the motor's count of lost frames grows by one per sample). The report says, per
+// beyond every joint's limits), lost (the motor's count of lost frames grows by one per sample),
+// silent (the motor stops answering: no torque, its state held at the last it reported, its count
+// of lost frames growing by one per sample). The report says, per
 // fault, how many periods after it began the controller's commands reached damping (every motor kp 0 and kd > 0) or
 // passive (mode 0).
 #pragma once
@@ -31,9 +33,9 @@
 namespace pbppo::sim {
 
 struct LeggedDdsFault {
-  std::string kind;  // stop, crc, nan, range, lost
+  std::string kind;  // stop, crc, nan, range, lost, silent
   double start_s = 0, duration_s = 1e300;
-  int motor = 0;  // nan, range, lost: the motor (the robot's order)
+  int motor = 0;  // nan, range, lost, silent: the motor (the robot's order)
 };
 
 struct LeggedDdsHilOptions {

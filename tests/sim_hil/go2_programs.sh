@@ -8,7 +8,7 @@
 #   2. the Simbody HIL (pbppo-hil go2) in lock-step: the controller stands the robot up and holds,
 #      every command inside the model's limits, no fall; the recording replays bit for bit;
 #   3. faults as data in the HIL (a wrong CRC, a NaN or out-of-range position, a motor losing
-#      frames, the state stopping):
+#      frames, a motor that stops answering, the state stopping):
 #      the commands reach damping within 3 periods of the controller's detection, the controller
 #      naming the cause.
 # usage: go2_programs.sh HIL CONTROLLER PBPPO CYCLONE_GO2_ROBOT SOURCE_DIR WORK_DIR
@@ -71,6 +71,8 @@ check_fault nan@3.0:2 "safe-stop: invalid sample: q_FR_calf = nan" 3
 check_fault range@3.0:4 "safe-stop: invalid sample: q_FL_thigh = 10" 3
 # A motor's driver counts a lost frame (motor_state[7].lost grows by one per sample).
 check_fault lost@3.0:7 "safe-stop: invalid sample: lost_RR_thigh = 1" 3
+# A motor stops answering: no torque, its state frozen, its driver counting the frames it lost.
+check_fault silent@3.0:11 "safe-stop: invalid sample: lost_RL_calf = 1" 3
 # The state stops: detected when stale (degraded after 2 periods) or lost; damping 3 periods after.
 check_fault stop@3.0+0.5 "(degraded: stale sample|e-stop: lost peer)" 8
 echo "go2 programs: ok"
