@@ -15,9 +15,9 @@
 # smallest worst phase, and the script says so). The Simbody HIL is not used: it stays the test.
 # Writes RUN_DIR/select.csv (one row per candidate) and prints the table.
 # Usage: tools/select_quadruped.sh RUN_DIR
-#   (PBPPO=path/to/pbppo, DEMO_SEEDS="101 102 103 104", DEV_SEED=101, FLAT_ROBOTS=50,
-#    MIXED_ROBOTS=200, MAX_FALLS_FLAT=0, MAX_FALLS_MIXED=4, SCHEDULE=models/quadruped/schedules/demo.yaml,
-#    JOBS=2)
+#   (PBPPO=path/to/pbppo, ROBOT=quadruped (the run's --robot: a folder of models/ or its robot.yaml),
+#    DEMO_SEEDS="101 102 103 104", DEV_SEED=101, FLAT_ROBOTS=50, MIXED_ROBOTS=200, MAX_FALLS_FLAT=0,
+#    MAX_FALLS_MIXED=4, SCHEDULE=models/ROBOT/schedules/demo.yaml, JOBS=2)
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 run_dir_argument "tools/select_quadruped.sh RUN_DIR (a pbppo train --env quadruped-walk --out folder)" "$@"
@@ -28,7 +28,11 @@ flat_robots="${FLAT_ROBOTS:-50}"
 mixed_robots="${MIXED_ROBOTS:-200}"
 max_flat="${MAX_FALLS_FLAT:-0}"
 max_mixed="${MAX_FALLS_MIXED:-4}"
-schedule="${SCHEDULE:-$root/models/quadruped/schedules/demo.yaml}"
+robot="${ROBOT:-quadruped}"
+[ -n "$robot" ] || fail "ROBOT: empty (a folder of models/, e.g. quadruped or go2, or a robot.yaml)"
+robot_dir="$root/models/$robot"
+[ -f "$robot" ] && robot_dir="$(dirname "$robot")"
+schedule="${SCHEDULE:-$robot_dir/schedules/demo.yaml}"
 jobs="${JOBS:-2}"
 [ -n "${demo_seeds// /}" ] || fail "DEMO_SEEDS: empty (one or more non-negative integers)"
 for s in $demo_seeds; do
@@ -53,10 +57,10 @@ for b in "${candidates[@]}"; do
   echo "$i mixed $b --terrain mixed --episodes $mixed_robots --seed $seed"
   i=$((i + 1))
 done > "$work/jobs"
-export pbppo work
+export pbppo work robot
 xargs -P "$jobs" -L 1 bash -c '
   f="$work/$0.$1.json"
-  "$pbppo" eval "$2" --env quadruped-walk "${@:3}" --json > "$f" && exit 0
+  "$pbppo" eval "$2" --env quadruped-walk --robot "$robot" "${@:3}" --json > "$f" && exit 0
   rc=$?
   [ "$rc" -eq 1 ] && grep -q "\"fell\": true" "$f" && exit 0
   echo "select_quadruped: pbppo eval $2 ${*:3} failed (exit $rc)" >&2
