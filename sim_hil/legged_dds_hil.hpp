@@ -20,9 +20,8 @@
 // whose checksum does not match), nan (the motor's position NaN), range (its position 10 rad,
 // beyond every joint's limits), lost (the motor's count of lost frames grows by one per sample),
 // silent (the motor stops answering: no torque, its state held at the last it reported, its count
-// of lost frames growing by one per sample). The report says, per
-// fault, how many periods after it began the controller's commands reached damping (every motor kp 0 and kd > 0) or
-// passive (mode 0).
+// of lost frames growing by one per sample). The report says, per fault, how many periods after it
+// began the controller's commands reached damping (every motor kp 0 and kd > 0) or passive (mode 0).
 #pragma once
 
 #include <atomic>

@@ -611,6 +611,15 @@ std::uint32_t IdlScalarSize(IdlScalar type) noexcept {
   return 8;
 }
 
+std::uint32_t IdlCounterMask(IdlScalar type) noexcept {
+  switch (type) {
+    case IdlScalar::kUint8: return 0xffu;
+    case IdlScalar::kUint16: return 0xffffu;
+    case IdlScalar::kUint32: return 0xffffffffu;
+    default: return 0;
+  }
+}
+
 const char* ToString(IdlScalar type) noexcept {
   switch (type) {
     case IdlScalar::kBool: return "boolean";

@@ -40,6 +40,9 @@ enum class IdlScalar : std::uint8_t {
 };
 // Its size in bytes (1, 2, 4 or 8).
 std::uint32_t IdlScalarSize(IdlScalar type) noexcept;
+// A counter's range as a mask (uint8 0xff, uint16 0xffff, uint32 0xffffffff): what a field mapped
+// as "increase(LEAF)" may read; 0 for every other type.
+std::uint32_t IdlCounterMask(IdlScalar type) noexcept;
 // The IDL 4 spelling (boolean, char, int8 ... uint64, float, double).
 const char* ToString(IdlScalar type) noexcept;
 

@@ -236,12 +236,10 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
                     "'" + field + "' is not a field of " + (names.size() == 1 ? "stream '" + stream + "'" : stream));
     if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
     if (leaf_of[static_cast<std::size_t>(slot)] >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
-    if (increase) {
-      const IdlScalar t = type.leaves[static_cast<std::size_t>(li)].type;
-      if (t != IdlScalar::kUint8 && t != IdlScalar::kUint16 && t != IdlScalar::kUint32)
-        return f.Fail(
-            fw, "'" + member + "': " + leaf + " is a " + ToString(t) + ", not a counter (uint8, uint16 or uint32)");
-    }
+    const IdlScalar t = type.leaves[static_cast<std::size_t>(li)].type;
+    if (increase && IdlCounterMask(t) == 0)
+      return f.Fail(fw,
+                    "'" + member + "': " + leaf + " is a " + ToString(t) + ", not a counter (uint8, uint16 or uint32)");
     leaf_of[static_cast<std::size_t>(slot)] = li;
     increase_of[static_cast<std::size_t>(slot)] = increase ? 1 : 0;
     return {};

@@ -189,12 +189,11 @@ void DdsLink::FillFromFields(std::size_t message, std::span<const double> fields
       continue;
     }
     // A counter's increase: added to the count the sample holds (modulo the leaf's range).
-    const std::uint32_t bits = 8 * robot::IdlScalarSize(m.type.leaves[fl.leaf].type);
-    const std::uint64_t range = std::uint64_t{1} << bits;
+    const std::uint32_t mask = robot::IdlCounterMask(m.type.leaves[fl.leaf].type);
     const double add = fields[fl.field];
-    const std::uint64_t step =
-        std::isfinite(add) && add > 0 ? static_cast<std::uint64_t>(std::min(add, 4294967295.0)) : 0;
-    sample->Set(fl.leaf, static_cast<double>((static_cast<std::uint64_t>(sample->Get(fl.leaf)) + step) % range));
+    const std::uint32_t step =
+        std::isfinite(add) && add > 0 ? static_cast<std::uint32_t>(std::min(add, static_cast<double>(mask))) : 0;
+    sample->Set(fl.leaf, static_cast<double>((static_cast<std::uint32_t>(sample->Get(fl.leaf)) + step) & mask));
   }
   if (!m.peer.empty()) {
     const std::uint64_t seq = ++sequence_[message];

@@ -52,9 +52,8 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
       In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, m.streams, {}, {}, -1, 0};
       for (const robot::FieldLeaf& fl : m.fields) {
         const robot::IdlScalar type = m.type.leaves[fl.leaf].type;
-        const std::uint32_t bits = 8 * robot::IdlScalarSize(type);
-        const std::uint32_t mask = !fl.increase ? 0 : bits >= 32 ? 0xffffffffu : (1u << bits) - 1;
-        in.steps.push_back({fl.field, m.type.leaves[fl.leaf].cdr_offset, type, mask});
+        in.steps.push_back(
+            {fl.field, m.type.leaves[fl.leaf].cdr_offset, type, fl.increase ? robot::IdlCounterMask(type) : 0u});
       }
       if (m.checksum.present) {
         in.checksum.emplace(m.type, m.checksum.leaf);
