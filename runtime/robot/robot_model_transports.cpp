@@ -271,7 +271,10 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
   if (const YAML::Node map = n["peer"]) {
     if (!map.IsMap()) return f.Fail(w + ".peer", "expected a mapping of members to clock_ns or sequence");
     for (const auto& kv : map) {
-      const std::string leaf = kv.first.as<std::string>(), what = kv.second.as<std::string>();
+      const std::string leaf = kv.first.as<std::string>();
+      if (!kv.second.IsScalar())
+        return f.Fail(w + ".peer." + leaf, "expected clock_ns or sequence, got " + YamlFields::Quote(kv.second));
+      const std::string what = kv.second.as<std::string>();
       const int li = type.LeafIndex(leaf);
       if (li < 0) return f.Fail(w + ".peer." + leaf, "'" + leaf + "' is not a member of " + type.type_name);
       if (what != "clock_ns" && what != "sequence")

@@ -8,13 +8,41 @@
 
 namespace pbppo::robot {
 
+namespace {
+
+// Every reader takes a mapping's keys as names: a key that is a list, a mapping or empty
+// ("? [a, b]: c", "{[a]: b}", "{: b}") is refused here, where the document is read, with its
+// line, so that no reader meets one.
+Status CheckKeys(const YAML::Node& n, const std::string& origin, int depth) {
+  auto fail = [&](const YAML::Node& at, const std::string& what) {
+    return MakeError(ErrorCode::kFormat,
+                     origin + ": YAML error at line " + std::to_string(at.Mark().line + 1) + ": " + what);
+  };
+  if (depth > 256) return fail(n, "nested more than 256 levels deep");
+  if (n.IsMap()) {
+    for (const auto& kv : n) {
+      if (!kv.first.IsScalar()) return fail(kv.first, "a mapping key that is not a name (a list, a mapping or empty)");
+      if (auto st = CheckKeys(kv.second, origin, depth + 1); !st) return st;
+    }
+  } else if (n.IsSequence()) {
+    for (const auto& e : n)
+      if (auto st = CheckKeys(e, origin, depth + 1); !st) return st;
+  }
+  return {};
+}
+
+}  // namespace
+
 Result<YAML::Node> ParseYaml(const std::string& text, const std::string& origin) {
+  YAML::Node root;
   try {
-    return YAML::Load(text);
+    root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     return MakeError(ErrorCode::kFormat,
                      origin + ": YAML error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
+  if (auto st = CheckKeys(root, origin, 0); !st) return st.error();
+  return root;
 }
 
 Result<YAML::Node> LoadYamlFile(const std::string& path) {

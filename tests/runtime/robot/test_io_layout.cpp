@@ -69,6 +69,13 @@ TEST_CASE("bad layouts are refused naming the file, element and field") {
   CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b, high: .nan}]") ==
         "t.yaml: actions[0].high: '.nan' is not a number");
   CHECK(ErrorOf("robot: [x\n").rfind("t.yaml: YAML error at line", 0) == 0);
+  // A key no reader could take as a name, refused where every document is read.
+  CHECK(ErrorOf("robot: x\n? [a, b]\n: 1\nobservations: [{name: a}]\nactions: [{name: b}]") ==
+        "t.yaml: YAML error at line 2: a mapping key that is not a name (a list, a mapping or empty)");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, {b: 1}: 2}]\nactions: [{name: b}]") ==
+        "t.yaml: YAML error at line 2: a mapping key that is not a name (a list, a mapping or empty)");
+  CHECK(ErrorOf("robot: x\nobservations: " + std::string(300, '[') + std::string(300, ']') + "\n") ==
+        "t.yaml: YAML error at line 2: nested more than 256 levels deep");
   CHECK(ErrorOf("- 1\n- 2\n") == "t.yaml: top level: expected a mapping with robot, observations, actions");
   auto missing = LoadIoLayout("/nonexistent/layout.yaml");
   REQUIRE_FALSE(missing.ok());
