@@ -9,11 +9,138 @@ namespace pbppo::onnx {
 
 using robot::YamlFields;
 
+namespace {
+
+// One model input element: a layout observation (name) or a constant (name empty); `where` names
+// the mapping entry it comes from.
+struct Entry {
+  std::string where;
+  std::string name;
+  double constant = 0;
+};
+
+// One term of the observations list: its components (layout observation names, "" for a constant)
+// and how many frames of it the model takes.
+struct Term {
+  std::string where;
+  std::vector<std::string> where_of;  // per component
+  std::vector<std::string> names;
+  std::vector<double> constants;
+  std::uint32_t frames = 1;
+};
+
+// Reads `history` and `observations` and expands them into one entry per model input element.
+Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const robot::IoLayout& layout, Mapping* m,
+                          std::vector<Entry>* entries) {
+  const bool has_history = static_cast<bool>(root["history"]);
+  if (has_history) {
+    YAML::Node h;
+    PBPPO_TRY(f.Map(root, "history", "", &h));
+    PBPPO_TRY(f.Keys(h, "history", {"length", "order", "oldest"}));
+    PBPPO_TRY(f.Count(h, "length", "history", 1, 4096, &m->history_length));
+    std::string order, oldest;
+    PBPPO_TRY(f.Text(h, "order", "history", &order));
+    if (order != "frame-major" && order != "term-major")
+      return f.Fail("history.order", "'" + order +
+                                         "' is neither frame-major (every term of one frame, then the next frame) "
+                                         "nor term-major (every frame of one term, then the next term)");
+    PBPPO_TRY(f.Text(h, "oldest", "history", &oldest));
+    if (oldest != "first" && oldest != "last")
+      return f.Fail("history.oldest", "'" + oldest + "' is neither first nor last (where the oldest frame sits)");
+    m->frame_major = order == "frame-major";
+    m->oldest_first = oldest == "first";
+  }
+  std::map<std::string, std::uint32_t> history_of;  // the layout's history per element name
+  for (const robot::ObservationElement& o : layout.observations) history_of[o.name] = o.history;
+
+  YAML::Node obs;
+  PBPPO_TRY(f.List(root, "observations", "", true, &obs));
+  std::vector<Term> terms;
+  for (std::size_t i = 0; i < obs.size(); ++i) {
+    Term t;
+    t.where = "observations[" + std::to_string(i) + "]";
+    t.frames = m->history_length;
+    auto component = [&](const YAML::Node& c, const std::string& w) -> Status {
+      if (c.IsMap()) {
+        PBPPO_TRY(f.Keys(c, w, {"constant"}));
+        double v = 0;
+        PBPPO_TRY(f.Number(c, "constant", w, -1e30, 1e30, &v));
+        t.where_of.push_back(w);
+        t.names.emplace_back();
+        t.constants.push_back(v);
+        return {};
+      }
+      if (!c.IsScalar())
+        return f.Fail(w, YamlFields::Quote(c) + " is neither a layout observation name nor {constant: VALUE}");
+      const std::string name = c.Scalar();
+      if (has_history && name.find('@') != std::string::npos)
+        return f.Fail(
+            w, "'" + name + "': with a history the mapping names each term once (its frames follow from history)");
+      t.where_of.push_back(w);
+      t.names.push_back(name);
+      t.constants.push_back(0);
+      return {};
+    };
+    auto components = [&](const YAML::Node& c, const std::string& w) -> Status {
+      if (!c.IsSequence()) return component(c, w);
+      if (c.size() == 0) return f.Fail(w, "an empty term");
+      for (std::size_t j = 0; j < c.size(); ++j) PBPPO_TRY(component(c[j], w + "[" + std::to_string(j) + "]"));
+      return {};
+    };
+    const YAML::Node e = obs[i];
+    if (e.IsMap() && e["term"]) {
+      PBPPO_TRY(f.Keys(e, t.where, {"term", "history"}));
+      if (!has_history || m->frame_major)
+        return f.Fail(t.where,
+                      "a term's own history needs the mapping's history with order term-major (a "
+                      "frame-major frame holds every term)");
+      PBPPO_TRY(f.Count(e, "history", t.where, 1, 4096, &t.frames));
+      PBPPO_TRY(components(e["term"], t.where + ".term"));
+    } else {
+      PBPPO_TRY(components(e, t.where));
+    }
+    terms.push_back(std::move(t));
+  }
+
+  // The entry of component c of term t at frame position p (0: the first of its frames in the input).
+  auto emit = [&](const Term& t, std::size_t c, std::uint32_t p) -> Status {
+    Entry en;
+    en.where = t.where_of[c];
+    if (t.names[c].empty()) {
+      en.constant = t.constants[c];
+    } else {
+      const std::uint32_t lag = m->oldest_first ? t.frames - 1 - p : p;  // policy steps before now
+      auto h = history_of.find(t.names[c]);
+      if (has_history && h == history_of.end())
+        return f.Fail(en.where, "'" + t.names[c] + "' is not an observation of the '" + layout.robot + "' layout");
+      if (has_history && lag >= h->second)
+        return f.Fail(en.where, "'" + t.names[c] + "' has a history of " + std::to_string(h->second) + " in the '" +
+                                    layout.robot + "' layout, but the mapping takes " + std::to_string(t.frames) +
+                                    " frames of it (no '" + t.names[c] + "@-" + std::to_string(lag) + "')");
+      en.name = lag == 0 ? t.names[c] : t.names[c] + "@-" + std::to_string(lag);
+    }
+    entries->push_back(std::move(en));
+    return {};
+  };
+  if (m->frame_major) {
+    for (std::uint32_t p = 0; p < m->history_length; ++p)
+      for (const Term& t : terms)
+        for (std::size_t c = 0; c < t.names.size(); ++c) PBPPO_TRY(emit(t, c, p));
+  } else {
+    for (const Term& t : terms)
+      for (std::uint32_t p = 0; p < t.frames; ++p)
+        for (std::size_t c = 0; c < t.names.size(); ++c) PBPPO_TRY(emit(t, c, p));
+  }
+  return {};
+}
+
+}  // namespace
+
 Result<Mapping> ParseMapping(const std::string& yaml_text, const std::string& origin, const robot::IoLayout& layout) {
   auto root = robot::ParseYaml(yaml_text, origin);
   if (!root) return std::move(root).error();
   const YamlFields f(origin);
-  PBPPO_TRY(f.Keys(*root, "", {"robot", "input", "output", "observations", "actions"}));
+  PBPPO_TRY(f.Keys(*root, "", {"robot", "input", "output", "history", "observations", "actions"}));
   Mapping m;
   m.origin = origin;
   PBPPO_TRY(f.Text(*root, "robot", "", &m.robot, YamlFields::TextRule::kToken));
@@ -35,31 +162,30 @@ Result<Mapping> ParseMapping(const std::string& yaml_text, const std::string& or
   for (std::size_t i = 0; i < obs_names.size(); ++i) obs_index[obs_names[i]] = i;
   for (std::size_t i = 0; i < act_names.size(); ++i) act_index[act_names[i]] = i;
 
-  YAML::Node obs;
-  PBPPO_TRY(f.List(*root, "observations", "", true, &obs));
-  if (obs.size() != m.input_size)
-    return f.Fail("observations", std::to_string(obs.size()) + " entries, but input.size is " +
-                                      std::to_string(m.input_size) + " (one entry per input element)");
+  std::vector<Entry> entries;
+  PBPPO_TRY(ExpandObservations(f, *root, layout, &m, &entries));
+  if (entries.size() != m.input_size) {
+    const std::string count = m.history_length == 1 && !m.frame_major && !m.oldest_first
+                                  ? std::to_string(entries.size()) + " entries"
+                                  : std::to_string(entries.size()) +
+                                        " input elements (every term's frames, history.length " +
+                                        std::to_string(m.history_length) + ")";
+    return f.Fail("observations",
+                  count + ", but input.size is " + std::to_string(m.input_size) + " (one entry per input element)");
+  }
   std::vector<std::int64_t> fed_by(obs_names.size(), -1);
-  for (std::size_t k = 0; k < obs.size(); ++k) {
-    const std::string w = "observations[" + std::to_string(k) + "]";
-    const YAML::Node e = obs[k];
-    if (e.IsMap()) {
-      PBPPO_TRY(f.Keys(e, w, {"constant"}));
-      double c = 0;
-      PBPPO_TRY(f.Number(e, "constant", w, -1e30, 1e30, &c));
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    const Entry& e = entries[k];
+    if (e.name.empty()) {
       m.input_source.push_back(-1);
-      m.input_constant.push_back(c);
+      m.input_constant.push_back(e.constant);
       continue;
     }
-    if (!e.IsScalar())
-      return f.Fail(w, YamlFields::Quote(e) + " is neither a layout observation name nor {constant: VALUE}");
-    const std::string name = e.Scalar();
-    auto it = obs_index.find(name);
+    auto it = obs_index.find(e.name);
     if (it == obs_index.end())
-      return f.Fail(w, "'" + name + "' is not an observation of the '" + layout.robot + "' layout");
+      return f.Fail(e.where, "'" + e.name + "' is not an observation of the '" + layout.robot + "' layout");
     if (fed_by[it->second] >= 0)
-      return f.Fail(w, "'" + name + "' already feeds input element " + std::to_string(fed_by[it->second]));
+      return f.Fail(e.where, "'" + e.name + "' already feeds input element " + std::to_string(fed_by[it->second]));
     fed_by[it->second] = static_cast<std::int64_t>(k);
     m.input_source.push_back(static_cast<std::int32_t>(it->second));
     m.input_constant.push_back(0.0);

@@ -9,7 +9,20 @@
 //   observations:          # one entry per input element, in order
 //     - {constant: 0.0}    # an input the robot does not measure
 //     - base_ang_vel_x     # a layout observation name
+//     - [dof_pos_0, dof_pos_1]   # or a list of them (the same as listing them one by one)
 //   actions: [LF_HAA, ...] # one entry per output element, in order: layout action names
+//
+// A model fed stacked history names each term once and states the stacking:
+//
+//   history: {length: 5, order: term-major, oldest: first}
+//   observations:          # one frame's terms, in order; each a name, a list of names or a constant
+//     - [base_ang_vel_x, base_ang_vel_y, base_ang_vel_z]
+//     - {term: [cmd_vx, cmd_vy], history: 1}   # term-major only: a term with its own frame count
+//
+// frame-major: frame 1's terms, then frame 2's, ...; term-major: term 1's frames (each frame its
+// components), then term 2's, .... oldest first: frames run from length-1 policy steps ago to now;
+// last: from now back. Frame k steps ago of element X is the layout's "X@-k" (its history must
+// reach that far); a constant is repeated in every frame.
 #pragma once
 
 #include <cstdint>
@@ -28,6 +41,10 @@ struct Mapping {
   std::uint32_t input_size = 0;
   std::string output_name;
   std::uint32_t output_size = 0;
+  // The stacked history the model takes (length 1, term-major, newest first: none).
+  std::uint32_t history_length = 1;
+  bool frame_major = false;
+  bool oldest_first = false;
   // Per input element: the layout observation index, or -1 for a constant.
   std::vector<std::int32_t> input_source;
   std::vector<double> input_constant;  // per input element (used where input_source is -1)

@@ -16,6 +16,12 @@ OUT_DIR/
                                 its normaliser folded into Mul + Add + Clip, output Clip(-1, 1)
   leaky_tanh_head.onnx          6-16-16-3 LeakyReLU(0.2) on random weights, Tanh, Mul, Add at the
                                 output: for importer unit tests with a synthetic layout
+  history_frame_major.onnx + .yaml, history_term_major.onnx + .yaml
+                                one linear layer over 4 stacked frames of the terms p and
+                                (v0, v1), frame-major newest first (as rl_sar's HIMLoco stacks) and
+                                term-major oldest first (as Isaac Lab's observation history
+                                flattens); each output reads named frames: a0 = p(now) +
+                                0.5 v1(3 steps ago), a1 = v0(1 step ago) - v1(2 steps ago)
   bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
 
 The good models are what torch.onnx.export writes for these trainers (opset 17, producer
@@ -403,7 +409,56 @@ def leaky_tanh_head(out_dir):
     return save(m, os.path.join(out_dir, "leaky_tanh_head.onnx"))
 
 
-# ------------------------------------------------------------------------------- e. bad models
+# ---------------------------------------------------------------------------- e. stacked history
+
+HISTORY_TERMS = [["p"], ["v0", "v1"]]
+HISTORY_LENGTH = 4
+# What each output reads, as (weight, element, steps ago).
+HISTORY_OUTPUTS = [[(1.0, "p", 0), (0.5, "v1", 3)], [(1.0, "v0", 1), (-1.0, "v1", 2)]]
+
+
+def history_index(order, oldest_first, element, lag):
+    """Where `element` `lag` policy steps ago sits in the stacked input: this script's own
+    statement of the two orders. Frame position f counts from the first frame in the input; with
+    the oldest first it holds the frame HISTORY_LENGTH-1-f steps ago, else f steps ago."""
+    f = HISTORY_LENGTH - 1 - lag if oldest_first else lag
+    frame = [e for term in HISTORY_TERMS for e in term]
+    if order == "frame-major":
+        return f * len(frame) + frame.index(element)
+    start = 0
+    for term in HISTORY_TERMS:
+        if element in term:
+            return start + f * len(term) + term.index(element)
+        start += HISTORY_LENGTH * len(term)
+    raise KeyError(element)
+
+
+def stacked_history(out_dir, name, order, oldest_first):
+    n = HISTORY_LENGTH * sum(len(t) for t in HISTORY_TERMS)
+    w = np.zeros((len(HISTORY_OUTPUTS), n))
+    for o, reads in enumerate(HISTORY_OUTPUTS):
+        for weight, element, lag in reads:
+            w[o, history_index(order, oldest_first, element, lag)] = weight
+    nodes = [gemm("/actor/actor.0/Gemm", "obs", "actor.0.weight", "actor.0.bias", "actions")]
+    inits = [init("actor.0.weight", w), init("actor.0.bias", np.zeros(len(HISTORY_OUTPUTS)))]
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", n])], [io("actions", ["batch", 2])], inits)
+    oldest = "first" if oldest_first else "last"
+    save(model(g, f"stacked history, {order}, oldest frame {oldest}: outputs read named frames"),
+         os.path.join(out_dir, name + ".onnx"))
+    terms = ", ".join(t[0] if len(t) == 1 else "[" + ", ".join(t) + "]" for t in HISTORY_TERMS)
+    with open(os.path.join(out_dir, name + ".yaml"), "w") as f:
+        f.write(
+            f"# {HISTORY_LENGTH} stacked frames, {order}, oldest {oldest}\n"
+            "robot: histbot\n"
+            f"input: {{name: obs, size: {n}}}\n"
+            "output: {name: actions, size: 2}\n"
+            f"history: {{length: {HISTORY_LENGTH}, order: {order}, oldest: {oldest}}}\n"
+            f"observations: [{terms}]\n"
+            "actions: [a0, a1]\n"
+        )
+
+
+# ------------------------------------------------------------------------------- f. bad models
 
 
 def small_layers(rng, widths):
@@ -706,6 +761,8 @@ def main():
     normalised_walk(a.out_dir, flat, flat_layers)
     sb3_auv(a.out_dir, auv, auv_layers, read_layout_actions(a.auv_layout))
     small = leaky_tanh_head(a.out_dir)
+    stacked_history(a.out_dir, "history_frame_major", "frame-major", oldest_first=False)
+    stacked_history(a.out_dir, "history_term_major", "term-major", oldest_first=True)
     bad_models(a.out_dir, small)
     for root, _, files in sorted(os.walk(a.out_dir)):
         for fn in sorted(files):

@@ -3,6 +3,7 @@
 // refused naming the node and its operator; the mapping file's errors name the field.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "policies/onnx/onnx_import.hpp"
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
+#include "runtime/robot/observation_builder.hpp"
 #include "tests/policies/onnx/onnx_builder.hpp"
 
 using namespace pbppo;
@@ -465,4 +467,137 @@ TEST_CASE("truncated and corrupted models are refused or imported consistently, 
     if (r.ok()) CHECK(r->check_max_ratio <= 1.0);
   }
   CHECK(refused == static_cast<int>(bytes.size()));
+}
+
+namespace {
+
+// p, v0 and v1 keep 3 frames; c (last) none.
+const char* kHistoryLayout = R"(
+robot: histbot
+observations:
+  - {name: p, unit: "1", history: 3}
+  - {name: v0, unit: "1", history: 3}
+  - {name: v1, unit: "1", history: 3}
+  - {name: c, unit: "1"}
+actions:
+  - {name: a0, command: c0, unit: "1", scale: 1, offset: 0, low: -1000, high: 1000}
+  - {name: a1, command: c1, unit: "1", scale: 1, offset: 0, low: -1000, high: 1000}
+)";
+
+std::string HistoryMap(const std::string& history, const std::string& obs, int size) {
+  return "robot: histbot\ninput: {name: obs, size: " + std::to_string(size) +
+         "}\noutput: {name: actions, size: 2}\nhistory: " + history + "\nobservations: " + obs +
+         "\nactions: [a0, a1]\n";
+}
+
+// The value a model input named like a layout input ("v0@-2") or a constant ("=0.5") holds at
+// policy step t of the sequence the test feeds: p = 100 + t, v0 = 200 + t, v1 = 300 + t,
+// c = 400 + t; k steps ago is step max(t - k, 0) (the first step fills every history slot).
+double Expected(const std::string& input, int t) {
+  if (input[0] == '=') return std::stod(input.substr(1));
+  const auto at = input.find("@-");
+  const std::string base = input.substr(0, at);
+  const int lag = at == std::string::npos ? 0 : std::stoi(input.substr(at + 2));
+  const double start = base == "p" ? 100 : base == "v0" ? 200 : base == "v1" ? 300 : 400;
+  return start + std::max(t - lag, 0);
+}
+
+// Feeds the sequence through the layout's observation builder for 8 policy steps and checks every
+// element of the model's input row against `expected` (what each element must be, written out).
+// `with_c`: the layout with c (a frame-major stack cannot take it: c keeps no frames).
+void CheckRows(const std::string& map_text, const std::vector<std::string>& expected, bool with_c = true) {
+  std::string text = kHistoryLayout;
+  if (!with_c) text.erase(text.find("  - {name: c"), text.find("actions:") - text.find("  - {name: c"));
+  auto layout = robot::ParseIoLayout(text, "histbot.yaml");
+  REQUIRE_MESSAGE(layout.ok(), layout.error().message);
+  auto map = ox::ParseMapping(map_text, "map.yaml", *layout);
+  REQUIRE_MESSAGE(map.ok(), map.error().message);
+  auto builder = robot::ObservationBuilder::Create(*layout, {"p", "v0", "v1", "c"});  // c unread without it
+  REQUIRE_MESSAGE(builder.ok(), builder.error().message);
+  std::vector<float> obs(layout->observation_size());
+  for (int t = 0; t < 8; ++t) {
+    const double signals[] = {100.0 + t, 200.0 + t, 300.0 + t, 400.0 + t};
+    builder->Build(signals, t == 0, obs.data());
+    const std::vector<double> row = ox::InputRow(*map, obs);
+    REQUIRE(row.size() == expected.size());
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      CAPTURE(t);
+      CAPTURE(k);
+      CAPTURE(expected[k]);
+      CHECK(row[k] == Expected(expected[k], t));
+    }
+  }
+  // The model the mapping describes imports, and the engine acts as the graph on the stacked row.
+  OnnxBuilder b(static_cast<int>(expected.size()));
+  b.Gemm(8);
+  b.Node("Elu", {"$"});
+  b.Gemm(2);
+  const std::string bytes = b.Bytes();
+  auto model = ox::ParseModel({reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()}, "m.onnx");
+  REQUIRE(model.ok());
+  auto imp = ox::Import(*model, *map, *layout, {});
+  REQUIRE_MESSAGE(imp.ok(), imp.error().message);
+  CHECK(imp->check_max_ratio <= 1.0);
+}
+
+}  // namespace
+
+TEST_CASE("stacked history in either order: every model input element is the layout's frame the mapping names") {
+  // Frame-major, oldest frame first (a frame is every term at one step).
+  CheckRows(HistoryMap("{length: 3, order: frame-major, oldest: first}", "[p, [v0, v1]]", 9),
+            {"p@-2", "v0@-2", "v1@-2", "p@-1", "v0@-1", "v1@-1", "p", "v0", "v1"}, false);
+  // Frame-major, newest first, a constant repeated in every frame.
+  CheckRows(HistoryMap("{length: 3, order: frame-major, oldest: last}", "[v1, {constant: 0.5}, p, v0]", 12),
+            {"v1", "=0.5", "p", "v0", "v1@-1", "=0.5", "p@-1", "v0@-1", "v1@-2", "=0.5", "p@-2", "v0@-2"}, false);
+  // Term-major, oldest first (each term's frames together, a frame its components), and a term
+  // of its own length.
+  CheckRows(HistoryMap("{length: 3, order: term-major, oldest: first}", "[[v0, v1], p, {term: c, history: 1}]", 10),
+            {"v0@-2", "v1@-2", "v0@-1", "v1@-1", "v0", "v1", "p@-2", "p@-1", "p", "c"});
+  // Term-major, newest first.
+  CheckRows(HistoryMap("{length: 3, order: term-major, oldest: last}", "[p, {term: c, history: 1}, [v0, v1]]", 10),
+            {"p", "p@-1", "p@-2", "c", "v0", "v1", "v0@-1", "v1@-1", "v0@-2", "v1@-2"});
+  // Without a history the mapping lists the layout's inputs themselves, as before.
+  CheckRows(
+      "robot: histbot\ninput: {name: obs, size: 10}\noutput: {name: actions, size: 2}\n"
+      "observations: [c, p@-2, p@-1, p, [v0@-2, v1@-2], v0@-1, v1@-1, v0, v1]\nactions: [a0, a1]\n",
+      {"c", "p@-2", "p@-1", "p", "v0@-2", "v1@-2", "v0@-1", "v1@-1", "v0", "v1"});
+}
+
+TEST_CASE("a stacked history the layout cannot give is refused, naming the field") {
+  auto layout = robot::ParseIoLayout(kHistoryLayout, "histbot.yaml");
+  REQUIRE(layout.ok());
+  auto error = [&](const std::string& text) {
+    auto m = ox::ParseMapping(text, "map.yaml", *layout);
+    return m.ok() ? std::string("(parsed)") : m.error().message;
+  };
+  CHECK(error(HistoryMap("{length: 3, order: time-major, oldest: first}", "[p, v0, v1, c]", 12)) ==
+        "map.yaml: history.order: 'time-major' is neither frame-major (every term of one frame, then the next "
+        "frame) nor term-major (every frame of one term, then the next term)");
+  CHECK(error(HistoryMap("{length: 3, order: frame-major, oldest: newest}", "[p, v0, v1, c]", 12)) ==
+        "map.yaml: history.oldest: 'newest' is neither first nor last (where the oldest frame sits)");
+  CHECK(error(HistoryMap("{length: 3, order: frame-major}", "[p, v0, v1, c]", 12)).find("history") !=
+        std::string::npos);
+  CHECK(error(HistoryMap("{length: 0, order: frame-major, oldest: last}", "[p, v0, v1]", 9)).find("history.length") !=
+        std::string::npos);
+  // c has no history in the layout: a frame-major stack would need c one step ago.
+  CHECK(error(HistoryMap("{length: 3, order: frame-major, oldest: last}", "[p, v0, v1, c]", 12)) ==
+        "map.yaml: observations[3]: 'c' has a history of 1 in the 'histbot' layout, but the mapping takes 3 frames "
+        "of it (no 'c@-1')");
+  CHECK(error(HistoryMap("{length: 3, order: frame-major, oldest: last}", "[p, v0, v1, {term: c, history: 1}]", 10)) ==
+        "map.yaml: observations[3]: a term's own history needs the mapping's history with order term-major (a "
+        "frame-major frame holds every term)");
+  // The layout keeps 3 frames of p; a mapping of 2 leaves one unseen.
+  CHECK(error(HistoryMap("{length: 2, order: term-major, oldest: first}", "[p, v0, v1, {term: c, history: 1}]", 7)) ==
+        "map.yaml: observations: layout observation 'p@-2' feeds no input element (the policy would not see it)");
+  CHECK(
+      error(HistoryMap("{length: 3, order: term-major, oldest: first}", "[p, v0@-1, v1, {term: c, history: 1}]", 10)) ==
+      "map.yaml: observations[1]: 'v0@-1': with a history the mapping names each term once (its frames follow "
+      "from history)");
+  CHECK(error(HistoryMap("{length: 3, order: term-major, oldest: first}", "[p, v0, v1, {term: c, history: 1}]", 12)) ==
+        "map.yaml: observations: 10 input elements (every term's frames, history.length 3), but input.size is 12 (one "
+        "entry per input element)");
+  CHECK(error(HistoryMap("{length: 3, order: term-major, oldest: first}", "[p, [v0, vX], v1, {term: c, history: 1}]",
+                         13)) == "map.yaml: observations[1][1]: 'vX' is not an observation of the 'histbot' layout");
+  CHECK(error(HistoryMap("{length: 3, order: term-major, oldest: first}", "[p, [], v1, {term: c, history: 1}]", 10)) ==
+        "map.yaml: observations[1]: an empty term");
 }

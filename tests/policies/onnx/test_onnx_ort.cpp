@@ -12,6 +12,8 @@
 // 1e-5 (measured: at most 1.6e-6), which a reduced-precision path would not meet.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +27,7 @@
 #include "policies/onnx/onnx_import.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/policy/reference.hpp"
+#include "runtime/robot/observation_builder.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -67,6 +70,7 @@ std::vector<std::vector<float>> Recorded(const std::string& env_name, const std:
 struct Compared {
   double max_abs = 0, max_ratio = 0, graph_ratio = 0;
   std::size_t rows = 0;
+  std::vector<std::vector<double>> engine;  // the engine's commands per row
 };
 
 Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const robot::IoLayout& layout,
@@ -108,6 +112,7 @@ Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const
     auto graph = ox::Evaluate(*model, ox::InputRow(map, observations[r]));
     REQUIRE(graph.ok());
     const std::vector<double> graph_cmd = ox::CommandsOf(map, layout, *graph);
+    c.engine.emplace_back(pd->action().begin(), pd->action().end());
     for (std::size_t k = 0; k < ort_cmd.size(); ++k) {
       const double engine = static_cast<double>(pd->action()[k]);
       const double tol = ox::CheckTolerance(ref.error_bound[k], ort_cmd[k]);
@@ -187,4 +192,52 @@ actions: [a1, a2, a0]
   CHECK(c.max_ratio <= 1.0);
   CHECK(c.max_abs < 1e-5);
   CHECK(c.graph_ratio <= 1.0);
+}
+
+TEST_CASE("stacked history, frame-major and term-major: each output reads the frames it names, as ONNX Runtime") {
+  // tools/onnx/make_models.py states where each frame sits in either order and writes one linear
+  // layer reading a0 = p(now) + 0.5 v1(3 steps ago), a1 = v0(1 step ago) - v1(2 steps ago). The
+  // layout keeps 4 frames; a 300-step sequence goes through its observation builder, then the
+  // imported blob and ONNX Runtime.
+  auto layout = robot::ParseIoLayout(R"(
+robot: histbot
+observations: [{name: p, history: 4}, {name: v0, history: 4}, {name: v1, history: 4}]
+actions:
+  - {name: a0, command: c0, scale: 1, offset: 0, low: -100, high: 100}
+  - {name: a1, command: c1, scale: 1, offset: 0, low: -100, high: 100}
+)",
+                                     "histbot.yaml");
+  REQUIRE_MESSAGE(layout.ok(), layout.error().message);
+  const int steps = 300;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  std::vector<std::array<double, 3>> signal(steps);
+  for (auto& s : signal)
+    for (double& x : s) x = u(rng);
+  auto builder = robot::ObservationBuilder::Create(*layout, {"p", "v0", "v1"});
+  REQUIRE(builder.ok());
+  std::vector<std::vector<float>> rows(steps, std::vector<float>(layout->observation_size()));
+  for (int t = 0; t < steps; ++t)
+    builder->Build(signal[static_cast<std::size_t>(t)].data(), t == 0, rows[static_cast<std::size_t>(t)].data());
+  auto ago = [&](int t, int k, int i) {  // signal i, k steps before step t (the first step fills the history)
+    return static_cast<double>(
+        static_cast<float>(signal[static_cast<std::size_t>(std::max(t - k, 0))][static_cast<std::size_t>(i)]));
+  };
+  for (const char* name : {"history_frame_major", "history_term_major"}) {
+    CAPTURE(name);
+    auto map = ox::LoadMapping(kModels + "/" + name + ".yaml", *layout);
+    REQUIRE_MESSAGE(map.ok(), map.error().message);
+    const Compared c = AgainstOrt(name, kModels + "/" + name + ".onnx", *layout, *map, rows);
+    CHECK(c.max_ratio <= 1.0);
+    CHECK(c.max_abs < 1e-5);
+    CHECK(c.graph_ratio <= 1.0);
+    double worst = 0;
+    for (int t = 0; t < steps; ++t) {
+      const auto& cmd = c.engine[static_cast<std::size_t>(t)];
+      worst = std::max(worst, std::fabs(cmd[0] - (ago(t, 0, 0) + 0.5 * ago(t, 3, 2))));
+      worst = std::max(worst, std::fabs(cmd[1] - (ago(t, 1, 1) - ago(t, 2, 2))));
+    }
+    MESSAGE(std::string(name) << ": engine against the frames it names, max |diff| " << worst);
+    CHECK(worst < 1e-5);
+  }
 }
