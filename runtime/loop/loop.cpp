@@ -349,6 +349,9 @@ void CheckSample(const RobotModel& m, RobotData& d) noexcept {
     st.invalid_input = -1;
     if (!st.seen) continue;
     const robot::StreamSpec& spec = m.streams[s];
+    // A command source silent for longer than zero_after: its command stops.
+    if (spec.zero_after_ticks > 0 && st.age_ticks > spec.zero_after_ticks)
+      std::fill_n(d.fields.begin() + spec.first_field, spec.field_count, 0.0);
     for (std::uint32_t f = spec.first_field; f < spec.first_field + spec.field_count; ++f) {
       const double v = d.fields[f];
       if (!(v >= m.fields[f].min && v <= m.fields[f].max)) {

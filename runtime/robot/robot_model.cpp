@@ -143,15 +143,28 @@ struct Loader : detail::Builder {
 
   Status DeclaredStreams(const YAML::Node& root) {
     return f.EachItem(root, "streams", "", false, [&](const YAML::Node& n, const std::string& w) -> Status {
-      PBPPO_TRY(
-          f.Keys(n, w, {"name", "transport", "period_s", "stale_after", "invalid_safe_stop", "required", "fields"}));
+      PBPPO_TRY(f.Keys(
+          n, w,
+          {"name", "transport", "period_s", "stale_after", "zero_after", "invalid_safe_stop", "required", "fields"}));
       StreamSpec s;
       PBPPO_TRY(f.Text(n, "name", w, &s.name, Rule::kToken));
       PBPPO_TRY(f.Text(n, "transport", w, &s.transport, Rule::kToken));
       PBPPO_TRY(f.Number(n, "period_s", w, 1e-6, 100.0, &s.period_s));
-      PBPPO_TRY(ReadStale(n, w, &s.stale_after));
+      if (n["zero_after"]) {
+        // A command source: its silence stops the command, it is no fault.
+        for (const char* k : {"stale_after", "required"})
+          if (n[k])
+            return f.Fail(YamlFields::Join(w, k),
+                          "goes with stale limits; with zero_after the stream's silence is no fault (its fields "
+                          "read 0)");
+        PBPPO_TRY(f.Number(n, "zero_after", w, 1e-6, 1e6, &s.zero_after));
+        s.required = false;
+      } else {
+        PBPPO_TRY(ReadStale(n, w, &s.stale_after));
+      }
       PBPPO_TRY(f.Count(n, "invalid_safe_stop", w, 1, 1000000, &s.invalid_safe_stop));
       PBPPO_TRY(f.Bool(n, "required", w, &s.required));
+      const bool zero = s.zero_after > 0;
       PBPPO_TRY(StartStream(std::move(s), w));
       return f.EachItem(n, "fields", w, true, [&](const YAML::Node& field, const std::string& fw) -> Status {
         PBPPO_TRY(f.Keys(field, fw, {"name", "min", "max", "count"}));
@@ -161,6 +174,9 @@ struct Loader : detail::Builder {
         PBPPO_TRY(f.Text(field, "name", fw, &name, Rule::kToken));
         PBPPO_TRY(f.OptionalNumber(field, "min", fw, -kInf, kInf, &lo));
         PBPPO_TRY(f.OptionalNumber(field, "max", fw, -kInf, kInf, &hi));
+        if (zero && !(lo <= 0 && 0 <= hi))
+          return f.Fail(fw, "'" + name + "': [" + YamlFields::Num(lo) + ", " + YamlFields::Num(hi) +
+                                "] does not hold 0, what the stream's fields read after zero_after");
         if (!field["count"]) return AddField(name, lo, hi, fw);
         PBPPO_TRY(f.Count(field, "count", fw, 1, 4096, &count));
         if (name.find("{i}") == std::string::npos) return f.Fail(fw + ".name", "'" + name + "' has no {i}");
@@ -329,6 +345,7 @@ Status Derive(RobotModel& m, double tick_s) {
     s.stale_degraded_ticks = missed(s.stale_after.degraded);
     s.stale_safe_stop_ticks = missed(s.stale_after.safe_stop);
     s.lost_ticks = periods(s.stale_after.lost);
+    s.zero_after_ticks = s.zero_after > 0 ? std::max<std::uint32_t>(1, missed(s.zero_after)) : 0;
   }
   for (CommandSpec& c : m.commands) {
     c.rate = c.rate_per_s * tick_s;
@@ -340,8 +357,8 @@ Status Derive(RobotModel& m, double tick_s) {
     sm.commands.push_back({c.name, c.min, c.max, c.degraded_min, c.degraded_max, c.rate, c.stop, c.stop_rate,
                            c.stop_value, c.hold_input});
   for (const StreamSpec& s : m.streams)
-    sm.streams.push_back(
-        {s.name, s.stale_degraded_ticks, s.stale_safe_stop_ticks, s.lost_ticks, s.invalid_safe_stop, s.required});
+    sm.streams.push_back({s.name, s.stale_degraded_ticks, s.stale_safe_stop_ticks, s.lost_ticks, s.invalid_safe_stop,
+                          s.required, s.zero_after <= 0});
   for (const FieldSpec& f : m.fields) sm.input_names.push_back(f.name);
   for (TransportSpec& t : m.transports) {
     t.first_link = static_cast<std::uint32_t>(sm.transport_names.size());

@@ -63,8 +63,12 @@ struct StreamSpec {
   // false: silence before the first sample is no fault (an operator who has not spoken yet);
   // once a sample came, the stream is stale and lost like any other.
   bool required = true;
+  // > 0 (zero_after in robot.yaml): a command source, such as a velocity command from a navigation
+  // stack, whose silence is no fault: older than this many periods, every field of the stream reads
+  // 0 (the command stops) until the next sample. stale_after is not given then.
+  double zero_after = 0;
   // Per tick (derived from the tick period): ages in ticks, "older than".
-  std::uint32_t stale_degraded_ticks = 0, stale_safe_stop_ticks = 0, lost_ticks = 0;
+  std::uint32_t stale_degraded_ticks = 0, stale_safe_stop_ticks = 0, lost_ticks = 0, zero_after_ticks = 0;
 };
 
 struct CommandSpec {

@@ -73,7 +73,7 @@ void CheckStreams(const SupervisorModel& m, const SupervisorInput& in, Superviso
         run = 0;
       }
     }
-    if (!x.seen && !l.required) continue;
+    if (!l.silence_faults || (!x.seen && !l.required)) continue;
     if (x.age_ticks > l.lost_ticks) {
       f.Add(Cause::kLostPeer, Mode::kEStop, I32(s), -1, age, l.lost_ticks);
     } else if (!x.seen) {
@@ -162,7 +162,8 @@ Status ValidateSupervisorModel(const SupervisorModel& m) {
     }
   }
   for (const StreamLimit& s : m.streams) {
-    if (!(s.stale_degraded_ticks < s.stale_safe_stop_ticks && s.stale_safe_stop_ticks < s.lost_ticks))
+    if (s.silence_faults &&
+        !(s.stale_degraded_ticks < s.stale_safe_stop_ticks && s.stale_safe_stop_ticks < s.lost_ticks))
       return Invalid("stream '" + s.name + "': stale limits " + std::to_string(s.stale_degraded_ticks) +
                      " (degraded), " + std::to_string(s.stale_safe_stop_ticks) + " (safe-stop), " +
                      std::to_string(s.lost_ticks) + " (lost) must increase");

@@ -91,6 +91,9 @@ struct StreamLimit {
   std::uint32_t stale_degraded_ticks = 1, stale_safe_stop_ticks = 2, lost_ticks = 20;  // "older than"
   std::uint32_t invalid_safe_stop = 1;
   bool required = true;  // false: no fault before the first sample
+  // false: a command source whose silence is no fault (its values read 0 after a while: the
+  // loop's business); the stale and lost limits are not used.
+  bool silence_faults = true;
 };
 
 struct SignalLimit {

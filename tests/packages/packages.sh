@@ -35,6 +35,7 @@ done
 dpkg-deb -c "$ctl_deb" | awk '{print $6}' >"$work/controller.files"
 for f in ./usr/bin/pbppo-controller ./usr/bin/pbppo-operator ./usr/share/pbppo-rt/robots/auv/robot.yaml \
   ./usr/share/pbppo-rt/robots/quadruped/robot.yaml ./usr/share/pbppo-rt/robots/dds_profile.xml \
+  ./usr/share/pbppo-rt/robots/ros2/idl/Twist_.idl \
   ./usr/share/pbppo-rt/policies/auv_nav/auv_nav.blob ./usr/share/pbppo-rt/policies/quadruped_walk/mixed.blob \
   ./usr/lib/systemd/system/pbppo-controller@.service ./usr/share/pbppo-rt/service/auv.conf \
   ./usr/share/doc/pbppo-rt/service.md; do

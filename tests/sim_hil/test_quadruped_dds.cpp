@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -24,6 +25,7 @@
 #include "tests/support/dds_domain.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
 
 using namespace pbppo;
 
@@ -50,8 +52,8 @@ std::uint64_t Commands(dds::DdsTransport& t) {
   return t.link().reader(0)->counters().received;
 }
 
-std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, robot::Transport* op) {
-  const robot::RobotModel& m = test::QuadrupedRobot();
+std::unique_ptr<sim::QuadrupedRig> MakeRig(const std::string& schedule_yaml, robot::Transport* op,
+                                           const robot::RobotModel& m = test::QuadrupedRobot()) {
   auto s = loop::ParseSchedule(schedule_yaml, "test schedule", m);
   REQUIRE_MESSAGE(s.ok(), s.error().message);
   auto sc = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
@@ -216,4 +218,176 @@ TEST_CASE(
   REQUIRE(after != std::string::npos);
   REQUIRE(std::sscanf(out.c_str() + after, "after tick=%llu phase=%u mode=%u", &tick, &phase, &mode) == 3);
   CHECK(mode >= static_cast<unsigned>(safety::Mode::kSafeStop));
+}
+
+namespace {
+
+// The quadruped with docs/cmd_vel.md's edit: its velocity command from ROS 2's cmd_vel
+// (geometry_msgs/msg/Twist on rt/cmd_vel, models/ros2/idl) on a transport of its own, a command
+// source whose silence stops the command (zero_after) instead of a fault; the status stays on the
+// operator transport.
+const robot::RobotModel& CmdVelQuadruped() {
+  static const robot::RobotModel* model = [] {
+    const std::string dir = test::CopyRobotFolder("quadruped", "quadruped_cmd_vel");
+    std::string text = test::ReadText(dir + "/robot.yaml");
+    text = test::ReplaceOnce(text, R"(  - name: operator
+    kind: dds
+    when: policy
+    messages:
+      - topic: velocity_command
+        idl: idl/VelocityCommand.idl
+        direction: in
+        stream: velocity_command
+        fields: {command_vx: vx_mps, command_vy: vy_mps, command_yaw_rate: yaw_rate_radps}
+        peer: {seq: sequence, stamp_ns: clock_ns}  # what an operator writes besides the command
+        durability: volatile           # any operator, ROS 2's publishers included
+)",
+                             R"(  - name: nav
+    kind: dds
+    when: policy
+    topic_prefix: rt/
+    messages:
+      - topic: cmd_vel
+        idl: ../ros2/idl/Twist_.idl
+        direction: in
+        stream: velocity_command
+        fields: {command_vx: linear.x, command_vy: linear.y, command_yaw_rate: angular.z}
+        durability: volatile
+  - name: operator
+    kind: dds
+    when: policy
+    messages:
+)");
+    text = test::ReplaceOnce(text, R"(    transport: operator
+    period_s: 0.1
+    required: false
+    stale_after: {degraded: 3, safe_stop: 5, lost: 20}
+)",
+                             R"(    transport: nav
+    period_s: 0.1
+    zero_after: 5
+)");
+    std::ofstream(dir + "/robot.yaml") << text;
+    auto m = robot::LoadRobotModel(dir + "/robot.yaml");
+    if (!m) {
+      std::fprintf(stderr, "%s\n", m.error().message.c_str());
+      std::abort();
+    }
+    return new robot::RobotModel(std::move(*m));
+  }();
+  return *model;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "ROS 2's cmd_vel (a Twist on rt/cmd_vel) drives the walk, its silence stops the command, a NaN stops the "
+    "robot") {
+  const int domain = test::TestDomain(43);
+  const robot::RobotModel& m = CmdVelQuadruped();
+  const int stream = m.StreamIndex("velocity_command");
+  REQUIRE(stream >= 0);
+  CHECK(m.streams[static_cast<std::size_t>(stream)].zero_after_ticks == 550);  // older than 5.5 periods
+  auto t = dds::DdsTransport::Open(m, "nav", Options(dds::DdsNaming::kNative, domain));
+  REQUIRE_MESSAGE(t.ok(), t.error().message);
+  auto ctl = std::move(*t);
+  CHECK(ctl->link().message(0).type.type_name == "geometry_msgs::msg::dds_::Twist_");
+  // A ROS 2 node's side: the same type and topic, written as a teleop or Nav2 node writes it.
+  auto pub = dds::DdsLink::Open(m, "nav", dds::DdsSide::kPeer, Options(dds::DdsNaming::kNative, domain));
+  REQUIRE_MESSAGE(pub.ok(), pub.error().message);
+  dds::DdsLink& nav = **pub;
+  REQUIRE(ctl->link().WaitForPeer(20 * kSecond));
+
+  // The node, on its clock: 0 until 2.5 s, then 0.5 m/s forward at 20 Hz until 5.9 s, one last
+  // Twist of 0.45 m/s (it marks the last sample in the trace: how long it stays in force is the
+  // silence before the command stops, on the rig's own clock), silent, one Twist with a NaN at
+  // 8.5 s, silent again.
+  auto rig = MakeRig("stream: velocity_command\nphases:\n  - {name: nav, duration_s: 9.0}\n", ctl.get(), m);
+  std::atomic<bool> done{false};
+  std::thread nav_thread([&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto next = t0;
+    dds::DdsSample c(nav.message(0).type);
+    std::vector<double> fields(m.fields.size(), 0.0);
+    const auto vx = static_cast<std::size_t>(m.FieldIndex("command_vx"));
+    bool last_sent = false, nan_sent = false;
+    while (!done.load()) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      bool send = true;
+      if (s < 5.9) {
+        fields[vx] = s < 2.5 ? 0.0 : 0.5;
+      } else if (!last_sent) {
+        fields[vx] = 0.45;
+        last_sent = true;
+      } else if (s >= 8.5 && !nan_sent) {
+        fields[vx] = std::nan("");
+        nan_sent = true;
+      } else {
+        send = false;
+      }
+      if (send) {
+        nav.FillFromFields(0, fields, &c);
+        (void)nav.writer(0)->Write(c.bytes());
+      }
+      next += std::chrono::milliseconds(50);
+      std::this_thread::sleep_until(next);
+    }
+  });
+  const bool ran = rig->RunSchedule();
+  done.store(true);
+  nav_thread.join();
+  CHECK(ran);
+  const std::vector<sim::RigSample>& trace = rig->trace();
+  // While commanded: the robot walks at the command.
+  std::uint64_t n = 0;
+  const double err = TrackingError(trace, 0.5f, 1.0, &n);
+  CAPTURE(n);
+  CHECK(n >= 1500);
+  CHECK(err <= 0.2);
+  // Silent: the last Twist stays in force for 5 periods and a half (0.55 s), then the command in
+  // force goes straight to 0; the mode stays nominal, the robot stops and stays up.
+  double last_from = -1, last_to = -1, zeroed = -1, first_fault = 1e9;
+  for (const loop::ModeChange& c : rig->loop().mode_changes())
+    first_fault = std::min(first_fault, static_cast<double>(c.tick) * m.tick_period_s);
+  double sum = 0;
+  std::uint64_t still = 0;
+  bool contact = false;
+  for (const sim::RigSample& s : trace) {
+    if (s.cmd_vx == 0.45f) {
+      if (last_from < 0) last_from = s.t_s;
+      last_to = s.t_s;
+    }
+    if (last_from >= 0 && zeroed < 0 && s.cmd_vx == 0.0f) zeroed = s.t_s;
+    if (zeroed >= 0 && s.mode == 0) {
+      contact = contact || s.body_contact;
+      if (s.t_s > zeroed + 1.0) {
+        sum += std::fabs(s.vx_mps);
+        ++still;
+      }
+    }
+  }
+  CAPTURE(last_from);
+  CAPTURE(last_to);
+  CAPTURE(zeroed);
+  CAPTURE(first_fault);
+  REQUIRE(last_from > 0);
+  REQUIRE(zeroed > 0);
+  CHECK(zeroed - last_to < 0.002);  // straight from the last command to 0, nothing between
+  CHECK(zeroed - last_from == doctest::Approx(0.551).epsilon(0.01));
+  CHECK(first_fault > zeroed + 1.5);  // no fault for the silence
+  CHECK_FALSE(contact);
+  REQUIRE(still >= 500);
+  CHECK(sum / static_cast<double>(still) <= 0.15);
+  // The NaN: an invalid sample, safe-stop naming the field.
+  bool safe_stop = false;
+  for (const loop::ModeChange& c : rig->loop().mode_changes())
+    if (c.mode >= safety::Mode::kSafeStop) {
+      CAPTURE(c.reason);
+      safe_stop = true;
+      CHECK(std::string(c.reason).find("invalid sample") != std::string::npos);
+      CHECK(std::string(c.reason).find("command_vx") != std::string::npos);
+      break;
+    }
+  CHECK(safe_stop);
+  CHECK(ctl->link().counters().malformed == 0);
 }

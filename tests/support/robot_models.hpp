@@ -13,13 +13,14 @@ namespace pbppo::test {
 
 // A fresh copy of a shipped robot's folder (or of `folder`, relative to the source tree) to edit:
 // <scratch dir `scratch`>/<name>, with the robots' shared files beside it (models/dds_profile.xml,
-// the quadruped's operator messages).
+// the quadruped's operator messages, the ROS 2 messages of models/ros2).
 // Returns the copy's folder.
 inline std::string CopyRobotFolder(const std::string& name, const std::string& scratch, std::string folder = "") {
   if (folder.empty()) folder = "models/" + name;
   const std::string root = ScratchDir(scratch), dir = root + "/" + name;
   std::filesystem::copy(SourcePath(folder), dir, std::filesystem::copy_options::recursive);
   std::filesystem::copy_file(SourcePath("models/dds_profile.xml"), root + "/dds_profile.xml");
+  std::filesystem::copy(SourcePath("models/ros2"), root + "/ros2", std::filesystem::copy_options::recursive);
   // The operator's message files another robot names from beside it (../quadruped/idl).
   if (name != "quadruped") {
     std::filesystem::create_directories(root + "/quadruped/idl");

@@ -504,3 +504,39 @@ TEST_CASE("robot model: motors over DDS, several streams per message, checksums 
   CHECK(err("  lost_per_sample_max: 0\n", "") ==
         m0 + ".fields.lost_FR_hip: 'lost_FR_hip' is not a field of the message's streams");
 }
+
+TEST_CASE("robot model: zero_after - a command source whose silence stops the command, no fault, bad data named") {
+  const test::RobotFileEdits edits("quadruped", "robot_model_zero_after");
+  const std::string& p = edits.path();
+  const std::string stale = "    required: false\n    stale_after: {degraded: 3, safe_stop: 5, lost: 20}\n";
+  const std::string original = test::ReadText(test::SourcePath("models/quadruped/robot.yaml"));
+  std::ofstream(p) << test::ReplaceOnce(original, stale, "    zero_after: 5\n");
+  auto m = LoadRobotModel(p);
+  REQUIRE_MESSAGE(m.ok(), m.error().message);
+  const auto s = static_cast<std::size_t>(m->StreamIndex("velocity_command"));
+  CHECK(m->streams[s].zero_after == 5.0);
+  CHECK(m->streams[s].zero_after_ticks == 550);  // older than 5.5 periods of 0.1 s at 1 kHz
+  CHECK_FALSE(m->streams[s].required);
+  CHECK_FALSE(m->supervisor_model.streams[s].silence_faults);
+  CHECK(m->supervisor_model.streams[0].silence_faults == (s != 0));
+  auto slow = WithTickPeriod(*m, 0.002);
+  REQUIRE(slow.ok());
+  CHECK(slow->streams[s].zero_after_ticks == 275);
+  // The shipped quadruped's operator: stale limits, faults.
+  CHECK(test::QuadrupedRobot().streams[s].zero_after_ticks == 0);
+  CHECK(test::QuadrupedRobot().supervisor_model.streams[s].silence_faults);
+
+  CHECK(edits.Error(stale, "    required: false\n    zero_after: 5\n") ==
+        p + ": streams[0].required: goes with stale limits; with zero_after the stream's silence is no fault (its "
+            "fields read 0)");
+  CHECK(edits.Error(stale, stale + "    zero_after: 5\n") ==
+        p + ": streams[0].stale_after: goes with stale limits; with zero_after the stream's silence is no fault (its "
+            "fields read 0)");
+  CHECK(edits.Error(stale, "    zero_after: 0\n").find(p + ": streams[0].zero_after: ") == 0);
+  CHECK(edits.Error(stale, "    zero_after: -1\n").find(p + ": streams[0].zero_after: ") == 0);
+  CHECK(edits.Error(stale + "    invalid_safe_stop: 1\n    fields:\n      - {name: command_vx, min: -1.0, max: 1.0}",
+                    "    zero_after: 5\n    invalid_safe_stop: 1\n    fields:\n      - {name: command_vx, min: 0.1, "
+                    "max: 1.0}") ==
+        p + ": streams[0].fields[0]: 'command_vx': [0.1, 1] does not hold 0, what the stream's fields read after "
+            "zero_after");
+}
