@@ -18,6 +18,7 @@
 
 #include "QuadrupedStatus.h"
 #include "VelocityCommand.h"
+#include "ros2_qos.h"
 
 /* The descriptor under another type name (ROS 2's), without the XTypes type information that
  * names the IDL's type: the remote side matches on the name. */
@@ -75,11 +76,7 @@ int main(int argc, char** argv) {
     fprintf(stderr, "cyclone_operator: dds_create_topic failed\n");
     return 1;
   }
-  /* ROS 2's default QoS: reliable, volatile, keep last 10. */
-  dds_qos_t* qos = dds_create_qos();
-  dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
-  dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 10);
+  dds_qos_t* qos = Ros2DefaultQos();
   const dds_entity_t writer = dds_create_writer(participant, command_topic, qos, NULL);
   const dds_entity_t reader = dds_create_reader(participant, status_topic, qos, NULL);
   dds_delete_qos(qos);

@@ -4,9 +4,11 @@
 // on a wall clock). First an operator on Fast DDS with the project's names; then an operator
 // written against Cyclone DDS with ROS 2's names (tests/interop/cyclone_operator.c, a child
 // process): it commands a walk, reads the controller's status back, then falls silent, and the
-// controller must stop the robot.
+// controller must stop the robot. Last, ROS 2's cmd_vel: a Twist on rt/cmd_vel from a node written
+// against Cyclone DDS (tests/interop/cyclone_cmd_vel.c), whose silence stops the command.
 #include <doctest/doctest.h>
 
+#include <sys/wait.h>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -45,6 +47,24 @@ std::unique_ptr<dds::DdsTransport> MakeController(dds::DdsNaming naming, int dom
   auto t = dds::DdsTransport::Open(test::QuadrupedRobot(), "operator", Options(naming, domain));
   REQUIRE_MESSAGE(t.ok(), t.error().message);
   return std::move(*t);
+}
+
+// Cyclone DDS in a child process on the loopback interface, discovery by unicast to 127.0.0.1 like
+// the Fast DDS profile.
+void UseCycloneLoopback() {
+  setenv("CYCLONEDDS_URI",
+         "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+         "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
+         1);
+}
+
+// Reads a child's output to its end into *out; its exit status.
+int Finish(FILE* child, std::string* out) {
+  char line[512];
+  while (std::fgets(line, sizeof line, child) != nullptr) *out += line;
+  const int status = pclose(child);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 // Velocity command samples the controller took.
@@ -148,12 +168,7 @@ TEST_CASE(
     "a Cyclone DDS operator with ROS 2 names drives the walk, reads the status, and its silence stops the robot") {
   const int domain = test::TestDomain(42);
   auto ctl = MakeController(dds::DdsNaming::kRos2, domain);
-  // Cyclone on the loopback interface, discovery by unicast to 127.0.0.1 like the Fast DDS profile.
-  setenv("CYCLONEDDS_URI",
-         "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
-         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
-         "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>",
-         1);
+  UseCycloneLoopback();
   const std::string cmd = std::string(PBPPO_CYCLONE_OPERATOR) + " " + std::to_string(domain) + " 0.5 5.0 3.0 2>&1";
   FILE* child = popen(cmd.c_str(), "r");
   REQUIRE(child != nullptr);
@@ -195,9 +210,7 @@ TEST_CASE(
     CHECK(safe_stop);
     CHECK(Commands(*ctl) >= 40);
   }
-  char line[512];
-  while (std::fgets(line, sizeof line, child) != nullptr) out += line;
-  const int rc = pclose(child);
+  const int rc = Finish(child, &out);
   CAPTURE(out);
   REQUIRE(matched);
   CHECK(rc == 0);
@@ -292,50 +305,29 @@ TEST_CASE(
   REQUIRE_MESSAGE(t.ok(), t.error().message);
   auto ctl = std::move(*t);
   CHECK(ctl->link().message(0).type.type_name == "geometry_msgs::msg::dds_::Twist_");
-  // A ROS 2 node's side: the same type and topic, written as a teleop or Nav2 node writes it.
-  auto pub = dds::DdsLink::Open(m, "nav", dds::DdsSide::kPeer, Options(dds::DdsNaming::kNative, domain));
-  REQUIRE_MESSAGE(pub.ok(), pub.error().message);
-  dds::DdsLink& nav = **pub;
-  REQUIRE(ctl->link().WaitForPeer(20 * kSecond));
-
-  // The node, on its clock: 0 until 2.5 s, then 0.5 m/s forward at 20 Hz until 5.9 s, one last
+  // A ROS 2 node's side in Cyclone DDS (tests/interop/cyclone_cmd_vel.c), on its own clock from
+  // when it sees our reader: 0 until 2.5 s, then 0.5 m/s forward at 20 Hz until 5.9 s, one last
   // Twist of 0.45 m/s (it marks the last sample in the trace: how long it stays in force is the
-  // silence before the command stops, on the rig's own clock), silent, one Twist with a NaN at
-  // 8.5 s, silent again.
-  auto rig = MakeRig("stream: velocity_command\nphases:\n  - {name: nav, duration_s: 9.0}\n", ctl.get(), m);
-  std::atomic<bool> done{false};
-  std::thread nav_thread([&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto next = t0;
-    dds::DdsSample c(nav.message(0).type);
-    std::vector<double> fields(m.fields.size(), 0.0);
-    const auto vx = static_cast<std::size_t>(m.FieldIndex("command_vx"));
-    bool last_sent = false, nan_sent = false;
-    while (!done.load()) {
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      bool send = true;
-      if (s < 5.9) {
-        fields[vx] = s < 2.5 ? 0.0 : 0.5;
-      } else if (!last_sent) {
-        fields[vx] = 0.45;
-        last_sent = true;
-      } else if (s >= 8.5 && !nan_sent) {
-        fields[vx] = std::nan("");
-        nan_sent = true;
-      } else {
-        send = false;
-      }
-      if (send) {
-        nav.FillFromFields(0, fields, &c);
-        (void)nav.writer(0)->Write(c.bytes());
-      }
-      next += std::chrono::milliseconds(50);
-      std::this_thread::sleep_until(next);
-    }
-  });
-  const bool ran = rig->RunSchedule();
-  done.store(true);
-  nav_thread.join();
+  // silence before the command stops, on the rig's own clock), silence, one Twist with a NaN at
+  // 8.5 s.
+  UseCycloneLoopback();
+  const std::string cmd = std::string(PBPPO_CYCLONE_CMD_VEL) + " " + std::to_string(domain) + " 2>&1";
+  FILE* child = popen(cmd.c_str(), "r");
+  REQUIRE(child != nullptr);
+  const bool matched = ctl->link().WaitForPeer(30 * kSecond);
+  bool ran = false;
+  std::unique_ptr<sim::QuadrupedRig> rig;
+  if (matched) {
+    // 12 s: the node's NaN (8.5 s on its clock, which starts when it sees our reader, up to about
+    // a second after we see its writer) arrives inside the run.
+    rig = MakeRig("stream: velocity_command\nphases:\n  - {name: nav, duration_s: 12.0}\n", ctl.get(), m);
+    ran = rig->RunSchedule();
+  }
+  std::string out;
+  const int rc = Finish(child, &out);
+  CAPTURE(out);
+  REQUIRE(matched);
+  CHECK(rc == 0);
   CHECK(ran);
   const std::vector<sim::RigSample>& trace = rig->trace();
   // While commanded: the robot walks at the command.
