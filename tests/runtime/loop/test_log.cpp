@@ -28,6 +28,8 @@
 #include "runtime/policy/blob.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/scripted_transport.hpp"
+#include "tests/support/test_paths.hpp"
+#include "tests/support/text_edit.hpp"
 
 using namespace pbppo;
 
@@ -641,4 +643,63 @@ TEST_CASE("log: a later file whose snapshot is damaged or missing is refused nam
   twice.insert(twice.begin() + static_cast<long>(second), b.begin() + static_cast<long>(snap_at),
                b.begin() + static_cast<long>(snap_at + snap_len));
   CHECK(Refusal(twice).find(": record 2 (snapshot): a snapshot is only the first record") != std::string::npos);
+}
+
+TEST_CASE(
+    "log: a command source's silence (zero_after) - its fields read 0, no fault, and the run replays bit for "
+    "bit") {
+  // The AUV with its sample stream made a command source: older than 3 periods, every field reads 0.
+  const test::RobotFileEdits edits("auv", "log_zero_after");
+  // (Every field's range must hold 0: the beam count's too.)
+  std::ofstream(edits.path()) << test::ReplaceOnce(
+      test::ReplaceOnce(test::ReadText(test::SourcePath("models/auv/robot.yaml")),
+                        "    stale_after: {degraded: 1, safe_stop: 2, lost: 20}  # sample periods without a new "
+                        "sample; lost: e-stop\n",
+                        "    zero_after: 3\n"),
+      "{name: sonar_beams, min: 16, max: 16}", "{name: sonar_beams, min: 0, max: 16}");
+  auto loaded = robot::LoadRobotModel(edits.path());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
+  const robot::RobotModel& m = *loaded;
+  REQUIRE(m.streams[0].zero_after_ticks == 3);
+  auto policy = policy::PolicyModel::FromSpec(Spec(m, 1));
+  REQUIRE(policy.ok());
+  auto source = loop::PolicySource::Create(m, *policy);
+  REQUIRE(source.ok());
+  robot::RobotData d = robot::MakeRobotData(m);
+  auto l = loop::MakeLoopData(m, source->get());
+  test::ScriptedTransport t(m);
+  robot::Transport* ts[] = {&t};
+  const std::string path = test::ScratchDir("log_zero_after_run") + "/run.log";
+  auto rec = loop::Recorder::Open(path, m, loop::MakeLogHeader(m, loop::SourceKind::kPolicy, 1));
+  REQUIRE_MESSAGE(rec.ok(), rec.error().message);
+  REQUIRE(loop::AttachRecorder(m, d, *l, rec->get()).ok());
+  l->Arm();
+  std::vector<double> sample(m.fields.size(), 0.0);
+  const auto x = static_cast<std::size_t>(m.FieldIndex("x_m"));
+  bool zero_after_silence = true;
+  for (std::uint64_t k = 0; k < 160; ++k) {
+    if (k < 100 && k % 7 != 3) {  // samples until tick 100, some missed (one tick without)
+      sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(k);
+      sample[x] = 1.0 + 0.01 * static_cast<double>(k);
+      sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
+      for (std::uint32_t i = 0; i < 16; ++i)
+        sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0 + (k + i) % 9;
+      t.Put(m, 0, sample);
+    }
+    rt::TickTiming timing;
+    timing.tick = k;
+    REQUIRE(loop::Tick(m, d, *l, ts, timing) == loop::TickStatus::kRunning);
+    if (k <= 102) CHECK(d.fields[x] > 0.9);  // a missed sample or three keep the last values
+    if (k >= 103) zero_after_silence = zero_after_silence && d.fields[x] == 0.0;
+  }
+  CHECK(zero_after_silence);
+  CHECK(l->mode_changes().empty());  // the silence is no fault
+  REQUIRE((*rec)->Stop().ok());
+  auto log = loop::ReadLog(path);
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  auto replay = loop::Replay(m, *log, source->get(), 1);
+  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+  CHECK(replay->ticks == 160);
+  CHECK(replay->compared == replay->ticks);
+  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
 }
