@@ -436,7 +436,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   notes.push_back(
       "inputs:      " + std::to_string(n_in - constants) + " layout observations" +
       (constants ? ", " + std::to_string(constants) + " constants folded into the first layer's bias" : ""));
-  if (map_.history_length > 1 || map_.frame_major || map_.oldest_first)
+  if (map_.stacked)
     notes.push_back("history:     " + std::to_string(map_.history_length) + " frames, " +
                     (map_.frame_major ? "frame-major" : "term-major") + ", oldest " +
                     (map_.oldest_first ? "first" : "last"));

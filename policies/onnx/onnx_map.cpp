@@ -19,13 +19,10 @@ struct Entry {
   double constant = 0;
 };
 
-// One term of the observations list: its components (layout observation names, "" for a constant)
+// One term of the observations list: its components (each as one frame of it: the entry of "now")
 // and how many frames of it the model takes.
 struct Term {
-  std::string where;
-  std::vector<std::string> where_of;  // per component
-  std::vector<std::string> names;
-  std::vector<double> constants;
+  std::vector<Entry> parts;
   std::uint32_t frames = 1;
 };
 
@@ -33,6 +30,7 @@ struct Term {
 Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const robot::IoLayout& layout, Mapping* m,
                           std::vector<Entry>* entries) {
   const bool has_history = static_cast<bool>(root["history"]);
+  m->stacked = has_history;
   if (has_history) {
     YAML::Node h;
     PBPPO_TRY(f.Map(root, "history", "", &h));
@@ -57,17 +55,15 @@ Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const rob
   PBPPO_TRY(f.List(root, "observations", "", true, &obs));
   std::vector<Term> terms;
   for (std::size_t i = 0; i < obs.size(); ++i) {
+    const std::string where = "observations[" + std::to_string(i) + "]";
     Term t;
-    t.where = "observations[" + std::to_string(i) + "]";
     t.frames = m->history_length;
     auto component = [&](const YAML::Node& c, const std::string& w) -> Status {
       if (c.IsMap()) {
         PBPPO_TRY(f.Keys(c, w, {"constant"}));
         double v = 0;
         PBPPO_TRY(f.Number(c, "constant", w, -1e30, 1e30, &v));
-        t.where_of.push_back(w);
-        t.names.emplace_back();
-        t.constants.push_back(v);
+        t.parts.push_back({w, "", v});
         return {};
       }
       if (!c.IsScalar())
@@ -76,9 +72,7 @@ Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const rob
       if (has_history && name.find('@') != std::string::npos)
         return f.Fail(
             w, "'" + name + "': with a history the mapping names each term once (its frames follow from history)");
-      t.where_of.push_back(w);
-      t.names.push_back(name);
-      t.constants.push_back(0);
+      t.parts.push_back({w, name, 0.0});
       return {};
     };
     auto components = [&](const YAML::Node& c, const std::string& w) -> Status {
@@ -89,35 +83,32 @@ Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const rob
     };
     const YAML::Node e = obs[i];
     if (e.IsMap() && e["term"]) {
-      PBPPO_TRY(f.Keys(e, t.where, {"term", "history"}));
+      PBPPO_TRY(f.Keys(e, where, {"term", "history"}));
       if (!has_history || m->frame_major)
-        return f.Fail(t.where,
+        return f.Fail(where,
                       "a term's own history needs the mapping's history with order term-major (a "
                       "frame-major frame holds every term)");
-      PBPPO_TRY(f.Count(e, "history", t.where, 1, 4096, &t.frames));
-      PBPPO_TRY(components(e["term"], t.where + ".term"));
+      PBPPO_TRY(f.Count(e, "history", where, 1, 4096, &t.frames));
+      PBPPO_TRY(components(e["term"], where + ".term"));
     } else {
-      PBPPO_TRY(components(e, t.where));
+      PBPPO_TRY(components(e, where));
     }
     terms.push_back(std::move(t));
   }
 
-  // The entry of component c of term t at frame position p (0: the first of its frames in the input).
-  auto emit = [&](const Term& t, std::size_t c, std::uint32_t p) -> Status {
-    Entry en;
-    en.where = t.where_of[c];
-    if (t.names[c].empty()) {
-      en.constant = t.constants[c];
-    } else {
+  // The entry of a term's part at frame position p (0: the first of its frames in the input).
+  auto emit = [&](const Term& t, const Entry& part, std::uint32_t p) -> Status {
+    Entry en = part;
+    if (!part.name.empty()) {
       const std::uint32_t lag = m->oldest_first ? t.frames - 1 - p : p;  // policy steps before now
-      auto h = history_of.find(t.names[c]);
+      auto h = history_of.find(part.name);
       if (has_history && h == history_of.end())
-        return f.Fail(en.where, "'" + t.names[c] + "' is not an observation of the '" + layout.robot + "' layout");
+        return f.Fail(part.where, "'" + part.name + "' is not an observation of the '" + layout.robot + "' layout");
       if (has_history && lag >= h->second)
-        return f.Fail(en.where, "'" + t.names[c] + "' has a history of " + std::to_string(h->second) + " in the '" +
-                                    layout.robot + "' layout, but the mapping takes " + std::to_string(t.frames) +
-                                    " frames of it (no '" + t.names[c] + "@-" + std::to_string(lag) + "')");
-      en.name = lag == 0 ? t.names[c] : t.names[c] + "@-" + std::to_string(lag);
+        return f.Fail(part.where, "'" + part.name + "' has a history of " + std::to_string(h->second) + " in the '" +
+                                      layout.robot + "' layout, but the mapping takes " + std::to_string(t.frames) +
+                                      " frames of it (no '" + part.name + "@-" + std::to_string(lag) + "')");
+      if (lag > 0) en.name += "@-" + std::to_string(lag);
     }
     entries->push_back(std::move(en));
     return {};
@@ -125,11 +116,11 @@ Status ExpandObservations(const YamlFields& f, const YAML::Node& root, const rob
   if (m->frame_major) {
     for (std::uint32_t p = 0; p < m->history_length; ++p)
       for (const Term& t : terms)
-        for (std::size_t c = 0; c < t.names.size(); ++c) PBPPO_TRY(emit(t, c, p));
+        for (const Entry& part : t.parts) PBPPO_TRY(emit(t, part, p));
   } else {
     for (const Term& t : terms)
       for (std::uint32_t p = 0; p < t.frames; ++p)
-        for (std::size_t c = 0; c < t.names.size(); ++c) PBPPO_TRY(emit(t, c, p));
+        for (const Entry& part : t.parts) PBPPO_TRY(emit(t, part, p));
   }
   return {};
 }
@@ -165,11 +156,10 @@ Result<Mapping> ParseMapping(const std::string& yaml_text, const std::string& or
   std::vector<Entry> entries;
   PBPPO_TRY(ExpandObservations(f, *root, layout, &m, &entries));
   if (entries.size() != m.input_size) {
-    const std::string count = m.history_length == 1 && !m.frame_major && !m.oldest_first
-                                  ? std::to_string(entries.size()) + " entries"
-                                  : std::to_string(entries.size()) +
-                                        " input elements (every term's frames, history.length " +
-                                        std::to_string(m.history_length) + ")";
+    const std::string count = !m.stacked ? std::to_string(entries.size()) + " entries"
+                                         : std::to_string(entries.size()) +
+                                               " input elements (every term's frames, history.length " +
+                                               std::to_string(m.history_length) + ")";
     return f.Fail("observations",
                   count + ", but input.size is " + std::to_string(m.input_size) + " (one entry per input element)");
   }

@@ -41,7 +41,8 @@ struct Mapping {
   std::uint32_t input_size = 0;
   std::string output_name;
   std::uint32_t output_size = 0;
-  // The stacked history the model takes (length 1, term-major, newest first: none).
+  // The stacked history the model takes (stacked: the mapping states one).
+  bool stacked = false;
   std::uint32_t history_length = 1;
   bool frame_major = false;
   bool oldest_first = false;

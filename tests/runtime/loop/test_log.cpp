@@ -56,6 +56,21 @@ policy::PolicySpec Spec(const robot::RobotModel& m, std::uint64_t seed) {
   return s;
 }
 
+// The AUV's sample of tick k (a pose, 16 sonar beams, the route's bearing) into the transport;
+// `sample` is scratch holding every field.
+void PutSample(const robot::RobotModel& m, std::uint64_t k, double x, double y, double yaw, double bearing,
+               std::vector<double>& sample, test::ScriptedTransport& t) {
+  sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(k);
+  sample[static_cast<std::size_t>(m.FieldIndex("x_m"))] = x;
+  sample[static_cast<std::size_t>(m.FieldIndex("y_m"))] = y;
+  sample[static_cast<std::size_t>(m.FieldIndex("yaw_rad"))] = yaw;
+  sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
+  for (std::uint32_t i = 0; i < 16; ++i)
+    sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0 + (k + i) % 9;
+  sample[static_cast<std::size_t>(m.FieldIndex("route_bearing_rad"))] = bearing;
+  t.Put(m, 0, sample);
+}
+
 // 300 ticks of the AUV: a sample most ticks (a unicycle's pose), none from tick 200 (stale,
 // then lost), an e-stop never; the log and its bytes. `come_back`: the samples come again from
 // tick 230 and a person asks to re-arm at tick 262.
@@ -86,18 +101,10 @@ Recorded Record(const std::string& name, std::uint64_t seed = 1, const EachTick&
     AllocationScope scope;
     for (std::uint64_t k = 0; k < 300; ++k) {
       if ((k < 200 || (come_back && k >= 230)) && k % 7 != 3) {  // some samples missed: stale for a tick
-        sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(k);
-        sample[static_cast<std::size_t>(m.FieldIndex("x_m"))] = x;
-        sample[static_cast<std::size_t>(m.FieldIndex("y_m"))] = y;
         // (come_back: wrapped, as the vehicle reports it; else the heading leaves its bounds:
         // invalid samples before the silence)
-        sample[static_cast<std::size_t>(m.FieldIndex("yaw_rad"))] =
-            come_back ? std::remainder(yaw, 2 * std::numbers::pi) : yaw;
-        sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
-        for (std::uint32_t i = 0; i < 16; ++i)
-          sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0 + (k + i) % 9;
-        sample[static_cast<std::size_t>(m.FieldIndex("route_bearing_rad"))] = std::sin(0.05 * static_cast<double>(k));
-        t.Put(m, 0, sample);
+        PutSample(m, k, x, y, come_back ? std::remainder(yaw, 2 * std::numbers::pi) : yaw,
+                  std::sin(0.05 * static_cast<double>(k)), sample, t);
       }
       if (k == 150) t.SetHealth(0, {true, false, false});  // one tick of a degraded link
       if (k == 151) t.SetHealth(0, {});
@@ -679,12 +686,7 @@ TEST_CASE(
   bool zero_after_silence = true;
   for (std::uint64_t k = 0; k < 160; ++k) {
     if (k < 100 && k % 7 != 3) {  // samples until tick 100, some missed (one tick without)
-      sample[static_cast<std::size_t>(m.FieldIndex("tick"))] = static_cast<double>(k);
-      sample[x] = 1.0 + 0.01 * static_cast<double>(k);
-      sample[static_cast<std::size_t>(m.FieldIndex("sonar_beams"))] = 16;
-      for (std::uint32_t i = 0; i < 16; ++i)
-        sample[static_cast<std::size_t>(m.FieldIndex(robot::ExpandIndex("sonar_{i}_m", i)))] = 3.0 + (k + i) % 9;
-      t.Put(m, 0, sample);
+      PutSample(m, k, 1.0 + 0.01 * static_cast<double>(k), 0.0, 0.0, 0.0, sample, t);
     }
     rt::TickTiming timing;
     timing.tick = k;
