@@ -51,8 +51,14 @@ Result<pid_t> Spawn(const std::vector<std::string>& args, const std::string& out
   std::vector<char*> argv;
   for (auto& a : argv_s) argv.push_back(a.data());
   argv.push_back(nullptr);
+  // A sweep's run is a process of its own, not a rank of the sweep's mpirun job (which would make
+  // it a data-parallel run over the job's ranks): the launcher's variables stay behind.
+  std::vector<char*> env;
+  for (char** e = environ; *e != nullptr; ++e)
+    if (std::strncmp(*e, "OMPI_", 5) != 0 && std::strncmp(*e, "PMIX_", 5) != 0) env.push_back(*e);
+  env.push_back(nullptr);
   pid_t pid = 0;
-  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, &attr, argv.data(), environ);
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, &attr, argv.data(), env.data());
   posix_spawn_file_actions_destroy(&fa);
   posix_spawnattr_destroy(&attr);
   if (rc != 0) return MakeError(ErrorCode::kIo, std::string("cannot start /proc/self/exe: ") + std::strerror(rc));

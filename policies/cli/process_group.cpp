@@ -1,5 +1,7 @@
 #include "policies/cli/process_group.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 
 #define OMPI_SKIP_MPICXX 1  // the C interface only
@@ -21,6 +23,43 @@ ProcessGroup::ProcessGroup() {
 
 ProcessGroup::~ProcessGroup() {
   if (mpi_) MPI_Finalize();
+}
+
+namespace {
+// MPI counts are ints: larger messages go in pieces of this many bytes.
+constexpr std::size_t kPiece = std::size_t{1} << 30;
+}  // namespace
+
+void ProcessGroup::Broadcast(void* data, std::size_t bytes, int root) const {
+  if (!mpi_) return;
+  auto* p = static_cast<char*>(data);
+  for (std::size_t done = 0; done < bytes; done += kPiece) {
+    const std::size_t n = std::min(kPiece, bytes - done);
+    MPI_Bcast(p + done, static_cast<int>(n), MPI_BYTE, root, MPI_COMM_WORLD);
+  }
+}
+
+std::vector<std::vector<char>> ProcessGroup::AllGather(std::span<const char> mine) const {
+  if (!mpi_) return {std::vector<char>(mine.begin(), mine.end())};
+  const std::uint64_t len = mine.size();
+  std::vector<std::uint64_t> lens(static_cast<std::size_t>(size_));
+  MPI_Allgather(&len, 1, MPI_UINT64_T, lens.data(), 1, MPI_UINT64_T, MPI_COMM_WORLD);
+  std::vector<std::vector<char>> all(static_cast<std::size_t>(size_));
+  for (int r = 0; r < size_; ++r) {
+    auto& v = all[static_cast<std::size_t>(r)];
+    if (r == rank_) {
+      v.assign(mine.begin(), mine.end());
+    } else {
+      v.resize(static_cast<std::size_t>(lens[static_cast<std::size_t>(r)]));
+    }
+    Broadcast(v.data(), v.size(), r);
+  }
+  return all;
+}
+
+void ProcessGroup::Abort(int rc) const {
+  if (mpi_) MPI_Abort(MPI_COMM_WORLD, rc);
+  std::exit(rc);
 }
 
 void ProcessGroup::Broadcast(std::vector<long>& v) const {

@@ -13,6 +13,7 @@
 #include <tuple>
 #include <vector>
 
+#include "policies/cli/process_group.hpp"
 #include "policies/envs/registry.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/core/cli_checks.hpp"
@@ -250,10 +251,16 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
 }
 
 int Train(trainer::TrainOptions o, bool quiet) {
+  // Under mpirun: one run over the job's ranks (data-parallel); rank 0 prints and writes. Every rank
+  // reads the same arguments, so a refusal is every rank's, printed once.
+  const ProcessGroup group;
+  if (group.size() > 1) o.group = &group;
+  const bool writer = group.rank() == 0;
+  auto refuse = [&](const std::string& msg) { return writer ? Fail(msg) : 2; };
   // Every option checked before the run starts (bad input: exit 2).
-  if (auto st = o.Validate(); !st) return Fail(st.error().message);
+  if (auto st = o.Validate(); !st) return refuse(st.error().message);
   auto env = envs::MakeEnv(o.env);
-  if (!env) return Fail(env.error().message);
+  if (!env) return refuse(env.error().message);
 
   g_stop.store(false);
   g_first_sigint_ns.store(0);
@@ -262,7 +269,7 @@ int Train(trainer::TrainOptions o, bool quiet) {
   auto last_print = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   bool printed = false;
   auto progress = [&](const trainer::Progress& p) {
-    if (quiet) return;
+    if (quiet || !writer) return;
     const auto now = std::chrono::steady_clock::now();
     if (now - last_print < std::chrono::milliseconds(250) && p.env_steps < p.total_steps) return;
     last_print = now;
@@ -278,16 +285,38 @@ int Train(trainer::TrainOptions o, bool quiet) {
                  Human(p.steps_per_second).c_str(), p.eta_seconds, p.mean_return, success, tracking, p.epsilon);
     std::fflush(stderr);
   };
-  std::fprintf(stderr, "pbppo train: %s, %s, seed %llu -> %s\n", o.env.name.c_str(), o.schedule.Describe().c_str(),
-               static_cast<unsigned long long>(o.seed), o.out_dir.c_str());
-  auto r = trainer::Train(o, std::move(env).value(), progress);
+  if (writer) {
+    std::fprintf(stderr, "pbppo train: %s, %s, seed %llu, %d rank%s x %d thread%s -> %s\n", o.env.name.c_str(),
+                 o.schedule.Describe().c_str(), static_cast<unsigned long long>(o.seed), group.size(),
+                 group.size() == 1 ? "" : "s", o.threads, o.threads == 1 ? "" : "s", o.out_dir.c_str());
+  }
+  // A rank that fails ends the job: the others would wait for it in the next exchange.
+  auto failed = [&](const std::string& msg) {
+    if (printed) std::fprintf(stderr, "\n");
+    const std::string where = group.size() > 1 ? " (rank " + std::to_string(group.rank()) + ")" : "";
+    Fail(msg + where, 1);
+    if (group.size() > 1) group.Abort(1);
+    return 1;
+  };
+  Result<trainer::TrainResult> r = MakeError(ErrorCode::kInvalidValue, "not run");
+  try {
+    r = trainer::Train(o, std::move(env).value(), progress);
+  } catch (const std::exception& e) {
+    return failed(e.what());
+  }
   std::signal(SIGINT, previous);
   if (printed) std::fprintf(stderr, "\n");
-  if (!r) return Fail(r.error().message, 1);
+  if (!r) return failed(r.error().message);
+  if (!writer) return r->interrupted ? 130 : 0;
   std::printf("env steps %llu (+ %llu evaluation steps = %llu)  wall %.1f s  %.0f steps/s\n",
               static_cast<unsigned long long>(r->env_steps), static_cast<unsigned long long>(r->eval_steps),
               static_cast<unsigned long long>(r->env_steps + r->eval_steps), r->wall_seconds, r->steps_per_second);
   std::printf("final return (last 100 training episodes) %.2f\n", r->final_return);
+  const trainer::TimeShares& t = r->time;
+  std::printf(
+      "time: rollout %.1f s (actor %.1f, environments %.1f, first thread), returns %.1f, update %.1f, evaluation "
+      "%.1f, ranks exchanging %.1f, other %.1f\n",
+      t.rollout, t.rollout_policy, t.rollout_env, t.returns, t.update, t.evaluation, t.exchange, t.other);
   std::printf("blob %s/policy.blob\n%s\n", o.out_dir.c_str(), r->plots_note.c_str());
   if (r->interrupted) {
     std::fprintf(stderr, "pbppo train: interrupted; log and last checkpoint are in %s\n", o.out_dir.c_str());

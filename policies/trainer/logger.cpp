@@ -95,6 +95,11 @@ Status Logger::Finish(const std::string& env_name, TrainResult& res) {
   j["final_return_last100"] = or_null(res.final_return);
   j["wall_seconds"] = res.wall_seconds;
   j["steps_per_second"] = res.steps_per_second;
+  const TimeShares& ts = res.time;
+  j["time_seconds"] = {{"rollout", ts.rollout},         {"rollout_policy", ts.rollout_policy},
+                       {"rollout_env", ts.rollout_env}, {"returns", ts.returns},
+                       {"update", ts.update},           {"evaluation", ts.evaluation},
+                       {"exchange", ts.exchange},       {"other", ts.other}};
   j["interrupted"] = res.interrupted;
   j["success_rate"] = res.iterations.empty() ? nlohmann::json() : or_null(res.iterations.back().success_rate);
   std::vector<int> pulls(o_.schedule.arms.size(), 0);

@@ -54,6 +54,18 @@ struct IterationStats : UpdateStats {
   std::vector<ArmState> arms;
 };
 
+// Where a run's wall time went, in seconds, as rank 0 saw it.
+struct TimeShares {
+  double rollout = 0;         // stepping the environments with the actor sampling (ranks exchanging excluded)
+  double rollout_policy = 0;  // the part of `rollout` the actor's forward passes took (its first thread's share)
+  double rollout_env = 0;     // the part the environments' steps and resets took (the same)
+  double returns = 0;         // values and GAE
+  double update = 0;          // the PPO update (exchanging gradients excluded)
+  double evaluation = 0;      // evaluation episodes for the schedule's feedback
+  double exchange = 0;        // ranks exchanging samples, returns and gradients, and waiting for each other there
+  double other = 0;           // the rest: normaliser statistics, the schedule, logging, checkpoints
+};
+
 struct TrainResult {
   std::vector<IterationStats> iterations;
   std::uint64_t env_steps = 0;
@@ -61,6 +73,8 @@ struct TrainResult {
   double final_return = 0;  // mean of the last 100 training episodes
   double wall_seconds = 0;
   double steps_per_second = 0;  // training steps per wall second, updates included
+  TimeShares time;
+  int ranks = 1, threads = 1;
   bool interrupted = false;
   policy::PolicySpec spec;  // the frozen policy (what the blob holds)
   // max |trainer's deterministic action - blob reference forward| over observations of the last

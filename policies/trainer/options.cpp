@@ -16,6 +16,9 @@ Status TrainOptions::Validate() const {
   if (num_envs < 1 || num_envs > 4096) return Invalid("--envs", std::to_string(num_envs) + " is not in [1, 4096]");
   if (rollout_steps < 1) return Invalid("--rollout", std::to_string(rollout_steps) + " is not positive");
   if (threads < 1 || threads > 256) return Invalid("--threads", std::to_string(threads) + " is not in [1, 256]");
+  if (num_envs < ranks())
+    return Invalid("--envs", std::to_string(num_envs) + " is fewer than the run's " + std::to_string(ranks()) +
+                                 " ranks (each rank steps at least one environment)");
   if (minibatch < 2) return Invalid("--minibatch", std::to_string(minibatch) + " is below 2");
   if (epochs < 1) return Invalid("--epochs", std::to_string(epochs) + " is not positive");
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
@@ -53,7 +56,7 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
       {"env", e.name}, {"models", e.models_dir},
       // Budget and parallelism.
       {"seed", o.seed}, {"steps", o.total_steps}, {"envs", o.num_envs}, {"rollout", o.rollout_steps},
-      {"threads", o.threads},
+      {"threads", o.threads}, {"ranks", o.ranks()},
       // PPO.
       {"minibatch", o.minibatch}, {"epochs", o.epochs}, {"learning_rate", o.learning_rate},
       {"lr_schedule", o.lr_schedule.Describe()}, {"gamma", o.gamma}, {"gae_lambda", o.gae_lambda},

@@ -12,6 +12,7 @@
 
 #include "policies/envs/env.hpp"
 #include "policies/trainer/clip_schedule.hpp"
+#include "policies/trainer/collective.hpp"
 #include "policies/trainer/lr_schedule.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/policy/policy_spec.hpp"
@@ -27,7 +28,11 @@ struct TrainOptions {
   std::uint64_t total_steps = 200000;  // --steps: training environment steps (evaluation steps are extra)
   int num_envs = 1;                    // --envs
   int rollout_steps = 2048;            // --rollout: per environment and iteration
-  int threads = 1;
+  int threads = 1;                     // per rank
+  // The ranks of one data-parallel run (mpirun): they split the environments, share the rollout
+  // and the update's gradients, and give the weights one process would; rank 0 alone writes.
+  // Null: this process alone.
+  const Collective* group = nullptr;
 
   // PPO.
   int minibatch = 64;
@@ -76,6 +81,8 @@ struct TrainOptions {
   int snapshots = 0;
   const std::atomic<bool>* stop = nullptr;  // set from a signal handler to stop cleanly
 
+  int ranks() const noexcept { return group != nullptr ? group->size() : 1; }
+  int rank() const noexcept { return group != nullptr ? group->rank() : 0; }
   const std::vector<int>& critic_hidden() const noexcept { return value_hidden.empty() ? policy_hidden : value_hidden; }
 
   // Checks every option but the environment's (envs::MakeEnv checks those); errors name the flag

@@ -1,6 +1,7 @@
 #include "policies/trainer/ppo.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -127,7 +128,8 @@ double Ppo::ExplainedVariance(const RolloutStorage& r) {
   return vr > 0 ? 1.0 - vd / vr : std::numeric_limits<double>::quiet_NaN();
 }
 
-UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, WorkerPool& pool) {
+UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, WorkerPool& pool,
+                        const Collective* group) {
   const long B = r.size();
   const long mb = std::min<long>(o_.minibatch, B), per_epoch = (B + mb - 1) / mb, total = per_epoch * o_.epochs;
   std::vector<std::vector<long>> perms(static_cast<std::size_t>(o_.epochs));  // per epoch, columns in minibatch order
@@ -147,13 +149,16 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
   // A held policy (--critic-warmup) has KL 0 from the rollout's: adapting to it would raise the rate
   // to its ceiling before the policy's first step, so the rate waits for the policy.
   const bool adaptive = o_.lr_schedule.kind == LrSchedule::Kind::kAdaptive && !critic_only;
-  // Chunk c of network n (0: the actor, 1: the critic) runs on thread (c + n) % W, the actor's
-  // segments 0..S-1 and the critic's S..2S-1 on thread (index % W): each thread takes its share of
-  // both networks. With one thread, or one chunk (two threads at most: one per network), every
-  // network stays on one thread, which then reads only what it wrote itself but for the other
-  // network's part of the gradient norm (and, for the critic, the actor's KL divergence): one
-  // barrier per minibatch instead of three.
-  const bool network_per_thread = W == 1 || K == 1;
+  // Chunk c of network n (0: the actor, 1: the critic) runs on rank (c + n) % R, on its thread
+  // ((c + n) / R) % W; the actor's segments 0..S-1 and the critic's S..2S-1 on thread (index % W) of
+  // every rank: each thread takes its share of both networks. With ranks, each chunk's gradient and
+  // statistics go from its rank to the others (by thread 0, between two barriers), and every rank
+  // then makes the same step. With one rank, and one thread or one chunk (two threads at most: one
+  // per network), every network stays on one thread, which then reads only what it wrote itself
+  // but for the other network's part of the gradient norm (and, for the critic, the actor's KL
+  // divergence): one barrier per minibatch instead of three.
+  const int R = group != nullptr ? group->size() : 1, rank = group != nullptr ? group->rank() : 0;
+  const bool network_per_thread = R == 1 && (W == 1 || K == 1);
   // A minibatch of one chunk computes its gradients in place; more sum theirs into them.
   const std::size_t buffers = K > 1 ? static_cast<std::size_t>(K) : 0;
   std::vector<Vec<float>> actor_chunks(buffers, Vec<float>::Zero(P)), critic_chunks(buffers, Vec<float>::Zero(V));
@@ -173,7 +178,7 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
     sh.seg_sq.assign(static_cast<std::size_t>(2 * S), 0.0);
   }
   UpdateStats sum;
-  double lr_end = lr_;
+  double lr_end = lr_, exchange_seconds = 0;
   SpinBarrier sync(W);
   auto segment = [S](Eigen::Index n, int s) {
     return std::pair<Eigen::Index, Eigen::Index>(n * s / S, n * (s + 1) / S);
@@ -197,7 +202,8 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
       for (int t = 0; t < 2 * K; ++t) {
         const int c = t / 2;
         const bool actor = t % 2 == 0;
-        if ((c + (actor ? 0 : 1)) % W != w) continue;
+        const int owner = c + (actor ? 0 : 1);
+        if (owner % R != rank || (owner / R) % W != w) continue;
         const long c0 = n * c / K, nc = n * (c + 1) / K - c0;
         ChunkStats& cs = sh.chunk[static_cast<std::size_t>(c)];
         if (actor) {
@@ -238,6 +244,23 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
         }
       }
       if (!network_per_thread) sync.ArriveAndWait();
+      if (R > 1) {
+        if (w == 0) {  // every chunk's gradient and statistics from its rank, in chunk order
+          const auto e0 = std::chrono::steady_clock::now();
+          for (int c = 0; c < K; ++c) {
+            ChunkStats& cs = sh.chunk[static_cast<std::size_t>(c)];
+            float* ag = K > 1 ? actor_chunks[static_cast<std::size_t>(c)].data() : actor_grad_.data();
+            float* cg = K > 1 ? critic_chunks[static_cast<std::size_t>(c)].data() : critic_grad_.data();
+            group->Broadcast(ag, static_cast<std::size_t>(P) * sizeof(float), c % R);
+            group->Broadcast(&cs.policy, sizeof cs.policy, c % R);
+            group->Broadcast(&cs.gaussian_kl, sizeof cs.gaussian_kl, c % R);
+            group->Broadcast(cg, static_cast<std::size_t>(V) * sizeof(float), (c + 1) % R);
+            group->Broadcast(&cs.value_loss, sizeof cs.value_loss, (c + 1) % R);
+          }
+          exchange_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - e0).count();
+        }
+        sync.ArriveAndWait();
+      }
       // 2. The minibatch's gradient, segment by segment: the chunks' summed in chunk order; each
       // segment's squared norm.
       for (int i = w; i < 2 * S; i += W) {
@@ -291,6 +314,7 @@ UpdateStats Ppo::Update(const RolloutStorage& r, double eps, bool critic_only, W
   });
   lr_ = lr_end;
   UpdateStats st = MeanOver(sum, total);
+  st.exchange_seconds = exchange_seconds;
   double ls = 0;
   for (int j = 0; j < r.action_size; ++j) ls += actor_params_[static_cast<Eigen::Index>(actor_.log_std_offset()) + j];
   st.log_std_mean = ls / r.action_size;

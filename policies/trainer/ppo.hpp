@@ -4,14 +4,15 @@
 // the clip bound the clip schedule chose (clip_schedule.hpp) and the learning rate the
 // learning-rate schedule sets (lr_schedule.hpp). Losses and gradients: ppo_loss.hpp.
 //
-// Deterministic: the same rollout and bound give bit-identical parameters for any thread count, on
-// every machine the build runs on (PinEigenBlocking).
+// Deterministic: the same rollout and bound give bit-identical parameters for any thread and rank
+// count, on every machine the build runs on (PinEigenBlocking).
 #pragma once
 
 #include <cstddef>
 #include <vector>
 
 #include "policies/trainer/adam.hpp"
+#include "policies/trainer/collective.hpp"
 #include "policies/trainer/mlp.hpp"
 #include "policies/trainer/options.hpp"
 #include "policies/trainer/ppo_loss.hpp"
@@ -26,6 +27,7 @@ struct UpdateStats {
   double approx_kl = 0, clip_fraction = 0, explained_variance = 0, entropy = 0;
   double policy_loss = 0, value_loss = 0, grad_norm = 0, log_std_mean = 0;
   double kl = 0;  // the Gaussian KL divergence from the rollout's policy (SumGaussianKl), before each step
+  double exchange_seconds = 0;  // ranks exchanging chunk gradients (and waiting for each other there)
 };
 
 // Eigen cuts a matrix product into blocks sized from the CPU's cache sizes, which it reads at run
@@ -60,7 +62,10 @@ class Ppo {
   // `epochs` passes over the rollout in minibatches with clip bound `eps`. critic_only: the actor
   // is held (its loss is still computed for the log). With the adaptive learning-rate schedule
   // each minibatch's KL divergence sets the rate of its step (and of the steps after it).
-  UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool);
+  // With ranks (`group`), every rank calls it with the same rollout and gets the same parameters;
+  // each computes its share of the chunks (below).
+  UpdateStats Update(const RolloutStorage& rollout, double eps, bool critic_only, WorkerPool& pool,
+                     const Collective* group = nullptr);
 
   // How the update divides a minibatch, whatever the thread count: minibatches of kChunkedFrom
   // samples or more in kChunks column chunks (chunks are the faster from about there:

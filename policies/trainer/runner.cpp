@@ -4,9 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "policies/trainer/exporter.hpp"
 #include "policies/trainer/seed.hpp"
+#include "policies/trainer/state_io.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -41,18 +45,34 @@ Runner::Runner(const TrainOptions& o, std::unique_ptr<envs::Env> env)
   raw_critic_cur_.assign(static_cast<std::size_t>(N_ * cd_), 0.f);
   ep_return_.assign(static_cast<std::size_t>(N_), 0.0);
   disc_ret_.assign(static_cast<std::size_t>(N_), 0.0);
-  for (int e = 0; e < N_; ++e) {
+  block_ = BlockSize(N_);
+  rank_ = o.rank();
+  ranks_ = o.ranks();
+  e0_ = RankBegin(rank_);
+  e1_ = RankBegin(rank_ + 1);
+  for (int e = e0_; e < e1_; ++e) {
     envs_.push_back(proto_->Clone());
     env_rng_.emplace_back(Mix(o.seed, 1000 + static_cast<std::uint64_t>(e)));
     envs_.back()->Reset(env_rng_.back(), {raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)});
     if (cd_ > 0) envs_.back()->CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
   }
-  const int W = std::min(pool_.size(), N_);
+  // The rank's blocks over its threads, whole blocks each.
+  const int b0 = e0_ / block_, blocks = (e1_ - e0_ + block_ - 1) / block_;
+  const int W = std::min(pool_.size(), blocks);
   workers_.assign(static_cast<std::size_t>(W), Worker{});
   for (int w = 0; w < W; ++w) {
-    workers_[static_cast<std::size_t>(w)].e0 = N_ * w / W;
-    workers_[static_cast<std::size_t>(w)].e1 = N_ * (w + 1) / W;
+    workers_[static_cast<std::size_t>(w)].e0 = std::min(e1_, (b0 + blocks * w / W) * block_);
+    workers_[static_cast<std::size_t>(w)].e1 = std::min(e1_, (b0 + blocks * (w + 1) / W) * block_);
   }
+}
+
+int BlockSize(int envs) noexcept {
+  return std::clamp(envs / 16, 1, 32);
+}
+
+int Runner::RankBegin(int r) const {
+  const int blocks = (N_ + block_ - 1) / block_;
+  return std::min(N_, blocks * r / ranks_ * block_);
 }
 
 void Runner::ValueInput(int e, float* out) const {
@@ -65,61 +85,69 @@ void Runner::ValueInput(int e, float* out) const {
 
 void Runner::RolloutWorker(Worker& w) {
   RolloutStorage& r = rollout_;
-  const int n = w.e1 - w.e0;
-  w.x.resize(d_, n);
   w.episodes.clear();
+  w.policy_seconds = w.env_seconds = 0;
   const float* log_std = ppo_.log_std();
   std::vector<float> stdv(static_cast<std::size_t>(a_)), act(static_cast<std::size_t>(a_));
   const double half_log_2pi = 0.5 * std::log(2.0 * M_PI);
   for (int j = 0; j < a_; ++j) stdv[static_cast<std::size_t>(j)] = std::exp(log_std[j]);
+  // Block by block (its forward pass the same product whoever runs it).
   for (int t = 0; t < T_; ++t) {
-    for (int e = w.e0; e < w.e1; ++e) {
-      const long i = static_cast<long>(t) * N_ + e;
-      const float* raw = raw_obs_cur_.data() + e * d_;
-      std::copy(raw, raw + d_, r.raw_obs.data() + i * d_);
-      obs_norm_.Normalize(raw, w.x.col(e - w.e0).data());
-      r.obs.col(i) = w.x.col(e - w.e0);
-      if (cd_ > 0) {
-        const float* raw_c = raw_critic_cur_.data() + e * cd_;
-        std::copy(raw_c, raw_c + cd_, r.raw_critic_obs.data() + i * cd_);
-        critic_norm_.Normalize(raw_c, r.critic_obs.col(i).data());
+    for (int eb = w.e0; eb < w.e1; eb += block_) {
+      const int eb1 = std::min(eb + block_, w.e1);
+      const auto c0 = Clock::now();
+      w.x.resize(d_, eb1 - eb);
+      for (int e = eb; e < eb1; ++e) {
+        const long i = static_cast<long>(t) * N_ + e;
+        const float* raw = raw_obs_cur_.data() + e * d_;
+        std::copy(raw, raw + d_, r.raw_obs.data() + i * d_);
+        obs_norm_.Normalize(raw, w.x.col(e - eb).data());
+        r.obs.col(i) = w.x.col(e - eb);
+        if (cd_ > 0) {
+          const float* raw_c = raw_critic_cur_.data() + e * cd_;
+          std::copy(raw_c, raw_c + cd_, r.raw_critic_obs.data() + i * cd_);
+          critic_norm_.Normalize(raw_c, r.critic_obs.col(i).data());
+        }
       }
-    }
-    const Mat<float>& mu = ppo_.actor().mean.Forward(ppo_.actor_params(), w.x, w.ws);
-    for (int e = w.e0; e < w.e1; ++e) {
-      const long i = static_cast<long>(t) * N_ + e;
-      const auto ui = static_cast<std::size_t>(i);
-      const int c = e - w.e0;
-      Rng& rng = env_rng_[static_cast<std::size_t>(e)];
-      envs::Env& env = *envs_[static_cast<std::size_t>(e)];
-      float lp = 0;
-      for (int j = 0; j < a_; ++j) {
-        const auto k = static_cast<std::size_t>(j);
-        const float sample = mu(j, c) + stdv[k] * static_cast<float>(rng.Normal());
-        r.actions(j, i) = sample;
-        r.action_mean(j, i) = mu(j, c);
-        const float z = (sample - mu(j, c)) * std::exp(-log_std[j]);
-        lp += -0.5f * z * z - log_std[j];
-        act[k] = std::clamp(sample, env.action_low()[k], env.action_high()[k]);
-      }
-      r.log_prob[ui] = lp - static_cast<float>(a_ * half_log_2pi);
-      const std::span<float> raw{raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)};
-      const std::span<float> raw_c{raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)};
-      const envs::StepResult s = env.Step(act, raw);
-      if (cd_ > 0) env.CriticObservation(raw_c);
-      r.rewards[ui] = static_cast<float>(s.reward);
-      r.terminated[ui] = s.terminated;
-      r.truncated[ui] = s.truncated && !s.terminated;
-      ep_return_[static_cast<std::size_t>(e)] += s.reward;
-      if (s.terminated || s.truncated) {
-        if (!s.terminated) ValueInput(e, r.truncation_value_inputs.col(i).data());
-        const envs::EpisodeInfo info = env.episode_info();
-        w.episodes.push_back({i, ep_return_[static_cast<std::size_t>(e)], info.available ? (info.success ? 1 : 0) : -1,
-                              info.tracking_error});
-        ep_return_[static_cast<std::size_t>(e)] = 0;
-        env.Reset(rng, raw);
+      const Mat<float>& mu = ppo_.actor().mean.Forward(ppo_.actor_params(), w.x, w.ws);
+      const auto c1 = Clock::now();
+      for (int e = eb; e < eb1; ++e) {
+        const long i = static_cast<long>(t) * N_ + e;
+        const auto ui = static_cast<std::size_t>(i);
+        const int c = e - eb;
+        Rng& rng = env_rng_[static_cast<std::size_t>(e - e0_)];
+        envs::Env& env = *envs_[static_cast<std::size_t>(e - e0_)];
+        float lp = 0;
+        for (int j = 0; j < a_; ++j) {
+          const auto k = static_cast<std::size_t>(j);
+          const float sample = mu(j, c) + stdv[k] * static_cast<float>(rng.Normal());
+          r.actions(j, i) = sample;
+          r.action_mean(j, i) = mu(j, c);
+          const float z = (sample - mu(j, c)) * std::exp(-log_std[j]);
+          lp += -0.5f * z * z - log_std[j];
+          act[k] = std::clamp(sample, env.action_low()[k], env.action_high()[k]);
+        }
+        r.log_prob[ui] = lp - static_cast<float>(a_ * half_log_2pi);
+        const std::span<float> raw{raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)};
+        const std::span<float> raw_c{raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)};
+        const envs::StepResult s = env.Step(act, raw);
         if (cd_ > 0) env.CriticObservation(raw_c);
+        r.rewards[ui] = static_cast<float>(s.reward);
+        r.terminated[ui] = s.terminated;
+        r.truncated[ui] = s.truncated && !s.terminated;
+        ep_return_[static_cast<std::size_t>(e)] += s.reward;
+        if (s.terminated || s.truncated) {
+          if (!s.terminated) ValueInput(e, r.truncation_value_inputs.col(i).data());
+          const envs::EpisodeInfo info = env.episode_info();
+          w.episodes.push_back({i, ep_return_[static_cast<std::size_t>(e)],
+                                info.available ? (info.success ? 1 : 0) : -1, info.tracking_error});
+          ep_return_[static_cast<std::size_t>(e)] = 0;
+          env.Reset(rng, raw);
+          if (cd_ > 0) env.CriticObservation(raw_c);
+        }
       }
+      w.policy_seconds += std::chrono::duration<double>(c1 - c0).count();
+      w.env_seconds += std::chrono::duration<double>(Clock::now() - c1).count();
     }
   }
   for (int e = w.e0; e < w.e1; ++e) ValueInput(e, r.last_value_inputs.col(e).data());
@@ -129,11 +157,22 @@ void Runner::CollectRollout() {
   obs_norm_.Freeze();
   critic_norm_.Freeze();
   std::copy(ppo_.log_std(), ppo_.log_std() + a_, rollout_.log_std.begin());
+  const auto t0 = Clock::now();
   pool_.Run([&](int w) {
     if (w < static_cast<int>(workers_.size())) RolloutWorker(workers_[static_cast<std::size_t>(w)]);
   });
+  const auto t1 = Clock::now();
+  time_.rollout += std::chrono::duration<double>(t1 - t0).count();
+  if (!workers_.empty()) {
+    time_.rollout_policy += workers_[0].policy_seconds;
+    time_.rollout_env += workers_[0].env_seconds;
+  }
   std::vector<Episode> eps;
   for (auto& w : workers_) eps.insert(eps.end(), w.episodes.begin(), w.episodes.end());
+  if (ranks_ > 1) {
+    ShareRollout(eps);
+    time_.exchange += std::chrono::duration<double>(Clock::now() - t1).count();
+  }
   std::sort(eps.begin(), eps.end(), [](const Episode& a, const Episode& b) { return a.index < b.index; });
   rollout_returns_.clear();
   for (const Episode& ep : eps) {
@@ -169,15 +208,61 @@ void Runner::CollectRollout() {
   }
 }
 
+void Runner::ShareRollout(std::vector<Episode>& episodes) {
+  RolloutStorage& r = rollout_;
+  const int vd = r.value_input_size();
+  const auto D = static_cast<std::size_t>(d_), CD = static_cast<std::size_t>(cd_), A = static_cast<std::size_t>(a_),
+             VD = static_cast<std::size_t>(vd);
+  // Environment e's samples at every step, its last value input, then its rank's finished episodes.
+  auto transfer = [&](int e0, int e1, auto&& io) {
+    for (int t = 0; t < T_; ++t) {
+      for (int e = e0; e < e1; ++e) {
+        const long i = static_cast<long>(t) * N_ + e;
+        const auto ui = static_cast<std::size_t>(i);
+        io(r.raw_obs.data() + ui * D, D);
+        io(r.obs.col(i).data(), D);
+        if (cd_ > 0) {
+          io(r.raw_critic_obs.data() + ui * CD, CD);
+          io(r.critic_obs.col(i).data(), CD);
+        }
+        io(r.actions.col(i).data(), A);
+        io(r.action_mean.col(i).data(), A);
+        io(&r.log_prob[ui], 1);
+        io(&r.rewards[ui], 1);
+        io(&r.terminated[ui], 1);
+        io(&r.truncated[ui], 1);
+        if (r.truncated[ui]) io(r.truncation_value_inputs.col(i).data(), VD);  // read after its flag
+      }
+    }
+    for (int e = e0; e < e1; ++e) io(r.last_value_inputs.col(e).data(), VD);
+  };
+  ByteWriter mine;
+  transfer(e0_, e1_, [&](auto* p, std::size_t n) { mine.Put(p, n); });
+  mine.PutVector(episodes);
+  const std::vector<std::vector<char>> all = o_.group->AllGather(mine.bytes());
+  for (int q = 0; q < ranks_; ++q) {
+    if (q == rank_) continue;
+    const std::vector<char>& bytes = all[static_cast<std::size_t>(q)];
+    ByteReader in(bytes.data(), bytes.size(), "rank " + std::to_string(q) + "'s rollout");
+    transfer(RankBegin(q), RankBegin(q + 1), [&](auto* p, std::size_t n) { in.Get(p, n); });
+    std::vector<Episode> theirs;
+    in.GetVector(theirs, "episodes");
+    in.CheckEnd();
+    episodes.insert(episodes.end(), theirs.begin(), theirs.end());
+  }
+}
+
 double Runner::Evaluate(int iteration, std::uint64_t* steps) {
+  const auto t0 = Clock::now();
   const int k = o_.schedule.eval_episodes;
   std::vector<double> returns(static_cast<std::size_t>(k), 0.0);
   std::vector<std::uint64_t> counts(static_cast<std::size_t>(k), 0);
+  // Episode ep on rank ep % ranks, spread over its threads; each episode's own seed.
   pool_.Run([&](int w) {
     typename Mlp<float>::Workspace ws;
     Mat<float> x(d_, 1);
     std::vector<float> raw(static_cast<std::size_t>(d_)), act(static_cast<std::size_t>(a_));
-    for (int ep = w; ep < k; ep += pool_.size()) {
+    for (int ep = rank_ + w * ranks_; ep < k; ep += pool_.size() * ranks_) {
       auto env = proto_->Clone();
       Rng rng(Mix(Mix(o_.seed, 7), static_cast<std::uint64_t>(iteration) * 4096 + static_cast<std::uint64_t>(ep)));
       env->Reset(rng, raw);
@@ -199,12 +284,42 @@ double Runner::Evaluate(int iteration, std::uint64_t* steps) {
       counts[static_cast<std::size_t>(ep)] = n;
     }
   });
+  const auto t1 = Clock::now();
+  time_.evaluation += std::chrono::duration<double>(t1 - t0).count();
+  if (ranks_ > 1) {
+    ByteWriter mine;
+    for (int ep = rank_; ep < k; ep += ranks_) {
+      mine.Put(&returns[static_cast<std::size_t>(ep)], 1);
+      mine.Put(&counts[static_cast<std::size_t>(ep)], 1);
+    }
+    const std::vector<std::vector<char>> all = o_.group->AllGather(mine.bytes());
+    for (int q = 0; q < ranks_; ++q) {
+      if (q == rank_) continue;
+      const std::vector<char>& bytes = all[static_cast<std::size_t>(q)];
+      ByteReader in(bytes.data(), bytes.size(), "rank " + std::to_string(q) + "'s evaluation returns");
+      for (int ep = q; ep < k; ep += ranks_) {
+        in.Get(&returns[static_cast<std::size_t>(ep)], 1);
+        in.Get(&counts[static_cast<std::size_t>(ep)], 1);
+      }
+      in.CheckEnd();
+    }
+    time_.exchange += std::chrono::duration<double>(Clock::now() - t1).count();
+  }
   double sum = 0;
   for (int ep = 0; ep < k; ++ep) {
     sum += returns[static_cast<std::size_t>(ep)];
     *steps += counts[static_cast<std::size_t>(ep)];
   }
   return sum / k;
+}
+
+bool Runner::StopRequested() const {
+  const char mine = o_.stop != nullptr && o_.stop->load() ? 1 : 0;
+  if (ranks_ == 1) return mine != 0;
+  // Any rank's stop stops them all, at the same iteration.
+  for (const std::vector<char>& v : o_.group->AllGather({&mine, 1}))
+    if (v.size() == 1 && v[0] != 0) return true;
+  return false;
 }
 
 double Runner::Mean100() const {
@@ -236,7 +351,7 @@ policy::PolicySpec Runner::Freeze(double final_return, std::uint64_t env_steps) 
 }
 
 Status Runner::WriteCheckpoint(double final_return, std::uint64_t env_steps, const std::string& name) {
-  if (o_.out_dir.empty()) return {};
+  if (o_.out_dir.empty() || rank_ != 0) return {};  // rank 0 writes
   return WritePolicy(o_.out_dir + "/" + name, Freeze(final_return, env_steps), o_.seed);
 }
 
@@ -248,7 +363,10 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
   TrainResult res;
   const auto t0 = Clock::now();
   Logger log(o_);
-  if (auto st = log.Open(); !st) return st.error();
+  const bool writer = rank_ == 0;  // of the run's results: log, summary, plots, blobs, progress
+  if (writer) {
+    if (auto st = log.Open(); !st) return st.error();
+  }
   auto schedule = MakeClipSchedule(o_.schedule);
   const bool bandit = schedule->uses_feedback();
   const bool eval_feedback = bandit && o_.schedule.feedback == FeedbackSource::kEval;
@@ -280,7 +398,10 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     st.iteration = it;
     st.train_return = rollout_return;
     st.episodes = rollout_episodes;
+    const auto r0 = Clock::now();
     ppo_.ComputeReturns(rollout_, pool_);
+    const auto r1 = Clock::now();
+    time_.returns += std::chrono::duration<double>(r1 - r0).count();
     const double explained_variance = Ppo::ExplainedVariance(rollout_);
     st.arm = schedule->Choose();
     st.arms = schedule->arms();
@@ -288,11 +409,13 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     if (o_.lr_schedule.kind != LrSchedule::Kind::kAdaptive)
       ppo_.set_learning_rate(o_.lr_schedule.AtIteration(o_.learning_rate, it, iterations));
     // --critic-warmup: the value network learns, the policy stays as it is.
-    static_cast<UpdateStats&>(st) = ppo_.Update(rollout_, st.epsilon, it < o_.critic_warmup, pool_);
+    static_cast<UpdateStats&>(st) = ppo_.Update(rollout_, st.epsilon, it < o_.critic_warmup, pool_, o_.group);
+    time_.update += std::chrono::duration<double>(Clock::now() - r1).count() - st.exchange_seconds;
+    time_.exchange += st.exchange_seconds;
     st.explained_variance = explained_variance;
     st.learning_rate = ppo_.learning_rate();
 
-    const bool stopping = o_.stop != nullptr && o_.stop->load();
+    const bool stopping = StopRequested();
     const bool more = it + 1 < iterations && !stopping;
     if (more) {
       CollectRollout();
@@ -323,9 +446,9 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     st.tracking_error_100 = Tracking100();
     const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
     st.steps_per_second = elapsed > 0 ? static_cast<double>(env_steps) / elapsed : 0;
-    log.Log(st);
+    if (writer) log.Log(st);
     res.iterations.push_back(st);
-    if (progress) {
+    if (progress && writer) {
       Progress p;
       p.iteration = it;
       p.env_steps = env_steps;
@@ -367,6 +490,11 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
   res.eval_steps = eval_steps;
   res.final_return = Mean100();
   res.steps_per_second = static_cast<double>(env_steps) / res.wall_seconds;
+  res.ranks = ranks_;
+  res.threads = pool_.size();
+  res.time = time_;
+  res.time.other =
+      res.wall_seconds - (time_.rollout + time_.returns + time_.update + time_.evaluation + time_.exchange);
   res.spec = Freeze(res.final_return, env_steps);
   res.freeze_check = CheckFrozen(res.spec, ppo_.actor(), ppo_.actor_params(), obs_norm_, *proto_,
                                  rollout_.raw_obs.data(), rollout_.size());
@@ -375,7 +503,9 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
                                                std::to_string(res.freeze_check) + " x the error bound)");
   }
   if (auto s = WriteCheckpoint(res.final_return, env_steps); !s) return s.error();
-  if (auto s = log.Finish(proto_->name(), res); !s) return s.error();
+  if (writer) {
+    if (auto s = log.Finish(proto_->name(), res); !s) return s.error();
+  }
   return res;
 }
 

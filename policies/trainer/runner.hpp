@@ -1,7 +1,16 @@
 // The on-policy runner (rsl_rl's OnPolicyRunner): N environments stepped by worker threads with
 // the actor sampling actions, evaluation episodes for the bandit's feedback, and the learning loop
 // (collect, returns, clip bound from the schedule, update, feedback, log, checkpoints), which ends
-// in the frozen blob (exporter.hpp). Same seed and same thread count give a bit-identical run.
+// in the frozen blob (exporter.hpp).
+//
+// Data-parallel over ranks (TrainOptions::group): each rank steps its share of the environments
+// and its share of the evaluation episodes, the ranks exchange what they collected, and every rank
+// then holds the whole rollout and does what follows from it the same way (normaliser statistics,
+// returns, the schedule's choice and feedback); the update's chunk gradients are computed once,
+// on their rank, and exchanged (Ppo::Update). The environments are stepped and the actor run in
+// blocks of a fixed number of environments that depend on N alone, and a rank or thread takes whole
+// blocks: every matrix product has the same shape however the work is split, so the same seed and
+// N give bit-identical weights for any number of ranks and threads.
 #pragma once
 
 #include <array>
@@ -37,9 +46,10 @@ class Runner {
     int success = -1;                  // 1, 0, or -1: the environment has no notion of success
     std::array<double, 3> tracking{};  // EpisodeInfo::tracking_error
   };
-  // A worker thread's share of the environments, [e0, e1), and its scratch.
+  // A worker thread's share of the environments, [e0, e1) (whole blocks), and its scratch.
   struct Worker {
     int e0 = 0, e1 = 0;
+    double policy_seconds = 0, env_seconds = 0;  // this iteration's rollout: the actor's forward passes, the steps
     Mat<float> x;
     typename Mlp<float>::Workspace ws;
     std::vector<Episode> episodes;
@@ -47,10 +57,16 @@ class Runner {
 
   void CollectRollout();
   void RolloutWorker(Worker& w);
+  // Ranks: every rank's samples, last value inputs and finished episodes onto every rank.
+  void ShareRollout(std::vector<Episode>& episodes);
+  // The first environment of rank r's blocks (r = ranks: N).
+  int RankBegin(int r) const;
   // The critic's input for the state environment e's buffers hold, into `out`.
   void ValueInput(int e, float* out) const;
   // Mean return of the schedule's k deterministic evaluation episodes; their steps are added to *steps.
   double Evaluate(int iteration, std::uint64_t* steps);
+  // A stop was asked for (TrainOptions::stop), on any rank.
+  bool StopRequested() const;
   double Mean100() const;
   double TaskSuccess100() const;              // NaN: no episode reported success
   std::array<double, 3> Tracking100() const;  // NaN: no episode reported tracking errors
@@ -61,11 +77,13 @@ class Runner {
   std::unique_ptr<envs::Env> proto_;
   WorkerPool pool_;
   int d_ = 0, cd_ = 0, a_ = 0, N_ = 0, T_ = 0;  // observation, critic observation, action sizes; envs; steps
+  int block_ = 1;                               // environments per block (BlockSize)
+  int rank_ = 0, ranks_ = 1, e0_ = 0, e1_ = 0;  // this rank, of ranks_; its environments [e0_, e1_)
   Ppo ppo_;
   ObservationNormalizer obs_norm_, critic_norm_;
   RolloutStorage rollout_;
-  std::vector<std::unique_ptr<envs::Env>> envs_;
-  std::vector<Rng> env_rng_;
+  std::vector<std::unique_ptr<envs::Env>> envs_;     // this rank's, from e0_
+  std::vector<Rng> env_rng_;                         // this rank's, from e0_
   std::vector<float> raw_obs_cur_, raw_critic_cur_;  // [N][d], [N][cd]: each environment's latest
   std::vector<double> ep_return_, disc_ret_;
   RunningMeanStd ret_rms_;
@@ -76,7 +94,12 @@ class Runner {
   std::deque<std::array<double, 3>> tracking100_;  // tracking errors of the last 100 (where known)
   double best_return_ = -std::numeric_limits<double>::infinity();
   double best_success_ = -1.0;  // -1: no task success known
+  TimeShares time_{};
 };
+
+// Environments per block of a run with N environments: N/16, within [1, 32] (so that up to 16
+// threads or ranks have work at any N of 16 or more, and a block's forward pass is a matrix product).
+int BlockSize(int envs) noexcept;
 
 // Checks the options, builds the environment (envs::MakeEnv) and runs.
 Result<TrainResult> Train(const TrainOptions& options, const std::function<void(const Progress&)>& progress = {});

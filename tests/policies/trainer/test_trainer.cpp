@@ -24,32 +24,54 @@ TrainOptions Small() {
   return {.seed = 3, .total_steps = 4096, .num_envs = 4, .rollout_steps = 256, .minibatch = 64, .epochs = 3};
 }
 
-TEST_CASE("same seed and thread count give a bit-identical run") {
-  for (int threads : {1, 2}) {
+void CheckSameRun(const TrainResult& a, const TrainResult& b) {
+  REQUIRE(a.spec.layers.size() == b.spec.layers.size());
+  for (std::size_t l = 0; l < a.spec.layers.size(); ++l) {
+    CHECK(a.spec.layers[l].weight == b.spec.layers[l].weight);
+    CHECK(a.spec.layers[l].bias == b.spec.layers[l].bias);
+  }
+  CHECK(a.spec.obs_mean == b.spec.obs_mean);
+  REQUIRE(a.iterations.size() == b.iterations.size());
+  for (std::size_t i = 0; i < a.iterations.size(); ++i) {
+    CHECK(a.iterations[i].approx_kl == b.iterations[i].approx_kl);
+    CHECK(a.iterations[i].value_loss == b.iterations[i].value_loss);
+  }
+}
+
+// One thread per environment makes each forward pass a matrix-vector product, several a matrix
+// product, whose sums Eigen orders otherwise: the environments' blocks keep the shapes fixed.
+// (Ranks: tests/policies/train_ranks.sh under mpirun.)
+TEST_CASE("same seed and environments give a bit-identical run on any number of threads") {
+  for (int envs : {2, 5}) {
+    CAPTURE(envs);
     TrainOptions c = Small();
-    c.threads = threads;
+    c.num_envs = envs;
+    c.rollout_steps = 1024 / envs;
     c.normalize_observations = true;
     c.scale_rewards = true;
+    c.threads = 1;
     auto a = Train(c);
-    auto b = Train(c);
     REQUIRE(a.ok());
-    REQUIRE(b.ok());
-    REQUIRE(a->spec.layers.size() == b->spec.layers.size());
-    for (std::size_t l = 0; l < a->spec.layers.size(); ++l) {
-      CHECK(a->spec.layers[l].weight == b->spec.layers[l].weight);
-      CHECK(a->spec.layers[l].bias == b->spec.layers[l].bias);
-    }
-    CHECK(a->spec.obs_mean == b->spec.obs_mean);
-    REQUIRE(a->iterations.size() == b->iterations.size());
-    for (std::size_t i = 0; i < a->iterations.size(); ++i) {
-      CHECK(a->iterations[i].approx_kl == b->iterations[i].approx_kl);
-      CHECK(a->iterations[i].value_loss == b->iterations[i].value_loss);
+    for (int threads : {1, 2, 3}) {
+      CAPTURE(threads);
+      c.threads = threads;
+      auto b = Train(c);
+      REQUIRE(b.ok());
+      CheckSameRun(*a, *b);
     }
     c.seed = 4;
     auto other = Train(c);
     REQUIRE(other.ok());
     CHECK(other->spec.layers[0].weight != a->spec.layers[0].weight);
   }
+}
+
+TEST_CASE("environments per block: N/16 within [1, 32]") {
+  CHECK(BlockSize(1) == 1);
+  CHECK(BlockSize(31) == 1);
+  CHECK(BlockSize(32) == 2);
+  CHECK(BlockSize(512) == 32);
+  CHECK(BlockSize(4096) == 32);
 }
 
 // rl-zoo's Pendulum settings on a small budget.
