@@ -60,6 +60,7 @@ for task in $tasks; do
       [ "$mode" = ranks ] && ranks=$c threads=1
       name="$task/${mode}_$c"
       rates=()
+      mkdir -p "$out/$task"
       for ((k = 1; k <= repeats; k++)); do
         rm -rf "$out/$name"
         if [ "$ranks" = 1 ]; then

@@ -93,3 +93,17 @@ sweep_launcher() {
     jobs=1
   fi
 }
+
+# train_run PBPPO DIR ARGS...: `pbppo train ARGS --out DIR`, or, where DIR holds a stopped run's
+# resume.bin, that run continued with its own options (`pbppo train --resume DIR`: the weights the
+# run would have given uninterrupted). Delete DIR to train afresh.
+train_run() {
+  local pbppo=$1 dir=$2
+  shift 2
+  if [ -f "$dir/resume.bin" ]; then
+    echo "$dir: continuing the stopped run there (its own options; delete the folder to start afresh)" >&2
+    "$pbppo" train --resume "$dir"
+  else
+    "$pbppo" train "$@" --out "$dir"
+  fi
+}

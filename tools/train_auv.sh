@@ -76,8 +76,8 @@ if finished "$out/stage1" "auv-nav:$first_layout" "$first_seed" 3e-4 "$first_mar
   echo "train_auv: stage 1: kept the finished run in $out/stage1"
 else
   echo "train_auv: stage 1: $first_layout, $first_steps steps, seed $first_seed${first_margin:+, geodesic margin $first_margin} -> $out/stage1"
-  "$pbppo" train "${common[@]}" --layout "$first_layout" --normalize-obs --lr 3e-4 --steps "$first_steps" \
-    --seed "$first_seed" ${first_margin:+--geodesic-margin "$first_margin"} --out "$out/stage1"
+  train_run "$pbppo" "$out/stage1" "${common[@]}" --layout "$first_layout" --normalize-obs --lr 3e-4 \
+    --steps "$first_steps" --seed "$first_seed" ${first_margin:+--geodesic-margin "$first_margin"}
 fi
 stage=1
 for pair in $mixed_stages; do
@@ -91,9 +91,9 @@ for pair in $mixed_stages; do
   fi
   echo "train_auv: stage $stage: mixed, $mixed_steps steps, seed $seed, lr $lr${margin:+, geodesic margin $margin}${clearance:+, clearance penalty $clearance}, from stage $prev -> $out/stage$stage"
   # The normaliser comes with the --init blob (and keeps adapting).
-  "$pbppo" train "${common[@]}" --layout mixed --init "$out/stage$prev/best.blob" --lr "$lr" \
-    --steps "$mixed_steps" --seed "$seed" ${margin:+--geodesic-margin "$margin"} \
-    ${clearance:+--clearance-penalty "$clearance"} --out "$out/stage$stage"
+  train_run "$pbppo" "$out/stage$stage" "${common[@]}" --layout mixed --init "$out/stage$prev/best.blob" \
+    --lr "$lr" --steps "$mixed_steps" --seed "$seed" ${margin:+--geodesic-margin "$margin"} \
+    ${clearance:+--clearance-penalty "$clearance"}
 done
 last="$out/stage$stage"
 # PPO on this task is not monotonic: each stage hands on, and ships, its best checkpoint.

@@ -27,7 +27,8 @@
 # weights on a CPU with another L1 size; another machine's MuJoCo or C library can still change
 # the rounding, and a run then drifts apart: docs/results/README.md saw it on the MuJoCo tasks). A
 # stage whose folder holds a finished run (summary.json, not interrupted) is kept, so a stopped
-# recipe resumes; delete OUT_DIR to train afresh.
+# recipe resumes: a stage that was stopped or killed continues from its last resume.bin (pbppo
+# train --resume: the same weights as uninterrupted); delete OUT_DIR to train afresh.
 # Usage: tools/train_quadruped.sh [OUT_DIR=runs/train_quadruped]
 #   PBPPO=path/to/pbppo  HIL=path/to/pbppo-hil  THREADS=2  SEED=1  START_STEPS=2e7  FLAT_STEPS=2e7
 #   SHARES=0.3:0.4  REWARD_SCALES=tracking_lin_vel=2.5,tracking_ang_vel=1.0,termination=-150
@@ -80,10 +81,10 @@ stage() {
   else
     echo "$name: from scratch, $steps steps: $*"
   fi
-  local t0
-  t0=$(date +%s)
-  "$pbppo" train "${common[@]}" "$@" --steps "$steps" "${init[@]}" --out "$out/$name"
-  echo "$name: wall time $(( $(date +%s) - t0 )) s" | tee "$out/$name/wall_time.txt"
+  train_run "$pbppo" "$out/$name" "${common[@]}" "$@" --steps "$steps" "${init[@]}"
+  # The run's wall time (a resumed run's: every part of it).
+  echo "$name: wall time $(python3 -c 'import json, sys; print(round(json.load(open(sys.argv[1]))["wall_seconds"]))' \
+    "$out/$name/summary.json") s" | tee "$out/$name/wall_time.txt"
 }
 seconds() { sed 's/[^0-9]//g' "$out/$1/wall_time.txt"; }
 

@@ -37,8 +37,9 @@ int main(int argc, char** argv) {
 
   pbppo::trainer::TrainOptions train_opts;
   bool train_quiet = false;
+  std::string train_resume;
   auto* train = app.add_subcommand("train", "Train a policy with PPO and a clip schedule (Pb-PPO)");
-  pbppo::cli::AddTrainOptions(*train, train_opts, train_quiet);
+  pbppo::cli::AddTrainOptions(*train, train_opts, train_quiet, &train_resume);
 
   pbppo::cli::SweepOptions sweep_opts;
   auto* sweep = pbppo::cli::AddSweep(app, sweep_opts);
@@ -70,7 +71,14 @@ int main(int argc, char** argv) {
   }
   if (*inspect) return pbppo::cli::Inspect(inspect_path, inspect_json, inspect_weights);
   if (*synth) return pbppo::cli::Synth(synth_opts);
-  if (*train) return pbppo::cli::Train(train_opts, train_quiet);
+  if (*train) {
+    // The arguments after `train`, as given.
+    std::vector<std::string> args;
+    int k = 1;
+    while (k < argc && std::string(argv[k]) != "train") ++k;
+    for (++k; k < argc; ++k) args.emplace_back(argv[k]);
+    return pbppo::cli::Train(train_opts, train_quiet, train_resume, args);
+  }
   if (*sweep) return pbppo::cli::Sweep(sweep_opts);
   if (*eval) return pbppo::cli::Eval(eval_opts);
   if (*curves) return pbppo::cli::Curves(curves_opts);

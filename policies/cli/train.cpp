@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -15,6 +16,8 @@
 
 #include "policies/cli/process_group.hpp"
 #include "policies/envs/registry.hpp"
+#include "policies/trainer/checkpoint.hpp"
+#include "policies/trainer/exporter.hpp"
 #include "policies/trainer/trainer.hpp"
 #include "runtime/core/cli_checks.hpp"
 #include "runtime/core/clock.hpp"
@@ -121,7 +124,7 @@ void AddEnvOptions(CLI::App& s, envs::EnvOptions& env, envs::EnvFlag::Use use) {
   }
 }
 
-void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
+void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet, std::string* resume) {
   AddEnvOptions(s, o.env, envs::EnvFlag::kTrain);
 
   // The clip schedule: --schedule and --arms make it (ParseSchedule, with the mode's default
@@ -181,7 +184,8 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
       ->default_str("2e5");
   o.total_steps = 200000;
   s.add_option("--seed", o.seed, "Seed")->check(cli_checks::NonNegativeInteger());
-  s.add_option("--out", o.out_dir, "Output folder (log.csv, summary.json, policy.blob, plots)")->required();
+  s.add_option("--out", o.out_dir,
+               "Output folder (log.csv, summary.json, policy.blob, plots); required unless --resume");
   // Sizes and PPO's coefficients: (flag, variable, help) each.
   using IntOption = std::tuple<const char*, int*, const char*>;
   for (auto [flag, value, help] : {IntOption{"--threads", &o.threads,
@@ -248,15 +252,87 @@ void AddTrainOptions(CLI::App& s, trainer::TrainOptions& o, bool& quiet) {
                "Start from this blob's policy and observation normaliser (same IO layout, --hidden and "
                "--activation; value network and log-std start fresh), e.g. to continue on a harder layout");
   s.add_flag("--quiet", quiet, "No progress line");
+  s.add_option("--resume-every", o.resume_every,
+               "Iterations between the resumable states written to OUT/resume.bin (also written at a stop; 0: never)")
+      ->check(CLI::NonNegativeNumber);
+  if (resume != nullptr) {
+    s.add_option("--resume", *resume,
+                 "Continue the stopped run in this folder from its resume.bin, with its own options (--threads and "
+                 "--quiet may be given; any ranks and threads give the same weights as the run uninterrupted)");
+  }
 }
 
-int Train(trainer::TrainOptions o, bool quiet) {
+namespace {
+
+// `pbppo train --resume DIR`: the run's options from DIR/resume.bin's arguments, read as the command
+// line reads them; --threads from this command line if given. Errors name the flag or the file.
+Result<trainer::TrainOptions> ResumeOptions(const std::string& dir, const std::vector<std::string>& args,
+                                            const trainer::TrainOptions& given, bool* quiet) {
+  auto refuse = [](const std::string& what) { return MakeError(ErrorCode::kInvalidValue, "--resume: " + what); };
+  bool threads_given = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    const std::string name = a.substr(0, a.find('='));
+    if (name == "--resume" || name == "--threads") {
+      threads_given |= name == "--threads";
+      if (a.find('=') == std::string::npos) ++i;  // its value
+    } else if (name != "--quiet") {
+      return refuse(
+          "the run's options are those its resume.bin recorded; only --threads and --quiet may be given "
+          "with it, not '" +
+          a + "'");
+    }
+  }
+  const std::string path = dir + "/" + trainer::kResumeFile;
+  if (!std::filesystem::exists(path)) {
+    if (std::filesystem::exists(dir + "/summary.json"))
+      return refuse("the run in '" + dir + "' finished (summary.json, no " + trainer::kResumeFile +
+                    "): nothing to resume");
+    return refuse("'" + path + "' does not exist (a run writes it every --resume-every iterations and at a stop)");
+  }
+  auto file = trainer::ReadResumeFile(path);
+  if (!file) return refuse(file.error().message);
+  if (file->git_revision != trainer::BuildGitRevision()) {
+    std::fprintf(stderr,
+                 "pbppo train: --resume: '%s' was written by build %s, this is %s: the run continues, but its weights "
+                 "may differ from the first build's run uninterrupted\n",
+                 path.c_str(), file->git_revision.c_str(), trainer::BuildGitRevision());
+  }
+  trainer::TrainOptions o;
+  bool recorded_quiet = false;
+  CLI::App app{"pbppo train"};
+  AddTrainOptions(app, o, recorded_quiet, nullptr);
+  try {
+    app.parse(std::vector<std::string>(file->args.rbegin(), file->args.rend()));
+  } catch (const CLI::ParseError& e) {
+    return refuse("'" + path + "' holds arguments this build refuses: " + e.what());
+  }
+  o.out_dir = dir;  // the folder it is in, wherever the run was started from
+  if (threads_given) o.threads = given.threads;
+  o.command_args = std::move(file->args);
+  o.resume_state = std::move(file->state);
+  *quiet = *quiet || recorded_quiet;
+  return o;
+}
+
+}  // namespace
+
+int Train(trainer::TrainOptions o, bool quiet, const std::string& resume, const std::vector<std::string>& args) {
   // Under mpirun: one run over the job's ranks (data-parallel); rank 0 prints and writes. Every rank
   // reads the same arguments, so a refusal is every rank's, printed once.
   const ProcessGroup group;
   if (group.size() > 1) o.group = &group;
   const bool writer = group.rank() == 0;
   auto refuse = [&](const std::string& msg) { return writer ? Fail(msg) : 2; };
+  if (!resume.empty()) {
+    auto resumed = ResumeOptions(resume, args, o, &quiet);
+    if (!resumed) return refuse(resumed.error().message);
+    o = std::move(*resumed);
+    o.group = group.size() > 1 ? &group : nullptr;
+  } else {
+    if (o.out_dir.empty()) return refuse("--out is required (or --resume DIR)");
+    o.command_args = args;
+  }
   // Every option checked before the run starts (bad input: exit 2).
   if (auto st = o.Validate(); !st) return refuse(st.error().message);
   auto env = envs::MakeEnv(o.env);

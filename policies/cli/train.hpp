@@ -2,6 +2,9 @@
 // the flag and the value), and Train() runs it with a progress line and a clean Ctrl-C.
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "policies/envs/registry.hpp"
 #include "policies/trainer/options.hpp"
 
@@ -14,7 +17,10 @@ namespace pbppo::cli {
 // --env, --models and every environment's own flags that `use` takes (envs::FlagsFor): pbppo
 // train's or pbppo eval's.
 void AddEnvOptions(CLI::App& sub, envs::EnvOptions& env, envs::EnvFlag::Use use);
-void AddTrainOptions(CLI::App& sub, trainer::TrainOptions& options, bool& quiet);
-int Train(trainer::TrainOptions options, bool quiet);
+// `resume` (null: no --resume flag) receives --resume's folder.
+void AddTrainOptions(CLI::App& sub, trainer::TrainOptions& options, bool& quiet, std::string* resume = nullptr);
+// `args`: the arguments after `train`, as given (resume.bin records them; with --resume, only
+// --threads and --quiet may be among them).
+int Train(trainer::TrainOptions options, bool quiet, const std::string& resume, const std::vector<std::string>& args);
 
 }  // namespace pbppo::cli

@@ -6,6 +6,7 @@
 #include <cstddef>
 
 #include "policies/trainer/mlp.hpp"
+#include "policies/trainer/state_io.hpp"
 
 namespace pbppo::trainer {
 
@@ -39,6 +40,18 @@ class Adam {
     const S inv_sqrt_bc2 = static_cast<S>(1.0 / std::sqrt(bc2));
     const S eps = static_cast<S>(eps_);
     pv.array() -= step * m.array() / (v.array().sqrt() * inv_sqrt_bc2 + eps);
+  }
+
+  // Its moments and step count (a resumed run's).
+  void Save(ByteWriter& w) const {
+    w.PutMatrix(m_);
+    w.PutMatrix(v_);
+    w.Put(t_);
+  }
+  void Load(ByteReader& r) {
+    r.GetMatrix(m_, "Adam's first moments");
+    r.GetMatrix(v_, "Adam's second moments");
+    t_ = r.Get<long>("Adam's step count");
   }
 
  private:

@@ -44,13 +44,15 @@ std::string Logger::CsvRow(const IterationStats& s) {
   return r.str();
 }
 
-Status Logger::Open() {
+Status Logger::Open(const std::vector<IterationStats>& resumed) {
   const std::string& dir = o_.out_dir;
   if (dir.empty()) return {};
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return MakeError(ErrorCode::kIo, "--out: cannot create folder '" + dir + "': " + ec.message());
-  if (auto st = WriteText(dir + "/log.csv", CsvHeader(o_.schedule.arms.size())); !st)
+  std::string text = CsvHeader(o_.schedule.arms.size());
+  for (const IterationStats& s : resumed) text += CsvRow(s);
+  if (auto st = WriteText(dir + "/log.csv", text); !st)
     return MakeError(ErrorCode::kIo, "--out: folder '" + dir + "' is not writable: " + st.error().message);
   csv_.open(dir + "/log.csv", std::ios::app);
   if (!csv_) return MakeError(ErrorCode::kIo, "--out: cannot append to '" + dir + "/log.csv'");

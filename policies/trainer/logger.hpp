@@ -87,9 +87,10 @@ class Logger {
  public:
   explicit Logger(const TrainOptions& options) : o_(options) {}
 
-  // Creates the output folder (and snapshots/ when asked) and log.csv with its header; nothing
-  // without an output folder. Errors name --out (or --snapshots) and the path.
-  Status Open();
+  // Creates the output folder (and snapshots/ when asked) and log.csv with its header and the rows
+  // of a resumed run's iterations so far; nothing without an output folder. Errors name --out (or
+  // --snapshots) and the path.
+  Status Open(const std::vector<IterationStats>& resumed = {});
   void Log(const IterationStats& s);
   // The curves (unless --no-plots) and summary.json; `env_name` is the environment's full name.
   Status Finish(const std::string& env_name, TrainResult& result);

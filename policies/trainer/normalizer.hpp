@@ -52,6 +52,20 @@ class ObservationNormalizer {
   const std::vector<float>& inv_std() const noexcept { return inv_std_; }
   float clip() const noexcept { return clip_; }
 
+  // Its running statistics and the normaliser in use (a resumed run's).
+  void Save(ByteWriter& w) const {
+    rms_.Save(w);
+    w.PutVector(mean_);
+    w.PutVector(inv_std_);
+    w.Put(clip_);
+  }
+  void Load(ByteReader& r) {
+    rms_.Load(r);
+    r.GetVector(mean_, "normaliser mean", static_cast<std::int64_t>(mean_.size()));
+    r.GetVector(inv_std_, "normaliser inverse std", static_cast<std::int64_t>(inv_std_.size()));
+    clip_ = r.Get<float>("normaliser clip");
+  }
+
  private:
   bool learn_ = false;
   RunningMeanStd rms_;

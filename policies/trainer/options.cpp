@@ -24,6 +24,7 @@ Status TrainOptions::Validate() const {
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");
   if (critic_warmup > 0 && init_blob.empty())
     return Invalid("--critic-warmup", "needs --init (it holds a trained policy while the fresh value network learns)");
+  if (resume_every < 0) return Invalid("--resume-every", std::to_string(resume_every) + " is negative");
   if (snapshots < 0 || snapshots > 1000)
     return Invalid("--snapshots", std::to_string(snapshots) + " is not in [0, 1000]");
   if (!(learning_rate > 0)) return Invalid("--lr", std::to_string(learning_rate) + " is not positive");
@@ -71,7 +72,7 @@ nlohmann::json OptionsJson(const TrainOptions& o) {
       {"critic_warmup", o.critic_warmup},
       // Outputs.
       {"out", o.out_dir}, {"no_plots", !o.plots}, {"checkpoint_seconds", o.checkpoint_seconds},
-      {"keep_best", o.keep_best}, {"snapshots", o.snapshots}};
+      {"keep_best", o.keep_best}, {"snapshots", o.snapshots}, {"resume_every", o.resume_every}};
   // clang-format on
   // The environment's flags, each by its key: as given, else the environment's default.
   auto resolved = envs::ResolveEnvOptions(e);

@@ -80,6 +80,13 @@ struct TrainOptions {
   // steps that produced them), to choose among afterwards on held-out episodes. 0: none.
   int snapshots = 0;
   const std::atomic<bool>* stop = nullptr;  // set from a signal handler to stop cleanly
+  // Resuming (checkpoint.hpp): every this many iterations (and at a stop) the run's state goes to
+  // OUT/resume.bin with these arguments (the command line's, to run again); 0 or no arguments: not
+  // written. A run given a state (ReadResumeFile's) continues from it: the same options, any ranks
+  // and threads, the same weights as the run would have given uninterrupted.
+  int resume_every = 25;
+  std::vector<std::string> command_args{};
+  std::vector<char> resume_state{};
 
   int ranks() const noexcept { return group != nullptr ? group->size() : 1; }
   int rank() const noexcept { return group != nullptr ? group->rank() : 0; }

@@ -73,6 +73,24 @@ Ppo::Ppo(const TrainOptions& o, int obs_size, int value_input_size, int action_s
   critic_adam_ = Adam<float>(static_cast<std::size_t>(critic_params_.size()), 1e-5);
 }
 
+void Ppo::Save(ByteWriter& w) const {
+  w.PutMatrix(actor_params_);
+  w.PutMatrix(critic_params_);
+  actor_adam_.Save(w);
+  critic_adam_.Save(w);
+  w.Put(lr_);
+  w.Put(rng_);
+}
+
+void Ppo::Load(ByteReader& r) {
+  r.GetMatrix(actor_params_, "actor parameters");
+  r.GetMatrix(critic_params_, "critic parameters");
+  actor_adam_.Load(r);
+  critic_adam_.Load(r);
+  lr_ = r.Get<double>("learning rate");
+  rng_ = r.Get<Rng>("minibatch generator");
+}
+
 void Ppo::ComputeReturns(RolloutStorage& r, WorkerPool& pool) const {
   const long B = r.size();
   const long chunk = 256;

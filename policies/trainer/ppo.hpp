@@ -50,6 +50,10 @@ class Ppo {
   const float* log_std() const noexcept { return actor_params_.data() + actor_.log_std_offset(); }
   const Mlp<float>& critic() const noexcept { return critic_; }
 
+  // The networks, optimisers, rate and minibatch generator (a resumed run's).
+  void Save(ByteWriter& w) const;
+  void Load(ByteReader& r);
+
   double learning_rate() const noexcept { return lr_; }
   void set_learning_rate(double lr) noexcept { lr_ = lr; }
 

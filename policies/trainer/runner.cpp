@@ -5,9 +5,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
+#include "policies/trainer/checkpoint.hpp"
 #include "policies/trainer/exporter.hpp"
 #include "policies/trainer/seed.hpp"
 #include "policies/trainer/state_io.hpp"
@@ -50,11 +52,13 @@ Runner::Runner(const TrainOptions& o, std::unique_ptr<envs::Env> env)
   ranks_ = o.ranks();
   e0_ = RankBegin(rank_);
   e1_ = RankBegin(rank_ + 1);
+  const std::size_t trace_capacity = std::min<std::size_t>(proto_->max_episode_steps(), 100000) * a_;
   for (int e = e0_; e < e1_; ++e) {
     envs_.push_back(proto_->Clone());
     env_rng_.emplace_back(Mix(o.seed, 1000 + static_cast<std::uint64_t>(e)));
-    envs_.back()->Reset(env_rng_.back(), {raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)});
-    if (cd_ > 0) envs_.back()->CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
+    traces_.emplace_back();
+    traces_.back().actions.reserve(trace_capacity);
+    ResetEnv(e);
   }
   // The rank's blocks over its threads, whole blocks each.
   const int b0 = e0_ / block_, blocks = (e1_ - e0_ + block_ - 1) / block_;
@@ -64,6 +68,14 @@ Runner::Runner(const TrainOptions& o, std::unique_ptr<envs::Env> env)
     workers_[static_cast<std::size_t>(w)].e0 = std::min(e1_, (b0 + blocks * w / W) * block_);
     workers_[static_cast<std::size_t>(w)].e1 = std::min(e1_, (b0 + blocks * (w + 1) / W) * block_);
   }
+}
+
+void Runner::ResetEnv(int e) {
+  const auto k = static_cast<std::size_t>(e - e0_);
+  traces_[k].start = env_rng_[k];
+  traces_[k].actions.clear();
+  envs_[k]->Reset(env_rng_[k], {raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)});
+  if (cd_ > 0) envs_[k]->CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
 }
 
 int BlockSize(int envs) noexcept {
@@ -130,6 +142,8 @@ void Runner::RolloutWorker(Worker& w) {
         r.log_prob[ui] = lp - static_cast<float>(a_ * half_log_2pi);
         const std::span<float> raw{raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)};
         const std::span<float> raw_c{raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)};
+        std::vector<float>& trace = traces_[static_cast<std::size_t>(e - e0_)].actions;
+        trace.insert(trace.end(), act.begin(), act.end());
         const envs::StepResult s = env.Step(act, raw);
         if (cd_ > 0) env.CriticObservation(raw_c);
         r.rewards[ui] = static_cast<float>(s.reward);
@@ -142,8 +156,7 @@ void Runner::RolloutWorker(Worker& w) {
           w.episodes.push_back({i, ep_return_[static_cast<std::size_t>(e)],
                                 info.available ? (info.success ? 1 : 0) : -1, info.tracking_error});
           ep_return_[static_cast<std::size_t>(e)] = 0;
-          env.Reset(rng, raw);
-          if (cd_ > 0) env.CriticObservation(raw_c);
+          ResetEnv(e);
         }
       }
       w.policy_seconds += std::chrono::duration<double>(c1 - c0).count();
@@ -355,6 +368,208 @@ Status Runner::WriteCheckpoint(double final_return, std::uint64_t env_steps, con
   return WritePolicy(o_.out_dir + "/" + name, Freeze(final_return, env_steps), o_.seed);
 }
 
+namespace {
+
+void PutIteration(ByteWriter& w, const IterationStats& s) {
+  w.Put(static_cast<const UpdateStats&>(s));
+  w.Put(s.iteration);
+  w.Put(s.env_steps);
+  w.Put(s.eval_steps);
+  w.Put(s.arm);
+  for (double x : {s.epsilon, s.feedback, s.feedback_before, s.success_rate, s.train_return, s.train_return_100,
+                   s.task_success_100, s.steps_per_second, s.learning_rate})
+    w.Put(x);
+  w.Put(s.improved);
+  w.Put(s.tracking_error_100);
+  w.Put(s.episodes);
+  w.PutVector(s.arms);
+}
+
+IterationStats GetIteration(ByteReader& r) {
+  IterationStats s;
+  static_cast<UpdateStats&>(s) = r.Get<UpdateStats>("an iteration's update");
+  s.iteration = r.Get<int>("an iteration's index");
+  s.env_steps = r.Get<std::uint64_t>("an iteration's steps");
+  s.eval_steps = r.Get<std::uint64_t>("an iteration's evaluation steps");
+  s.arm = r.Get<int>("an iteration's arm");
+  for (double* x : {&s.epsilon, &s.feedback, &s.feedback_before, &s.success_rate, &s.train_return, &s.train_return_100,
+                    &s.task_success_100, &s.steps_per_second, &s.learning_rate})
+    *x = r.Get<double>("an iteration's figures");
+  s.improved = r.Get<bool>("an iteration's improvement");
+  s.tracking_error_100 = r.Get<std::array<double, 3>>("an iteration's tracking errors");
+  s.episodes = r.Get<int>("an iteration's episodes");
+  r.GetVector(s.arms, "an iteration's arms");
+  return s;
+}
+
+template <typename T>
+std::vector<T> AsVector(const std::deque<T>& d) {
+  return {d.begin(), d.end()};
+}
+
+template <typename T>
+void GetDeque(ByteReader& r, std::deque<T>& d, const char* field) {
+  std::vector<T> v;
+  r.GetVector(v, field);
+  d.assign(v.begin(), v.end());
+}
+
+}  // namespace
+
+std::vector<char> Runner::SaveState(const LoopState& loop, const std::vector<IterationStats>& iterations) {
+  // This rank's environments, then every rank's on rank 0 (in environment order).
+  ByteWriter mine;
+  for (int e = e0_; e < e1_; ++e) {
+    const auto k = static_cast<std::size_t>(e - e0_);
+    mine.Put(env_rng_[k]);
+    mine.Put(traces_[k].start);
+    mine.PutVector(traces_[k].actions);
+    mine.Put(ep_return_[static_cast<std::size_t>(e)]);
+  }
+  std::vector<std::vector<char>> parts;
+  if (ranks_ > 1) {
+    parts = o_.group->AllGather(mine.bytes());
+  } else {
+    parts.push_back(std::move(mine.bytes()));
+  }
+  if (rank_ != 0) return {};
+  ByteWriter w;
+  for (int x : {N_, T_, d_, cd_, a_}) w.Put(x);
+  w.Put(loop.next_iteration);
+  w.Put(loop.env_steps);
+  w.Put(loop.eval_steps);
+  for (double x : {loop.rollout_return, loop.feedback_prev, loop.seconds_before}) w.Put(x);
+  for (int x : {loop.rollout_episodes, loop.improved_count, loop.feedback_count}) w.Put(x);
+  w.PutVector(loop.choices);
+  w.Put(static_cast<std::uint64_t>(iterations.size()));
+  for (const IterationStats& st : iterations) PutIteration(w, st);
+  ppo_.Save(w);
+  obs_norm_.Save(w);
+  critic_norm_.Save(w);
+  ret_rms_.Save(w);
+  w.PutVector(disc_ret_);
+  w.PutVector(AsVector(last100_));
+  w.PutVector(AsVector(success100_));
+  w.PutVector(AsVector(tracking100_));
+  w.Put(best_return_);
+  w.Put(best_success_);
+  w.Put(time_);
+  const RolloutStorage& r = rollout_;
+  w.PutMatrix(r.obs);
+  w.PutMatrix(r.critic_obs);
+  w.PutMatrix(r.actions);
+  w.PutMatrix(r.action_mean);
+  w.PutVector(r.log_std);
+  w.PutVector(r.raw_obs);
+  w.PutVector(r.raw_critic_obs);
+  w.PutVector(r.log_prob);
+  w.PutVector(r.rewards);
+  w.PutVector(r.terminated);
+  w.PutVector(r.truncated);
+  w.PutMatrix(r.truncation_value_inputs);
+  w.PutMatrix(r.last_value_inputs);
+  for (const std::vector<char>& part : parts) w.Put(part.data(), part.size());
+  return std::move(w.bytes());
+}
+
+void Runner::LoadState(const std::vector<char>& bytes, LoopState& loop, std::vector<IterationStats>& iterations) {
+  ByteReader in(bytes.data(), bytes.size(), "the resume state");
+  static constexpr const char* kShape[] = {"--envs", "--rollout", "the observation size",
+                                           "the critic's observation size", "the action size"};
+  const int shape[] = {N_, T_, d_, cd_, a_};
+  for (int k = 0; k < 5; ++k) {
+    const int x = in.Get<int>(kShape[k]);
+    if (x != shape[k])
+      throw std::runtime_error("the resume state: " + std::string(kShape[k]) + " was " + std::to_string(x) +
+                               ", the run has " + std::to_string(shape[k]));
+  }
+  loop.next_iteration = in.Get<int>("the next iteration");
+  if (loop.next_iteration < 0)
+    throw std::runtime_error("the resume state: iteration " + std::to_string(loop.next_iteration) + " is negative");
+  loop.env_steps = in.Get<std::uint64_t>("the steps");
+  loop.eval_steps = in.Get<std::uint64_t>("the evaluation steps");
+  for (double* x : {&loop.rollout_return, &loop.feedback_prev, &loop.seconds_before}) *x = in.Get<double>("the loop");
+  for (int* x : {&loop.rollout_episodes, &loop.improved_count, &loop.feedback_count}) *x = in.Get<int>("the loop");
+  in.GetVector(loop.choices, "the schedule's choices", loop.next_iteration);
+  const auto logged = in.Get<std::uint64_t>("the iterations");
+  if (logged != static_cast<std::uint64_t>(loop.next_iteration))
+    throw std::runtime_error("the resume state: " + std::to_string(logged) + " iterations logged, " +
+                             std::to_string(loop.next_iteration) + " run");
+  iterations.resize(static_cast<std::size_t>(logged));
+  for (IterationStats& st : iterations) st = GetIteration(in);
+  ppo_.Load(in);
+  obs_norm_.Load(in);
+  critic_norm_.Load(in);
+  ret_rms_.Load(in);
+  in.GetVector(disc_ret_, "the discounted returns", N_);
+  GetDeque(in, last100_, "the last 100 returns");
+  GetDeque(in, success100_, "the last 100 successes");
+  GetDeque(in, tracking100_, "the last 100 tracking errors");
+  best_return_ = in.Get<double>("the best return");
+  best_success_ = in.Get<double>("the best success");
+  time_ = in.Get<TimeShares>("the time shares");
+  RolloutStorage& r = rollout_;
+  const long B = r.size();
+  in.GetMatrix(r.obs, "the rollout's observations");
+  in.GetMatrix(r.critic_obs, "the rollout's critic observations");
+  in.GetMatrix(r.actions, "the rollout's actions");
+  in.GetMatrix(r.action_mean, "the rollout's action means");
+  in.GetVector(r.log_std, "the rollout's log-std", a_);
+  in.GetVector(r.raw_obs, "the rollout's raw observations", B * d_);
+  in.GetVector(r.raw_critic_obs, "the rollout's raw critic observations", B * cd_);
+  in.GetVector(r.log_prob, "the rollout's log-probabilities", B);
+  in.GetVector(r.rewards, "the rollout's rewards", B);
+  in.GetVector(r.terminated, "the rollout's terminations", B);
+  in.GetVector(r.truncated, "the rollout's truncations", B);
+  in.GetMatrix(r.truncation_value_inputs, "the rollout's truncation value inputs");
+  in.GetMatrix(r.last_value_inputs, "the rollout's last value inputs");
+  // Every environment's record; this rank's environments replay their episodes so far.
+  std::vector<EpisodeTrace> traces(static_cast<std::size_t>(e1_ - e0_));
+  for (int e = 0; e < N_; ++e) {
+    const Rng now = in.Get<Rng>("an environment's generator");
+    EpisodeTrace t{in.Get<Rng>("an environment's episode start"), {}};
+    in.GetVector(t.actions, "an environment's episode trace");
+    const double ret = in.Get<double>("an environment's episode return");
+    if (t.actions.size() % static_cast<std::size_t>(a_) != 0)
+      throw std::runtime_error("the resume state: environment " + std::to_string(e) + "'s trace holds " +
+                               std::to_string(t.actions.size()) + " values, not whole actions of " +
+                               std::to_string(a_));
+    if (e < e0_ || e >= e1_) continue;
+    const auto k = static_cast<std::size_t>(e - e0_);
+    env_rng_[k] = now;
+    ep_return_[static_cast<std::size_t>(e)] = ret;
+    traces[k] = std::move(t);
+  }
+  in.CheckEnd();
+  std::vector<std::string> errors(static_cast<std::size_t>(pool_.size()));
+  pool_.Run([&](int w) {
+    for (int e = e0_ + w; e < e1_; e += pool_.size()) {
+      const auto k = static_cast<std::size_t>(e - e0_);
+      EpisodeTrace& t = traces[k];
+      Rng g = t.start;
+      envs::Env& env = *envs_[k];
+      const std::span<float> raw{raw_obs_cur_.data() + e * d_, static_cast<std::size_t>(d_)};
+      env.Reset(g, raw);
+      const std::size_t steps = t.actions.size() / static_cast<std::size_t>(a_);
+      for (std::size_t j = 0; j < steps; ++j) {
+        const envs::StepResult sr =
+            env.Step({t.actions.data() + j * static_cast<std::size_t>(a_), static_cast<std::size_t>(a_)}, raw);
+        if (sr.terminated || sr.truncated) {
+          errors[static_cast<std::size_t>(w)] = "the resume state: environment " + std::to_string(e) +
+                                                "'s episode ended at step " + std::to_string(j + 1) + " of " +
+                                                std::to_string(steps) + " of its replay (another environment?)";
+          break;
+        }
+      }
+      if (cd_ > 0) env.CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
+      traces_[k].start = t.start;
+      traces_[k].actions.assign(t.actions.begin(), t.actions.end());
+    }
+  });
+  for (const std::string& e : errors)
+    if (!e.empty()) throw std::runtime_error(e);
+}
+
 Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& progress) {
   if (!o_.init_blob.empty()) {
     if (auto st = LoadActor(o_.init_blob, *proto_, ppo_.actor(), ppo_.actor_params(), &obs_norm_); !st)
@@ -364,25 +579,46 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
   const auto t0 = Clock::now();
   Logger log(o_);
   const bool writer = rank_ == 0;  // of the run's results: log, summary, plots, blobs, progress
-  if (writer) {
-    if (auto st = log.Open(); !st) return st.error();
-  }
   auto schedule = MakeClipSchedule(o_.schedule);
   const bool bandit = schedule->uses_feedback();
   const bool eval_feedback = bandit && o_.schedule.feedback == FeedbackSource::kEval;
   const std::uint64_t per_iter = static_cast<std::uint64_t>(T_) * static_cast<std::uint64_t>(N_);
   const int iterations = static_cast<int>((o_.total_steps + per_iter - 1) / per_iter);
 
-  std::uint64_t env_steps = 0, eval_steps = 0;
-  CollectRollout();
-  env_steps += per_iter;
-  double rollout_return = Mean(rollout_returns_);
-  int rollout_episodes = static_cast<int>(rollout_returns_.size());
-  double feedback_prev = eval_feedback ? Evaluate(-1, &eval_steps) : rollout_return;
-  int improved_count = 0, feedback_count = 0;
+  LoopState loop;
+  if (!o_.resume_state.empty()) {
+    try {
+      LoadState(o_.resume_state, loop, res.iterations);
+    } catch (const std::exception& e) {
+      return MakeError(ErrorCode::kFormat, std::string("--resume: ") + e.what());
+    }
+    // The schedule's state is what its calls made it: the same calls again.
+    for (std::size_t i = 0; i < loop.choices.size(); ++i) {
+      const LoopState::Choice& c = loop.choices[i];
+      const int arm = schedule->Choose();
+      if (arm != c.arm)
+        return MakeError(ErrorCode::kMismatch, "--resume: the clip schedule chose arm " + std::to_string(arm) +
+                                                   " at iteration " + std::to_string(i) + ", the run arm " +
+                                                   std::to_string(c.arm));
+      if (c.updated) schedule->Update(c.arm, c.after, c.before);
+    }
+  }
+  if (writer) {
+    if (auto st = log.Open(res.iterations); !st) return st.error();
+  }
+  if (o_.resume_state.empty()) {
+    CollectRollout();
+    loop.env_steps += per_iter;
+    loop.rollout_return = Mean(rollout_returns_);
+    loop.rollout_episodes = static_cast<int>(rollout_returns_.size());
+    loop.feedback_prev = eval_feedback ? Evaluate(-1, &loop.eval_steps) : loop.rollout_return;
+  }
   auto last_checkpoint = Clock::now();
+  // Wall seconds of the run so far: the processes' before this one (a resumed run's) and this one's.
+  const double seconds_before = loop.seconds_before;
+  auto elapsed = [&] { return seconds_before + std::chrono::duration<double>(Clock::now() - t0).count(); };
 
-  for (int it = 0; it < iterations; ++it) {
+  for (int it = loop.next_iteration; it < iterations; ++it) {
     // --keep-best: the parameters that collected the best last-100-episode task success (or, for
     // environments without one, return) so far (these episodes were collected by this and the few
     // previous iterations' policies).
@@ -391,13 +627,13 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
       if (success > best_success_ || (success == best_success_ && Mean100() > best_return_)) {
         best_success_ = success;
         best_return_ = Mean100();
-        if (auto s = WriteCheckpoint(best_return_, env_steps, "best.blob"); !s) return s.error();
+        if (auto s = WriteCheckpoint(best_return_, loop.env_steps, "best.blob"); !s) return s.error();
       }
     }
     IterationStats st;
     st.iteration = it;
-    st.train_return = rollout_return;
-    st.episodes = rollout_episodes;
+    st.train_return = loop.rollout_return;
+    st.episodes = loop.rollout_episodes;
     const auto r0 = Clock::now();
     ppo_.ComputeReturns(rollout_, pool_);
     const auto r1 = Clock::now();
@@ -416,49 +652,53 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     st.learning_rate = ppo_.learning_rate();
 
     const bool stopping = StopRequested();
-    const bool more = it + 1 < iterations && !stopping;
+    // The next rollout is collected even when stopping: the iteration is then whole (its feedback
+    // given), and the run can resume from it.
+    const bool more = it + 1 < iterations;
     if (more) {
       CollectRollout();
-      env_steps += per_iter;
-      rollout_return = Mean(rollout_returns_);
-      rollout_episodes = static_cast<int>(rollout_returns_.size());
+      loop.env_steps += per_iter;
+      loop.rollout_return = Mean(rollout_returns_);
+      loop.rollout_episodes = static_cast<int>(rollout_returns_.size());
     }
     st.feedback = kNaN;
-    st.feedback_before = feedback_prev;
+    st.feedback_before = loop.feedback_prev;
     if (eval_feedback) {
-      st.feedback = Evaluate(it, &eval_steps);
+      st.feedback = Evaluate(it, &loop.eval_steps);
     } else if (bandit && more) {
-      st.feedback = rollout_return;
+      st.feedback = loop.rollout_return;
     }
+    LoopState::Choice choice{st.arm, 0, st.feedback, loop.feedback_prev};
     // No bandit update while the policy is held (--critic-warmup): the return did not change because of ε.
-    if (bandit && std::isfinite(st.feedback) && std::isfinite(feedback_prev) && it >= o_.critic_warmup) {
-      schedule->Update(st.arm, st.feedback, feedback_prev);
-      ++feedback_count;
-      st.improved = st.feedback > feedback_prev;
-      improved_count += st.improved;
+    if (bandit && std::isfinite(st.feedback) && std::isfinite(loop.feedback_prev) && it >= o_.critic_warmup) {
+      schedule->Update(st.arm, st.feedback, loop.feedback_prev);
+      choice.updated = 1;
+      ++loop.feedback_count;
+      st.improved = st.feedback > loop.feedback_prev;
+      loop.improved_count += st.improved;
     }
-    if (std::isfinite(st.feedback)) feedback_prev = st.feedback;
-    st.success_rate = feedback_count > 0 ? static_cast<double>(improved_count) / feedback_count : kNaN;
-    st.env_steps = env_steps;
-    st.eval_steps = eval_steps;
+    loop.choices.push_back(choice);
+    if (std::isfinite(st.feedback)) loop.feedback_prev = st.feedback;
+    st.success_rate = loop.feedback_count > 0 ? static_cast<double>(loop.improved_count) / loop.feedback_count : kNaN;
+    st.env_steps = loop.env_steps;
+    st.eval_steps = loop.eval_steps;
     st.train_return_100 = Mean100();
     st.task_success_100 = TaskSuccess100();
     st.tracking_error_100 = Tracking100();
-    const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
-    st.steps_per_second = elapsed > 0 ? static_cast<double>(env_steps) / elapsed : 0;
+    st.steps_per_second = static_cast<double>(loop.env_steps) / elapsed();
     if (writer) log.Log(st);
     res.iterations.push_back(st);
     if (progress && writer) {
       Progress p;
       p.iteration = it;
-      p.env_steps = env_steps;
-      p.eval_steps = eval_steps;
+      p.env_steps = loop.env_steps;
+      p.eval_steps = loop.eval_steps;
       p.total_steps = o_.total_steps;
       p.steps_per_second = st.steps_per_second;
-      p.eta_seconds =
-          st.steps_per_second > 0
-              ? static_cast<double>(o_.total_steps > env_steps ? o_.total_steps - env_steps : 0) / st.steps_per_second
-              : 0;
+      p.eta_seconds = st.steps_per_second > 0
+                          ? static_cast<double>(o_.total_steps > loop.env_steps ? o_.total_steps - loop.env_steps : 0) /
+                                st.steps_per_second
+                          : 0;
       p.mean_return = st.train_return_100;
       p.task_success = st.task_success_100;
       p.tracking_error = st.tracking_error_100;
@@ -477,34 +717,49 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
     }
     if (!o_.out_dir.empty() &&
         std::chrono::duration<double>(Clock::now() - last_checkpoint).count() >= o_.checkpoint_seconds) {
-      if (auto s = WriteCheckpoint(Mean100(), env_steps); !s) return s.error();
+      if (auto s = WriteCheckpoint(Mean100(), loop.env_steps); !s) return s.error();
       last_checkpoint = Clock::now();
+    }
+    // --resume-every N: the state to continue from, after every N iterations and at a stop.
+    loop.next_iteration = it + 1;
+    if (more && !o_.out_dir.empty() && o_.resume_every > 0 && ((it + 1) % o_.resume_every == 0 || stopping)) {
+      loop.seconds_before = elapsed();
+      const std::vector<char> state = SaveState(loop, res.iterations);
+      if (writer) {
+        if (auto s = WriteResumeFile(o_.out_dir + "/" + kResumeFile, {o_.command_args, BuildGitRevision(), state}); !s)
+          return s.error();
+      }
     }
     if (stopping) {
       res.interrupted = true;
       break;
     }
   }
-  res.wall_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  res.env_steps = env_steps;
-  res.eval_steps = eval_steps;
+  res.wall_seconds = elapsed();
+  res.env_steps = loop.env_steps;
+  res.eval_steps = loop.eval_steps;
   res.final_return = Mean100();
-  res.steps_per_second = static_cast<double>(env_steps) / res.wall_seconds;
+  res.steps_per_second = static_cast<double>(loop.env_steps) / res.wall_seconds;
   res.ranks = ranks_;
   res.threads = pool_.size();
   res.time = time_;
   res.time.other =
       res.wall_seconds - (time_.rollout + time_.returns + time_.update + time_.evaluation + time_.exchange);
-  res.spec = Freeze(res.final_return, env_steps);
+  res.spec = Freeze(res.final_return, loop.env_steps);
   res.freeze_check = CheckFrozen(res.spec, ppo_.actor(), ppo_.actor_params(), obs_norm_, *proto_,
                                  rollout_.raw_obs.data(), rollout_.size());
   if (!(res.freeze_check <= 1.0)) {
     return MakeError(ErrorCode::kMismatch, "trainer: the frozen policy does not reproduce the trainer's actions (" +
                                                std::to_string(res.freeze_check) + " x the error bound)");
   }
-  if (auto s = WriteCheckpoint(res.final_return, env_steps); !s) return s.error();
+  if (auto s = WriteCheckpoint(res.final_return, loop.env_steps); !s) return s.error();
   if (writer) {
     if (auto s = log.Finish(proto_->name(), res); !s) return s.error();
+    // A finished run has nothing to resume.
+    if (!res.interrupted && !o_.out_dir.empty()) {
+      std::error_code ec;
+      std::filesystem::remove(o_.out_dir + "/" + kResumeFile, ec);
+    }
   }
   return res;
 }

@@ -39,6 +39,27 @@ class Runner {
   Result<TrainResult> Learn(const std::function<void(const Progress&)>& progress);
 
  private:
+  // The learning loop's own state between iterations (what a resumed run continues from).
+  struct LoopState {
+    int next_iteration = 0;
+    std::uint64_t env_steps = 0, eval_steps = 0;
+    double rollout_return = 0, feedback_prev = 0, seconds_before = 0;
+    int rollout_episodes = 0, improved_count = 0, feedback_count = 0;
+    // Per iteration: the arm chosen, and the schedule's feedback if it had any (replayed on resume:
+    // the schedule's state is what its calls made it).
+    struct Choice {
+      int arm = 0;
+      std::uint8_t updated = 0;
+      double after = 0, before = 0;
+    };
+    std::vector<Choice> choices;
+  };
+  // An environment's episode so far: the generator's state before its reset and the actions it has
+  // taken since (a resumed run replays them to rebuild the environment's state).
+  struct EpisodeTrace {
+    Rng start;
+    std::vector<float> actions;
+  };
   // A finished training episode.
   struct Episode {
     long index = 0;  // t*N+e of its last step
@@ -67,6 +88,12 @@ class Runner {
   double Evaluate(int iteration, std::uint64_t* steps);
   // A stop was asked for (TrainOptions::stop), on any rank.
   bool StopRequested() const;
+  // The state of the run after a whole iteration (its next rollout collected), as resume.bin holds it
+  // (every rank calls it; rank 0 gets the bytes); and the run rebuilt from them.
+  std::vector<char> SaveState(const LoopState& loop, const std::vector<IterationStats>& iterations);
+  void LoadState(const std::vector<char>& bytes, LoopState& loop, std::vector<IterationStats>& iterations);
+  // Environment e (this rank's) resets and its episode trace starts again.
+  void ResetEnv(int e);
   double Mean100() const;
   double TaskSuccess100() const;              // NaN: no episode reported success
   std::array<double, 3> Tracking100() const;  // NaN: no episode reported tracking errors
@@ -84,6 +111,7 @@ class Runner {
   RolloutStorage rollout_;
   std::vector<std::unique_ptr<envs::Env>> envs_;     // this rank's, from e0_
   std::vector<Rng> env_rng_;                         // this rank's, from e0_
+  std::vector<EpisodeTrace> traces_;                 // this rank's, from e0_
   std::vector<float> raw_obs_cur_, raw_critic_cur_;  // [N][d], [N][cd]: each environment's latest
   std::vector<double> ep_return_, disc_ret_;
   RunningMeanStd ret_rms_;

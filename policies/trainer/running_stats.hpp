@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "policies/trainer/state_io.hpp"
+
 namespace pbppo::trainer {
 
 class RunningMeanStd {
@@ -40,6 +42,17 @@ class RunningMeanStd {
   const std::vector<double>& mean() const noexcept { return mean_; }
   const std::vector<double>& var() const noexcept { return var_; }
   double count() const noexcept { return count_; }
+
+  void Save(ByteWriter& w) const {
+    w.PutVector(mean_);
+    w.PutVector(var_);
+    w.Put(count_);
+  }
+  void Load(ByteReader& r) {
+    r.GetVector(mean_, "running mean", static_cast<std::int64_t>(mean_.size()));
+    r.GetVector(var_, "running variance", static_cast<std::int64_t>(var_.size()));
+    count_ = r.Get<double>("running count");
+  }
 
  private:
   std::vector<double> mean_, var_;

@@ -11,20 +11,13 @@
 # usage: train_ranks.sh PBPPO MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 mpiexec=$2 src=$3 work=$4
-source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir
+source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, log_without_timing
 fresh_dir "$work"
 cd "$work"
 mpi() {
   local np=$1
   shift
   "$mpiexec" --allow-run-as-root --oversubscribe -np "$np" "$@"
-}
-# log.csv without its timing column.
-log_without_timing() {
-  /usr/bin/python3 -c 'import csv, sys
-rows = list(csv.reader(open(sys.argv[1])))
-k = rows[0].index("steps_per_second")
-for r in rows: print(",".join(r[:k] + r[k + 1:]))' "$1"
 }
 # same NAME RUN...: every run's blob and log equal the first's.
 same() {

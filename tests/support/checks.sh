@@ -1,7 +1,8 @@
 # Sourced by the test scripts: fail MESSAGE, expect FILE PATTERN (the file is printed when the
-# extended regular expression is not found in it), fresh_dir DIR (an empty folder), and
-# start_in SRC WORK (WORK emptied, then into SRC: the scripts run from the source tree), and
-# trace_difference (two runs' CSV traces compared).
+# extended regular expression is not found in it), fresh_dir DIR (an empty folder),
+# start_in SRC WORK (WORK emptied, then into SRC: the scripts run from the source tree),
+# trace_difference (two runs' CSV traces compared) and log_without_timing (a training log.csv
+# without its timing column).
 fail() {
   echo "FAIL: $*"
   exit 1
@@ -34,4 +35,13 @@ trace_difference() {
   paste -d, "$a" "$b" | awk -F, -v x="$x" -v y="$y" -v c="$cols" \
     'NR > 1 {d = sqrt(($x - $(x + c)) ^ 2 + ($y - $(y + c)) ^ 2); if (d > m) m = d}
      END {printf "     the two positions are never more than %.3g m apart\n", m}'
+}
+
+# log_without_timing LOG_CSV: a training run's log.csv without its steps_per_second column (what two
+# runs of the same training at other speeds have in common).
+log_without_timing() {
+  /usr/bin/python3 -c 'import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+k = rows[0].index("steps_per_second")
+for r in rows: print(",".join(r[:k] + r[k + 1:]))' "$1"
 }
