@@ -9,7 +9,7 @@
 # of the wall time in physics, the actor's forward passes (inference), the update (values and GAE
 # included), the ranks' exchanges and the rest (summary.json's time_seconds). Every configuration's
 # blob must equal the one-core blob (the run is the same, only faster): the script says so.
-# Writes OUT_DIR/scaling.csv, scaling.md and scaling.svg (steps per second against cores).
+# Writes OUT_DIR/scaling.csv, scaling.md and scaling.png (steps per second against cores).
 # Usage: bench/train_scaling.sh [OUT_DIR=runs/train_scaling]
 #   PBPPO=path/to/pbppo  MPIRUN=mpirun  CORES="1 2" (default: 1, 2, 4, ... up to nproc)
 #   WALK_ITERATIONS=10  HOPPER_ITERATIONS=10  TASKS="walk hopper"  REPEATS=1 (the median of so many)
@@ -128,7 +128,7 @@ if command -v gnuplot >/dev/null; then
       plot="$plot${plot:+, }'$out/$task.$mode.dat' using 1:2 with linespoints title '$task, $mode'"
     done
   done
-  gnuplot -e "set terminal svg size 800,500; set output '$out/scaling.svg'; set logscale xy 2;
+  gnuplot -e "set terminal pngcairo size 800,500; set output '$out/scaling.png'; set logscale xy 2;
     set xlabel 'cores'; set ylabel 'environment steps per second'; set key top left; set grid; plot $plot"
 fi
-echo "bench/train_scaling.sh: $out/scaling.md, $out/scaling.csv, $out/scaling.svg" >&2
+echo "bench/train_scaling.sh: $out/scaling.md, $out/scaling.csv, $out/scaling.png" >&2

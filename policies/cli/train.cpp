@@ -29,9 +29,10 @@ std::atomic<bool> g_stop{false};
 std::atomic<std::int64_t> g_first_sigint_ns{0};
 static_assert(std::atomic<std::int64_t>::is_always_lock_free, "used from a signal handler");
 
-// The first SIGINT asks for a clean stop (log, summary, checkpoint). A second one ends the process at
-// once, but only when it comes more than a second later: `timeout -s INT` and a terminal's job control
-// can deliver the same interrupt twice (to the process and to its group), which must not kill the run.
+// The first SIGINT or SIGTERM asks for a clean stop (log, summary, checkpoint, resume.bin). A second
+// one ends the process at once, but only when it comes more than a second later: `timeout -s INT`
+// and a terminal's job control can deliver the same interrupt twice (to the process and to its
+// group), which must not kill the run.
 extern "C" void OnSigint(int) {
   const std::int64_t now = MonotonicNs();  // clock_gettime only: async-signal-safe
   const std::int64_t first = g_first_sigint_ns.load();
@@ -266,8 +267,9 @@ namespace {
 
 // `pbppo train --resume DIR`: the run's options from DIR/resume.bin's arguments, read as the command
 // line reads them; --threads from this command line if given. Errors name the flag or the file.
+// `say`: this process prints the warning of another build (rank 0 alone does).
 Result<trainer::TrainOptions> ResumeOptions(const std::string& dir, const std::vector<std::string>& args,
-                                            const trainer::TrainOptions& given, bool* quiet) {
+                                            const trainer::TrainOptions& given, bool* quiet, bool say) {
   auto refuse = [](const std::string& what) { return MakeError(ErrorCode::kInvalidValue, "--resume: " + what); };
   bool threads_given = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
@@ -292,7 +294,7 @@ Result<trainer::TrainOptions> ResumeOptions(const std::string& dir, const std::v
   }
   auto file = trainer::ReadResumeFile(path);
   if (!file) return refuse(file.error().message);
-  if (file->git_revision != trainer::BuildGitRevision()) {
+  if (say && file->git_revision != trainer::BuildGitRevision()) {
     std::fprintf(stderr,
                  "pbppo train: --resume: '%s' was written by build %s, this is %s: the run continues, but its weights "
                  "may differ from the first build's run uninterrupted\n",
@@ -325,7 +327,7 @@ int Train(trainer::TrainOptions o, bool quiet, const std::string& resume, const 
   const bool writer = group.rank() == 0;
   auto refuse = [&](const std::string& msg) { return writer ? Fail(msg) : 2; };
   if (!resume.empty()) {
-    auto resumed = ResumeOptions(resume, args, o, &quiet);
+    auto resumed = ResumeOptions(resume, args, o, &quiet, writer);
     if (!resumed) return refuse(resumed.error().message);
     o = std::move(*resumed);
     o.group = group.size() > 1 ? &group : nullptr;
@@ -342,6 +344,7 @@ int Train(trainer::TrainOptions o, bool quiet, const std::string& resume, const 
   g_first_sigint_ns.store(0);
   o.stop = &g_stop;
   auto previous = std::signal(SIGINT, OnSigint);
+  auto previous_term = std::signal(SIGTERM, OnSigint);  // mpirun's Ctrl-C, a scheduler's notice
   auto last_print = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   bool printed = false;
   auto progress = [&](const trainer::Progress& p) {
@@ -381,6 +384,7 @@ int Train(trainer::TrainOptions o, bool quiet, const std::string& resume, const 
     return failed(e.what());
   }
   std::signal(SIGINT, previous);
+  std::signal(SIGTERM, previous_term);
   if (printed) std::fprintf(stderr, "\n");
   if (!r) return failed(r.error().message);
   if (!writer) return r->interrupted ? 130 : 0;
@@ -395,7 +399,9 @@ int Train(trainer::TrainOptions o, bool quiet, const std::string& resume, const 
       t.rollout, t.rollout_policy, t.rollout_env, t.returns, t.update, t.evaluation, t.exchange, t.other);
   std::printf("blob %s/policy.blob\n%s\n", o.out_dir.c_str(), r->plots_note.c_str());
   if (r->interrupted) {
-    std::fprintf(stderr, "pbppo train: interrupted; log and last checkpoint are in %s\n", o.out_dir.c_str());
+    std::fprintf(stderr,
+                 "pbppo train: interrupted; log and last checkpoint are in %s (continue: pbppo train --resume %s)\n",
+                 o.out_dir.c_str(), o.out_dir.c_str());
     return 130;
   }
   return 0;

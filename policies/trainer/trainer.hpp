@@ -1,10 +1,14 @@
 // The Pb-PPO trainer: PPO whose clip bound a clip schedule (a bandit fed by task return) chooses
 // each iteration, on N environments stepped in parallel, ending in a frozen policy blob with golden
-// vectors. Same seed and same thread count give a bit-identical run.
+// vectors. The same seed and number of environments give a bit-identical run on any threads and
+// ranks (runner.hpp), and a resumed run the same as one uninterrupted (checkpoint.hpp).
 //
 // Train(options) is the entry point. The parts, each its own file, read in this order:
 //   options.hpp          TrainOptions: every option of a run in one struct (the command line's)
-//   runner.hpp           the learning loop: rollouts on worker threads, evaluation, checkpoints
+//   runner.hpp           the learning loop: rollouts on worker threads and ranks, evaluation,
+//                        checkpoints, the resumable state
+//   collective.hpp       what the ranks of one run exchange
+//   state_io.hpp         the state as bytes (the ranks' exchange, resume.bin: checkpoint.hpp)
 //   rollout_storage.hpp  one iteration's rollout, time-major
 //   ppo.hpp              the algorithm: actor and critic, values and GAE, the clipped update
 //   ppo_loss.hpp         the losses and their hand-written gradients (mlp.hpp: the networks)

@@ -4,7 +4,7 @@
 #      the blob and log (timings aside) of the same run uninterrupted: the pendulum (evaluation
 #      feedback, normaliser, reward scaling), the walking robot (privileged critic, rollout
 #      feedback, snapshots), Hopper and the AUV; a finished run leaves no resume.bin;
-#   b. a run stopped by SIGINT writes resume.bin at the stop and resumes to the same blob;
+#   b. a run stopped by SIGINT or SIGTERM writes resume.bin at the stop and resumes to the same blob;
 #   c. the recipes' train_run continues a killed run the same way;
 #   d. refusals, exit 2, the message naming the flag or the file: other options with --resume, a
 #      finished run, a missing folder, a damaged file, a file that is not one, no --out.
@@ -73,21 +73,27 @@ killed auv_killed "${auv[@]}"
 "$pbppo" train --resume auv_killed --threads 2 >auv_resumed.log 2>&1 || { cat auv_resumed.log; fail "resume"; }
 same auv auv_killed
 
-echo "== b: SIGINT, resume.bin at the stop"
-"$pbppo" "${pend_flags[@]}" --resume-every 1000 --out stopped >stopped.log 2>&1 &
-pid=$!
-for _ in $(seq 3000); do
-  [ "$(cat stopped/log.csv 2>/dev/null | wc -l)" -ge 6 ] && break
-  sleep 0.02
-done
-kill -INT "$pid"
-rc=0
-wait "$pid" || rc=$?
-[ "$rc" = 130 ] || { cat stopped.log; fail "SIGINT: exit $rc, not 130"; }
-[ -s stopped/resume.bin ] || fail "no resume.bin after SIGINT"
-"$pbppo" train --resume stopped --quiet >stopped_resumed.log 2>&1 ||
-  { cat stopped_resumed.log; fail "resume after SIGINT"; }
-same pend stopped
+echo "== b: SIGINT or SIGTERM, resume.bin at the stop"
+# stopped_by SIGNAL NAME: the pendulum run in NAME (no periodic state) stopped by SIGNAL after 5
+# iterations exits 130 with resume.bin, and resumes to the uninterrupted run.
+stopped_by() {
+  local signal=$1 name=$2 rc=0 pid
+  "$pbppo" "${pend_flags[@]}" --resume-every 1000 --out "$name" >"$name.log" 2>&1 &
+  pid=$!
+  for _ in $(seq 3000); do
+    [ "$(cat "$name/log.csv" 2>/dev/null | wc -l)" -ge 6 ] && break
+    sleep 0.02
+  done
+  kill "-$signal" "$pid"
+  wait "$pid" || rc=$?
+  [ "$rc" = 130 ] || { cat "$name.log"; fail "SIG$signal: exit $rc, not 130"; }
+  [ -s "$name/resume.bin" ] || fail "no resume.bin after SIG$signal"
+  "$pbppo" train --resume "$name" --quiet >"${name}_resumed.log" 2>&1 ||
+    { cat "${name}_resumed.log"; fail "resume after SIG$signal"; }
+  same pend "$name"
+}
+stopped_by INT stopped
+stopped_by TERM termed
 
 echo "== c: the recipes' train_run (tools/common.sh) continues a killed run"
 killed recipe "${pend[@]}"
