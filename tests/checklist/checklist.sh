@@ -13,7 +13,7 @@ pbppo=$1 ctl=$2 plant=$3 src=$4 work=$5
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 robot=tests/data/slider/robot.yaml
-domain=$((30 + $$ % 150))
+dds_domain  # sets domain: one no other test holds
 
 echo "== 1: a test policy for the slider's layout"
 "$pbppo" synth --layout tests/data/slider/io_layout.yaml --widths 3-16-1 --activation tanh --seed 5 \

@@ -15,7 +15,7 @@ source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, trace_differen
 source "$src/tests/packages/common.sh"  # make_packages
 fresh_dir "$work"
 [ -f "$aroot/.files" ] || fail "$aroot/.files missing: make the root with tools/arm64/make_root.sh"
-domain=$((200 + $$ % 30))
+dds_domain  # sets domain: one no other test holds
 
 echo "== 1: the arm64 packages"
 make_packages "$abuild" "$work/out"

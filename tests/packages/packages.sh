@@ -22,7 +22,7 @@ source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir
 source "$src/tests/packages/common.sh"  # make_packages
 fresh_dir "$work"
 [ "$(id -u)" -eq 0 ] || fail "this test installs packages (dpkg -i): run it as root"
-domain=$((150 + $$ % 50))
+dds_domain  # sets domain: one no other test holds
 
 echo "== 1: the packages"
 make_packages "$build" "$work/out"

@@ -16,7 +16,7 @@ source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 blob=policies/frozen/auv_nav/auv_nav.blob
 robot=models/auv/robot.yaml
-domain=$((60 + $$ % 100))
+dds_domain  # sets domain: one no other test holds
 # The trajectories are compared byte for byte, so no tick may run without its sample: the
 # controller's lock-step timeout (500 ms, for a vanished vehicle) is raised past any pause of a
 # loaded machine (sanitizer builds, encryption, the open pair beside the secured one).

@@ -31,7 +31,7 @@ blob=policies/frozen/auv_nav/auv_nav.blob
 robot=models/auv/robot.yaml
 # Missions the shipped policy must complete: "layout:seed ...".
 missions=${PBPPO_AUV_MISSIONS:-$(cat policies/frozen/auv_nav/test_missions.txt)}
-domain=$((100 + $$ % 100))
+dds_domain  # sets domain: one no other test holds
 
 echo "== 1: start-up refusals"
 cp "$blob" "$work/corrupt.blob"

@@ -17,7 +17,7 @@ hil=$1 ctl=$2 pbppo=$3 cyclone=$4 src=$5 work=$6
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 robot=models/go2/robot.yaml
-domain=$((30 + $$ % 150))
+dds_domain  # sets domain: one no other test holds
 export CYCLONEDDS_URI='<CycloneDDS><Domain id="any"><General><Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces><AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex><Peers><Peer address="127.0.0.1"/></Peers></Discovery></Domain></CycloneDDS>'
 
 echo "== 1: the robot's side in Cyclone DDS"

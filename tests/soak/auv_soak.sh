@@ -21,7 +21,7 @@ hil=$1 ctl=$2 pbppo=$3 src=$4 work=$5 vehicles=${6:-40} seed=${7:-1}
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 blob=policies/frozen/auv_nav/auv_nav.blob
-domain=$((200 + $$ % 30))
+dds_domain  # sets domain: one no other test holds
 mkdir -p "$work/robot" "$work/log"
 cp -r models/auv "$work/robot/auv"
 cp models/dds_profile.xml "$work/robot/"

@@ -1,8 +1,8 @@
 # Sourced by the test scripts: fail MESSAGE, expect FILE PATTERN (the file is printed when the
 # extended regular expression is not found in it), fresh_dir DIR (an empty folder),
 # start_in SRC WORK (WORK emptied, then into SRC: the scripts run from the source tree),
-# trace_difference (two runs' CSV traces compared) and log_without_timing (a training log.csv
-# without its timing column).
+# trace_difference (two runs' CSV traces compared), log_without_timing (a training log.csv
+# without its timing column) and dds_domain (a DDS domain no other test holds).
 fail() {
   echo "FAIL: $*"
   exit 1
@@ -44,4 +44,21 @@ log_without_timing() {
 rows = list(csv.reader(open(sys.argv[1])))
 k = rows[0].index("steps_per_second")
 for r in rows: print(",".join(r[:k] + r[k + 1:]))' "$1"
+}
+
+# dds_domain: sets `domain` to a DDS domain (10 ... 229) no other test on this machine holds, held
+# by a lock on /tmp/pbppo-dds-domain-N.lock until the script and the programs it started end (the
+# C++ tests take theirs the same way: tests/support/dds_domain.hpp).
+dds_domain() {
+  local start=$(($$ % 220)) k d
+  for ((k = 0; k < 220; k++)); do
+    d=$((10 + (start + k) % 220))
+    exec {dds_domain_fd}>"/tmp/pbppo-dds-domain-$d.lock"
+    if flock -n "$dds_domain_fd"; then
+      domain=$d
+      return
+    fi
+    exec {dds_domain_fd}>&-
+  done
+  fail "no free DDS domain (all 220 held)"
 }

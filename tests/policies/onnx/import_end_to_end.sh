@@ -14,7 +14,7 @@ pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
 start_in "$src" "$work"
 quad=models/quadruped/robot.yaml auv=models/auv/robot.yaml
-domain=$((100 + $$ % 100))
+dds_domain  # sets domain: one no other test holds
 
 echo "== 1: the good models import"
 import() {  # import NAME ROBOT
