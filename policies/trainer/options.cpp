@@ -1,6 +1,7 @@
 #include "policies/trainer/options.hpp"
 
 #include "policies/envs/registry.hpp"
+#include "policies/trainer/rollout_storage.hpp"
 
 namespace pbppo::trainer {
 namespace {
@@ -16,9 +17,10 @@ Status TrainOptions::Validate() const {
   if (num_envs < 1 || num_envs > 4096) return Invalid("--envs", std::to_string(num_envs) + " is not in [1, 4096]");
   if (rollout_steps < 1) return Invalid("--rollout", std::to_string(rollout_steps) + " is not positive");
   if (threads < 1 || threads > 256) return Invalid("--threads", std::to_string(threads) + " is not in [1, 256]");
-  if (num_envs < ranks())
-    return Invalid("--envs", std::to_string(num_envs) + " is fewer than the run's " + std::to_string(ranks()) +
-                                 " ranks (each rank steps at least one environment)");
+  if (const int block = BlockSize(num_envs), blocks = (num_envs + block - 1) / block; blocks < ranks())
+    return Invalid("--envs", std::to_string(num_envs) + " gives " + std::to_string(blocks) + " block(s) of " +
+                                 std::to_string(block) + ", fewer than the run's " + std::to_string(ranks()) +
+                                 " ranks (each rank steps whole blocks of N/16 environments, within 1 and 32)");
   if (minibatch < 2) return Invalid("--minibatch", std::to_string(minibatch) + " is below 2");
   if (epochs < 1) return Invalid("--epochs", std::to_string(epochs) + " is not positive");
   if (critic_warmup < 0) return Invalid("--critic-warmup", std::to_string(critic_warmup) + " is negative");

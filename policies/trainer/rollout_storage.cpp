@@ -1,6 +1,12 @@
 #include "policies/trainer/rollout_storage.hpp"
 
+#include <algorithm>
+
 namespace pbppo::trainer {
+
+int BlockSize(int envs) noexcept {
+  return std::clamp(envs / 16, 1, 32);
+}
 
 RolloutStorage::RolloutStorage(int steps_, int envs_, int obs_size_, int critic_size_, int action_size_)
     : steps(steps_), envs(envs_), obs_size(obs_size_), critic_size(critic_size_), action_size(action_size_) {

@@ -13,6 +13,12 @@
 
 namespace pbppo::trainer {
 
+// Environments per block of a run with N environments: N/16, within [1, 32]. The runner steps the
+// environments, and runs the actor, block by block, a thread or rank taking whole blocks, so every
+// forward pass has the same shape however the work is shared (up to 16 threads or ranks have work at
+// any N of 16 or more).
+int BlockSize(int envs) noexcept;
+
 struct RolloutStorage {
   RolloutStorage() = default;
   // critic_size 0: the critic sees the actor's observation.

@@ -78,10 +78,6 @@ void Runner::ResetEnv(int e) {
   if (cd_ > 0) envs_[k]->CriticObservation({raw_critic_cur_.data() + e * cd_, static_cast<std::size_t>(cd_)});
 }
 
-int BlockSize(int envs) noexcept {
-  return std::clamp(envs / 16, 1, 32);
-}
-
 int Runner::RankBegin(int r) const {
   const int blocks = (N_ + block_ - 1) / block_;
   return std::min(N_, blocks * r / ranks_ * block_);

@@ -125,10 +125,6 @@ class Runner {
   TimeShares time_{};
 };
 
-// Environments per block of a run with N environments: N/16, within [1, 32] (so that up to 16
-// threads or ranks have work at any N of 16 or more, and a block's forward pass is a matrix product).
-int BlockSize(int envs) noexcept;
-
 // Checks the options, builds the environment (envs::MakeEnv) and runs.
 Result<TrainResult> Train(const TrainOptions& options, const std::function<void(const Progress&)>& progress = {});
 // The same on a given environment (tests bring their own).

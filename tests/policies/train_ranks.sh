@@ -7,7 +7,7 @@
 #      observation normaliser and reward scaling);
 #   b. rank 0 alone prints and writes (one result, summary.json says 2 ranks);
 #   c. a rank killed mid-run ends the job with an error, and the output holds no half-written blob;
-#   d. refused before anything is written: fewer environments than ranks (exit 2, said once).
+#   d. refused before anything is written: fewer blocks of environments than ranks (exit 2, said once).
 # usage: train_ranks.sh PBPPO MPIEXEC SOURCE_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 mpiexec=$2 src=$3 work=$4
@@ -89,7 +89,7 @@ echo "== d: refusals"
 rc=0
 mpi 2 "$pbppo" train --env pendulum --envs 1 --steps 1000 --out refused >refused.log 2>&1 || rc=$?
 [ "$rc" = 2 ] || { cat refused.log; fail "--envs 1 on 2 ranks: exit $rc, not 2"; }
-expect refused.log "--envs: 1 is fewer than the run's 2 ranks \(each rank steps at least one environment\)"
+expect refused.log "--envs: 1 gives 1 block\(s\) of 1, fewer than the run's 2 ranks \(each rank steps whole blocks"
 [ "$(grep -c 'fewer than' refused.log)" = 1 ] || fail "the refusal printed more than once"
 [ ! -e refused ] || fail "refused: the output folder was written"
 echo "PASS"
