@@ -6,7 +6,7 @@
 // Train(options) is the entry point. The parts, each its own file, read in this order:
 //   options.hpp          TrainOptions: every option of a run in one struct (the command line's)
 //   runner.hpp           the learning loop: rollouts on worker threads and ranks, evaluation,
-//                        checkpoints, the resumable state
+//                        checkpoints (runner.cpp); its resumable state (runner_state.cpp)
 //   collective.hpp       what the ranks of one run exchange
 //   state_io.hpp         the state as bytes (the ranks' exchange, resume.bin: checkpoint.hpp)
 //   rollout_storage.hpp  one iteration's rollout, time-major
