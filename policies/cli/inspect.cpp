@@ -27,6 +27,11 @@ std::string Hex64(std::uint64_t v) {
 std::string ShapeLine(const PolicySpec& s) {
   std::string t = std::to_string(s.input_size);
   for (const auto& l : s.layers) {
+    if (l.kind != policy::LayerKind::kDense) {
+      t += " -> " + std::string(policy::ToString(l.kind)) + " " + std::to_string(l.out) +
+           (l.linear_before_reset ? "(linear_before_reset)" : "");
+      continue;
+    }
     t += " -> " + std::to_string(l.out) + " " + policy::ToString(l.activation);
     if (l.activation == policy::Activation::kLeakyRelu) {
       char a[40];
@@ -37,9 +42,17 @@ std::string ShapeLine(const PolicySpec& s) {
   return t;
 }
 
-nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t crc, bool weights) {
+// The format version the file states (the loader checked it).
+std::uint32_t FileVersion(const std::vector<std::uint8_t>& bytes) {
+  std::uint32_t v = 0;
+  std::memcpy(&v, bytes.data() + policy::kOffVersion, 4);
+  return v;
+}
+
+nlohmann::json ToJson(const PolicySpec& s, std::uint32_t version, std::size_t file_bytes, std::uint32_t crc,
+                      bool weights) {
   nlohmann::json j;
-  j["format_version"] = policy::kBlobFormatVersion;
+  j["format_version"] = version;
   j["file_bytes"] = file_bytes;
   j["crc32"] = crc;
   j["input_size"] = s.input_size;
@@ -47,11 +60,19 @@ nlohmann::json ToJson(const PolicySpec& s, std::size_t file_bytes, std::uint32_t
   j["parameter_count"] = s.ParameterCount();
   j["layers"] = nlohmann::json::array();
   for (const auto& l : s.layers) {
-    j["layers"].push_back({{"in", l.in}, {"out", l.out}, {"activation", policy::ToString(l.activation)}});
+    j["layers"].push_back({{"kind", policy::ToString(l.kind)},
+                           {"in", l.in},
+                           {"out", l.out},
+                           {"activation", policy::ToString(l.activation)}});
     if (l.activation == policy::Activation::kLeakyRelu) j["layers"].back()["alpha"] = l.alpha;
+    if (l.kind == policy::LayerKind::kGru) j["layers"].back()["linear_before_reset"] = l.linear_before_reset;
     if (weights) {
-      j["layers"].back()["weight"] = l.weight;  // row-major [out][in]
+      j["layers"].back()["weight"] = l.weight;  // row-major [gates * out][in]
       j["layers"].back()["bias"] = l.bias;
+      if (l.kind != policy::LayerKind::kDense) {
+        j["layers"].back()["recurrent_weight"] = l.recurrent_weight;  // row-major [gates * out][out]
+        j["layers"].back()["recurrent_bias"] = l.recurrent_bias;
+      }
     }
   }
   j["normaliser"] = {{"mean", s.obs_mean}, {"inv_std", s.obs_inv_std}, {"clip", s.obs_clip}};
@@ -90,14 +111,17 @@ int Inspect(const std::string& path, bool json, bool weights) {
   std::uint32_t crc = 0;
   std::memcpy(&crc, bytes.data() + bytes.size() - 4, 4);
   if (json) {
-    std::cout << ToJson(s, bytes.size(), crc, weights).dump(2) << "\n";
+    std::cout << ToJson(s, FileVersion(bytes), bytes.size(), crc, weights).dump(2) << "\n";
     return 0;
   }
   std::printf("policy blob   %s\n", path.c_str());
-  std::printf("  format      v%u, %zu bytes, crc32 0x%08x (verified)\n", policy::kBlobFormatVersion, bytes.size(), crc);
+  std::printf("  format      v%u, %zu bytes, crc32 0x%08x (verified)\n", FileVersion(bytes), bytes.size(), crc);
   std::printf("  network     %s\n", ShapeLine(s).c_str());
   std::printf("  parameters  %llu (%.1f KiB of float32 weights)\n", static_cast<unsigned long long>(s.ParameterCount()),
               static_cast<double>(s.ParameterCount()) * 4.0 / 1024.0);
+  if (s.Recurrent())
+    std::printf("  state       %llu floats carried from one step to the next (zero at arming)\n",
+                static_cast<unsigned long long>(s.StateSize()));
   std::printf("  head        %s mean, action = clamp(head(y) * scale + offset, low, high)\n",
               policy::ToString(s.action_head));
   std::printf("  io layout   hash %s\n", Hex64(s.io_layout_hash).c_str());

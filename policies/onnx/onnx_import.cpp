@@ -382,7 +382,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   }
   for (std::size_t l = 0; l < layers.size(); ++l) {
     const Piece& p = layers[l].lin;
-    policy::DenseLayer d;
+    policy::Layer d;
     d.activation = p.activation;
     d.alpha = static_cast<float>(p.alpha);
     d.in = l == 0 ? n_obs : p.in;

@@ -26,7 +26,7 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
   s.obs_inv_std = normalizer.inv_std();
   s.obs_clip = normalizer.clip();
   for (std::size_t l = 0; l < actor.mean.layers(); ++l) {
-    policy::DenseLayer L;
+    policy::Layer L;
     L.in = static_cast<std::uint32_t>(actor.mean.in(l));
     L.out = static_cast<std::uint32_t>(actor.mean.out(l));
     L.activation = actor.mean.activation(l);
@@ -67,8 +67,11 @@ Status LoadActor(const std::string& path, const envs::Env& env, const GaussianPo
     return InitError("'" + path + "' has " + std::to_string(s.layers.size()) + " layers, --hidden gives " +
                      std::to_string(mean.layers()));
   for (std::size_t l = 0; l < s.layers.size(); ++l) {
-    const policy::DenseLayer& L = s.layers[l];
+    const policy::Layer& L = s.layers[l];
     const std::string where = "'" + path + "' layer " + std::to_string(l) + " ";
+    if (L.kind != policy::LayerKind::kDense)
+      return InitError(where + "is " + policy::ToString(L.kind) +
+                       ": the trainer's actor is an MLP (dense layers only)");
     if (static_cast<int>(L.in) != mean.in(l) || static_cast<int>(L.out) != mean.out(l))
       return InitError(where + "is " + std::to_string(L.in) + "x" + std::to_string(L.out) + ", --hidden gives " +
                        std::to_string(mean.in(l)) + "x" + std::to_string(mean.out(l)));
@@ -77,7 +80,7 @@ Status LoadActor(const std::string& path, const envs::Env& env, const GaussianPo
                        policy::ToString(mean.activation(l)) + " (--activation)");
   }
   for (std::size_t l = 0; l < s.layers.size(); ++l) {
-    const policy::DenseLayer& L = s.layers[l];
+    const policy::Layer& L = s.layers[l];
     auto W = mean.W(params, l);
     for (std::uint32_t o = 0; o < L.out; ++o)
       for (std::uint32_t i = 0; i < L.in; ++i) W(o, i) = L.weight[o * L.in + i];

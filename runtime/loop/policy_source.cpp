@@ -64,6 +64,7 @@ void PolicySource::Start(const robot::RobotModel&, const robot::RobotData& d, Lo
   have_action_ = false;
   status_ = policy::ForwardStatus::kOk;
   std::fill(last_action_.begin(), last_action_.end(), 0.0f);
+  data_.ResetState();  // a recurrent policy starts each run from its clean state
 }
 
 bool PolicySource::Compute(const robot::RobotModel& m, const robot::RobotData& d, LoopData& loop,
@@ -115,6 +116,7 @@ void PolicySource::SaveState(StateWriter& o) const noexcept {
   o.PutSpan<float>(action_);
   o.PutSpan<float>(last_action_);
   for (std::uint64_t v : {data_.forward_calls, data_.nonfinite_observations, data_.nonfinite_actions}) o.Put(v);
+  if (policy_.recurrent()) o.PutSpan<float>(data_.state());  // only then: feed-forward records as before
 }
 
 bool PolicySource::LoadState(StateReader& in) {
@@ -125,7 +127,8 @@ bool PolicySource::LoadState(StateReader& in) {
          in.GetSpan<float>(action_, "policy.action") && in.GetSpan<float>(last_action_, "policy.last_action") &&
          in.Get(data_.forward_calls, "policy.forward_calls") &&
          in.Get(data_.nonfinite_observations, "policy.nonfinite_observations") &&
-         in.Get(data_.nonfinite_actions, "policy.nonfinite_actions");
+         in.Get(data_.nonfinite_actions, "policy.nonfinite_actions") &&
+         (!policy_.recurrent() || in.GetSpan<float>(data_.state(), "policy.recurrent_state"));
 }
 
 const char* PolicySource::failure() const noexcept {

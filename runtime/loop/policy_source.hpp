@@ -6,6 +6,9 @@
 // inference input. An observation is built only from streams that have a sample and pass the
 // sample check; the first one fills the history (the start of the run phase).
 //
+// A recurrent policy's state starts clean at each Start() (arming) and is part of the saved state,
+// so a recorded run replays from any snapshot.
+//
 // last_action_<name> signals see the previous run's action in policy units: (command - offset) /
 // scale through the layout's action map (0 before the first run).
 #pragma once
@@ -34,11 +37,13 @@ class PolicySource final : public CommandSource {
   bool Compute(const robot::RobotModel& model, const robot::RobotData& data, LoopData& loop,
                std::span<double> desired) noexcept override;
   const char* failure() const noexcept override;
-  // The observation's history, the last observation and action, when the next run is due.
+  // The observation's history, the last observation and action, when the next run is due, and a
+  // recurrent policy's state.
   void SaveState(StateWriter& out) const noexcept override;
   bool LoadState(StateReader& in) override;
 
-  std::span<const float> observation() const noexcept { return obs_; }
+  std::span<const float> observation() const noexcept { return obs_; }  // of the last run
+  std::span<const float> action() const noexcept { return action_; }    // of the last run
   std::uint64_t runs() const noexcept { return runs_; }
 
  private:

@@ -95,11 +95,13 @@ Status CheckShape(std::uint32_t input, std::uint32_t output, std::uint32_t layer
 
 Status CheckLayerShape(std::size_t index, std::uint32_t in, std::uint32_t out, std::uint32_t act,
                        std::uint32_t expected_in, bool last, std::uint32_t output, const BlobLimits& limits) {
-  if (in == 0 || in > limits.max_width) {
-    return Fail(ErrorCode::kLimit, Str("layer %zu: input width %u outside 1..%u", index, in, limits.max_width));
+  // Widths stay below 2^24 whatever the limits say, so that parameter counts cannot overflow.
+  const std::uint32_t max_width = std::min(limits.max_width, 1u << 24);
+  if (in == 0 || in > max_width) {
+    return Fail(ErrorCode::kLimit, Str("layer %zu: input width %u outside 1..%u", index, in, max_width));
   }
-  if (out == 0 || out > limits.max_width) {
-    return Fail(ErrorCode::kLimit, Str("layer %zu: width %u exceeds limit %u", index, out, limits.max_width));
+  if (out == 0 || out > max_width) {
+    return Fail(ErrorCode::kLimit, Str("layer %zu: width %u exceeds limit %u", index, out, max_width));
   }
   if (in != expected_in) {
     return Fail(ErrorCode::kMismatch,
@@ -111,6 +113,35 @@ Status CheckLayerShape(std::size_t index, std::uint32_t in, std::uint32_t out, s
   }
   if (act > static_cast<std::uint32_t>(Activation::kLeakyRelu)) {
     return Fail(ErrorCode::kInvalidValue, Str("layer %zu: activation %u unknown (0..4)", index, act));
+  }
+  return {};
+}
+
+// A layer's kind and flags: a known kind; a recurrent layer is not the last (the action comes from
+// a dense layer), has no activation of its own, and only a GRU has the linear_before_reset flag.
+Status CheckLayerKind(std::size_t index, std::uint32_t kind, std::uint32_t flags, std::uint32_t act, bool last) {
+  if (kind > static_cast<std::uint32_t>(LayerKind::kGru)) {
+    return Fail(ErrorCode::kInvalidValue, Str("layer %zu: kind %u unknown (0 dense, 1 lstm, 2 gru)", index, kind));
+  }
+  const auto k = static_cast<LayerKind>(kind);
+  if (k == LayerKind::kDense) {
+    if (flags != 0) return Fail(ErrorCode::kInvalidValue, Str("layer %zu: flags %u on a dense layer", index, flags));
+    return {};
+  }
+  if (last) {
+    return Fail(
+        ErrorCode::kInvalidValue,
+        Str("layer %zu: a %s layer cannot be the last (the action comes from a dense layer)", index, ToString(k)));
+  }
+  if (act != static_cast<std::uint32_t>(Activation::kIdentity)) {
+    return Fail(ErrorCode::kInvalidValue,
+                Str("layer %zu: a %s layer has activation %s (only identity: its output is h)", index, ToString(k),
+                    ToString(static_cast<Activation>(act))));
+  }
+  const std::uint32_t allowed = k == LayerKind::kGru ? kLayerFlagLinearBeforeReset : 0u;
+  if ((flags & ~allowed) != 0) {
+    return Fail(ErrorCode::kInvalidValue,
+                Str("layer %zu: flags %u not defined for a %s layer", index, flags, ToString(k)));
   }
   return {};
 }
@@ -210,22 +241,34 @@ Status ValidateSpec(const PolicySpec& s, const BlobLimits& limits) {
   std::uint32_t prev = s.input_size;
   std::uint64_t params = 0;
   for (std::size_t i = 0; i < s.layers.size(); ++i) {
-    const DenseLayer& l = s.layers[i];
-    if (auto st = CheckLayerShape(i, l.in, l.out, static_cast<std::uint32_t>(l.activation), prev,
-                                  i + 1 == s.layers.size(), s.output_size, limits);
+    const Layer& l = s.layers[i];
+    const bool last = i + 1 == s.layers.size();
+    if (auto st = CheckLayerShape(i, l.in, l.out, static_cast<std::uint32_t>(l.activation), prev, last, s.output_size,
+                                  limits);
+        !st) {
+      return st;
+    }
+    if (auto st = CheckLayerKind(i, static_cast<std::uint32_t>(l.kind),
+                                 l.linear_before_reset ? kLayerFlagLinearBeforeReset : 0u,
+                                 static_cast<std::uint32_t>(l.activation), last);
         !st) {
       return st;
     }
     if (auto st = CheckLayerAlpha(i, l.activation, l.alpha); !st) return st;
-    params += static_cast<std::uint64_t>(l.in) * l.out + l.out;
+    params += l.ParameterCount();
     if (params > limits.max_parameters) {
       return Fail(ErrorCode::kLimit,
                   Str("layer %zu: parameter count reaches %llu, over limit %llu", i,
                       static_cast<unsigned long long>(params), static_cast<unsigned long long>(limits.max_parameters)));
     }
+    const std::size_t rows = static_cast<std::size_t>(l.gates()) * l.out;
+    const bool rec = l.kind != LayerKind::kDense;
     const std::string w = Str("layer %zu weight", i), b = Str("layer %zu bias", i);
-    if (auto st = CheckFiniteArray(l.weight, static_cast<std::size_t>(l.in) * l.out, w.c_str()); !st) return st;
-    if (auto st = CheckFiniteArray(l.bias, l.out, b.c_str()); !st) return st;
+    const std::string rw = Str("layer %zu recurrent_weight", i), rb = Str("layer %zu recurrent_bias", i);
+    if (auto st = CheckFiniteArray(l.weight, rows * l.in, w.c_str()); !st) return st;
+    if (auto st = CheckFiniteArray(l.bias, rows, b.c_str()); !st) return st;
+    if (auto st = CheckFiniteArray(l.recurrent_weight, rec ? rows * l.out : 0, rw.c_str()); !st) return st;
+    if (auto st = CheckFiniteArray(l.recurrent_bias, rec ? rows : 0, rb.c_str()); !st) return st;
     prev = l.out;
   }
   if (auto st = CheckFiniteArray(s.obs_mean, s.input_size, "obs_mean"); !st) return st;
@@ -280,8 +323,9 @@ Status ValidateSpec(const PolicySpec& s, const BlobLimits& limits) {
 Result<std::vector<std::uint8_t>> EncodeBlob(const PolicySpec& s) {
   if (auto st = ValidateSpec(s); !st) return st.error();
   ByteWriter w;
+  const bool v2 = s.Recurrent();
   w.Raw(kBlobMagic, sizeof kBlobMagic);
-  w.U32(kBlobFormatVersion);
+  w.U32(v2 ? kBlobFormatVersion : kBlobFeedForwardVersion);
   w.U32(kBlobHeaderBytes);
   w.U64(0);  // file_bytes, patched below
   w.U32(s.input_size);
@@ -289,18 +333,24 @@ Result<std::vector<std::uint8_t>> EncodeBlob(const PolicySpec& s) {
   w.U32(static_cast<std::uint32_t>(s.layers.size()));
   w.U32(static_cast<std::uint32_t>(s.action_head));
   w.U64(s.io_layout_hash);
-  for (const DenseLayer& l : s.layers) {
+  for (const Layer& l : s.layers) {
     w.U32(l.in);
     w.U32(l.out);
     w.U32(static_cast<std::uint32_t>(l.activation));
     w.U32(std::bit_cast<std::uint32_t>(l.alpha));  // leaky_relu's slope; 0 for the others (validated)
+    if (v2) {
+      w.U32(static_cast<std::uint32_t>(l.kind));
+      w.U32(l.linear_before_reset ? kLayerFlagLinearBeforeReset : 0u);
+    }
   }
   w.Floats(s.obs_mean);
   w.Floats(s.obs_inv_std);
   w.Raw(&s.obs_clip, sizeof(float));
-  for (const DenseLayer& l : s.layers) {
+  for (const Layer& l : s.layers) {
     w.Floats(l.weight);
     w.Floats(l.bias);
+    w.Floats(l.recurrent_weight);  // empty for a dense layer
+    w.Floats(l.recurrent_bias);
   }
   w.Floats(s.action_scale);
   w.Floats(s.action_offset);
@@ -333,13 +383,13 @@ Status CheckFrame(std::span<const std::uint8_t> b, const BlobLimits& limits) {
     return Fail(ErrorCode::kFormat, "magic: not a pbppo policy blob (expected \"PBPPOPOL\")");
   }
   const auto version = Load<std::uint32_t>(b, kOffVersion);
-  if (version != kBlobFormatVersion) {
-    return Fail(ErrorCode::kFormat,
-                Str("format_version %u unsupported (this loader reads %u)", version, kBlobFormatVersion));
+  if (version < kBlobFeedForwardVersion || version > kBlobFormatVersion) {
+    return Fail(ErrorCode::kFormat, Str("format_version %u unsupported (this loader reads %u..%u)", version,
+                                        kBlobFeedForwardVersion, kBlobFormatVersion));
   }
   const auto header_bytes = Load<std::uint32_t>(b, kOffHeaderBytes);
   if (header_bytes != kBlobHeaderBytes) {
-    return Fail(ErrorCode::kFormat, Str("header_bytes %u, format v1 has %u", header_bytes, kBlobHeaderBytes));
+    return Fail(ErrorCode::kFormat, Str("header_bytes %u, format v%u has %u", header_bytes, version, kBlobHeaderBytes));
   }
   const auto file_bytes = Load<std::uint64_t>(b, kOffFileBytes);
   if (file_bytes > limits.max_file_bytes) {
@@ -361,30 +411,44 @@ Status CheckFrame(std::span<const std::uint8_t> b, const BlobLimits& limits) {
   return {};
 }
 
-using LayerRecords = std::vector<std::array<std::uint32_t, 4>>;
+// A layer record: in, out, activation, alpha bits, kind, flags (v1 records end after alpha: dense).
+using LayerRecords = std::vector<std::array<std::uint32_t, 6>>;
 
 // The layer table, checked completely, and the exact byte count it implies, before anything is
 // allocated for the weights.
-Status ReadLayerTable(ByteReader& r, const PolicySpec& s, std::uint32_t layer_count, const BlobLimits& limits,
-                      LayerRecords* records) {
-  if (r.left() / kLayerRecordBytes < layer_count) return Fail(ErrorCode::kFormat, "layer table: truncated");
-  records->resize(layer_count);
+Status ReadLayerTable(ByteReader& r, const PolicySpec& s, std::uint32_t version, std::uint32_t layer_count,
+                      const BlobLimits& limits, LayerRecords* records) {
+  const std::uint32_t record_bytes = version >= 2 ? kLayerRecordBytesV2 : kLayerRecordBytes;
+  if (r.left() / record_bytes < layer_count) return Fail(ErrorCode::kFormat, "layer table: truncated");
+  records->assign(layer_count, {0, 0, 0, 0, 0, 0});
   std::uint32_t prev = s.input_size;
   std::uint64_t params = 0;
+  bool recurrent = false;
   for (std::uint32_t i = 0; i < layer_count; ++i) {
-    (void)r.Raw((*records)[i].data(), kLayerRecordBytes);
+    (void)r.Raw((*records)[i].data(), record_bytes);
     const auto& rec = (*records)[i];
-    if (auto st = CheckLayerShape(i, rec[0], rec[1], rec[2], prev, i + 1 == layer_count, s.output_size, limits); !st) {
+    const bool last = i + 1 == layer_count;
+    if (auto st = CheckLayerShape(i, rec[0], rec[1], rec[2], prev, last, s.output_size, limits); !st) {
       return st.error();
     }
+    if (auto st = CheckLayerKind(i, rec[4], rec[5], rec[2], last); !st) return st.error();
     // The 4th word: leaky_relu's alpha (float32 bits), reserved and 0 for every other activation.
     if (rec[2] == static_cast<std::uint32_t>(Activation::kLeakyRelu)) {
       if (auto st = CheckLayerAlpha(i, Activation::kLeakyRelu, std::bit_cast<float>(rec[3])); !st) return st.error();
     } else if (rec[3] != 0) {
       return Fail(ErrorCode::kFormat, Str("layer %u: reserved field %u is not 0", i, rec[3]));
     }
-    params += static_cast<std::uint64_t>(rec[0]) * rec[1] + rec[1];
+    Layer shape;
+    shape.kind = static_cast<LayerKind>(rec[4]);
+    shape.in = rec[0];
+    shape.out = rec[1];
+    recurrent = recurrent || shape.kind != LayerKind::kDense;
+    params += shape.ParameterCount();  // widths below 2^24 (CheckLayerShape): no overflow
     prev = rec[1];
+    if (params > limits.max_parameters) break;
+  }
+  if (version >= 2 && !recurrent) {
+    return Fail(ErrorCode::kFormat, "format_version 2 without a recurrent layer (such a policy is written as v1)");
   }
   if (params > limits.max_parameters) {
     return Fail(ErrorCode::kLimit,
@@ -409,13 +473,20 @@ Status ReadBody(ByteReader& r, const LayerRecords& records, const BlobLimits& li
   (void)r.Raw(&s.obs_clip, sizeof(float));
   s.layers.resize(records.size());
   for (std::size_t i = 0; i < records.size(); ++i) {
-    DenseLayer& l = s.layers[i];
+    Layer& l = s.layers[i];
     l.in = records[i][0];
     l.out = records[i][1];
     l.activation = static_cast<Activation>(records[i][2]);
     l.alpha = std::bit_cast<float>(records[i][3]);
-    (void)r.Floats(&l.weight, static_cast<std::size_t>(l.in) * l.out);
-    (void)r.Floats(&l.bias, l.out);
+    l.kind = static_cast<LayerKind>(records[i][4]);
+    l.linear_before_reset = (records[i][5] & kLayerFlagLinearBeforeReset) != 0;
+    const std::size_t rows = static_cast<std::size_t>(l.gates()) * l.out;
+    (void)r.Floats(&l.weight, rows * l.in);
+    (void)r.Floats(&l.bias, rows);
+    if (l.kind != LayerKind::kDense) {
+      (void)r.Floats(&l.recurrent_weight, rows * l.out);
+      (void)r.Floats(&l.recurrent_bias, rows);
+    }
   }
   (void)r.Floats(&s.action_scale, s.output_size);
   (void)r.Floats(&s.action_offset, s.output_size);
@@ -449,6 +520,7 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
   PolicySpec s;
   s.input_size = Load<std::uint32_t>(b, kOffInputSize);
   s.output_size = Load<std::uint32_t>(b, kOffOutputSize);
+  const auto version = Load<std::uint32_t>(b, kOffVersion);  // checked by CheckFrame
   const auto layer_count = Load<std::uint32_t>(b, kOffLayerCount);
   const auto head = Load<std::uint32_t>(b, kOffActionHead);
   s.io_layout_hash = Load<std::uint64_t>(b, kOffIoLayoutHash);
@@ -461,7 +533,7 @@ Result<PolicySpec> DecodeBlob(std::span<const std::uint8_t> b, const BlobLimits&
   std::uint8_t skip[kBlobHeaderBytes];
   (void)r.Raw(skip, kBlobHeaderBytes);
   LayerRecords records;
-  if (auto st = ReadLayerTable(r, s, layer_count, limits, &records); !st) return st.error();
+  if (auto st = ReadLayerTable(r, s, version, layer_count, limits, &records); !st) return st.error();
   if (auto st = ReadBody(r, records, limits, &s); !st) return st.error();
   if (auto st = ValidateSpec(s, limits); !st) return st.error();
   return s;

@@ -1,4 +1,6 @@
-// Frozen policy blob, format v1 (docs/policy_blob.md). Shared by the writer and the loader.
+// Frozen policy blob, formats v1 and v2 (docs/policy_blob.md). Shared by the writer and the loader.
+// v2 adds recurrent layers (a longer layer record and the recurrent weights); the writer uses v1
+// for a policy without them, so feed-forward blobs are the same bytes as before v2 existed.
 #pragma once
 
 #include <cstddef>
@@ -7,9 +9,12 @@
 namespace pbppo::policy {
 
 inline constexpr char kBlobMagic[8] = {'P', 'B', 'P', 'P', 'O', 'P', 'O', 'L'};
-inline constexpr std::uint32_t kBlobFormatVersion = 1;
+inline constexpr std::uint32_t kBlobFormatVersion = 2;       // the newest this code reads
+inline constexpr std::uint32_t kBlobFeedForwardVersion = 1;  // written for dense layers only
 inline constexpr std::uint32_t kBlobHeaderBytes = 48;
-inline constexpr std::uint32_t kLayerRecordBytes = 16;
+inline constexpr std::uint32_t kLayerRecordBytes = 16;           // v1: in, out, activation, alpha
+inline constexpr std::uint32_t kLayerRecordBytesV2 = 24;         // v2: ... kind, flags
+inline constexpr std::uint32_t kLayerFlagLinearBeforeReset = 1;  // v2 flags bit 0 (GRU only)
 
 // The fixed header: each field's offset in bytes (its type after it).
 enum BlobHeaderOffset : std::size_t {

@@ -184,7 +184,12 @@ std::uint32_t ForwardAvx512(const ModelView& m, const DataView& d) noexcept {
   const float* src = d.x;
   float* dst = d.ping;
   for (std::uint32_t li = 0; li < m.layer_count; ++li) {
-    Dense(m.layers[li], src, dst);
+    const KernelLayer& l = m.layers[li];
+    if (l.kind == 0) {
+      Dense(l, src, dst);
+    } else {
+      RecurrentStep(l, src, dst, d, &Dense);
+    }
     src = dst;
     dst = (dst == d.ping) ? d.pong : d.ping;
   }

@@ -30,6 +30,14 @@ void Activate(std::uint32_t activation, float alpha, VecMap y) noexcept {
   }
 }
 
+// y = act(W x + b) over row-major W; x and y of the layer's widths (no padding needed).
+void Dense(const KernelLayer& l, const float* x, float* y) {
+  VecMap out(y, Ix(l.out));
+  out.matrix().noalias() = MatMap(l.weight, Ix(l.out), Ix(l.in)) * ConstVecMap(x, Ix(l.in)).matrix();
+  out += ConstVecMap(l.bias, Ix(l.out));
+  Activate(l.activation, l.alpha, out);
+}
+
 }  // namespace
 
 std::uint32_t ForwardPortable(const ModelView& m, const DataView& d) noexcept {
@@ -46,10 +54,11 @@ std::uint32_t ForwardPortable(const ModelView& m, const DataView& d) noexcept {
   float* dst = d.ping;
   for (std::uint32_t li = 0; li < m.layer_count; ++li) {
     const KernelLayer& l = m.layers[li];
-    VecMap y(dst, Ix(l.out));
-    y.matrix().noalias() = MatMap(l.weight, Ix(l.out), Ix(l.in)) * ConstVecMap(src, Ix(l.in)).matrix();
-    y += ConstVecMap(l.bias, Ix(l.out));
-    Activate(l.activation, l.alpha, y);
+    if (l.kind == 0) {
+      Dense(l, src, dst);
+    } else {
+      RecurrentStep(l, src, dst, d, &Dense);
+    }
     src = dst;
     dst = (dst == d.ping) ? d.pong : d.ping;
   }

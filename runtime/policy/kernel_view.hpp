@@ -22,6 +22,15 @@ struct KernelLayer {
   std::uint32_t out_pad;  // out rounded up to 16
   std::uint32_t activation;
   float alpha;  // leaky_relu (activation 4): y = x > 0 ? x : alpha * x; 0 otherwise
+  // Recurrent layers (kind 1 LSTM, 2 GRU; policy_spec.hpp's LayerKind) run as dense parts with the
+  // identity activation, each laid out as above, and an element-wise step (RecurrentStep):
+  // parts[0] = W x + Wb (in -> gates * out); LSTM parts[1] = R h + Rb (out -> 4 out); GRU
+  // parts[1] = R_zr h + Rb_zr (out -> 2 out), parts[2] = R_h (r * h or h) + Rb_h (out -> out).
+  // A dense layer (kind 0) has none; its weight and bias are the fields above.
+  std::uint32_t kind;
+  std::uint32_t linear_before_reset;  // GRU: 1 as torch exports it
+  const KernelLayer* parts;
+  std::uint32_t state;  // the layer's state in DataView::state, in floats: h [out_pad], LSTM c [out_pad]
 };
 
 struct ModelView {
@@ -47,7 +56,22 @@ struct DataView {
   float* ping;         // [max_width_pad]
   float* pong;         // [max_width_pad]
   float* action;       // [output_pad]
+  // Recurrent layers only (null or unused otherwise): their state (zero at the start, kept between
+  // calls; padding stays zero) and scratch for the gates, each aligned and zero-padded.
+  float* state;  // [sum of the layers' state floats]
+  float* gx;     // [max gates * out, padded]
+  float* gh;     // [max gates * out, padded]
+  float* rh;     // [max out_pad]: GRU r * h
+  float* gt;     // [max out_pad]: GRU R_h (.) + Rb_h
 };
+
+// A kernel's dense layer: y[0, out_pad) = act(W x + b) in that kernel's layout, x zero-padded.
+using DenseFn = void (*)(const KernelLayer& l, const float* x, float* y);
+
+// One step of recurrent layer l (forward_recurrent.cpp, shared by every kernel): its dense parts
+// through the kernel's `dense`, the gates element-wise (Eigen arrays), the state updated in place,
+// y[0, out) = the new h and y[out, out_pad) = 0.
+void RecurrentStep(const KernelLayer& l, const float* x, float* y, const DataView& d, DenseFn dense) noexcept;
 
 // Return value of a kernel: bit 0 non-finite observation, bit 1 non-finite action.
 inline constexpr std::uint32_t kBadObservation = 1u;

@@ -19,7 +19,7 @@ std::uint32_t Pad(std::uint32_t n) {
 
 // Copies W (row-major [out][in]) into AVX-512 tiles: for each tile of up to 8 output vectors,
 // [in][vectors * 16] so the kernel streams it front to back. Padding rows are zero.
-void PackTiles(const DenseLayer& l, std::uint32_t out_pad, float* dst) {
+void PackTiles(const Layer& l, std::uint32_t out_pad, float* dst) {
   const std::uint32_t vectors = out_pad / detail::kLanes;
   for (std::uint32_t v0 = 0; v0 < vectors; v0 += detail::kTileVectors) {
     const std::uint32_t nv = std::min(detail::kTileVectors, vectors - v0);
@@ -36,7 +36,7 @@ void PackTiles(const DenseLayer& l, std::uint32_t out_pad, float* dst) {
 }
 
 // Row-major [out][in rounded up to 16]; the padding columns stay zero.
-void PackRows(const DenseLayer& l, float* dst) {
+void PackRows(const Layer& l, float* dst) {
   const std::uint32_t in_pad = Pad(l.in);
   for (std::uint32_t o = 0; o < l.out; ++o) {
     std::memcpy(dst + static_cast<std::size_t>(o) * in_pad, l.weight.data() + static_cast<std::size_t>(o) * l.in,
@@ -108,6 +108,42 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   m.kernel_ = kernel;
   const std::uint32_t in_pad = Pad(spec.input_size), out_pad = Pad(spec.output_size);
 
+  // The dense pieces: each dense layer, and each recurrent layer's parts (kernel_view.hpp).
+  struct Piece {
+    Layer dense;            // kind dense; its weight and bias
+    std::size_t owner = 0;  // the spec layer
+    std::size_t part = 0;   // 0 for a dense layer or a recurrent layer's input part
+  };
+  std::vector<Piece> pieces;
+  auto rows = [](const std::vector<float>& v, std::size_t width, std::size_t from, std::size_t count) {
+    return std::vector<float>(v.begin() + static_cast<std::ptrdiff_t>(from * width),
+                              v.begin() + static_cast<std::ptrdiff_t>((from + count) * width));
+  };
+  for (std::size_t li = 0; li < spec.layers.size(); ++li) {
+    const Layer& l = spec.layers[li];
+    const std::uint32_t g = l.gates(), n = l.out;
+    auto add = [&](std::uint32_t in, std::uint32_t out, std::vector<float> w, std::vector<float> b, std::size_t part) {
+      Piece p;
+      p.dense.in = in;
+      p.dense.out = out;
+      p.dense.weight = std::move(w);
+      p.dense.bias = std::move(b);
+      p.owner = li;
+      p.part = part;
+      if (l.kind == LayerKind::kDense) {
+        p.dense.activation = l.activation;
+        p.dense.alpha = l.alpha;
+      }
+      pieces.push_back(std::move(p));
+    };
+    add(l.in, g * n, l.weight, l.bias, 0);
+    if (l.kind == LayerKind::kLstm) add(n, 4 * n, l.recurrent_weight, l.recurrent_bias, 1);
+    if (l.kind == LayerKind::kGru) {
+      add(n, 2 * n, rows(l.recurrent_weight, n, 0, 2 * n), rows(l.recurrent_bias, 1, 0, 2 * n), 1);
+      add(n, n, rows(l.recurrent_weight, n, 2 * n, n), rows(l.recurrent_bias, 1, 2 * n, n), 2);
+    }
+  }
+
   // Parameter block layout.
   ArenaPlan plan;
   const std::size_t off_mean = plan.Floats(in_pad), off_inv_std = plan.Floats(in_pad);
@@ -115,9 +151,9 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   const std::size_t off_low = plan.Floats(out_pad), off_high = plan.Floats(out_pad);
   std::vector<std::size_t> off_w, off_b;
   std::uint32_t max_pad = in_pad;
-  for (const DenseLayer& l : spec.layers) {
+  for (const Piece& p : pieces) {
+    const Layer& l = p.dense;
     const std::uint32_t lp = Pad(l.out);
-    max_pad = std::max(max_pad, lp);
     std::size_t floats = static_cast<std::size_t>(l.out) * l.in;
     if (packed) {
       floats = l.out <= detail::kRowFormMaxOut ? static_cast<std::size_t>(l.out) * Pad(l.in)
@@ -138,20 +174,46 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
   copy(spec.action_offset, at(off_offset));
   copy(spec.action_low, at(off_low));
   copy(spec.action_high, at(off_high));
-  for (std::size_t li = 0; li < spec.layers.size(); ++li) {
-    const DenseLayer& l = spec.layers[li];
+  std::vector<detail::KernelLayer> kernel_pieces;
+  for (std::size_t pi = 0; pi < pieces.size(); ++pi) {
+    const Layer& l = pieces[pi].dense;
     const std::uint32_t lp = Pad(l.out);
     if (packed && l.out <= detail::kRowFormMaxOut) {
-      PackRows(l, at(off_w[li]));
+      PackRows(l, at(off_w[pi]));
     } else if (packed) {
-      PackTiles(l, lp, at(off_w[li]));
+      PackTiles(l, lp, at(off_w[pi]));
     } else {
-      copy(l.weight, at(off_w[li]));
+      copy(l.weight, at(off_w[pi]));
     }
-    copy(l.bias, at(off_b[li]));
-    m.layers_.push_back(detail::KernelLayer{at(off_w[li]), at(off_b[li]), l.in, l.out, lp,
-                                            static_cast<std::uint32_t>(l.activation), l.alpha});
+    copy(l.bias, at(off_b[pi]));
+    kernel_pieces.push_back(detail::KernelLayer{at(off_w[pi]), at(off_b[pi]), l.in, l.out, lp,
+                                                static_cast<std::uint32_t>(l.activation), l.alpha, 0, 0, nullptr, 0});
   }
+  // A recurrent layer's parts, in order, in parts_ (which never reallocates after this).
+  m.parts_.reserve(pieces.size());
+  std::uint32_t state = 0;
+  for (std::size_t li = 0; li < spec.layers.size(); ++li) {
+    const Layer& l = spec.layers[li];
+    std::size_t first = 0;
+    while (pieces[first].owner != li) ++first;
+    const std::uint32_t lp = Pad(l.out);
+    max_pad = std::max(max_pad, lp);
+    if (l.kind == LayerKind::kDense) {
+      m.layers_.push_back(kernel_pieces[first]);
+      continue;
+    }
+    const std::size_t at_part = m.parts_.size();
+    for (std::size_t pi = first; pi < pieces.size() && pieces[pi].owner == li; ++pi) {
+      m.parts_.push_back(kernel_pieces[pi]);
+      m.max_gate_pad_ = std::max(m.max_gate_pad_, kernel_pieces[pi].out_pad);
+    }
+    m.max_hidden_pad_ = std::max(m.max_hidden_pad_, lp);
+    m.layers_.push_back(detail::KernelLayer{nullptr, nullptr, l.in, l.out, lp, 0, 0.0f,
+                                            static_cast<std::uint32_t>(l.kind), l.linear_before_reset ? 1u : 0u,
+                                            m.parts_.data() + at_part, state});
+    state += (l.kind == LayerKind::kLstm ? 2 : 1) * lp;
+  }
+  m.state_floats_ = state;
   m.max_width_pad_ = max_pad;
   m.view_ = detail::ModelView{m.layers_.data(),
                               static_cast<std::uint32_t>(m.layers_.size()),
@@ -169,11 +231,11 @@ Result<PolicyModel> PolicyModel::FromSpec(const PolicySpec& spec, const LoadOpti
                               at(off_high)};
 
   m.description_ = spec;
-  for (DenseLayer& l : m.description_.layers) {
-    l.weight.clear();
-    l.weight.shrink_to_fit();
-    l.bias.clear();
-    l.bias.shrink_to_fit();
+  for (Layer& l : m.description_.layers) {
+    for (std::vector<float>* v : {&l.weight, &l.bias, &l.recurrent_weight, &l.recurrent_bias}) {
+      v->clear();
+      v->shrink_to_fit();
+    }
   }
   return m;
 }
@@ -198,11 +260,16 @@ Result<PolicyData> MakePolicyData(const PolicyModel& model) {
   const std::size_t off_obs = plan.Floats(mv.input_pad), off_x = plan.Floats(mv.input_pad);
   const std::size_t off_ping = plan.Floats(model.max_width_pad()), off_pong = plan.Floats(model.max_width_pad());
   const std::size_t off_act = plan.Floats(mv.output_pad);
+  const std::size_t off_state = plan.Floats(model.state_size());
+  const std::size_t off_gx = plan.Floats(model.max_gate_pad()), off_gh = plan.Floats(model.max_gate_pad());
+  const std::size_t off_rh = plan.Floats(model.max_hidden_pad()), off_gt = plan.Floats(model.max_hidden_pad());
   PolicyData d;
-  d.arena_ = AlignedBlock(plan.bytes());
+  d.arena_ = AlignedBlock(plan.bytes());  // zeroed: the state starts clean, padding stays zero
   std::byte* base = d.arena_.data();
   auto at = [base](std::size_t off) { return reinterpret_cast<float*>(base + off); };
-  d.view_ = detail::DataView{at(off_obs), at(off_x), at(off_ping), at(off_pong), at(off_act)};
+  d.view_ = detail::DataView{at(off_obs),   at(off_x),  at(off_ping), at(off_pong), at(off_act),
+                             at(off_state), at(off_gx), at(off_gh),   at(off_rh),   at(off_gt)};
+  d.state_size_ = model.state_size();
   d.model_ = &model;
   d.input_size_ = mv.input_size;
   d.output_size_ = mv.output_size;
@@ -227,6 +294,10 @@ ForwardStatus Forward(const PolicyModel& model, PolicyData& data) noexcept {
     return ForwardStatus::kNonFiniteAction;
   }
   return ForwardStatus::kOk;
+}
+
+void PolicyData::ResetState() noexcept {
+  std::fill_n(view_.state, state_size_, 0.0f);
 }
 
 void SetEigenMallocAllowed(bool allowed) noexcept {

@@ -47,6 +47,13 @@ class PolicyModel {
   Kernel kernel() const noexcept { return kernel_; }
   std::uint64_t parameter_bytes() const noexcept { return parameter_bytes_; }
   const detail::ModelView& view() const noexcept { return view_; }
+  // Whether a layer is recurrent: the data then carries state from one Forward() to the next.
+  bool recurrent() const noexcept { return state_floats_ > 0; }
+  // Floats of state (each recurrent layer's h, and c for an LSTM, padded to 16; 0 without one).
+  std::uint32_t state_size() const noexcept { return state_floats_; }
+  // Scratch a recurrent step needs: the widest gate vector and the widest hidden state, padded.
+  std::uint32_t max_gate_pad() const noexcept { return max_gate_pad_; }
+  std::uint32_t max_hidden_pad() const noexcept { return max_hidden_pad_; }
 
   PolicyModel(PolicyModel&&) noexcept = default;
   PolicyModel& operator=(PolicyModel&&) noexcept = default;
@@ -58,8 +65,12 @@ class PolicyModel {
   PolicySpec description_;
   AlignedBlock params_;
   std::vector<detail::KernelLayer> layers_;
+  std::vector<detail::KernelLayer> parts_;  // recurrent layers' dense parts
   detail::ModelView view_{};
   std::uint32_t max_width_pad_ = 0;
+  std::uint32_t max_gate_pad_ = 0;    // widest recurrent part output, padded
+  std::uint32_t max_hidden_pad_ = 0;  // widest recurrent layer, padded
+  std::uint32_t state_floats_ = 0;
   std::uint64_t parameter_bytes_ = 0;
   Kernel kernel_ = Kernel::kPortable;
 };
@@ -80,6 +91,14 @@ class PolicyData {
   // Action after Forward(): scaled, offset and clamped to the blob's limits.
   std::span<const float> action() const noexcept { return {view_.action, output_size_}; }
 
+  // A recurrent policy's state (policy_model.hpp's state_size floats): zero when made, carried
+  // from one Forward() to the next; a call with a non-finite observation leaves it unchanged.
+  // ResetState() zeroes it (at arming, at a switch to this policy); saved and restored as a whole
+  // to record and replay a run. Empty for a feed-forward policy.
+  std::span<const float> state() const noexcept { return {view_.state, state_size_}; }
+  std::span<float> state() noexcept { return {view_.state, state_size_}; }
+  void ResetState() noexcept;
+
   std::uint64_t forward_calls = 0;
   std::uint64_t nonfinite_observations = 0;
   std::uint64_t nonfinite_actions = 0;
@@ -96,6 +115,7 @@ class PolicyData {
   const PolicyModel* model_ = nullptr;
   std::uint32_t input_size_ = 0;
   std::uint32_t output_size_ = 0;
+  std::uint32_t state_size_ = 0;
 };
 
 // Makes the data for a model (the only allocation). The data refers to the model, which must

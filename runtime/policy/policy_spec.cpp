@@ -15,6 +15,34 @@ const char* ToString(ActionHead h) noexcept {
   return EnumName(h, {"linear", "tanh"});
 }
 
+const char* ToString(LayerKind k) noexcept {
+  return EnumName(k, {"dense", "lstm", "gru"});
+}
+
+std::uint32_t GateCount(LayerKind k) noexcept {
+  switch (k) {
+    case LayerKind::kDense: return 1;
+    case LayerKind::kLstm: return 4;
+    case LayerKind::kGru: return 3;
+  }
+  return 1;
+}
+
+std::uint32_t StateFloats(LayerKind k, std::uint32_t out) noexcept {
+  switch (k) {
+    case LayerKind::kDense: return 0;
+    case LayerKind::kLstm: return 2 * out;
+    case LayerKind::kGru: return out;
+  }
+  return 0;
+}
+
+std::uint64_t Layer::ParameterCount() const noexcept {
+  const std::uint64_t rows = static_cast<std::uint64_t>(gates()) * out;
+  const std::uint64_t n = rows * in + rows;
+  return kind == LayerKind::kDense ? n : n + rows * out + rows;
+}
+
 bool ParseActivation(const std::string& s, Activation* out) noexcept {
   for (auto a :
        {Activation::kIdentity, Activation::kTanh, Activation::kElu, Activation::kRelu, Activation::kLeakyRelu}) {
@@ -28,7 +56,19 @@ bool ParseActivation(const std::string& s, Activation* out) noexcept {
 
 std::uint64_t PolicySpec::ParameterCount() const noexcept {
   std::uint64_t n = 0;
-  for (const auto& l : layers) n += static_cast<std::uint64_t>(l.in) * l.out + l.out;
+  for (const auto& l : layers) n += l.ParameterCount();
+  return n;
+}
+
+bool PolicySpec::Recurrent() const noexcept {
+  for (const auto& l : layers)
+    if (l.kind != LayerKind::kDense) return true;
+  return false;
+}
+
+std::uint64_t PolicySpec::StateSize() const noexcept {
+  std::uint64_t n = 0;
+  for (const auto& l : layers) n += StateFloats(l.kind, l.out);
   return n;
 }
 
@@ -39,7 +79,7 @@ PolicySpec MakeRandomSpec(const std::vector<std::uint32_t>& widths, Activation h
   s.input_size = widths.front();
   s.output_size = widths.back();
   for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
-    DenseLayer l;
+    Layer l;
     l.in = widths[i];
     l.out = widths[i + 1];
     l.activation = (i + 2 == widths.size()) ? Activation::kIdentity : hidden;
@@ -71,6 +111,33 @@ PolicySpec MakeRandomSpec(const std::vector<std::uint32_t>& widths, Activation h
   s.provenance.environment = "none";
   s.provenance.clip_schedule = "none";
   s.provenance.seed = seed;
+  return s;
+}
+
+}  // namespace pbppo::policy
+
+namespace pbppo::policy {
+
+PolicySpec MakeRandomRecurrentSpec(const std::vector<std::uint32_t>& widths, Activation hidden, std::size_t index,
+                                   LayerKind kind, bool linear_before_reset, std::uint64_t seed) {
+  PolicySpec s = MakeRandomSpec(widths, hidden, seed);
+  if (index + 1 >= s.layers.size()) return s;
+  Rng rng(seed ^ 0x5EC0u);
+  Layer& l = s.layers[index];
+  l.kind = kind;
+  l.activation = Activation::kIdentity;
+  l.alpha = 0.0f;
+  l.linear_before_reset = kind == LayerKind::kGru && linear_before_reset;
+  const std::size_t rows = static_cast<std::size_t>(l.gates()) * l.out;
+  const double k = 1.0 / std::sqrt(static_cast<double>(l.out));
+  auto fill = [&](std::vector<float>& v, std::size_t n) {
+    v.resize(n);
+    for (float& x : v) x = static_cast<float>(k * (2.0 * rng.Uniform() - 1.0));
+  };
+  fill(l.weight, rows * l.in);
+  fill(l.bias, rows);
+  fill(l.recurrent_weight, rows * l.out);
+  fill(l.recurrent_bias, rows);
   return s;
 }
 

@@ -51,9 +51,134 @@ double ActivationRoundoff(Activation a, double alpha, double fx, double e) {
   return 4.0 * kU * std::max(std::fabs(fx), 1.0);
 }
 
+// A value and the bound on a float32 computation's deviation from it.
+struct Bounded {
+  double v = 0.0, e = 0.0;
+};
+
+// The product of two bounded values as a float multiply gives it: the error carried (first and
+// second order) and one rounding of the computed product's magnitude.
+Bounded Mul(Bounded a, Bounded b) {
+  const double carried = std::fabs(a.v) * b.e + std::fabs(b.v) * a.e + a.e * b.e;
+  return {a.v * b.v, carried + kU * (std::fabs(a.v) + a.e) * (std::fabs(b.v) + b.e)};
+}
+
+// The sum of two bounded values with one rounding.
+Bounded Add(Bounded a, Bounded b) {
+  return {a.v + b.v, a.e + b.e + kU * (std::fabs(a.v) + a.e + std::fabs(b.v) + b.e)};
+}
+
+// Row `row` of W x + b over row-major W of width n: a dot product of length n + 1 rounds within
+// gamma(n + 1) * sum |w| (|x| + e) (Higham; any order, FMA or not); input errors carry through |w|.
+Bounded Affine(const float* w_rows, const float* bias, std::size_t n, const std::vector<double>& x,
+               const std::vector<double>& e, std::size_t row) {
+  const float* w = w_rows + row * n;
+  double acc = static_cast<double>(bias[row]), mag = std::fabs(static_cast<double>(bias[row])), prop = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double wi = static_cast<double>(w[i]);
+    acc += wi * x[i];
+    mag += std::fabs(wi) * (std::fabs(x[i]) + e[i]);
+    prop += std::fabs(wi) * e[i];
+  }
+  return {acc, prop + Gamma(n + 1) * mag};
+}
+
+// sigmoid as the kernels compute it, 0.5 * tanh(0.5 x) + 0.5: the halvings are exact, tanh is
+// within 4 kU (|tanh| <= 1), the halving of it exact and the final add one rounding of a value
+// at most 1; the input error carries through sigmoid's slope, at most 1/4.
+Bounded Sigmoid(Bounded x) {
+  return {1.0 / (1.0 + std::exp(-x.v)), 0.25 * x.e + 3.0 * kU};
+}
+
+Bounded Tanh(Bounded x) {
+  return {std::tanh(x.v), x.e + 4.0 * kU};  // 1-Lipschitz; the kernels' tanh within 4 kU of 1
+}
+
+void LstmReference(const Layer& l, const std::vector<double>& x, const std::vector<double>& ex,
+                   ReferenceState::Layer& st, std::vector<double>* y, std::vector<double>* ey) {
+  const std::size_t n = l.out;
+  std::vector<double> h(n), eh(n), c(n), ec(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    Bounded g[4];
+    for (std::size_t k = 0; k < 4; ++k) {
+      g[k] = Add(Affine(l.weight.data(), l.bias.data(), l.in, x, ex, k * n + j),
+                 Affine(l.recurrent_weight.data(), l.recurrent_bias.data(), n, st.h, st.eh, k * n + j));
+    }
+    const Bounded i = Sigmoid(g[0]), o = Sigmoid(g[1]), f = Sigmoid(g[2]), u = Tanh(g[3]);
+    const Bounded cn = Add(Mul(f, {st.c[j], st.ec[j]}), Mul(i, u));
+    const Bounded hn = Mul(o, Tanh(cn));
+    h[j] = hn.v;
+    eh[j] = hn.e;
+    c[j] = cn.v;
+    ec[j] = cn.e;
+  }
+  st.h = h;
+  st.eh = eh;
+  st.c = std::move(c);
+  st.ec = std::move(ec);
+  *y = std::move(h);
+  *ey = std::move(eh);
+}
+
+void GruReference(const Layer& l, const std::vector<double>& x, const std::vector<double>& ex,
+                  ReferenceState::Layer& st, std::vector<double>* y, std::vector<double>* ey) {
+  const std::size_t n = l.out;
+  const float* R = l.recurrent_weight.data();
+  const float* Rb = l.recurrent_bias.data();
+  std::vector<Bounded> z(n), r(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    z[j] = Sigmoid(Add(Affine(l.weight.data(), l.bias.data(), l.in, x, ex, j), Affine(R, Rb, n, st.h, st.eh, j)));
+    r[j] =
+        Sigmoid(Add(Affine(l.weight.data(), l.bias.data(), l.in, x, ex, n + j), Affine(R, Rb, n, st.h, st.eh, n + j)));
+  }
+  std::vector<double> rh(n), erh(n);  // r * h, the input of R_h without linear_before_reset
+  for (std::size_t i = 0; i < n; ++i) {
+    const Bounded p = Mul(r[i], {st.h[i], st.eh[i]});
+    rh[i] = p.v;
+    erh[i] = p.e;
+  }
+  std::vector<double> h(n), eh(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const Bounded gx = Affine(l.weight.data(), l.bias.data(), l.in, x, ex, 2 * n + j);
+    const Bounded pre = l.linear_before_reset ? Add(gx, Mul(r[j], Affine(R, Rb, n, st.h, st.eh, 2 * n + j)))
+                                              : Add(gx, Affine(R, Rb, n, rh, erh, 2 * n + j));
+    const Bounded nn = Tanh(pre);
+    const Bounded one_minus_z{1.0 - z[j].v, z[j].e + kU * (std::fabs(1.0 - z[j].v) + z[j].e)};
+    const Bounded hn = Add(Mul(one_minus_z, nn), Mul(z[j], {st.h[j], st.eh[j]}));
+    h[j] = hn.v;
+    eh[j] = hn.e;
+  }
+  st.h = h;
+  st.eh = eh;
+  *y = std::move(h);
+  *ey = std::move(eh);
+}
+
 }  // namespace
 
+ReferenceState MakeReferenceState(const PolicySpec& s) {
+  ReferenceState st;
+  st.layers.resize(s.layers.size());
+  for (std::size_t i = 0; i < s.layers.size(); ++i) {
+    const Layer& l = s.layers[i];
+    if (l.kind == LayerKind::kDense) continue;
+    ReferenceState::Layer& ls = st.layers[i];
+    ls.h.assign(l.out, 0.0);
+    ls.eh.assign(l.out, 0.0);
+    if (l.kind == LayerKind::kLstm) {
+      ls.c.assign(l.out, 0.0);
+      ls.ec.assign(l.out, 0.0);
+    }
+  }
+  return st;
+}
+
 ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
+  ReferenceState st = MakeReferenceState(s);
+  return ReferenceForward(s, obs, &st);
+}
+
+ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs, ReferenceState* state) {
   std::vector<double> x(s.input_size), e(s.input_size);
   const double clip = static_cast<double>(s.obs_clip);
   for (std::size_t i = 0; i < s.input_size; ++i) {
@@ -62,21 +187,20 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
     x[i] = std::clamp(v, -clip, clip);
     e[i] = 2.0 * kU * std::fabs(v) * 1.0000001;
   }
-  for (const DenseLayer& l : s.layers) {
+  for (std::size_t li = 0; li < s.layers.size(); ++li) {
+    const Layer& l = s.layers[li];
     std::vector<double> y(l.out), ey(l.out);
-    const double g = Gamma(l.in + 1);
-    const auto alpha = static_cast<double>(l.alpha);
-    for (std::size_t j = 0; j < l.out; ++j) {
-      double acc = static_cast<double>(l.bias[j]), mag = std::fabs(static_cast<double>(l.bias[j])), prop = 0.0;
-      const float* w = l.weight.data() + j * l.in;
-      for (std::size_t i = 0; i < l.in; ++i) {
-        acc += static_cast<double>(w[i]) * x[i];
-        mag += std::fabs(static_cast<double>(w[i])) * (std::fabs(x[i]) + e[i]);
-        prop += std::fabs(static_cast<double>(w[i])) * e[i];
+    if (l.kind == LayerKind::kLstm) {
+      LstmReference(l, x, e, state->layers[li], &y, &ey);
+    } else if (l.kind == LayerKind::kGru) {
+      GruReference(l, x, e, state->layers[li], &y, &ey);
+    } else {
+      const auto alpha = static_cast<double>(l.alpha);
+      for (std::size_t j = 0; j < l.out; ++j) {
+        const Bounded pre = Affine(l.weight.data(), l.bias.data(), l.in, x, e, j);
+        y[j] = Activate(l.activation, alpha, pre.v);
+        ey[j] = pre.e + ActivationRoundoff(l.activation, alpha, y[j], pre.e);
       }
-      y[j] = Activate(l.activation, alpha, acc);
-      const double e_pre = prop + g * mag;
-      ey[j] = e_pre + ActivationRoundoff(l.activation, alpha, y[j], e_pre);
     }
     x = std::move(y);
     e = std::move(ey);
@@ -100,6 +224,7 @@ ReferenceOutput ReferenceForward(const PolicySpec& s, const float* obs) {
 
 GoldenVectors MakeGoldenVectors(const PolicySpec& s, std::size_t rows, std::uint64_t seed) {
   Rng rng(seed);
+  ReferenceState state = MakeReferenceState(s);  // a recurrent policy's rows are one sequence
   GoldenVectors g;
   g.input_size = s.input_size;
   g.output_size = s.output_size;
@@ -111,7 +236,7 @@ GoldenVectors MakeGoldenVectors(const PolicySpec& s, std::size_t rows, std::uint
       const double sd = 1.0 / static_cast<double>(s.obs_inv_std[i]);
       obs[i] = static_cast<float>(static_cast<double>(s.obs_mean[i]) + sd * spread * rng.Normal());
     }
-    g.expected.push_back(ReferenceForward(s, obs.data()));
+    g.expected.push_back(ReferenceForward(s, obs.data(), &state));
     g.observations.push_back(std::move(obs));
   }
   return g;

@@ -21,7 +21,24 @@ struct ReferenceOutput {
   std::vector<double> error_bound;
 };
 
-// Runs the policy in float64 over the spec's float32 parameters.
+// A recurrent policy's state in float64 and the bound on a float32 forward's deviation from it,
+// per layer (empty vectors for a dense layer; c and ec for an LSTM only).
+struct ReferenceState {
+  struct Layer {
+    std::vector<double> h, eh, c, ec;
+  };
+  std::vector<Layer> layers;
+};
+// The state at the start: zero, exactly.
+ReferenceState MakeReferenceState(const PolicySpec& spec);
+
+// Runs the policy in float64 over the spec's float32 parameters, one step from `state` (updated).
+// The bound extends to the recurrent layers: their gate products as dot products, sigmoid (as
+// 0.5 tanh(0.5 x) + 0.5, slope 1/4) and tanh within the kernels' tanh error, every product and sum
+// of the state update one rounding with first- and second-order error terms; the state's bound is
+// carried from step to step.
+ReferenceOutput ReferenceForward(const PolicySpec& spec, const float* observation, ReferenceState* state);
+// The same from the start state (a feed-forward policy has no other).
 ReferenceOutput ReferenceForward(const PolicySpec& spec, const float* observation);
 
 struct GoldenVectors {
@@ -32,7 +49,8 @@ struct GoldenVectors {
 };
 
 // Observations that exercise the normaliser clip, both signs and every activation region,
-// drawn deterministically from `seed`, with the reference outputs for them.
+// drawn deterministically from `seed`, with the reference outputs for them. For a recurrent policy
+// the rows are one sequence from the start state: the self-test runs them in order on fresh data.
 GoldenVectors MakeGoldenVectors(const PolicySpec& spec, std::size_t rows, std::uint64_t seed);
 
 Status WriteGoldenFile(const std::string& path, const GoldenVectors& g);

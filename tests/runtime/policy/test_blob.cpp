@@ -160,7 +160,7 @@ TEST_CASE("MakeRandomSpec gives hidden leaky_relu layers alpha 0.01 and the outp
   CHECK(s.layers[2].activation == Activation::kIdentity);
   CHECK(s.layers[2].alpha == 0.0f);
   CHECK(ValidateSpec(s).ok());
-  for (const DenseLayer& l : MakeRandomSpec({6, 9, 3}, Activation::kRelu, 7).layers) CHECK(l.alpha == 0.0f);
+  for (const Layer& l : MakeRandomSpec({6, 9, 3}, Activation::kRelu, 7).layers) CHECK(l.alpha == 0.0f);
 }
 
 TEST_CASE("a leaky_relu layer's alpha round-trips as float32 bits in the layer record's 4th word") {
@@ -199,7 +199,7 @@ TEST_CASE("a leaky_relu layer's alpha round-trips as float32 bits in the layer r
   }
   back = DecodeBlob(*bytes);
   REQUIRE(back.ok());
-  for (const DenseLayer& l : back->layers) CHECK(std::bit_cast<std::uint32_t>(l.alpha) == 0u);
+  for (const Layer& l : back->layers) CHECK(std::bit_cast<std::uint32_t>(l.alpha) == 0u);
 }
 
 TEST_CASE("the writer refuses a leaky_relu alpha outside [0, 1] and an alpha on any other layer") {

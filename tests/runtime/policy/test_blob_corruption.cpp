@@ -103,7 +103,10 @@ TEST_CASE("structural header fields corrupted under a valid CRC are rejected, na
     Recrc(b);
     return Refused(b);
   };
-  CHECK(with(kOffVersion, 2) == "policy blob: format_version 2 unsupported (this loader reads 1)");
+  CHECK(with(kOffVersion, 3) == "policy blob: format_version 3 unsupported (this loader reads 1..2)");
+  CHECK(with(kOffVersion, 0) == "policy blob: format_version 0 unsupported (this loader reads 1..2)");
+  // v1 records read as v2 ones (24 bytes): the 5th word, the next record's input width, is no kind.
+  CHECK(with(kOffVersion, 2) == "policy blob: layer 0: kind 4 unknown (0 dense, 1 lstm, 2 gru)");
   CHECK(with(kOffHeaderBytes, 64) == "policy blob: header_bytes 64, format v1 has 48");
   CHECK(with(kOffInputSize, 0) == "policy blob: input_size 0 outside 1..1024");
   CHECK(with(kOffInputSize, 100000) == "policy blob: input_size 100000 outside 1..1024");

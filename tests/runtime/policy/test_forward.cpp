@@ -9,6 +9,7 @@
 #include "runtime/policy/blob.hpp"
 #include "runtime/policy/policy_model.hpp"
 #include "runtime/policy/reference.hpp"
+#include "tests/support/golden_check.hpp"
 #include "tests/support/policy_on_kernel.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -16,33 +17,7 @@ using namespace pbppo::policy;
 
 namespace {
 
-struct Deviation {
-  double worst_ratio = 0.0;  // max |runtime - reference| / bound
-  double worst_abs = 0.0;
-};
-
-Deviation Check(const PolicyModel& model, const GoldenVectors& g) {
-  auto data = MakePolicyData(model);
-  REQUIRE(data.ok());
-  Deviation dev;
-  for (std::size_t r = 0; r < g.observations.size(); ++r) {
-    std::copy(g.observations[r].begin(), g.observations[r].end(), data->observation().begin());
-    REQUIRE(Forward(model, *data) == ForwardStatus::kOk);
-    for (std::size_t j = 0; j < g.output_size; ++j) {
-      const double got = data->action()[j];
-      const double want = g.expected[r].action[j];
-      const double bound = g.expected[r].error_bound[j];
-      const double err = std::fabs(got - want);
-      dev.worst_abs = std::max(dev.worst_abs, err);
-      dev.worst_ratio = std::max(dev.worst_ratio, err / bound);
-      if (err > bound) {
-        FAIL_CHECK("kernel " << ToString(model.kernel()) << " row " << r << " action " << j << ": " << got
-                             << " vs reference " << want << ", error " << err << " > bound " << bound);
-      }
-    }
-  }
-  return dev;
-}
+using pbppo::test::Deviation;
 
 struct Shape {
   const char* name;
@@ -83,7 +58,7 @@ TEST_CASE("every kernel reproduces the golden vectors within the float32 error b
       auto model = PolicyModel::FromSpec(spec, {.kernel = k});
       REQUIRE(model.ok());
       REQUIRE(model->kernel() == k);
-      const Deviation d = Check(*model, g);
+      const Deviation d = pbppo::test::CheckGolden(*model, g);
       const std::string what = std::string(shape.name) + " " + ToString(k);
       MESSAGE(what << ": max |error| " << d.worst_abs << ", " << d.worst_ratio << " of the bound");
       // The bound is a worst case; a float32 forward lands far inside it. This catches a path
@@ -108,7 +83,7 @@ TEST_CASE("leaky_relu with random slopes in [0, 1]: every kernel within the boun
         spec.layers.back().alpha = 0.0f;
       }
       spec.action_head = seed == 3 ? ActionHead::kTanh : ActionHead::kLinear;
-      for (DenseLayer& l : spec.layers) {
+      for (Layer& l : spec.layers) {
         if (l.activation != Activation::kLeakyRelu) continue;
         const double u = rng.Uniform();
         l.alpha = u < 0.15 ? 0.0f : u < 0.3 ? 1.0f : u < 0.45 ? 0.01f : static_cast<float>(rng.Uniform());
@@ -122,7 +97,7 @@ TEST_CASE("leaky_relu with random slopes in [0, 1]: every kernel within the boun
         CAPTURE(kernel_name);
         auto model = PolicyModel::FromSpec(spec, {.kernel = k});
         REQUIRE(model.ok());
-        const Deviation d = Check(*model, g);
+        const Deviation d = pbppo::test::CheckGolden(*model, g);
         CHECK(d.worst_abs < 1e-5);
       }
       ++specs;
@@ -136,7 +111,7 @@ TEST_CASE("leaky_relu is x > 0 ? x : alpha * x exactly, on every kernel") {
   // activation of the observation, bit for bit.
   for (std::uint32_t n : {3u, 20u, 130u}) {  // avx512 row form, a 2-vector tile, 8 + 1 vectors
     PolicySpec spec = MakeRandomSpec({n, n}, Activation::kIdentity, 1);
-    DenseLayer& l = spec.layers[0];
+    Layer& l = spec.layers[0];
     l.activation = Activation::kLeakyRelu;
     l.alpha = 0.3f;
     std::fill(l.weight.begin(), l.weight.end(), 0.0f);
@@ -184,7 +159,7 @@ TEST_CASE("golden files written by the writer are reproduced from the files") {
   for (Kernel k : AvailableKernels()) {
     auto model = PolicyModel::FromFile(dir + "/p3.blob", {.kernel = k});
     REQUIRE(model.ok());
-    Check(*model, *g);
+    pbppo::test::CheckGolden(*model, *g);
   }
 }
 
@@ -203,7 +178,7 @@ TEST_CASE("shipped and reference blobs: every kernel within each golden row's bo
       CAPTURE(kernel_name);
       auto model = PolicyModel::FromFile(blob, {.kernel = k});
       REQUIRE_MESSAGE(model.ok(), model.error().message);
-      const Deviation d = Check(*model, *g);
+      const Deviation d = pbppo::test::CheckGolden(*model, *g);
       MESSAGE(rel << " " << ToString(k) << ": max |error| " << d.worst_abs << ", " << d.worst_ratio << " of the bound");
       CHECK(d.worst_abs < 1e-5);
     }

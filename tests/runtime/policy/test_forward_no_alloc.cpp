@@ -1,6 +1,6 @@
 // After set-up, Forward() makes no heap allocation: 100,000 calls per kernel and network (2,000
 // under an emulator, tens of times slower), every malloc and operator new counted, with Eigen's own
-// allocation check armed as well.
+// allocation check armed as well; recurrent networks among them (their state carried, and reset).
 #include <doctest/doctest.h>
 
 #include "runtime/core/alloc_probe.hpp"
@@ -33,10 +33,15 @@ TEST_CASE("100,000 forward calls allocate nothing") {
   struct Net {
     std::vector<std::uint32_t> widths;
     Activation act;
+    LayerKind first = LayerKind::kDense;  // the first layer's kind (a recurrent one carries state)
   };
-  for (const Net& net : {Net{{48, 512, 256, 128, 12}, Activation::kElu}, Net{{24, 64, 64, 2}, Activation::kElu},
-                         Net{{24, 64, 64, 2}, Activation::kLeakyRelu}}) {
-    const PolicySpec spec = MakeRandomSpec(net.widths, net.act, 2);
+  for (const Net& net :
+       {Net{{48, 512, 256, 128, 12}, Activation::kElu}, Net{{24, 64, 64, 2}, Activation::kElu},
+        Net{{24, 64, 64, 2}, Activation::kLeakyRelu}, Net{{48, 64, 64, 12}, Activation::kElu, LayerKind::kLstm},
+        Net{{48, 64, 64, 12}, Activation::kElu, LayerKind::kGru}}) {
+    const PolicySpec spec = net.first == LayerKind::kDense
+                                ? MakeRandomSpec(net.widths, net.act, 2)
+                                : MakeRandomRecurrentSpec(net.widths, net.act, 0, net.first, false, 2);
     for (Kernel k : AvailableKernels()) {
       const std::string kernel_name = ToString(k);
       CAPTURE(kernel_name);
@@ -53,6 +58,7 @@ TEST_CASE("100,000 forward calls allocate nothing") {
           auto obs = data->observation();
           obs[static_cast<std::size_t>(call) % obs.size()] = static_cast<float>(rng.Normal());
           bad += Forward(*model, *data) != ForwardStatus::kOk;
+          if (call % 1000 == 999) data->ResetState();
         }
         allocations = scope.count();
       }
