@@ -11,6 +11,7 @@
 
 #include "report/plots.hpp"
 #include "runtime/core/cli_checks.hpp"
+#include "runtime/loop/record_cli.hpp"
 #include "runtime/loop/runner.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/policy/blob.hpp"
@@ -35,6 +36,7 @@ struct Options {
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
   std::uint64_t seed = 1;
+  loop::RecordCli record;  // --in-process: the controller's log (pbppo replay)
 };
 
 int Fail(const std::string& msg, int rc) {
@@ -164,6 +166,18 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
     for (const auto& w : rs.warnings) std::fprintf(stderr, "pbppo-hil quadruped: warning: %s\n", w.c_str());
     std::printf("%s\n", rs.Summary().c_str());
   }
+  std::unique_ptr<loop::Recorder> recorder;
+  if (!o.record.path.empty()) {  // as pbppo-controller records: every input and command of the loop
+    auto rec = loop::Recorder::Open(o.record.path, model,
+                                    loop::MakeLogHeader(model, (*rig)->source().kind, (*rig)->source().hash),
+                                    o.record.options());
+    if (!rec) return Fail(rec.error().message, 2);
+    recorder = std::move(*rec);
+    if (auto st = loop::AttachRecorder(model, (*rig)->data(), (*rig)->loop(), recorder.get()); !st) {
+      (void)recorder->Stop();
+      return Fail("--record-max-mb: " + st.error().message, 2);
+    }
+  }
   robot::Transport* published[] = {op.get()};
   std::optional<loop::StatusPublisher> status;
   if (op) status.emplace(published, (*rig)->loop(), 200'000'000);
@@ -171,6 +185,12 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   const auto t0 = std::chrono::steady_clock::now();
   const bool ok = (*rig)->RunSchedule();
   status.reset();
+  if (recorder) {
+    (void)loop::AttachRecorder(model, (*rig)->data(), (*rig)->loop(), nullptr);
+    if (auto st = recorder->Stop(); !st) return Fail("--record: " + st.error().message, 1);
+    std::printf("recorded %llu records in %s (%llu dropped)\n", static_cast<unsigned long long>(recorder->records()),
+                o.record.path.c_str(), static_cast<unsigned long long>(recorder->dropped()));
+  }
   if (op) op->Finish(loop::StatusOf((*rig)->loop()));  // the final status out, delivered
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
@@ -232,6 +252,7 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--plot", o.plot,
                  "--in-process: velocities PNG (and <name>_path.png, the base path; <name>_latency.png, the tick)");
   app.add_option("--profile", o.profile, "--in-process: write the controller's tick profile (JSON)");
+  loop::AddRecordOptions(app, o.record);
   app.add_option("--operator", o.operator_kind,
                  "--in-process: the operator: schedule (--commands) or dds (velocity commands over DDS, e.g. from "
                  "pbppo-operator; real time)")

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 
+#include "runtime/loop/policy_source.hpp"
 #include "runtime/loop/replay.hpp"
 #include "runtime/loop/source_files.hpp"
 #include "runtime/policy/kernel_option.hpp"
@@ -36,6 +37,9 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
   c->add_option("--trace-fields", o.trace_fields, "The fields of --trace (default: every field)")
       ->delimiter(',')
       ->needs(trace);
+  c->add_option("--policy-io", o.policy_io,
+                "Write each policy run's observation and action as float32 rows to PREFIX.obs.f32 and "
+                "PREFIX.act.f32 (to run the same inputs through another implementation)");
   policy::AddKernelOption(*c, o.kernel)
       ->description("The recording's forward kernel (pbppo-controller --kernel; auto: this CPU's fastest)");
   return c;
@@ -61,8 +65,29 @@ int Replay(const ReplayOptions& o) {
     for (std::uint32_t f : traced) std::fprintf(trace.get(), ",%s", robot->fields[f].name.c_str());
     std::fprintf(trace.get(), "\n");
   }
+  // --policy-io: the policy's observation and action at each of its runs.
+  using File = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+  File obs_file(nullptr, &std::fclose), act_file(nullptr, &std::fclose);
+  if (!o.policy_io.empty()) {
+    if (o.policy.empty()) return Fail("--policy-io needs --policy (a recording with a policy)");
+    for (auto [file, ext] : {std::pair{&obs_file, ".obs.f32"}, std::pair{&act_file, ".act.f32"}}) {
+      const std::string path = o.policy_io + ext;
+      file->reset(std::fopen(path.c_str(), "wb"));
+      if (!*file) return Fail("--policy-io: cannot write '" + path + "': " + std::strerror(errno));
+    }
+  }
+  const loop::PolicySource* policy_source = nullptr;
+  std::uint64_t policy_runs = 0;
   const loop::ReplayTick each_tick = [&](const robot::RobotData& d, const loop::LoopData& l) {
+    if (policy_source != nullptr && policy_source->runs() != policy_runs) {
+      policy_runs = policy_source->runs();
+      const auto obs = policy_source->observation();
+      const auto act = policy_source->action();
+      std::fwrite(obs.data(), sizeof(float), obs.size(), obs_file.get());
+      std::fwrite(act.data(), sizeof(float), act.size(), act_file.get());
+    }
     std::FILE* t = trace.get();
+    if (t == nullptr) return;
     std::fprintf(t, "%llu,%s,%s", static_cast<unsigned long long>(d.tick), loop::ToString(l.phase()),
                  safety::ToString(d.mode));
     for (std::uint32_t f : traced) {
@@ -110,7 +135,13 @@ int Replay(const ReplayOptions& o) {
     // The self-test ran when the recording armed; a replay compares the commands instead.
     auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
     if (!source) return Fail(source.error().message);
-    auto r = loop::Replay(*robot, *log, source->source.get(), source->hash, trace ? each_tick : loop::ReplayTick{});
+    if (obs_file) {
+      policy_source = dynamic_cast<const loop::PolicySource*>(source->source.get());
+      if (policy_source == nullptr) return Fail("--policy-io: the recording's source is not a policy");
+      // policy_runs goes on from the file before: a rotated file's snapshot restores the count.
+    }
+    auto r = loop::Replay(*robot, *log, source->source.get(), source->hash,
+                          trace || obs_file ? each_tick : loop::ReplayTick{});
     if (!r) return Fail(path + ": " + r.error().message);
     if (!r->outputs.empty()) next_tick = r->outputs.back().tick + 1;
     if (!o.out.empty()) {
@@ -144,6 +175,12 @@ int Replay(const ReplayOptions& o) {
   }
   if (trace && (std::ferror(trace.get()) != 0 || std::fclose(trace.release()) != 0))
     return Fail("--trace: writing '" + o.trace + "' failed");
+  for (File* f : {&obs_file, &act_file})
+    if (*f && (std::ferror(f->get()) != 0 || std::fclose(f->release()) != 0))
+      return Fail("--policy-io: writing '" + o.policy_io + ".*.f32' failed");
+  if (!o.policy_io.empty())
+    std::printf("replay: %llu policy runs: observations in %s.obs.f32, actions in %s.act.f32 (float32 rows)\n",
+                static_cast<unsigned long long>(policy_runs), o.policy_io.c_str(), o.policy_io.c_str());
   return differs ? 1 : 0;
 }
 

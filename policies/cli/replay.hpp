@@ -4,7 +4,8 @@
 // (--record-max-mb) each replay on their own from the snapshot they begin with; given several,
 // each is replayed and they must follow one another (one recording, consecutive files, the ticks
 // continuing). --trace FILE writes what every tick saw and did: tick, phase, mode and the robot's
-// fields as the tick held them (--trace-fields NAME,...: those only), one CSV row per tick. Exit 0:
+// fields as the tick held them (--trace-fields NAME,...: those only), one CSV row per tick.
+// --policy-io PREFIX writes each policy run's observation and action (float32 rows). Exit 0:
 // identical; 1: a difference (the first one named), files that do not follow
 // one another, or a log, robot or source refused (naming the offset and field, or what differs
 // from the recording); 2: usage.
@@ -22,6 +23,7 @@ namespace pbppo::cli {
 struct ReplayOptions {
   std::vector<std::string> logs;
   std::string robot, policy, trajectory, out, trace;
+  std::string policy_io;  // PREFIX: each policy run's observation and action, PREFIX.obs.f32 / .act.f32
   std::vector<std::string> trace_fields;
   std::string kernel = "auto";  // the recording's forward kernel
 };

@@ -51,6 +51,33 @@ Result<Tensor> ReadTensor(const ::onnx::TensorProto& t, const std::string& name,
   if (t.has_segment()) return Fail(origin, ErrorCode::kUnsupported, "tensor " + Quoted(name) + " is segmented");
   auto n = ElementCount(t, origin, limits);
   if (!n) return std::move(n).error();
+  if (out.data_type == ::onnx::TensorProto::INT64 || out.data_type == ::onnx::TensorProto::INT32) {
+    // Axes, starts and ends of shape operators (Unsqueeze, Squeeze, Slice).
+    const unsigned width = out.data_type == ::onnx::TensorProto::INT64 ? 8 : 4;
+    if (t.has_raw_data()) {
+      const std::string& raw = t.raw_data();
+      if (raw.size() != *n * width)
+        return Fail(origin, ErrorCode::kFormat,
+                    "tensor " + Quoted(name) + ": " + std::to_string(raw.size()) + " bytes of data for " +
+                        std::to_string(*n) + " integer elements " + out.Shape());
+      out.ints.resize(*n);
+      for (std::uint64_t k = 0; k < *n; ++k) {
+        std::uint64_t bits = 0;
+        for (unsigned b = width; b-- > 0;) bits = (bits << 8) | static_cast<std::uint8_t>(raw[k * width + b]);
+        if (width == 4) bits = static_cast<std::uint64_t>(static_cast<std::int64_t>(static_cast<std::int32_t>(bits)));
+        out.ints[k] = static_cast<std::int64_t>(bits);
+      }
+    } else if (width == 8 && static_cast<std::uint64_t>(t.int64_data_size()) == *n) {
+      out.ints.assign(t.int64_data().begin(), t.int64_data().end());
+    } else if (width == 4 && static_cast<std::uint64_t>(t.int32_data_size()) == *n) {
+      out.ints.assign(t.int32_data().begin(), t.int32_data().end());
+    } else {
+      return Fail(origin, ErrorCode::kFormat,
+                  "tensor " + Quoted(name) + ": its integer values do not match " + std::to_string(*n) + " elements " +
+                      out.Shape());
+    }
+    return out;
+  }
   if (!out.is_float32()) return out;  // the node that uses it refuses it, naming itself
   if (t.has_raw_data()) {
     const std::string& raw = t.raw_data();
@@ -89,16 +116,28 @@ Result<Port> ReadPort(const ::onnx::ValueInfoProto& v, const char* what, const s
                 where + " is " + DataTypeName(tt.elem_type()) + ": the engine takes and gives float32");
   if (!tt.has_shape()) return Fail(origin, ErrorCode::kUnsupported, where + " has no shape");
   const auto& shape = tt.shape();
-  if (shape.dim_size() != 1 && shape.dim_size() != 2)
+  const int rank = shape.dim_size();
+  if (rank < 1 || rank > 3)
     return Fail(origin, ErrorCode::kUnsupported,
-                where + " has rank " + std::to_string(shape.dim_size()) + ": the engine takes [batch, size] or [size]");
-  const int last = shape.dim_size() - 1;
-  p.has_batch = shape.dim_size() == 2;
-  if (p.has_batch) {
-    const auto& b = shape.dim(0);
-    if (b.has_dim_value() && b.dim_value() != 1)
+                where + " has rank " + std::to_string(rank) +
+                    ": the engine takes [batch, size] or [size] (and a recurrent state [layers, batch, size])");
+  const int last = rank - 1;
+  p.has_batch = rank >= 2;
+  for (int k = 0; k < last; ++k) {
+    const auto& b = shape.dim(k);
+    const bool batch = k == rank - 2;  // [batch, size] or [layers, batch, size]
+    if (!b.has_dim_value() && !batch)
+      return Fail(origin, ErrorCode::kUnsupported,
+                  where + " dimension " + std::to_string(k) + " is symbolic" +
+                      (b.has_dim_param() ? " (" + Quoted(b.dim_param()) + ")" : std::string()) +
+                      ": only the batch dimension may be");
+    if (batch && b.has_dim_value() && b.dim_value() != 1)
       return Fail(origin, ErrorCode::kUnsupported,
                   where + " has a fixed batch of " + std::to_string(b.dim_value()) + ": the engine runs one row");
+    if (!batch && (b.dim_value() < 1 || b.dim_value() > 64))
+      return Fail(origin, ErrorCode::kUnsupported,
+                  where + " dimension " + std::to_string(k) + " is " + std::to_string(b.dim_value()) + " (1 to 64)");
+    p.dims.push_back(b.has_dim_value() ? b.dim_value() : 1);
   }
   const auto& d = shape.dim(last);
   if (!d.has_dim_value())
@@ -109,6 +148,7 @@ Result<Port> ReadPort(const ::onnx::ValueInfoProto& v, const char* what, const s
   if (d.dim_value() < 1 || d.dim_value() > 65536)
     return Fail(origin, ErrorCode::kUnsupported, where + " has size " + std::to_string(d.dim_value()));
   p.size = static_cast<std::uint32_t>(d.dim_value());
+  p.dims.push_back(d.dim_value());
   return p;
 }
 
@@ -178,6 +218,18 @@ const Attribute* Node::Find(const char* attribute) const noexcept {
 
 std::string Node::Label() const {
   return (name.empty() ? "node #" + std::to_string(index) : "node " + Quoted(name)) + " (" + op + ")";
+}
+
+const Port* Model::FindInput(const std::string& name) const noexcept {
+  for (const Port& p : inputs)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+const Port* Model::FindOutput(const std::string& name) const noexcept {
+  for (const Port& p : outputs)
+    if (p.name == name) return &p;
+  return nullptr;
 }
 
 const Tensor* Model::Constant(const std::string& n) const noexcept {
@@ -283,31 +335,37 @@ Result<Model> ParseModel(std::span<const std::uint8_t> bytes, const std::string&
         if (n.inputs[k] == value) users += (users.empty() ? "" : ", ") + n.Label() + " input " + std::to_string(k);
     return users.empty() ? std::string("no node") : users;
   };
-  for (const Node& n : out.nodes)  // before the inputs: recurrent exports add state inputs
-    if (n.op == "LSTM" || n.op == "GRU" || n.op == "RNN" || n.op == "Scan" || n.op == "Loop" || n.op == "If")
+  for (const Node& n : out.nodes)
+    if (n.op == "RNN" || n.op == "Scan" || n.op == "Loop" || n.op == "If")
       return Fail(origin, ErrorCode::kUnsupported,
-                  n.Label() + ": a recurrent or control-flow operator: the engine runs feed-forward policies only");
-  if (inputs.size() != 1) {
-    std::string list;
-    for (const auto* v : inputs)
-      list += (list.empty() ? "" : "; ") + Quoted(v->name()) + " used by " + node_using(v->name());
-    return Fail(origin, ErrorCode::kUnsupported,
-                std::to_string(inputs.size()) + " graph inputs (" + (list.empty() ? "none" : list) +
-                    "): the engine takes one observation vector, and weights must be initializers");
+                  n.Label() + ": a control-flow or plain RNN operator: the engine runs chains of layers, LSTM and GRU");
+  if (inputs.empty()) return Fail(origin, ErrorCode::kUnsupported, "no graph input (weights must be initializers)");
+  if (g.output_size() == 0) return Fail(origin, ErrorCode::kUnsupported, "no graph output");
+  // Which input is the observation and which are a recurrent state is the mapping's to say
+  // (onnx_map.hpp): the importer picks them by name.
+  // A port the engine could not take is refused here when it is the only one; among several, the
+  // importer refuses it if the mapping uses it (or the graph's extra inputs or outputs first).
+  for (const auto* v : inputs) {
+    auto port = ReadPort(*v, "input", origin);
+    if (!port && inputs.size() == 1) return std::move(port).error();
+    Port p = port ? std::move(*port) : Port{};
+    if (!port) p.problem = port.error().message;
+    p.name = v->name();
+    p.users = node_using(v->name());
+    out.inputs.push_back(std::move(p));
   }
-  if (g.output_size() != 1) {
-    std::string list;
-    for (const auto& v : g.output()) list += (list.empty() ? "" : ", ") + Quoted(v.name());
-    return Fail(origin, ErrorCode::kUnsupported,
-                std::to_string(g.output_size()) + " graph outputs (" + list + "): the engine gives one action vector");
+  for (const auto& v : g.output()) {
+    auto port = ReadPort(v, "output", origin);
+    if (!port && g.output_size() == 1) return std::move(port).error();
+    Port p = port ? std::move(*port) : Port{};
+    if (!port) p.problem = port.error().message;
+    p.name = v.name();
+    out.outputs.push_back(std::move(p));
   }
-  auto in = ReadPort(*inputs[0], "input", origin);
-  if (!in) return std::move(in).error();
-  auto outp = ReadPort(g.output(0), "output", origin);
-  if (!outp) return std::move(outp).error();
-  out.input = *in;
-  out.output = *outp;
-  std::set<std::string> produced{out.input.name};
+  out.input = out.inputs.front();
+  out.output = out.outputs.front();
+  std::set<std::string> produced;
+  for (const Port& p : out.inputs) produced.insert(p.name);
   for (const auto& [name, t] : out.constants) produced.insert(name);
   for (const Node& n : out.nodes) {  // ONNX requires topological order: refuse what is not
     for (const std::string& v : n.inputs)

@@ -1,8 +1,8 @@
 // An ONNX model as plain data: its one input and output, its constants (initializers and Constant
 // nodes, float32 only, read as doubles) and its nodes in file order. The only reader of ONNX files
 // in the project (ReadOnnxModel); what it refuses is what no importer could run exactly: a file
-// that is not an ONNX model, external or sparse data, more than one input or output, symbolic
-// dimensions other than the batch, operator sets of other domains. Set-up time only.
+// that is not an ONNX model, external or sparse data, symbolic dimensions other than the batch,
+// control flow, operator sets of other domains. Set-up time only.
 #pragma once
 
 #include <cstdint>
@@ -21,7 +21,8 @@ struct Tensor {
   std::string name;
   std::int32_t data_type = 0;  // TensorProto.DataType: 1 float32, 10 float16, 11 float64, ...
   std::vector<std::int64_t> dims;
-  std::vector<double> values;  // float32 values, exactly (empty unless data_type is float32)
+  std::vector<double> values;      // float32 values, exactly (empty unless data_type is float32)
+  std::vector<std::int64_t> ints;  // int64 and int32 values (axes, starts, ends of shape operators)
 
   bool is_float32() const noexcept { return data_type == 1; }
   std::string Shape() const;  // "[512, 48]", "[]" for a scalar
@@ -53,11 +54,15 @@ struct Node {
   std::string Label() const;
 };
 
-// A graph input or output: a float32 tensor [batch, size] (or [size]).
+// A graph input or output: a float32 tensor [batch, size] (or [size]), or a recurrent state
+// [layers, batch, size].
 struct Port {
   std::string name;
-  std::uint32_t size = 0;
-  bool has_batch = false;  // rank 2: [batch, size]
+  std::uint32_t size = 0;          // the last dimension
+  bool has_batch = false;          // rank 2 or 3
+  std::vector<std::int64_t> dims;  // the batch as 1
+  std::string users;               // inputs: "node 'x' (Gemm) input 0, ..." or "no node", for messages
+  std::string problem;             // why the engine cannot take it (empty if it can): one of several ports
 };
 
 struct Model {
@@ -66,12 +71,18 @@ struct Model {
   std::int64_t opset = 0;  // of the default domain
   std::string producer_name;
   std::string producer_version;
-  Port input;
-  Port output;
+  // Every graph input that is not an initializer, and every graph output, in file order. The
+  // importer takes the mapping's input and output from them, and its state inputs and outputs.
+  std::vector<Port> inputs;
+  std::vector<Port> outputs;
+  Port input;   // inputs[0]
+  Port output;  // outputs[0]
   std::map<std::string, Tensor> constants;
   std::vector<Node> nodes;
 
   const Tensor* Constant(const std::string& name) const noexcept;
+  const Port* FindInput(const std::string& name) const noexcept;
+  const Port* FindOutput(const std::string& name) const noexcept;
 };
 
 // Limits checked before anything is allocated from a size in the file.

@@ -18,14 +18,28 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // One recognised piece of the chain.
 struct Piece {
-  enum class Kind : std::uint8_t { kAffine, kClip, kLinear, kActivation } kind;
+  enum class Kind : std::uint8_t { kAffine, kClip, kLinear, kActivation, kRecurrent } kind;
   const Node* node = nullptr;
   std::vector<double> a, b;       // affine: x -> a x + b per element
   double lo = -kInf, hi = kInf;   // clip
-  std::uint32_t in = 0, out = 0;  // linear
-  std::vector<double> w, bias;    // linear: row-major [out][in]
+  std::uint32_t in = 0, out = 0;  // linear; recurrent: out is the hidden size
+  std::vector<double> w, bias;    // linear: row-major [out][in]; recurrent: [gates * out][in], Wb
   policy::Activation activation = policy::Activation::kIdentity;
   double alpha = 0;  // LeakyRelu
+  // recurrent: LSTM or GRU, R [gates * out][out] and Rb, GRU's linear_before_reset
+  policy::LayerKind recurrent = policy::LayerKind::kDense;
+  std::vector<double> rw, rbias;
+  bool linear_before_reset = false;
+  std::string state_note;  // "h_in[0] -> h_out[0], c_in[0] -> c_out[0]"
+
+  std::uint32_t rows() const { return out * policy::GateCount(recurrent); }
+};
+
+// Where a recurrent node's state comes from or goes to: a graph input or output and the layer
+// index along its first dimension (a Slice or a Concat input of a stacked export; 0 otherwise).
+struct StateSlot {
+  std::string port;
+  std::int64_t slot = 0;
 };
 
 class Importer {
@@ -39,7 +53,13 @@ class Importer {
     return MakeError(ErrorCode::kUnsupported, m_.origin + ": " + n.Label() + ": " + what);
   }
   Error Refuse(const std::string& what) const { return MakeError(ErrorCode::kUnsupported, m_.origin + ": " + what); }
+  Status SelectPorts();
   Status Walk();
+  Status Recurrent(const Node& n, std::uint32_t width, Piece* p);
+  Result<StateSlot> StateSource(const Node& n, std::size_t k) const;
+  Result<StateSlot> StateDestination(const Node& n, std::size_t k) const;
+  Status CheckStateWiring(const Node& n, const char* what, const StateSlot& from, const StateSlot& to);
+  Result<std::vector<std::int64_t>> IntsOf(const Node& n, std::size_t k, const char* attribute) const;
   Result<const Tensor*> ConstantInput(const Node& n, std::size_t k) const;
   Result<std::vector<double>> PerElement(const Node& n, const Tensor& t, std::uint32_t width) const;
   Status Assemble(policy::PolicySpec& s, std::vector<std::string>& notes);
@@ -47,7 +67,12 @@ class Importer {
   const Model& m_;
   const Mapping& map_;
   const robot::IoLayout& layout_;
+  const Port* in_ = nullptr;  // the mapping's input and output ports
+  const Port* out_ = nullptr;
   std::vector<Piece> pieces_;
+  std::map<std::string, const Node*> producer_;            // value -> the node giving it
+  std::map<std::string, std::vector<const Node*>> users_;  // value -> the nodes reading it
+  std::map<std::string, std::vector<bool>> slots_used_;    // state input -> per layer slot
 };
 
 std::string Printable(const std::string& s, std::size_t max) {
@@ -80,20 +105,24 @@ Result<std::vector<double>> Importer::PerElement(const Node& n, const Tensor& t,
 }
 
 Status Importer::Walk() {
-  std::map<std::string, std::vector<const Node*>> users;
-  for (const Node& n : m_.nodes)
+  std::map<std::string, std::vector<const Node*>>& users = users_;
+  for (const Node& n : m_.nodes) {
     for (const std::string& v : n.inputs)
       if (!v.empty() && !m_.Constant(v)) users[v].push_back(&n);
-  std::string cur = m_.input.name;
-  std::uint32_t width = m_.input.size;
+    for (const std::string& v : n.outputs)
+      if (!v.empty()) producer_[v] = &n;
+  }
+  std::string cur = in_->name;
+  std::uint32_t width = in_->size;
+  std::size_t rank = in_->dims.size();  // where the features are: always the last dimension
   while (true) {
     const auto& u = users[cur];
-    if (cur == m_.output.name) {
+    if (cur == out_->name) {
       if (!u.empty()) return Refuse(*u[0], "reads the graph output '" + cur + "': the engine runs a chain of layers");
       break;
     }
     if (u.empty())
-      return Refuse("value '" + cur + "' reaches no node and is not the graph output '" + m_.output.name + "'");
+      return Refuse("value '" + cur + "' reaches no node and is not the graph output '" + out_->name + "'");
     if (u.size() > 1) {
       std::string list;
       for (const Node* n : u) list += (list.empty() ? "" : ", ") + n->Label();
@@ -105,11 +134,18 @@ Status Importer::Walk() {
       return Refuse(n, "an operator of domain '" + n.domain + "': only the default ONNX operator set is read");
     for (const Attribute& a : n.attributes) {  // the attributes read below, of the type ONNX gives them
       const bool is_float = a.name == "alpha" || a.name == "beta" || a.name == "min" || a.name == "max";
-      const bool is_int = a.name == "transA" || a.name == "transB" || a.name == "axis";
-      if ((is_float && a.kind != Attribute::Kind::kFloat) || (is_int && a.kind != Attribute::Kind::kInt))
-        return Refuse(n, "attribute '" + a.name + "' is not " + (is_float ? "a float" : "an integer"));
+      const bool is_int = a.name == "transA" || a.name == "transB" || a.name == "axis" || a.name == "hidden_size" ||
+                          a.name == "linear_before_reset" || a.name == "input_forget" || a.name == "layout";
+      const bool is_ints = a.name == "axes" || a.name == "starts" || a.name == "ends";
+      if ((is_float && a.kind != Attribute::Kind::kFloat) || (is_int && a.kind != Attribute::Kind::kInt) ||
+          (is_ints && a.kind != Attribute::Kind::kInts))
+        return Refuse(n, "attribute '" + a.name + "' is not " +
+                             (is_float ? "a float"
+                              : is_int ? "an integer"
+                                       : "a list of integers"));
     }
-    if (n.outputs.size() != 1 || n.outputs[0].empty())
+    const bool recurrent = n.op == "LSTM" || n.op == "GRU";
+    if (!recurrent && (n.outputs.size() != 1 || n.outputs[0].empty()))
       return Refuse(n, std::to_string(n.outputs.size()) + " outputs: the engine's operators have one");
     std::size_t chain_at = n.inputs.size();
     for (std::size_t k = 0; k < n.inputs.size(); ++k) {
@@ -124,8 +160,43 @@ Status Importer::Walk() {
       if (op == "Flatten") {
         const Attribute* a = n.Find("axis");
         if (a != nullptr && a->i != 1) return Refuse(n, "axis " + std::to_string(a->i) + " (only 1 keeps a row a row)");
+        rank = 2;
       }
       cur = n.outputs[0];
+      continue;
+    }
+    if (op == "Unsqueeze" || op == "Squeeze") {
+      // Only dimensions of size 1 before the features: the row stays the same numbers.
+      if (chain_at != 0) return Refuse(n, "the value is its input " + std::to_string(chain_at) + ", not 0");
+      auto axes = IntsOf(n, 1, "axes");
+      if (!axes) return std::move(axes).error();
+      if (axes->empty()) return Refuse(n, "no axes: the engine needs to know which dimensions of size 1 it removes");
+      const std::size_t to = op == "Unsqueeze" ? rank + axes->size() : rank;
+      for (std::int64_t a : *axes) {
+        const std::int64_t ax = a < 0 ? a + static_cast<std::int64_t>(to) : a;
+        if (ax < 0 || ax >= static_cast<std::int64_t>(to))
+          return Refuse(n, "axis " + std::to_string(a) + " outside a value of rank " + std::to_string(to));
+        if (ax == static_cast<std::int64_t>(to) - 1)
+          return Refuse(n, "axis " + std::to_string(a) + " is the features' dimension (the last)");
+      }
+      if (op == "Squeeze" && axes->size() >= rank)
+        return Refuse(n, std::to_string(axes->size()) + " axes of a value of rank " + std::to_string(rank));
+      rank = op == "Unsqueeze" ? to : rank - axes->size();
+      cur = n.outputs[0];
+      continue;
+    }
+    if (recurrent) {
+      if (chain_at != 0) return Refuse(n, "the value is its input " + std::to_string(chain_at) + ", not X (0)");
+      if (rank != 3)
+        return Refuse(n, "X has rank " + std::to_string(rank) +
+                             ": an exported single step is [1, batch, features] (an Unsqueeze before the node)");
+      if (auto st = Recurrent(n, width, &p); !st) return st;
+      width = p.out;
+      // The chain goes on from Y [1, 1, batch, hidden] or, where Y is not used, from Y_h.
+      const bool y_used = !n.outputs.empty() && !n.outputs[0].empty() && !users[n.outputs[0]].empty();
+      cur = y_used ? n.outputs[0] : n.outputs[1];
+      rank = y_used ? 4 : 3;
+      pieces_.push_back(std::move(p));
       continue;
     }
     if (op == "Gemm" || op == "MatMul") {
@@ -222,14 +293,209 @@ Status Importer::Walk() {
     } else {
       return Refuse(n,
                     "operator not supported by the engine (it runs Gemm, MatMul, Add, Sub, Mul, Div, Clip, Relu, "
-                    "LeakyRelu, Elu, Tanh, Identity, Flatten)");
+                    "LeakyRelu, Elu, Tanh, LSTM, GRU, Identity, Flatten, Unsqueeze, Squeeze)");
     }
     pieces_.push_back(std::move(p));
     cur = n.outputs[0];
   }
-  if (width != m_.output.size)
-    return Refuse("the chain gives " + std::to_string(width) + " values, the output '" + m_.output.name +
-                  "' declares " + std::to_string(m_.output.size));
+  if (width != out_->size)
+    return Refuse("the chain gives " + std::to_string(width) + " values, the output '" + out_->name + "' declares " +
+                  std::to_string(out_->size));
+  for (const auto& [port, used] : slots_used_)
+    for (std::size_t k = 0; k < used.size(); ++k)
+      if (!used[k])
+        return Refuse("state input '" + port + "'" + (used.size() > 1 ? " layer " + std::to_string(k) : "") +
+                      " feeds no LSTM or GRU node on the chain from '" + in_->name + "'");
+  return {};
+}
+
+Result<std::vector<std::int64_t>> Importer::IntsOf(const Node& n, std::size_t k, const char* attribute) const {
+  if (const Attribute* a = n.Find(attribute); a != nullptr) return a->ints;
+  if (k >= n.inputs.size() || n.inputs[k].empty()) return std::vector<std::int64_t>{};
+  const Tensor* t = m_.Constant(n.inputs[k]);
+  if (t == nullptr || (t->data_type != 7 && t->data_type != 6))
+    return Refuse(n, "input " + std::to_string(k) + " '" + n.inputs[k] + "' is not a constant integer list");
+  return t->ints;
+}
+
+Result<StateSlot> Importer::StateSource(const Node& n, std::size_t k) const {
+  const char* what = k == 5 ? "initial_h" : "initial_c";
+  std::string v = n.inputs[k];
+  std::int64_t slot = 0;
+  bool sliced = false;
+  for (int hops = 0; hops < 16; ++hops) {
+    if (const Port* p = m_.FindInput(v)) {
+      if (p->dims.size() != 3)
+        return Refuse(n, std::string(what) + " is graph input '" + v + "' of rank " + std::to_string(p->dims.size()) +
+                             ": a state is [layers, batch, hidden]");
+      if (slot >= p->dims[0])
+        return Refuse(n, std::string(what) + " reads layer " + std::to_string(slot) + " of '" + v + "', which has " +
+                             std::to_string(p->dims[0]));
+      return StateSlot{v, slot};
+    }
+    auto it = producer_.find(v);
+    if (it == producer_.end())
+      return Refuse(n, std::string(what) + " '" + v +
+                           "' is a constant: the state would start from it at every step (export it as a graph input "
+                           "and name it in the mapping's state)");
+    const Node& q = *it->second;
+    if (q.op == "Identity") {
+      v = q.inputs.empty() ? "" : q.inputs[0];
+      continue;
+    }
+    if (q.op == "Slice" && !sliced) {
+      auto starts = IntsOf(q, 1, "starts"), ends = IntsOf(q, 2, "ends"), axes = IntsOf(q, 3, "axes"),
+           steps = IntsOf(q, 4, "steps");
+      if (!starts) return std::move(starts).error();
+      if (!ends) return std::move(ends).error();
+      if (!axes) return std::move(axes).error();
+      if (!steps) return std::move(steps).error();
+      const bool one_layer = starts->size() == 1 && ends->size() == 1 && (*ends)[0] == (*starts)[0] + 1 &&
+                             (*starts)[0] >= 0 && (axes->empty() || *axes == std::vector<std::int64_t>{0}) &&
+                             (steps->empty() || *steps == std::vector<std::int64_t>{1});
+      if (!one_layer)
+        return Refuse(q, "slices the state for " + n.Label() + " other than one layer of its first dimension");
+      slot = (*starts)[0];
+      sliced = true;
+      v = q.inputs[0];
+      continue;
+    }
+    return Refuse(n, std::string(what) + " comes from " + q.Label() +
+                         ": a state must be a graph input, directly or as a Slice of one layer of it");
+  }
+  return Refuse(n, std::string(what) + ": too many Identity nodes before it");
+}
+
+Result<StateSlot> Importer::StateDestination(const Node& n, std::size_t k) const {
+  const char* what = k == 1 ? "Y_h" : "Y_c";
+  if (k >= n.outputs.size() || n.outputs[k].empty())
+    return Refuse(n, std::string("gives no ") + what +
+                         ": its next state would be lost (export it as a graph output and name it in the mapping's "
+                         "state)");
+  std::string v = n.outputs[k];
+  std::int64_t slot = 0;
+  bool concatenated = false;
+  for (int hops = 0; hops < 16; ++hops) {
+    if (m_.FindOutput(v) != nullptr) return StateSlot{v, slot};
+    const Node* next = nullptr;
+    auto it = users_.find(v);
+    if (it != users_.end())
+      for (const Node* u : it->second)
+        if (u->op == "Identity" || (u->op == "Concat" && !concatenated)) next = u;
+    if (next == nullptr)
+      return Refuse(n, std::string(what) + " '" + n.outputs[k] +
+                           "' reaches no graph output: the state is not wired back to the next step");
+    if (next->op == "Concat") {
+      const Attribute* axis = next->Find("axis");
+      if (axis == nullptr || axis->i != 0)
+        return Refuse(*next, "concatenates states along an axis other than 0 (their layers)");
+      slot = std::find(next->inputs.begin(), next->inputs.end(), v) - next->inputs.begin();
+      concatenated = true;
+    }
+    v = next->outputs.empty() ? "" : next->outputs[0];
+  }
+  return Refuse(n, std::string(what) + ": too many Identity nodes after it");
+}
+
+Status Importer::CheckStateWiring(const Node& n, const char* what, const StateSlot& from, const StateSlot& to) {
+  const StatePair* pair = nullptr;
+  std::string named;
+  for (const StatePair& q : map_.state) {
+    named += (named.empty() ? "" : ", ") + q.input + " -> " + q.output;
+    if (q.input == from.port) pair = &q;
+  }
+  if (pair == nullptr)
+    return Refuse(n, std::string(what) + " is read from '" + from.port + "', which " + map_.origin +
+                         " does not name as a state input (state: " + (named.empty() ? "none" : named) + ")");
+  if (pair->output != to.port)
+    return Refuse(n, std::string(what) + " is read from '" + from.port + "' but the node's next state goes to '" +
+                         to.port + "', and " + map_.origin + " feeds '" + from.port + "' from '" + pair->output +
+                         "': the state output is not wired back to its input");
+  if (from.slot != to.slot)
+    return Refuse(n, std::string(what) + " reads layer " + std::to_string(from.slot) + " of '" + from.port +
+                         "' but writes layer " + std::to_string(to.slot) + " of '" + to.port + "'");
+  const Port* in = m_.FindInput(from.port);
+  std::vector<bool>& used = slots_used_[from.port];
+  used.resize(static_cast<std::size_t>(in->dims[0]), false);
+  if (used[static_cast<std::size_t>(from.slot)])
+    return Refuse(n, std::string(what) + ": layer " + std::to_string(from.slot) + " of '" + from.port +
+                         "' is already the state of another node");
+  used[static_cast<std::size_t>(from.slot)] = true;
+  return {};
+}
+
+Status Importer::Recurrent(const Node& n, std::uint32_t width, Piece* p) {
+  const bool lstm = n.op == "LSTM";
+  const std::uint32_t gates = lstm ? 4 : 3;
+  const Attribute* hs = n.Find("hidden_size");
+  if (hs == nullptr || hs->i < 1 || hs->i > 4096)
+    return Refuse(n, hs == nullptr ? std::string("no hidden_size") : "hidden_size " + std::to_string(hs->i));
+  const auto H = static_cast<std::uint32_t>(hs->i);
+  if (const Attribute* d = n.Find("direction"); d != nullptr && d->s != "forward")
+    return Refuse(n,
+                  "direction '" + d->s + "': the engine runs one forward direction (a policy steps forward in time)");
+  if (n.Find("activations") != nullptr)
+    return Refuse(n, "activations given: the engine runs the default sigmoid and tanh only");
+  if (n.Find("clip") != nullptr) return Refuse(n, "clip given: the engine's cell is not clipped");
+  if (const Attribute* a = n.Find("input_forget"); a != nullptr && a->i != 0)
+    return Refuse(n, "input_forget 1: the engine's LSTM has separate input and forget gates");
+  if (const Attribute* a = n.Find("layout"); a != nullptr && a->i != 0)
+    return Refuse(n, "layout 1 (batch first): the engine reads the default layout 0");
+  if (n.inputs.size() > 4 && !n.inputs[4].empty())
+    return Refuse(n, "sequence_lens given: the engine runs one step at a time");
+  if (lstm && n.inputs.size() > 7 && !n.inputs[7].empty())
+    return Refuse(n, "peepholes (input P): the engine's LSTM has none");
+  auto W = ConstantInput(n, 1);
+  if (!W) return std::move(W).error();
+  auto R = ConstantInput(n, 2);
+  if (!R) return std::move(R).error();
+  const std::vector<std::int64_t> w_dims{1, gates * H, width}, r_dims{1, gates * H, H};
+  if ((*W)->dims != w_dims)
+    return Refuse(n, "W '" + (*W)->name + "' has shape " + (*W)->Shape() + ", expected [1, " +
+                         std::to_string(gates * H) + ", " + std::to_string(width) + "] (" + std::to_string(gates) +
+                         " gates of hidden_size " + std::to_string(H) + " over " + std::to_string(width) + " inputs)");
+  if ((*R)->dims != r_dims)
+    return Refuse(n, "R '" + (*R)->name + "' has shape " + (*R)->Shape() + ", expected [1, " +
+                         std::to_string(gates * H) + ", " + std::to_string(H) + "]");
+  std::vector<double> B(2u * gates * H, 0.0);
+  if (n.inputs.size() > 3 && !n.inputs[3].empty()) {
+    auto b = ConstantInput(n, 3);
+    if (!b) return std::move(b).error();
+    if ((*b)->values.size() != B.size())
+      return Refuse(
+          n, "B '" + (*b)->name + "' has shape " + (*b)->Shape() + ", expected [1, " + std::to_string(B.size()) + "]");
+    B = (*b)->values;
+  }
+  const std::size_t state_inputs = lstm ? 2 : 1;
+  for (std::size_t s = 0; s < state_inputs; ++s) {
+    const std::size_t k = 5 + s;
+    const char* what = s == 0 ? "initial_h" : "initial_c";
+    if (k >= n.inputs.size() || n.inputs[k].empty())
+      return Refuse(n, std::string("no ") + what +
+                           ": the state would start from zero at every step (export it as a graph input and name it "
+                           "in the mapping's state)");
+    auto from = StateSource(n, k);
+    if (!from) return std::move(from).error();
+    auto to = StateDestination(n, 1 + s);
+    if (!to) return std::move(to).error();
+    for (const Port* port : {m_.FindInput(from->port), m_.FindOutput(to->port)})
+      if (port->size != H)
+        return Refuse(n, std::string(what) + ": state '" + port->name + "' has size " + std::to_string(port->size) +
+                             ", the node's hidden_size is " + std::to_string(H));
+    if (auto st = CheckStateWiring(n, what, *from, *to); !st) return st;
+    p->state_note += (p->state_note.empty() ? "" : ", ") + from->port + "[" + std::to_string(from->slot) + "] -> " +
+                     to->port + "[" + std::to_string(to->slot) + "]";
+  }
+  p->kind = Piece::Kind::kRecurrent;
+  p->recurrent = lstm ? policy::LayerKind::kLstm : policy::LayerKind::kGru;
+  p->in = width;
+  p->out = H;
+  p->w = (*W)->values;
+  p->bias.assign(B.begin(), B.begin() + gates * H);
+  p->rw = (*R)->values;
+  p->rbias.assign(B.begin() + gates * H, B.end());
+  const Attribute* lbr = n.Find("linear_before_reset");
+  p->linear_before_reset = !lstm && lbr != nullptr && lbr->i != 0;
   return {};
 }
 
@@ -240,13 +506,14 @@ std::string Names(const std::vector<const Node*>& nodes) {
 }
 
 Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes) {
-  const std::uint32_t n_in = m_.input.size;
+  const std::uint32_t n_in = in_->size;
   std::size_t i = 0;
   // Input normaliser: x -> clamp(a x + b, lo, hi).
   std::vector<double> a(n_in, 1.0), b(n_in, 0.0);
   const Piece* clip = nullptr;
   std::vector<const Node*> norm_nodes;
-  for (; i < pieces_.size() && pieces_[i].kind != Piece::Kind::kLinear; ++i) {
+  auto is_layer = [](const Piece& p) { return p.kind == Piece::Kind::kLinear || p.kind == Piece::Kind::kRecurrent; };
+  for (; i < pieces_.size() && !is_layer(pieces_[i]); ++i) {
     const Piece& p = pieces_[i];
     if (p.kind == Piece::Kind::kActivation) return Refuse(*p.node, "an activation before the first layer");
     if (clip != nullptr)
@@ -265,7 +532,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
     }
     norm_nodes.push_back(p.node);
   }
-  if (i == pieces_.size()) return Refuse("no Gemm or MatMul: nothing the engine could run as a layer");
+  if (i == pieces_.size()) return Refuse("no Gemm, MatMul, LSTM or GRU: nothing the engine could run as a layer");
 
   // Layers; an affine map right after a linear one (MatMul then Add) folds into it.
   struct Layer {
@@ -276,9 +543,10 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   std::vector<Layer> layers;
   for (; i < pieces_.size(); ++i) {
     const Piece& p = pieces_[i];
-    if (p.kind == Piece::Kind::kLinear) {
+    if (is_layer(p)) {
       if (!layers.empty()) layers.back().closed = true;
-      layers.push_back({p, false, {p.node}});
+      // A recurrent layer's output is its h: nothing folds into it or follows it but a layer.
+      layers.push_back({p, p.kind == Piece::Kind::kRecurrent, {p.node}});
       continue;
     }
     Layer& L = layers.back();
@@ -302,14 +570,15 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
     break;  // the output map
   }
   // Output map: y -> clamp(sy y + oy, ylo, yhi) per output element.
-  const std::uint32_t n_out = m_.output.size;
+  const std::uint32_t n_out = out_->size;
   std::vector<double> sy(n_out, 1.0), oy(n_out, 0.0), ylo(n_out, -kInf), yhi(n_out, kInf);
   std::vector<const Node*> out_nodes;
   for (; i < pieces_.size(); ++i) {
     const Piece& p = pieces_[i];
-    if (p.kind == Piece::Kind::kLinear || p.kind == Piece::Kind::kActivation)
+    if (is_layer(p) || p.kind == Piece::Kind::kActivation)
       return Refuse(*p.node, "follows the output map (" + Names(out_nodes) +
-                                 "): elementwise ops and clips between layers are not supported");
+                                 "): elementwise ops and clips between layers (and after an LSTM or GRU) are not "
+                                 "supported");
     if (p.kind == Piece::Kind::kClip) {
       for (std::uint32_t j = 0; j < n_out; ++j) {
         ylo[j] = std::max(ylo[j], p.lo);
@@ -329,18 +598,19 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
     out_nodes.push_back(p.node);
   }
 
-  // The mapping against the model.
-  if (map_.input_name != m_.input.name || map_.input_size != m_.input.size)
-    return MakeError(ErrorCode::kMismatch, map_.origin + ": input: '" + map_.input_name + "' of " +
-                                               std::to_string(map_.input_size) + " elements, but " + m_.origin +
-                                               " takes '" + m_.input.name + "' of " + std::to_string(m_.input.size));
-  if (map_.output_name != m_.output.name || map_.output_size != m_.output.size)
-    return MakeError(ErrorCode::kMismatch, map_.origin + ": output: '" + map_.output_name + "' of " +
-                                               std::to_string(map_.output_size) + " elements, but " + m_.origin +
-                                               " gives '" + m_.output.name + "' of " + std::to_string(m_.output.size));
-
   // First layer: constant inputs into the bias; the normaliser into the blob's, or into the
   // weights when it has no clip and an element's scale is not positive.
+  // The mapping against the model.
+  if (in_->name != map_.input_name || in_->size != map_.input_size)
+    return MakeError(ErrorCode::kMismatch, map_.origin + ": input: '" + map_.input_name + "' of " +
+                                               std::to_string(map_.input_size) + " elements, but " + m_.origin +
+                                               " takes '" + in_->name + "' of " + std::to_string(in_->size));
+  if (out_->name != map_.output_name || out_->size != map_.output_size)
+    return MakeError(ErrorCode::kMismatch, map_.origin + ": output: '" + map_.output_name + "' of " +
+                                               std::to_string(map_.output_size) + " elements, but " + m_.origin +
+                                               " gives '" + out_->name + "' of " + std::to_string(out_->size));
+  if (layers.back().lin.kind == Piece::Kind::kRecurrent)
+    return Refuse(*layers.back().lin.node, "the last layer: the action comes from a Gemm or MatMul after it");
   Piece& first = layers.front().lin;
   const double c_lo = clip ? clip->lo : -kInf, c_hi = clip ? clip->hi : kInf;
   bool fold = false;
@@ -363,7 +633,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
     } else {
       continue;
     }
-    for (std::uint32_t o = 0; o < first.out; ++o) bias[o] += first.w[o * n_in + j] * add;
+    for (std::uint32_t o = 0; o < first.rows(); ++o) bias[o] += first.w[o * n_in + j] * add;
   }
   const std::uint32_t n_obs = layout_.observation_size();
   std::vector<std::uint32_t> element_of_obs(n_obs, 0);
@@ -383,13 +653,20 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   for (std::size_t l = 0; l < layers.size(); ++l) {
     const Piece& p = layers[l].lin;
     policy::Layer d;
+    d.kind = p.recurrent;
     d.activation = p.activation;
     d.alpha = static_cast<float>(p.alpha);
     d.in = l == 0 ? n_obs : p.in;
     d.out = l + 1 == layers.size() ? s.output_size : p.out;
-    d.weight.resize(static_cast<std::size_t>(d.in) * d.out);
-    d.bias.resize(d.out);
-    for (std::uint32_t o = 0; o < d.out; ++o) {
+    const std::uint32_t rows = d.out * d.gates();
+    d.weight.resize(static_cast<std::size_t>(d.in) * rows);
+    d.bias.resize(rows);
+    if (p.kind == Piece::Kind::kRecurrent) {
+      d.linear_before_reset = p.linear_before_reset;
+      for (double v : p.rw) d.recurrent_weight.push_back(static_cast<float>(v));
+      for (double v : p.rbias) d.recurrent_bias.push_back(static_cast<float>(v));
+    }
+    for (std::uint32_t o = 0; o < rows; ++o) {
       const std::uint32_t row = l + 1 == layers.size() ? map_.output_of_action[o] : o;
       d.bias[o] = static_cast<float>(l == 0 ? bias[row] : p.bias[row]);
       for (std::uint32_t k = 0; k < d.in; ++k) {
@@ -427,10 +704,14 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
                   (fold                 ? " (folded into the first layer: a scale is not positive)"
                    : norm_nodes.empty() ? ""
                                         : " -> the blob's"));
-  for (std::size_t l = 0; l < layers.size(); ++l)
-    notes.push_back("layer " + std::to_string(l) + ":     " + std::to_string(layers[l].lin.in) + " -> " +
-                    std::to_string(layers[l].lin.out) + " " + policy::ToString(layers[l].lin.activation) + "  (" +
-                    Names(layers[l].nodes) + ")");
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const Piece& p = layers[l].lin;
+    const bool rec = p.kind == Piece::Kind::kRecurrent;
+    notes.push_back("layer " + std::to_string(l) + ":     " + std::to_string(p.in) + " -> " + std::to_string(p.out) +
+                    " " + (rec ? policy::ToString(p.recurrent) : policy::ToString(p.activation)) +
+                    (rec && p.linear_before_reset ? " (linear_before_reset)" : "") + "  (" + Names(layers[l].nodes) +
+                    ")" + (rec ? "  state " + p.state_note : ""));
+  }
   notes.push_back("output map:  " +
                   (out_nodes.empty() ? std::string("none") : Names(out_nodes) + " -> the action map"));
   notes.push_back(
@@ -443,8 +724,70 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
   return {};
 }
 
+// The mapping's input and output among the graph's, and its state inputs and outputs: every other
+// graph input or output is refused, naming it.
+Status Importer::SelectPorts() {
+  auto is_state_input = [&](const std::string& name) {
+    for (const StatePair& q : map_.state)
+      if (q.input == name) return true;
+    return false;
+  };
+  auto is_state_output = [&](const std::string& name) {
+    for (const StatePair& q : map_.state)
+      if (q.output == name) return true;
+    return false;
+  };
+  const std::string state_note = map_.state.empty() ? "" : " and the mapping's state";
+  bool stray_input = false, stray_output = false;
+  for (const Port& p : m_.inputs) stray_input |= p.name != map_.input_name && !is_state_input(p.name);
+  for (const Port& p : m_.outputs) stray_output |= p.name != map_.output_name && !is_state_output(p.name);
+  if (stray_input && m_.inputs.size() > 1) {
+    std::string list;
+    for (const Port& p : m_.inputs) list += (list.empty() ? "" : "; ") + ("'" + p.name + "' used by ") + p.users;
+    return Refuse(std::to_string(m_.inputs.size()) + " graph inputs (" + list +
+                  "): the engine takes one observation vector" + state_note +
+                  ", and weights must be initializers (a recurrent model's state inputs are named in the mapping's "
+                  "state)");
+  }
+  if (stray_output && m_.outputs.size() > 1) {
+    std::string list;
+    for (const Port& p : m_.outputs) list += (list.empty() ? "" : ", ") + ("'" + p.name + "'");
+    return Refuse(std::to_string(m_.outputs.size()) + " graph outputs (" + list +
+                  "): the engine gives one action vector" + state_note);
+  }
+  // By the mapping's names; a model of one input and output is walked whatever they are called, so
+  // that what the graph cannot run is said before how the mapping differs (CheckPorts).
+  in_ = m_.FindInput(map_.input_name);
+  out_ = m_.FindOutput(map_.output_name);
+  if (in_ == nullptr) in_ = &m_.inputs.front();
+  if (out_ == nullptr) out_ = &m_.outputs.front();
+  for (const Port* p : {in_, out_})
+    if (!p->problem.empty()) return MakeError(ErrorCode::kUnsupported, p->problem);
+  if (in_->dims.size() > 2)
+    return Refuse("input '" + in_->name + "' has rank 3: the observation is [batch, size] or [size]");
+  for (std::size_t i = 0; i < map_.state.size(); ++i) {
+    const StatePair& q = map_.state[i];
+    const std::string where = map_.origin + ": state[" + std::to_string(i) + "]";
+    const Port* a = m_.FindInput(q.input);
+    const Port* b = m_.FindOutput(q.output);
+    if (a == nullptr)
+      return MakeError(ErrorCode::kMismatch, where + ".input: '" + q.input + "' is not a graph input of " + m_.origin);
+    if (b == nullptr)
+      return MakeError(ErrorCode::kMismatch,
+                       where + ".output: '" + q.output + "' is not a graph output of " + m_.origin);
+    for (const Port* port : {a, b})
+      if (!port->problem.empty()) return MakeError(ErrorCode::kUnsupported, port->problem);
+    if (a->dims != b->dims)
+      return MakeError(ErrorCode::kMismatch, where + ": '" + q.input + "' and '" + q.output +
+                                                 "' differ in shape: the output cannot be fed back to the input");
+  }
+  return {};
+}
+
 Result<Imported> Importer::Run(const ImportOptions& options) {
+  if (auto st = SelectPorts(); !st) return st.error();
   if (auto st = Walk(); !st) return st.error();
+
   Imported out;
   if (auto st = Assemble(out.spec, out.notes); !st) return st.error();
   policy::Provenance& p = out.spec.provenance;
@@ -459,12 +802,13 @@ Result<Imported> Importer::Run(const ImportOptions& options) {
   if (auto st = policy::ValidateSpec(out.spec); !st)
     return MakeError(st.error().code, m_.origin + ": the imported policy: " + st.error().message);
 
-  // The check: the blob's float64 reference against the graph's own evaluation.
+  // The check: the blob's float64 reference against the graph's own evaluation (a recurrent
+  // policy's golden rows are one sequence: the graph runs them in order with its state fed back).
   out.golden = policy::MakeGoldenVectors(out.spec, options.golden_rows, options.golden_seed);
+  auto graph = GraphCommands(m_, map_, layout_, out.golden.observations);
+  if (!graph) return std::move(graph).error();
   for (std::size_t r = 0; r < out.golden.observations.size(); ++r) {
-    auto y = Evaluate(m_, InputRow(map_, out.golden.observations[r]));
-    if (!y) return std::move(y).error();
-    const std::vector<double> cmd = CommandsOf(map_, layout_, *y);
+    const std::vector<double>& cmd = (*graph)[r];
     const policy::ReferenceOutput& ref = out.golden.expected[r];
     for (std::size_t k = 0; k < cmd.size(); ++k) {
       const double d = std::fabs(cmd[k] - ref.action[k]);
@@ -511,6 +855,28 @@ std::vector<double> CommandsOf(const Mapping& mapping, const robot::IoLayout& la
     cmd[k] = std::clamp(L.scale * y[mapping.output_of_action[k]] + L.offset, L.low, L.high);
   }
   return cmd;
+}
+
+Result<std::vector<std::vector<double>>> GraphCommands(const Model& model, const Mapping& mapping,
+                                                       const robot::IoLayout& layout,
+                                                       const std::vector<std::vector<float>>& observations) {
+  Feeds feeds;
+  for (const StatePair& q : mapping.state) {
+    const Port* p = model.FindInput(q.input);
+    if (p == nullptr) return MakeError(ErrorCode::kMismatch, model.origin + ": no state input '" + q.input + "'");
+    std::size_t n = 1;
+    for (auto d : p->dims) n *= static_cast<std::size_t>(d);
+    feeds[q.input].assign(n, 0.0);
+  }
+  std::vector<std::vector<double>> out;
+  for (const auto& row : observations) {
+    feeds[mapping.input_name] = InputRow(mapping, row);
+    auto y = EvaluateGraph(model, feeds);
+    if (!y) return std::move(y).error();
+    out.push_back(CommandsOf(mapping, layout, (*y)[mapping.output_name]));
+    for (const StatePair& q : mapping.state) feeds[q.input] = (*y)[q.output];
+  }
+  return out;
 }
 
 }  // namespace pbppo::onnx

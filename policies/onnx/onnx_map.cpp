@@ -131,7 +131,7 @@ Result<Mapping> ParseMapping(const std::string& yaml_text, const std::string& or
   auto root = robot::ParseYaml(yaml_text, origin);
   if (!root) return std::move(root).error();
   const YamlFields f(origin);
-  PBPPO_TRY(f.Keys(*root, "", {"robot", "input", "output", "history", "observations", "actions"}));
+  PBPPO_TRY(f.Keys(*root, "", {"robot", "input", "output", "state", "history", "observations", "actions"}));
   Mapping m;
   m.origin = origin;
   PBPPO_TRY(f.Text(*root, "robot", "", &m.robot, YamlFields::TextRule::kToken));
@@ -146,6 +146,26 @@ Result<Mapping> ParseMapping(const std::string& yaml_text, const std::string& or
   PBPPO_TRY(f.Keys(out, "output", {"name", "size"}));
   PBPPO_TRY(f.Text(out, "name", "output", &m.output_name));
   PBPPO_TRY(f.Count(out, "size", "output", 1, 65536, &m.output_size));
+  if (root->operator[]("state")) {
+    YAML::Node st;
+    PBPPO_TRY(f.List(*root, "state", "", true, &st));
+    for (std::size_t i = 0; i < st.size(); ++i) {
+      const std::string where = "state[" + std::to_string(i) + "]";
+      if (!st[i].IsMap()) return f.Fail(where, YamlFields::Quote(st[i]) + " is not {input: NAME, output: NAME}");
+      PBPPO_TRY(f.Keys(st[i], where, {"input", "output"}));
+      StatePair pair;
+      PBPPO_TRY(f.Text(st[i], "input", where, &pair.input));
+      PBPPO_TRY(f.Text(st[i], "output", where, &pair.output));
+      for (const StatePair& q : m.state) {
+        if (q.input == pair.input) return f.Fail(where + ".input", "'" + pair.input + "' is already a state input");
+        if (q.output == pair.output)
+          return f.Fail(where + ".output", "'" + pair.output + "' is already a state output");
+      }
+      if (pair.input == m.input_name) return f.Fail(where + ".input", "'" + pair.input + "' is the observation input");
+      if (pair.output == m.output_name) return f.Fail(where + ".output", "'" + pair.output + "' is the action output");
+      m.state.push_back(std::move(pair));
+    }
+  }
 
   const std::vector<std::string> obs_names = layout.ObservationNames();
   const std::vector<std::string> act_names = layout.ActionNames();

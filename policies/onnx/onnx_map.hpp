@@ -19,6 +19,13 @@
 //     - [base_ang_vel_x, base_ang_vel_y, base_ang_vel_z]
 //     - {term: [cmd_vx, cmd_vy], history: 1}   # term-major only: a term with its own frame count
 //
+// A recurrent model (LSTM or GRU nodes) takes its state as graph inputs and gives the next state
+// as graph outputs; the mapping pairs them, each output fed back to its input at the next step:
+//
+//   state:
+//     - {input: h_in, output: h_out}
+//     - {input: c_in, output: c_out}
+//
 // frame-major: frame 1's terms, then frame 2's, ...; term-major: term 1's frames (each frame its
 // components), then term 2's, .... oldest first: frames run from length-1 policy steps ago to now;
 // last: from now back. Frame k steps ago of element X is the layout's "X@-k" (its history must
@@ -34,6 +41,12 @@
 
 namespace pbppo::onnx {
 
+// A recurrent state: the graph input it is read from and the graph output that gives it next.
+struct StatePair {
+  std::string input;
+  std::string output;
+};
+
 struct Mapping {
   std::string origin;  // the file, for messages
   std::string robot;
@@ -41,6 +54,7 @@ struct Mapping {
   std::uint32_t input_size = 0;
   std::string output_name;
   std::uint32_t output_size = 0;
+  std::vector<StatePair> state;  // a recurrent model's (empty for a feed-forward one)
   // The stacked history the model takes (stacked: the mapping states one).
   bool stacked = false;
   std::uint32_t history_length = 1;

@@ -22,6 +22,13 @@ OUT_DIR/
                                 term-major oldest first (as Isaac Lab's observation history
                                 flattens); each output reads named frames: a0 = p(now) +
                                 0.5 v1(3 steps ago), a1 = v0(1 step ago) - v1(2 steps ago)
+  lstm_walk.onnx + .yaml        flat.blob's second layer run by an LSTM 64 (its cell input eps times the
+                                layer's, gates held open, forget 0.018): walks as flat.blob, state h, c
+  gru_actor.onnx + .yaml        GRU 32 (linear_before_reset 1, as torch) and a 16 ELU head, random weights
+  gru_lbr0.onnx + .yaml         GRU 24 (linear_before_reset 0, ONNX's default) behind a Sub/Div
+                                normaliser, a 16 tanh head
+  lstm_stacked.onnx + .yaml     two stacked LSTM 24 layers as torch exports num_layers=2: the state
+                                inputs [2, batch, 24] sliced per layer, the outputs concatenated
   bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
 
 The good models are what torch.onnx.export writes for these trainers (opset 17, producer
@@ -458,6 +465,180 @@ def stacked_history(out_dir, name, order, oldest_first):
         )
 
 
+
+# ------------------------------------------------------------------------- g. recurrent actors
+
+# The recurrent state as torch.onnx.export writes an nn.LSTM / nn.GRU of rsl_rl's ActorCriticRecurrent
+# actor (its exporter: obs, h_in, c_in -> actions, h_out, c_out): Unsqueeze(obs, 0) -> X [1, batch, n];
+# the node's Y [1, 1, batch, H] -> Squeeze(1) -> Squeeze(0) -> the MLP head; initial_h / initial_c are
+# the graph inputs (one layer) or Slices of them (stacked), Y_h / Y_c the graph outputs (or Concats).
+# torch's gate order is converted to ONNX's on export: LSTM i, o, f, c; GRU z, r, h.
+
+
+def axes_const(name, axes):
+    return numpy_helper.from_array(np.array(axes, dtype=np.int64), name)
+
+
+def recurrent_node(kind, prefix, x, w, r, b, h0, c0, y, yh, yc, hidden, lbr=None, **extra):
+    inputs = [x, w, r, b, "", h0] + ([c0] if kind == "LSTM" else [])
+    outputs = [y, yh] + ([yc] if kind == "LSTM" else [])
+    attrs = {"hidden_size": hidden}
+    if kind == "GRU" and lbr is not None:
+        attrs["linear_before_reset"] = lbr
+    attrs.update(extra)
+    return helper.make_node(kind, inputs, outputs, name=f"{prefix}/{kind}", **attrs)
+
+
+def torch_rnn_weights(rng, kind, n_in, hidden):
+    """W [1, G*H, n_in], R [1, G*H, H], B [1, 2*G*H], uniform in +-1/sqrt(H) as torch initialises them."""
+    g = 4 if kind == "LSTM" else 3
+    k = 1.0 / np.sqrt(hidden)
+    return (
+        rng.uniform(-k, k, (1, g * hidden, n_in)),
+        rng.uniform(-k, k, (1, g * hidden, hidden)),
+        rng.uniform(-k, k, (1, 2 * g * hidden)),
+    )
+
+
+def recurrent_graph(kind, n_in, layers, hidden, head, rng, lbr=None, pre_nodes=None, pre_inits=None, first_in=None,
+                    rnn_weights=None):
+    """obs [-> pre_nodes] -> Unsqueeze -> `layers` stacked `kind` layers of `hidden` -> Squeeze(1), Squeeze(0)
+    -> the head (torch_gemm_chain over the hidden state). Returns the graph."""
+    nodes, inits = list(pre_nodes or []), list(pre_inits or [])
+    x_in = nodes[-1].output[0] if nodes else "obs"
+    inits += [axes_const("/memory_a/Constant_output_0", [0]), axes_const("/memory_a/Constant_1_output_0", [1])]
+    nodes.append(helper.make_node("Unsqueeze", [x_in, "/memory_a/Constant_output_0"], ["/memory_a/Unsqueeze_output_0"],
+                                  name="/memory_a/Unsqueeze"))
+    x = "/memory_a/Unsqueeze_output_0"
+    width = first_in or n_in
+    state_names = ["h"] + (["c"] if kind == "LSTM" else [])
+    outs = {s: [] for s in state_names}
+    for layer in range(layers):
+        pre = f"/memory_a/rnn/l{layer}" if layers > 1 else "/memory_a/rnn"
+        w, r, b = rnn_weights[layer] if rnn_weights else torch_rnn_weights(rng, kind, width, hidden)
+        wn, rn, bn = f"onnx::{kind}_W_{layer}", f"onnx::{kind}_R_{layer}", f"onnx::{kind}_B_{layer}"
+        inits += [init(wn, w), init(rn, r), init(bn, b)]
+        state_in = {}
+        for s_ in state_names:
+            if layers == 1:
+                state_in[s_] = f"{s_}_in"
+            else:  # torch: Slice(state, starts [layer], ends [layer + 1], axes [0])
+                st, en, ax = f"{pre}/{s_}_starts", f"{pre}/{s_}_ends", f"{pre}/{s_}_axes"
+                inits += [axes_const(st, [layer]), axes_const(en, [layer + 1]), axes_const(ax, [0])]
+                state_in[s_] = f"{pre}/Slice_{s_}_output_0"
+                nodes.append(helper.make_node("Slice", [f"{s_}_in", st, en, ax], [state_in[s_]], name=f"{pre}/Slice_{s_}"))
+        y = f"{pre}/{kind}_output_0"
+        yh = "h_out" if layers == 1 else f"{pre}/{kind}_output_1"
+        yc = "c_out" if layers == 1 else f"{pre}/{kind}_output_2"
+        nodes.append(recurrent_node(kind, pre, x, wn, rn, bn, state_in["h"], state_in.get("c"), y, yh, yc, hidden, lbr))
+        outs["h"].append(yh)
+        if kind == "LSTM":
+            outs["c"].append(yc)
+        sq = f"{pre}/Squeeze_output_0"
+        nodes.append(helper.make_node("Squeeze", [y, "/memory_a/Constant_1_output_0"], [sq], name=f"{pre}/Squeeze"))
+        x, width = sq, hidden
+    if layers > 1:
+        for s_ in state_names:
+            nodes.append(helper.make_node("Concat", outs[s_], [f"{s_}_out"], name=f"/memory_a/Concat_{s_}", axis=0))
+    nodes.append(helper.make_node("Squeeze", [x, "/memory_a/Constant_output_0"], ["/memory_a/Squeeze_output_0"],
+                                  name="/memory_a/Squeeze"))
+    head_nodes, head_inits = torch_gemm_chain(head)
+    head_nodes[0].input[0] = "/memory_a/Squeeze_output_0"
+    nodes += head_nodes
+    inits += head_inits
+    inputs = [io("obs", ["batch", n_in])] + [io(f"{s_}_in", [layers, "batch", hidden]) for s_ in state_names]
+    outputs = [io("actions", ["batch", head[-1][0].shape[0]])] + [
+        io(f"{s_}_out", [layers, "batch", hidden]) for s_ in state_names
+    ]
+    return helper.make_graph(nodes, "main_graph", inputs, outputs, inits)
+
+
+def write_recurrent_mapping(path, flat, kind, header):
+    states = ["h"] + (["c"] if kind == "LSTM" else [])
+    write_mapping(path, "quadruped", "obs", [(n, None, None) for n in flat["observation_names"]], "actions",
+                  [(n, None) for n in flat["action_names"]], header)
+    with open(path, "a") as f:
+        f.write("state:  # the recurrent state: each output fed back to its input at the next step\n")
+        for s_ in states:
+            f.write(f"  - {{input: {s_}_in, output: {s_}_out}}\n")
+
+
+# The walking LSTM: flat.blob (45-128-64-32-12 ELU) with its second layer run by an LSTM. The LSTM's
+# cell input is eps * (W2 x + b2), its input and output gates held open (bias 12), its forget gate at
+# sigmoid(-4) = 0.018 of the previous cell; h = o * tanh(c) ~ eps * (z + 0.018 z_prev ...), and a
+# 64-64 layer of weight I / eps with ELU gives back ELU(z) with a little of the steps before: it
+# walks as flat.blob does, its state carried from step to step (zero at arming).
+LSTM_WALK_EPS = 1e-3
+
+
+def lstm_walk(out_dir, flat, flat_layers):
+    rng = np.random.default_rng(20261128)
+    (w1, b1, a1), (w2, b2, a2), (w3, b3, a3), (w4, b4, a4) = flat_layers
+    assert (a1, a2, a3, a4) == ("elu", "elu", "elu", "identity") and flat["action_head"] == "linear"
+    assert all(m == 0.0 for m in flat["normaliser"]["mean"]) and all(s == 1.0 for s in flat["normaliser"]["inv_std"])
+    n_in, n1, hidden = w1.shape[1], w1.shape[0], w2.shape[0]
+    eps = LSTM_WALK_EPS
+    W = np.zeros((1, 4 * hidden, n1))
+    R = np.zeros((1, 4 * hidden, hidden))
+    B = np.zeros((1, 8 * hidden))
+    gate = {"i": 0, "o": 1, "f": 2, "c": 3}  # ONNX order
+    for name, bias in (("i", 12.0), ("o", 12.0), ("f", -4.0)):
+        k = gate[name]
+        B[0, k * hidden:(k + 1) * hidden] = bias
+        R[0, k * hidden:(k + 1) * hidden, :] = rng.normal(0.0, 0.5, (hidden, hidden))
+    k = gate["c"]
+    W[0, k * hidden:(k + 1) * hidden, :] = eps * w2
+    B[0, k * hidden:(k + 1) * hidden] = eps * b2
+    pre, pre_inits = torch_gemm_chain([(w1, b1)])
+    # torch_gemm_chain's single layer writes "actions": rename it to the first layer's output, then ELU
+    pre[0].output[0] = "/actor_in/Gemm_output_0"
+    pre[0].name = "/actor_in/Gemm"
+    for t in pre_inits:
+        t.name = t.name.replace("actor.0", "actor_in.0")
+    pre[0].input[1], pre[0].input[2] = "actor_in.0.weight", "actor_in.0.bias"
+    pre.append(helper.make_node("Elu", ["/actor_in/Gemm_output_0"], ["/actor_in/Elu_output_0"], name="/actor_in/Elu",
+                                alpha=1.0))
+    head = [(np.eye(hidden) / eps, np.zeros(hidden)), (w3, b3), (w4, b4)]
+    g = recurrent_graph("LSTM", n_in, 1, hidden, head, rng, pre_nodes=pre, pre_inits=pre_inits, first_in=n1,
+                        rnn_weights=[(W, R, B)])
+    save(model(g, "a walking LSTM actor built from flat.blob: 45-128 ELU, LSTM 64 (state h, c), 64-64 ELU, 64-32 ELU, "
+                  "32-12"), os.path.join(out_dir, "lstm_walk.onnx"))
+    write_recurrent_mapping(os.path.join(out_dir, "lstm_walk.yaml"), flat, "LSTM",
+                            ["lstm_walk.onnx: flat.blob's second layer as an LSTM; it walks as flat.blob does."])
+
+
+def random_recurrent(out_dir, flat, name, seed, kind, hidden, layers=1, lbr=None, normalise=False, head_act="Elu"):
+    rng = np.random.default_rng(seed)
+    n_in, n_out = len(flat["observation_names"]), len(flat["action_names"])
+    pre, pre_inits = None, None
+    if normalise:  # rsl_rl's EmpiricalNormalization without a clip: Sub mean, Div std (folded into W)
+        pre = [helper.make_node("Sub", ["obs", "normalizer.mean"], ["/normalizer/Sub_output_0"], name="/normalizer/Sub"),
+               helper.make_node("Div", ["/normalizer/Sub_output_0", "normalizer.std"], ["/normalizer/Div_output_0"],
+                                name="/normalizer/Div")]
+        pre_inits = [init("normalizer.mean", rng.normal(0.0, 0.3, (1, n_in))),
+                     init("normalizer.std", rng.uniform(0.5, 2.0, (1, n_in)))]
+    head = [(rng.normal(0.0, 0.3, (16, hidden)), rng.normal(0.0, 0.1, 16)),
+            (rng.normal(0.0, 0.3, (n_out, 16)), rng.normal(0.0, 0.1, n_out))]
+    g = recurrent_graph(kind, n_in, layers, hidden, head, rng, lbr=lbr, pre_nodes=pre, pre_inits=pre_inits)
+    if head_act != "Elu":
+        for n in g.node:
+            if n.op_type == "Elu" and n.name.startswith("/actor/"):
+                n.op_type = head_act
+                del n.attribute[:]
+                n.name = n.name.replace("Elu", head_act)
+    save(model(g, f"{kind} {hidden} x {layers} on random weights (torch's initialisation), head 16 {head_act}"),
+         os.path.join(out_dir, name + ".onnx"))
+    write_recurrent_mapping(os.path.join(out_dir, name + ".yaml"), flat, kind,
+                            [f"{name}.onnx: the quadruped layout's 45 observations in order, 12 actions."])
+
+
+def recurrent_models(out_dir, flat, flat_layers):
+    lstm_walk(out_dir, flat, flat_layers)
+    random_recurrent(out_dir, flat, "gru_actor", 20261129, "GRU", 32, lbr=1)
+    random_recurrent(out_dir, flat, "gru_lbr0", 20261130, "GRU", 24, lbr=0, normalise=True, head_act="Tanh")
+    random_recurrent(out_dir, flat, "lstm_stacked", 20261131, "LSTM", 24, layers=2)
+
+
 # ------------------------------------------------------------------------------- f. bad models
 
 
@@ -490,7 +671,7 @@ def parses(data):
         return False
 
 
-def bad_models(out_dir, good_small_bytes):
+def bad_models(out_dir, good_small_bytes, flat):
     bad = os.path.join(out_dir, "bad")
     os.makedirs(bad, exist_ok=True)
     rows = []  # (file, what is wrong, what the error must name)
@@ -577,9 +758,9 @@ def bad_models(out_dir, good_small_bytes):
     write(
         "recurrent.onnx",
         small_actor(rng, tweak=lstm),
-        "a recurrent actor: Unsqueeze, LSTM (hidden 8), Squeeze, Gemm; the LSTM is not the first node",
-        "node '/memory_a/rnn/LSTM', op LSTM: a walk from the input meets the Unsqueeze first, so the importer "
-        "must look for recurrent operators in the whole graph before it walks",
+        "a recurrent actor exported without its state: Unsqueeze, LSTM (hidden 8, no initial_h or initial_c "
+        "input, no Y_h or Y_c output), Squeeze, Gemm: its state would start from zero at every step",
+        "node '/memory_a/rnn/LSTM', op LSTM, that it has no initial_h",
     )
 
     write(
@@ -707,6 +888,79 @@ def bad_models(out_dir, good_small_bytes):
         check=False,  # full shape inference would reject it, the structural checker does not look
     )
 
+    # Recurrent actors with their state miswired (mapping bad/recurrent.yaml: h_in -> h_out, c_in -> c_out).
+    write_recurrent_mapping(os.path.join(bad, "recurrent.yaml"), flat, "LSTM",
+                            ["the recurrent models in bad/: 45 observations, 12 actions, an LSTM's h and c"])
+    n_in, n_out = len(flat["observation_names"]), len(flat["action_names"])
+
+    def small_lstm(hidden=8, tweak=None, declared=None):
+        g = recurrent_graph("LSTM", n_in, 1, hidden, [(rng.normal(0.0, 0.3, (n_out, hidden)), np.zeros(n_out))], rng)
+        if declared:  # the state ports declared with another hidden size
+            for v in list(g.input) + list(g.output):
+                if v.name in ("h_in", "c_in", "h_out", "c_out"):
+                    v.type.tensor_type.shape.dim[2].dim_value = declared
+        if tweak:
+            tweak(g)
+        return g
+
+    def rnn(g):
+        return next(n for n in g.node if n.op_type in ("LSTM", "GRU"))
+
+    def not_wired(g):
+        # the node's Y_h goes nowhere; 'h_out' is the Identity of 'h_in' (the state never changes)
+        rnn(g).output[1] = "/memory_a/rnn/LSTM_output_1"
+        g.node.append(helper.make_node("Identity", ["h_in"], ["h_out"], name="/memory_a/Identity"))
+
+    write(
+        "lstm_state_not_wired.onnx",
+        small_lstm(tweak=not_wired),
+        "the LSTM's Y_h reaches no graph output; the graph output 'h_out' is an Identity of 'h_in'",
+        "node '/memory_a/rnn/LSTM', its Y_h, not wired back",
+    )
+
+    def swapped(g):
+        n = rnn(g)
+        n.output[1], n.output[2] = "c_out", "h_out"
+
+    write(
+        "lstm_state_swapped.onnx",
+        small_lstm(tweak=swapped),
+        "Y_h is written to 'c_out' and Y_c to 'h_out': the next h would be read as c",
+        "node '/memory_a/rnn/LSTM', initial_h read from 'h_in' but written to 'c_out'",
+    )
+
+    write(
+        "lstm_hidden_mismatch.onnx",
+        small_lstm(hidden=8, declared=16),
+        "hidden_size 8, but the state inputs and outputs are declared [1, batch, 16]",
+        "node '/memory_a/rnn/LSTM', state 'h_in' of size 16, hidden_size 8",
+        check=False,  # shape inference would reject it
+    )
+
+    def bidirectional(g):
+        n = rnn(g)
+        n.attribute.append(helper.make_attribute("direction", "bidirectional"))
+
+    write(
+        "lstm_bidirectional.onnx",
+        small_lstm(tweak=bidirectional),
+        "direction 'bidirectional' (its weights are those of one direction)",
+        "node '/memory_a/rnn/LSTM', direction 'bidirectional'",
+        check=False,
+    )
+
+    def peephole(g):
+        n = rnn(g)
+        g.initializer.append(init("onnx::LSTM_P", rng.normal(0.0, 0.1, (1, 3 * 8))))
+        n.input.append("onnx::LSTM_P")
+
+    write(
+        "lstm_peephole.onnx",
+        small_lstm(tweak=peephole),
+        "an LSTM with peepholes (input P)",
+        "node '/memory_a/rnn/LSTM', peepholes",
+    )
+
     with open(os.path.join(bad, "README"), "w") as f:
         f.write("# ONNX models `pbppo import-onnx` must refuse\n\n")
         f.write("Written by tools/onnx/make_models.py (fixed seeds). Apart from the two that are not protobuf at all,\n")
@@ -763,7 +1017,8 @@ def main():
     small = leaky_tanh_head(a.out_dir)
     stacked_history(a.out_dir, "history_frame_major", "frame-major", oldest_first=False)
     stacked_history(a.out_dir, "history_term_major", "term-major", oldest_first=True)
-    bad_models(a.out_dir, small)
+    recurrent_models(a.out_dir, flat, flat_layers)
+    bad_models(a.out_dir, small, flat)
     for root, _, files in sorted(os.walk(a.out_dir)):
         for fn in sorted(files):
             p = os.path.join(root, fn)

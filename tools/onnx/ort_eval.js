@@ -1,11 +1,14 @@
 #!/usr/bin/env node
-// ort_eval.js MODEL.onnx IN.f32 ROWS OUT.f32
+// ort_eval.js MODEL.onnx IN.f32 ROWS OUT.f32 [STATE_IN=STATE_OUT ...]
 //
 // The reference for the ONNX importer's tests (pbppo import-onnx): runs MODEL.onnx with ONNX
 // Runtime on the CPU, graph optimisations disabled and one intra-op thread, on ROWS rows of
 // float32 little-endian input (row-major; the row width is the second dimension of the model's
 // first input, which must be fixed), all rows in one batch, and writes the model's first output
 // as float32 little-endian, row-major. Errors name the file and exit 1; usage errors exit 2.
+// With STATE_IN=STATE_OUT pairs (a recurrent model's state inputs and outputs) the rows are one
+// sequence: run one at a time, each state input zero at the first row and then the state output
+// of the row before, as a controller carries it.
 //
 // Install once: cd tools/onnx && npm ci --ignore-scripts (tools/setup.sh does it).
 'use strict';
@@ -13,7 +16,7 @@
 const fs = require('fs');
 const path = require('path');
 
-const usage = 'usage: ort_eval.js MODEL.onnx IN.f32 ROWS OUT.f32';
+const usage = 'usage: ort_eval.js MODEL.onnx IN.f32 ROWS OUT.f32 [STATE_IN=STATE_OUT ...]';
 
 function fail(message) {
   process.stderr.write(`ort_eval: ${message}\n`);
@@ -53,11 +56,19 @@ function encodeF32(values) {
 }
 
 async function main(argv) {
-  if (argv.length !== 4) {
+  if (argv.length < 4) {
     process.stderr.write(`${usage}\n`);
     process.exit(2);
   }
   const [modelPath, inPath, rowsArg, outPath] = argv;
+  const pairs = argv.slice(4).map((a) => {
+    const m = /^([^=]+)=([^=]+)$/.exec(a);
+    if (!m) {
+      process.stderr.write(`ort_eval: '${a}' is not STATE_IN=STATE_OUT\n${usage}\n`);
+      process.exit(2);
+    }
+    return {input: m[1], output: m[2]};
+  });
   if (!/^[1-9][0-9]*$/.test(rowsArg) || Number(rowsArg) > 1e7) {
     process.stderr.write(`ort_eval: ROWS '${rowsArg}' is not a positive row count\n${usage}\n`);
     process.exit(2);
@@ -97,21 +108,59 @@ async function main(argv) {
     );
   }
 
-  const feeds = {[meta.name]: new ort.Tensor('float32', decodeF32(input), [rows, width])};
-  let results;
-  try {
-    results = await session.run(feeds);
-  } catch (e) {
-    fail(`${modelPath}: ONNX Runtime run failed: ${e.message}`);
-  }
   const outName = session.outputNames[0];
-  const y = results[outName];
-  if (y.type !== 'float32') fail(`${modelPath}: output '${outName}' is ${y.type}, not float32`);
-  if (y.dims.length < 1 || y.dims[0] !== rows) {
-    fail(`${modelPath}: output '${outName}' has shape [${y.dims.join(', ')}], expected ${rows} rows first`);
+  const x = decodeF32(input);
+  let out;
+  if (pairs.length === 0) {
+    const feeds = {[meta.name]: new ort.Tensor('float32', x, [rows, width])};
+    let results;
+    try {
+      results = await session.run(feeds);
+    } catch (e) {
+      fail(`${modelPath}: ONNX Runtime run failed: ${e.message}`);
+    }
+    const y = results[outName];
+    if (y.type !== 'float32') fail(`${modelPath}: output '${outName}' is ${y.type}, not float32`);
+    if (y.dims.length < 1 || y.dims[0] !== rows) {
+      fail(`${modelPath}: output '${outName}' has shape [${y.dims.join(', ')}], expected ${rows} rows first`);
+    }
+    out = y.data;
+  } else {
+    // One row at a time, the state carried: zero tensors of each state input's shape (batch 1).
+    const state = {};
+    for (const p of pairs) {
+      const i = session.inputNames.indexOf(p.input);
+      if (i < 0) fail(`${modelPath}: no input '${p.input}' (inputs: ${session.inputNames.join(', ')})`);
+      if (session.outputNames.indexOf(p.output) < 0) {
+        fail(`${modelPath}: no output '${p.output}' (outputs: ${session.outputNames.join(', ')})`);
+      }
+      const shape = session.inputMetadata[i].shape.map((d) => (typeof d === 'number' ? d : 1));
+      state[p.input] = new ort.Tensor('float32', new Float32Array(shape.reduce((a, b) => a * b, 1)), shape);
+    }
+    const parts = [];
+    for (let r = 0; r < rows; ++r) {
+      const feeds = {[meta.name]: new ort.Tensor('float32', x.slice(r * width, (r + 1) * width), [1, width])};
+      for (const p of pairs) feeds[p.input] = state[p.input];
+      let results;
+      try {
+        results = await session.run(feeds);
+      } catch (e) {
+        fail(`${modelPath}: ONNX Runtime run failed at row ${r}: ${e.message}`);
+      }
+      const y = results[outName];
+      if (y.type !== 'float32') fail(`${modelPath}: output '${outName}' is ${y.type}, not float32`);
+      parts.push(y.data);
+      for (const p of pairs) state[p.input] = results[p.output];
+    }
+    out = new Float32Array(parts.reduce((n, a) => n + a.length, 0));
+    let at = 0;
+    for (const a of parts) {
+      out.set(a, at);
+      at += a.length;
+    }
   }
   try {
-    fs.writeFileSync(outPath, encodeF32(y.data));
+    fs.writeFileSync(outPath, encodeF32(out));
   } catch (e) {
     fail(`${outPath}: cannot write (${e.code || e.message})`);
   }

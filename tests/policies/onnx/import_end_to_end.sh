@@ -7,7 +7,11 @@
 #   3. the imported stable-baselines3-style AUV actor flies the AUV missions through
 #      pbppo-controller and pbppo-hil auv over Fast DDS (lock-step) as the shipped blob does;
 #   4. the imported rsl_rl-style walking actor walks the demo schedule in the quadruped HIL with
-#      the shipped flat policy's figures (no code change: the same programs, another blob).
+#      the shipped flat policy's figures (no code change: the same programs, another blob);
+#   5. the imported walking LSTM walks the demo schedule in the quadruped HIL (the controller's
+#      loop in process, its state carried tick to tick), as the shipped flat policy does; the
+#      recorded run replays bit for bit, and each of its 800-odd policy steps, run by ONNX Runtime
+#      on the recorded observations with the state fed back, gives the engine's action.
 # usage: import_end_to_end.sh PBPPO HIL CONTROLLER SOURCE_DIR MODELS_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
@@ -34,6 +38,17 @@ import normalised_walk "$quad"
 expect "$work/normalised_walk.import.log" "normaliser: +Sub .*Div .*Clip .*clip at 100 -> the blob's"
 import sb3_auv "$auv"
 expect "$work/sb3_auv.import.log" "output map: +Clip"
+import lstm_walk "$quad"
+expect "$work/lstm_walk.import.log" "128 -> 64 lstm .*state h_in\[0\] -> h_out\[0\], c_in\[0\] -> c_out\[0\]"
+import gru_actor "$quad"
+expect "$work/gru_actor.import.log" "45 -> 32 gru \(linear_before_reset\)"
+import gru_lbr0 "$quad"
+expect "$work/gru_lbr0.import.log" "normaliser: +Sub .*Div .* -> the blob's"
+import lstm_stacked "$quad"
+expect "$work/lstm_stacked.import.log" "24 -> 24 lstm .*state h_in\[1\] -> h_out\[1\], c_in\[1\] -> c_out\[1\]"
+"$pbppo" inspect "$work/lstm_walk.blob" >"$work/lstm_walk.inspect"
+expect "$work/lstm_walk.inspect" "format      v2, "
+expect "$work/lstm_walk.inspect" "state       128 floats carried from one step to the next"
 
 echo "== 2: refusals"
 refuse() {  # refuse MODEL MAP ROBOT PATTERN
@@ -49,7 +64,7 @@ m=$models/rsl_rl_walk.yaml b=$models/bad
 refuse "$b/truncated.onnx" "$m" "$quad" "truncated.onnx: not an ONNX model"
 refuse "$b/garbage.onnx" "$m" "$quad" "garbage.onnx: not an ONNX model"
 refuse "$b/unsupported_op.onnx" "$m" "$quad" "node 'actor.softmax' \(Softmax\): operator not supported"
-refuse "$b/recurrent.onnx" "$m" "$quad" "node '/memory_a/rnn/LSTM' \(LSTM\): a recurrent"
+refuse "$b/recurrent.onnx" "$m" "$quad" "node '/memory_a/rnn/LSTM' \(LSTM\): no initial_h: the state would start from zero"
 refuse "$b/dynamic_dim.onnx" "$m" "$quad" "input 'obs' dimension 1 is symbolic \('n_obs'\)"
 refuse "$b/float16.onnx" "$m" "$quad" "node '/actor/actor.2/Gemm' \(Gemm\): constant 'actor.2.weight' is float16"
 refuse "$b/elu_alpha.onnx" "$m" "$quad" "node '/actor/actor.1/Elu' \(Elu\): alpha 0.5"
@@ -64,6 +79,19 @@ refuse "$models/rsl_rl_walk.onnx" "$models/normalised_walk.yaml" "$quad" \
 refuse "$models/sb3_auv.onnx" "$models/sb3_auv.yaml" "$quad" \
   "sb3_auv.yaml: robot: 'auv', but the robot's IO layout is for 'quadruped'"
 refuse "$work/none.onnx" "$m" "$quad" "none.onnx: cannot open"
+r=$b/recurrent.yaml
+refuse "$b/lstm_state_not_wired.onnx" "$r" "$quad" \
+  "node '/memory_a/rnn/LSTM' \(LSTM\): Y_h '/memory_a/rnn/LSTM_output_1' reaches no graph output"
+refuse "$b/lstm_state_swapped.onnx" "$r" "$quad" \
+  "node '/memory_a/rnn/LSTM' \(LSTM\): initial_h is read from 'h_in' but the node's next state goes to 'c_out'"
+refuse "$b/lstm_hidden_mismatch.onnx" "$r" "$quad" \
+  "node '/memory_a/rnn/LSTM' \(LSTM\): initial_h: state 'h_in' has size 16, the node's hidden_size is 8"
+refuse "$b/lstm_bidirectional.onnx" "$r" "$quad" "node '/memory_a/rnn/LSTM' \(LSTM\): direction 'bidirectional'"
+refuse "$b/lstm_peephole.onnx" "$r" "$quad" "node '/memory_a/rnn/LSTM' \(LSTM\): peepholes"
+refuse "$models/gru_actor.onnx" "$models/lstm_walk.yaml" "$quad" \
+  "lstm_walk.yaml: state\[1\].input: 'c_in' is not a graph input of .*gru_actor.onnx"
+refuse "$models/lstm_walk.onnx" "$models/rsl_rl_walk.yaml" "$quad" \
+  "lstm_walk.onnx: 3 graph inputs \('obs' used by node '/actor_in/Gemm' \(Gemm\) input 0; 'h_in' used by node"
 
 echo "== 3: the imported AUV actor flies the missions through pbppo-controller (lock-step, Fast DDS)"
 mission() {  # mission NAME BLOB LAYOUT SEED
@@ -107,5 +135,58 @@ for name, p in ra.items():
         worst = max(worst, abs(p["mean_abs_error"][k] - rb[name]["mean_abs_error"][k]))
 print(f"   largest per-phase tracking difference, imported vs shipped: {worst:.4f}")
 sys.exit(0 if worst <= 0.02 else 1)
+PY
+echo "== 5: the imported LSTM walks in the quadruped HIL, replays bit for bit, acts as ONNX Runtime"
+"$hil" quadruped --in-process --policy "$work/lstm_walk.blob" --commands models/quadruped/schedules/demo.yaml \
+  --report "$work/imported_lstm.json" --record "$work/lstm_run.log" >"$work/imported_lstm.log" 2>&1 ||
+  { cat "$work/imported_lstm.log"; fail "imported_lstm: pbppo-hil exited $?"; }
+expect "$work/imported_lstm.log" "no fall"
+sed -n '2,8p' "$work/imported_lstm.log" | sed "s/^/   imported_lstm: /"
+"$pbppo" replay "$work/lstm_run.log" --robot "$quad" --policy "$work/lstm_walk.blob" \
+  --policy-io "$work/lstm_io" >"$work/lstm_replay.log" 2>&1 || { cat "$work/lstm_replay.log"; fail "replay"; }
+expect "$work/lstm_replay.log" "commands compared, 0 different$"
+sed 's/^/   /' "$work/lstm_replay.log"
+steps=$(( $(stat -c %s "$work/lstm_io.obs.f32") / (45 * 4) ))
+[ "$steps" -ge 800 ] || fail "only $steps policy steps recorded"
+node tools/onnx/ort_eval.js "$models/lstm_walk.onnx" "$work/lstm_io.obs.f32" "$steps" "$work/lstm_ort.f32" \
+  h_in=h_out c_in=c_out || fail "ort_eval.js exited $?"
+"$pbppo" inspect --json "$work/lstm_walk.blob" >"$work/lstm_walk.json"
+# lstm_walk.yaml maps the layout's observations and actions in order, without constants: the
+# recorded observation is the model's input, the engine's action the layout's map of its output.
+/usr/bin/python3 - "$work" "$steps" <<'PY'
+import json, sys
+import numpy as np
+work, steps = sys.argv[1], int(sys.argv[2])
+m = json.load(open(f"{work}/lstm_walk.json"))["action_map"]
+y = np.fromfile(f"{work}/lstm_ort.f32", "<f4").reshape(steps, 12).astype(np.float64)
+engine = np.fromfile(f"{work}/lstm_io.act.f32", "<f4").reshape(steps, 12).astype(np.float64)
+ort = np.clip(y * np.array(m["scale"]) + np.array(m["offset"]), m["low"], m["high"])
+rel = np.abs(engine - ort) / np.maximum(1.0, np.abs(ort))
+print(f"   {steps} policy steps: engine vs ONNX Runtime max |diff| {np.abs(engine - ort).max():.3g} "
+      f"(relative {rel.max():.3g}; the import check's tolerance is at least 1e-5 relative)")
+sys.exit(0 if rel.max() <= 1e-5 else 1)
+PY
+# A rotated recording: each file begins with the loop's state, the LSTM's h and c among it, and
+# replays alone from there (mid-walk).
+"$hil" quadruped --in-process --policy "$work/lstm_walk.blob" --commands models/quadruped/schedules/demo.yaml \
+  --record "$work/lstm_rot.log" --record-max-mb 0.5 --record-rotate 3 >"$work/lstm_rot_hil.txt" 2>&1 ||
+  { cat "$work/lstm_rot_hil.txt"; fail "rotated recording: pbppo-hil exited $?"; }
+kept=$(ls "$work"/lstm_rot.*.log | wc -l)
+[ "$kept" -eq 3 ] || fail "rotated recording: $kept files kept, expected 3"
+for f in "$work"/lstm_rot.*.log; do
+  "$pbppo" replay "$f" --robot "$quad" --policy "$work/lstm_walk.blob" >"$work/lstm_rot_replay.txt" 2>&1 ||
+    { cat "$work/lstm_rot_replay.txt"; fail "$f: replay"; }
+  expect "$work/lstm_rot_replay.txt" "commands compared, 0 different$"
+  expect "$work/lstm_rot_replay.txt" "replayed from its snapshot at tick"
+  sed -n 2p "$work/lstm_rot_replay.txt" | sed 's/^/   /'
+done
+# As the shipped flat policy walks (the LSTM is built from it), phase by phase within 0.03.
+/usr/bin/python3 - "$work/shipped_flat.json" "$work/imported_lstm.json" <<'PY'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+ra, rb = ({p["name"]: p for p in r["phases"]} for r in (a, b))
+worst = max(abs(p["mean_abs_error"][k] - rb[n]["mean_abs_error"][k]) for n, p in ra.items() for k in range(3))
+print(f"   largest per-phase tracking difference, imported LSTM vs shipped flat: {worst:.4f}")
+sys.exit(0 if worst <= 0.03 else 1)
 PY
 echo "import end to end: ok"

@@ -251,7 +251,7 @@ TEST_CASE("what the engine cannot run exactly is refused, naming the node and it
          b.Node("LSTM", {"$"}, "mem");
          return b.Bytes();
        },
-       "node 'mem' (LSTM): a recurrent or control-flow operator"},
+       "node 'mem' (LSTM): X has rank 2: an exported single step is [1, batch, features]"},
       {"elu alpha",
        [] {
          OnnxBuilder b(6);
@@ -443,6 +443,21 @@ TEST_CASE("the mapping file is checked against the layout and the model, naming 
   OnnxBuilder c(7);
   c.Gemm(3);
   CHECK(ErrorOf(c.Bytes(), MapText(6, all)) == "map.yaml: input: 'obs' of 6 elements, but m.onnx takes 'obs' of 7");
+  // A recurrent model's state: pairs of names, each used once, never the observation or action.
+  CHECK(ErrorOf(bytes, MapText() + "state: [h_in]\n") ==
+        "map.yaml: state[0]: 'h_in' is not {input: NAME, output: NAME}");
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: h, output: h2}, {input: h, output: h3}]\n") ==
+        "map.yaml: state[1].input: 'h' is already a state input");
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: a, output: h}, {input: b, output: h}]\n") ==
+        "map.yaml: state[1].output: 'h' is already a state output");
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: obs, output: h}]\n") ==
+        "map.yaml: state[0].input: 'obs' is the observation input");
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: h, output: actions}]\n") ==
+        "map.yaml: state[0].output: 'actions' is the action output");
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: h, output: h2, size: 3}]\n").find("size") != std::string::npos);
+  // ... and against the model: a state the graph does not have.
+  CHECK(ErrorOf(bytes, MapText() + "state: [{input: h_in, output: h_out}]\n") ==
+        "map.yaml: state[0].input: 'h_in' is not a graph input of m.onnx");
 }
 
 TEST_CASE("truncated and corrupted models are refused or imported consistently, never crash") {

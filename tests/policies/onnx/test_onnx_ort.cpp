@@ -1,7 +1,9 @@
 // The imported blobs against ONNX Runtime (label onnx): the models tools/onnx/make_models.py built
 // (the onnx.models fixture) are imported, then run by the runtime engine and by ONNX Runtime
 // (tools/onnx/ort_eval.js, onnxruntime-node) on random observations and on observations recorded
-// from the training environments, and the commands compared.
+// from the training environments, and the commands compared. A recurrent model's rows are one
+// sequence on every side: the engine's state, ONNX Runtime's state inputs fed from its outputs,
+// the float64 graph's and reference's state, all zero at the first row.
 //
 // Tolerance: both sides compute in float32 from the same float32 weights, so each lies within the
 // float64 reference's first-order float32 bound (docs/policy_blob.md, golden vectors); two sides:
@@ -69,6 +71,7 @@ std::vector<std::vector<float>> Recorded(const std::string& env_name, const std:
 
 struct Compared {
   double max_abs = 0, max_ratio = 0, graph_ratio = 0;
+  double stateless_abs = 0;  // a recurrent policy run with its state reset at every step, against ONNX Runtime
   std::size_t rows = 0;
   std::vector<std::vector<double>> engine;  // the engine's commands per row
 };
@@ -93,8 +96,9 @@ Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const
         f.write(reinterpret_cast<const char*>(&x), 4);
       }
   }
-  const std::string cmd = "node " + test::SourcePath("tools/onnx/ort_eval.js") + " " + onnx_file + " " + in + " " +
-                          std::to_string(observations.size()) + " " + out;
+  std::string cmd = "node " + test::SourcePath("tools/onnx/ort_eval.js") + " " + onnx_file + " " + in + " " +
+                    std::to_string(observations.size()) + " " + out;
+  for (const ox::StatePair& q : map.state) cmd += " " + q.input + "=" + q.output;  // the rows are one sequence
   REQUIRE_MESSAGE(std::system(cmd.c_str()) == 0, cmd);
   std::ifstream f(out, std::ios::binary);
   std::vector<float> y(observations.size() * map.output_size);
@@ -102,16 +106,24 @@ Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const
   REQUIRE(f.gcount() == static_cast<std::streamsize>(y.size() * 4));
   Compared c;
   c.rows = observations.size();
+  // The float64 graph and reference over the rows in order, a recurrent state carried from one
+  // row to the next (as the engine's data and ONNX Runtime's state inputs carry it).
+  auto graph = ox::GraphCommands(*model, map, layout, observations);
+  REQUIRE_MESSAGE(graph.ok(), graph.error().message);
+  policy::ReferenceState ref_state = policy::MakeReferenceState(imp->spec);
+  auto stateless = policy::MakePolicyData(*pm);
+  REQUIRE(stateless.ok());
   for (std::size_t r = 0; r < observations.size(); ++r) {
     const std::vector<double> ort_row(y.begin() + static_cast<long>(r * map.output_size),
                                       y.begin() + static_cast<long>((r + 1) * map.output_size));
     const std::vector<double> ort_cmd = ox::CommandsOf(map, layout, ort_row);
     std::copy(observations[r].begin(), observations[r].end(), pd->observation().begin());
     REQUIRE(policy::Forward(*pm, *pd) == policy::ForwardStatus::kOk);
-    const policy::ReferenceOutput ref = policy::ReferenceForward(imp->spec, observations[r].data());
-    auto graph = ox::Evaluate(*model, ox::InputRow(map, observations[r]));
-    REQUIRE(graph.ok());
-    const std::vector<double> graph_cmd = ox::CommandsOf(map, layout, *graph);
+    const policy::ReferenceOutput ref = policy::ReferenceForward(imp->spec, observations[r].data(), &ref_state);
+    const std::vector<double>& graph_cmd = (*graph)[r];
+    stateless->ResetState();
+    std::copy(observations[r].begin(), observations[r].end(), stateless->observation().begin());
+    REQUIRE(policy::Forward(*pm, *stateless) == policy::ForwardStatus::kOk);
     c.engine.emplace_back(pd->action().begin(), pd->action().end());
     for (std::size_t k = 0; k < ort_cmd.size(); ++k) {
       const double engine = static_cast<double>(pd->action()[k]);
@@ -119,10 +131,12 @@ Compared AgainstOrt(const std::string& name, const std::string& onnx_file, const
       c.max_abs = std::max(c.max_abs, std::fabs(engine - ort_cmd[k]));
       c.max_ratio = std::max(c.max_ratio, std::fabs(engine - ort_cmd[k]) / tol);
       c.graph_ratio = std::max(c.graph_ratio, std::fabs(graph_cmd[k] - ort_cmd[k]) / tol);
+      c.stateless_abs = std::max(c.stateless_abs, std::fabs(static_cast<double>(stateless->action()[k]) - ort_cmd[k]));
     }
   }
   MESSAGE(name << ": " << c.rows << " rows, engine vs ONNX Runtime max |diff| " << c.max_abs << " (" << c.max_ratio
-               << " of the tolerance); float64 graph vs ONNX Runtime " << c.graph_ratio);
+               << " of the tolerance); float64 graph vs ONNX Runtime " << c.graph_ratio
+               << (map.state.empty() ? "" : "; with the state reset at every step " + std::to_string(c.stateless_abs)));
   return c;
 }
 
@@ -149,6 +163,8 @@ void CheckRobotModel(const std::string& name, const std::string& robot_yaml, con
   CHECK(c.max_ratio <= 1.0);
   CHECK(c.max_abs < 1e-5);
   CHECK(c.graph_ratio <= 1.0);
+  // A recurrent model's state matters: without it the engine would be far off ONNX Runtime.
+  if (!map->state.empty()) CHECK(c.stateless_abs > 1e-3);
 }
 
 }  // namespace
@@ -165,6 +181,16 @@ TEST_CASE("walking actor with its normaliser in the graph, inputs and outputs re
 
 TEST_CASE("stable-baselines3-style AUV actor (64-64 tanh, MatMul+Add, output clip): matches ONNX Runtime") {
   CheckRobotModel("sb3_auv", "models/auv/robot.yaml", "auv-nav", "policies/frozen/auv_nav/auv_nav.blob");
+}
+
+TEST_CASE("recurrent actors over 656-step sequences, the state carried: the engine matches ONNX Runtime") {
+  // 256 random rows, then 400 recorded from the walking environment, as one sequence from a zero
+  // state: the LSTM built from flat.blob, a GRU as torch exports it (linear_before_reset 1), a GRU
+  // with ONNX's default (0) behind a Sub/Div normaliser, two stacked LSTM layers (Slice, Concat).
+  for (const char* name : {"lstm_walk", "gru_actor", "gru_lbr0", "lstm_stacked"}) {
+    CAPTURE(name);
+    CheckRobotModel(name, "models/quadruped/robot.yaml", "quadruped-walk", "policies/frozen/quadruped_walk/flat.blob");
+  }
 }
 
 TEST_CASE("LeakyReLU layers and a tanh head with an output scale and offset: matches ONNX Runtime") {
