@@ -29,6 +29,9 @@ OUT_DIR/
                                 normaliser, a 16 tanh head
   lstm_stacked.onnx + .yaml     two stacked LSTM 24 layers as torch exports num_layers=2: the state
                                 inputs [2, batch, 24] sliced per layer, the outputs concatenated
+  unitree_walk.onnx + .deploy.yaml
+                                flat.blob as unitree_rl_lab exports an Isaac Lab policy: joints breadth
+                                first (joint_ids_map), two frames of base_ang_vel and projected_gravity
   bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
 
 The good models are what torch.onnx.export writes for these trainers (opset 17, producer
@@ -639,6 +642,81 @@ def recurrent_models(out_dir, flat, flat_layers):
     random_recurrent(out_dir, flat, "lstm_stacked", 20261131, "LSTM", 24, layers=2)
 
 
+# ------------------------------------------------------------------------- h. a deploy file
+
+# unitree_rl_lab's export (deploy.yaml beside policy.onnx) of flat.blob as if trained in Isaac Lab:
+# the articulation's joint order breadth first (every HAA, then every HFE, then every KFE), so
+# joint_ids_map permutes; observation terms in Isaac Lab's order, base_ang_vel and
+# projected_gravity with 2 frames of history (term-major, oldest first; the older frame's weights
+# 0), clip [-100, 100] before the scale; actions scaled 0.25 about the default pose.
+UNITREE_JOINT_ORDER = [f"{leg}_{j}" for j in ("HAA", "HFE", "KFE") for leg in ("LF", "RF", "LH", "RH")]
+UNITREE_TERMS = [  # name, width, scale, history, flat's first column (per policy joint for joint terms)
+    ("base_ang_vel", 3, [0.25] * 3, 2, 0),
+    ("projected_gravity", 3, [1.0] * 3, 2, 3),
+    ("velocity_commands", 3, [2.0, 2.0, 0.25], 1, 6),
+    ("joint_pos_rel", 12, [1.0] * 12, 1, 9),
+    ("joint_vel_rel", 12, [0.05] * 12, 1, 21),
+    ("last_action", 12, [1.0] * 12, 1, 33),
+]
+
+
+def unitree_walk(out_dir, flat, flat_layers, quad_actions):
+    robot_joints = [n[len("last_action_"):] for n in flat["observation_names"] if n.startswith("last_action_")]
+    assert flat["action_names"] == robot_joints and len(robot_joints) == 12
+    motor = [robot_joints.index(j) for j in UNITREE_JOINT_ORDER]  # joint_ids_map
+    (w1, b1, _), *rest = flat_layers
+    columns = []  # per model input: flat's column, or None (an older frame: weight 0)
+    for name, width, _, history, col0 in UNITREE_TERMS:
+        for frame in range(history):  # oldest first
+            for k in range(width):
+                col = col0 + (motor[k] if width == 12 else k)
+                columns.append(col if frame == history - 1 else None)
+    W1 = np.zeros((w1.shape[0], len(columns)))
+    for i, col in enumerate(columns):
+        if col is not None:
+            W1[:, i] = w1[:, col]
+    (w4, b4, _) = rest[-1]
+    layers = [(W1, b1)] + [(w, b) for (w, b, _) in rest[:-1]] + [(w4[motor, :], b4[motor])]
+    nodes, inits = torch_gemm_chain(layers)
+    g = helper.make_graph(nodes, "main_graph", [io("obs", ["batch", len(columns)])], [io("actions", ["batch", 12])],
+                          inits)
+    save(model(g, "flat.blob exported as unitree_rl_lab exports an Isaac Lab policy (deploy.yaml beside it)"),
+         os.path.join(out_dir, "unitree_walk.onnx"))
+    # The default pose: the quadruped layout's action offsets (its io_layout.yaml).
+    offsets = {j: quad_actions[j]["offset"] for j in robot_joints}
+    lines = [
+        "# unitree_rl_lab's deploy.yaml for unitree_walk.onnx (written by tools/onnx/make_models.py)",
+        "joint_ids_map: [" + ", ".join(str(m) for m in motor) + "]",
+        "step_dt: 0.02",
+        "stiffness: [" + ", ".join(["20.0"] * 12) + "]",
+        "damping: [" + ", ".join(["0.5"] * 12) + "]",
+        "default_joint_pos: [" + ", ".join(repr(offsets[j]) for j in UNITREE_JOINT_ORDER) + "]",
+        "commands:",
+        "  base_velocity:",
+        "    ranges:",
+        "      lin_vel_x: [-1.0, 1.0]",
+        "      lin_vel_y: [-0.5, 0.5]",
+        "      ang_vel_z: [-1.0, 1.0]",
+        "      heading: null",
+        "actions:",
+        "  JointPositionAction:",
+        "    clip: null",
+        "    joint_names: [.*]",
+        "    scale: [" + ", ".join(["0.25"] * 12) + "]",
+        "    offset: [" + ", ".join(repr(offsets[j]) for j in UNITREE_JOINT_ORDER) + "]",
+        "    joint_ids: null",
+        "observations:",
+    ]
+    for name, width, scale, history, _ in UNITREE_TERMS:
+        lines += [f"  {name}:",
+                  "    params: {command_name: base_velocity}" if name == "velocity_commands" else "    params: {}",
+                  "    clip: [-100.0, 100.0]",
+                  "    scale: [" + ", ".join(repr(x) for x in scale) + "]",
+                  f"    history_length: {history}"]
+    with open(os.path.join(out_dir, "unitree_walk.deploy.yaml"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
 # ------------------------------------------------------------------------------- f. bad models
 
 
@@ -1018,6 +1096,8 @@ def main():
     stacked_history(a.out_dir, "history_frame_major", "frame-major", oldest_first=False)
     stacked_history(a.out_dir, "history_term_major", "term-major", oldest_first=True)
     recurrent_models(a.out_dir, flat, flat_layers)
+    quad_layout = os.path.join(os.path.dirname(a.auv_layout), "..", "quadruped", "io_layout.yaml")
+    unitree_walk(a.out_dir, flat, flat_layers, read_layout_actions(quad_layout))
     bad_models(a.out_dir, small, flat)
     for root, _, files in sorted(os.walk(a.out_dir)):
         for fn in sorted(files):

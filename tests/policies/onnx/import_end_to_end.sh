@@ -11,7 +11,11 @@
 #   5. the imported walking LSTM walks the demo schedule in the quadruped HIL (the controller's
 #      loop in process, its state carried tick to tick), as the shipped flat policy does; the
 #      recorded run replays bit for bit, and each of its 800-odd policy steps, run by ONNX Runtime
-#      on the recorded observations with the state fed back, gives the engine's action.
+#      on the recorded observations with the state fed back, gives the engine's action;
+#   6. a policy exported with unitree_rl_lab's deploy.yaml (joints in another order, two frames of
+#      history on some terms) imports with --deploy alone: the IO layout and mapping it writes,
+#      put in a copy of the robot's folder, walk the demo schedule as the shipped policy does;
+#      deploy files the layout cannot express are refused naming the field.
 # usage: import_end_to_end.sh PBPPO HIL CONTROLLER SOURCE_DIR MODELS_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
@@ -121,21 +125,20 @@ walk() {  # walk NAME BLOB
 }
 walk shipped_flat policies/frozen/quadruped_walk/flat.blob
 walk imported_rsl_rl "$work/rsl_rl_walk.blob"
-# The same figures as the shipped policy's, phase by phase, within 0.02 (the two differ by float32
-# rounding: a 512-wide network and folded constants).
-/usr/bin/python3 - "$work/shipped_flat.json" "$work/imported_rsl_rl.json" <<'PY'
+# like_shipped NAME LIMIT: NAME's per-phase tracking errors within LIMIT of the shipped flat policy's.
+like_shipped() {
+  /usr/bin/python3 - "$work/shipped_flat.json" "$work/$1.json" "$1" "$2" <<'PY'
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:3])
-def rows(r):
-    return {p["name"]: p for p in r["phases"]}
-ra, rb = rows(a), rows(b)
-worst = 0.0
-for name, p in ra.items():
-    for k in range(3):
-        worst = max(worst, abs(p["mean_abs_error"][k] - rb[name]["mean_abs_error"][k]))
-print(f"   largest per-phase tracking difference, imported vs shipped: {worst:.4f}")
-sys.exit(0 if worst <= 0.02 else 1)
+ra, rb = ({p["name"]: p for p in r["phases"]} for r in (a, b))
+worst = max(abs(p["mean_abs_error"][k] - rb[n]["mean_abs_error"][k]) for n, p in ra.items() for k in range(3))
+print(f"   largest per-phase tracking difference, {sys.argv[3]} vs shipped flat: {worst:.4f}")
+sys.exit(0 if worst <= float(sys.argv[4]) else 1)
 PY
+}
+# The same figures as the shipped policy's, phase by phase, within 0.02 (the two differ by float32
+# rounding: a 512-wide network and folded constants).
+like_shipped imported_rsl_rl 0.02 || fail "imported_rsl_rl does not walk as the shipped policy"
 echo "== 5: the imported LSTM walks in the quadruped HIL, replays bit for bit, acts as ONNX Runtime"
 "$hil" quadruped --in-process --policy "$work/lstm_walk.blob" --commands models/quadruped/schedules/demo.yaml \
   --report "$work/imported_lstm.json" --record "$work/lstm_run.log" >"$work/imported_lstm.log" 2>&1 ||
@@ -181,12 +184,45 @@ for f in "$work"/lstm_rot.*.log; do
   sed -n 2p "$work/lstm_rot_replay.txt" | sed 's/^/   /'
 done
 # As the shipped flat policy walks (the LSTM is built from it), phase by phase within 0.03.
-/usr/bin/python3 - "$work/shipped_flat.json" "$work/imported_lstm.json" <<'PY'
-import json, sys
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
-ra, rb = ({p["name"]: p for p in r["phases"]} for r in (a, b))
-worst = max(abs(p["mean_abs_error"][k] - rb[n]["mean_abs_error"][k]) for n, p in ra.items() for k in range(3))
-print(f"   largest per-phase tracking difference, imported LSTM vs shipped flat: {worst:.4f}")
-sys.exit(0 if worst <= 0.03 else 1)
-PY
+like_shipped imported_lstm 0.03 || fail "the imported LSTM does not walk as the shipped policy"
+echo "== 6: a unitree_rl_lab deploy.yaml in place of a mapping"
+"$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$models/unitree_walk.deploy.yaml" \
+  --out "$work/unitree_walk.blob" >"$work/unitree_walk.import.log" 2>&1 ||
+  { cat "$work/unitree_walk.import.log"; fail "unitree_walk: import-onnx --deploy exited $?"; }
+sed 's/^/   /' "$work/unitree_walk.import.log"
+expect "$work/unitree_walk.import.log" "6 observation terms, 45 layout observations, 12 joint position actions"
+expect "$work/unitree_walk.import.log" "history: +2 frames, term-major, oldest first"
+expect "$work/unitree_walk.map.yaml" "q_LF_HAA, q_RF_HAA, q_LH_HAA, q_RH_HAA, q_LF_HFE"
+expect "$work/unitree_walk.io_layout.yaml" "name: base_ang_vel_x, signal: base_ang_vel_x, scale: 0.25, clip: 25, history: 2"
+# The robot's folder with the deploy file's layout in place of its own (the blob carries its hash).
+rm -rf "$work/models" && mkdir -p "$work/models" && cp models/dds_profile.xml "$work/models/"
+cp -r models/quadruped "$work/models/unitree_quadruped"
+cp "$work/unitree_walk.io_layout.yaml" "$work/models/unitree_quadruped/io_layout.yaml"
+"$hil" quadruped --robot "$work/models/unitree_quadruped/robot.yaml" --in-process --policy "$work/unitree_walk.blob" \
+  --commands models/quadruped/schedules/demo.yaml --report "$work/unitree_walk.json" >"$work/unitree_walk.log" 2>&1 ||
+  { cat "$work/unitree_walk.log"; fail "unitree_walk: pbppo-hil exited $?"; }
+expect "$work/unitree_walk.log" "no fall"
+sed -n '2,8p' "$work/unitree_walk.log" | sed "s/^/   unitree_walk: /"
+like_shipped unitree_walk 0.02 || fail "the deploy-file import does not walk as the shipped policy"
+# On the shipped layout the blob is refused: its layout is the deploy file's.
+"$hil" quadruped --in-process --policy "$work/unitree_walk.blob" --commands models/quadruped/schedules/demo.yaml \
+  >"$work/unitree_wrong_layout.log" 2>&1 && fail "the deploy file's blob ran on the shipped layout"
+expect "$work/unitree_wrong_layout.log" "policy does not fit robot layout 'quadruped'"
+d=$work/bad_deploy.yaml
+sed 's/stiffness: \[20.0,/stiffness: [40.0,/' "$models/unitree_walk.deploy.yaml" >"$d"
+refuse_deploy() {  # refuse_deploy PATTERN: $d refused, nothing written
+  local rc=0
+  rm -f "$work/refused".*
+  "$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$d" --out "$work/refused.blob" \
+    >"$work/refused.log" 2>&1 || rc=$?
+  [ "$rc" -eq 1 ] || { cat "$work/refused.log"; fail "$d: exit $rc, expected 1"; }
+  [ -z "$(ls "$work"/refused.* 2>/dev/null | grep -v refused.log)" ] || fail "a refused deploy import wrote a file"
+  expect "$work/refused.log" "$1"
+  sed 's/^/   /' "$work/refused.log"
+}
+refuse_deploy "bad_deploy.yaml: stiffness\[0\]: 40 for joint LF_HAA, but robot 'quadruped' tracks a policy's targets with kp 20"
+sed 's/  joint_vel_rel:/  height_scan:/' "$models/unitree_walk.deploy.yaml" >"$d"
+refuse_deploy "bad_deploy.yaml: observations.height_scan: an observation term no signal of robot 'quadruped' gives"
+sed 's/^joint_ids_map: .*/joint_ids_map: [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]/' "$models/unitree_walk.deploy.yaml" >"$d"
+refuse_deploy "bad_deploy.yaml: default_joint_pos\[1\]: 0 rad for policy joint 1 \(motor 1, LF_HFE\)"
 echo "import end to end: ok"

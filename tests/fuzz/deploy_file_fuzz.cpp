@@ -1,0 +1,42 @@
+// libFuzzer target: any text as a deploy file (pbppo import-onnx --deploy, policies/onnx/
+// deploy_file.hpp) for the shipped quadruped and a model of 51 inputs and 12 outputs (the seed
+// unitree_walk.deploy.yaml fits it). The file is refused with a message naming it, or read into an
+// IO layout and a mapping that its own readers accepted, one action per policy joint and every
+// model input fed from the layout or a constant.
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+#include "policies/onnx/deploy_file.hpp"
+#include "runtime/robot/robot_model.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace pbppo;
+  static const robot::RobotModel* robot = [] {
+    auto r = robot::LoadRobotModel(std::string(PBPPO_SOURCE_DIR) + "/models/quadruped/robot.yaml");
+    if (!r) std::abort();
+    return new robot::RobotModel(std::move(*r));
+  }();
+  static const onnx::Model* model = [] {
+    auto* m = new onnx::Model;
+    m->origin = "fuzz.onnx";
+    m->inputs = {{"obs", 51, true, {1, 51}, "", ""}};
+    m->outputs = {{"actions", 12, true, {1, 12}, "", ""}};
+    m->input = m->inputs[0];
+    m->output = m->outputs[0];
+    return m;
+  }();
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  auto d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml");
+  if (!d) {
+    const std::string& m = d.error().message;
+    if (m.rfind("fuzz.yaml", 0) != 0 && m.rfind("l.yaml", 0) != 0 && m.rfind("m.yaml", 0) != 0) std::abort();
+    return 0;
+  }
+  if (d->layout.actions.empty() || d->mapping.output_of_action.size() != d->layout.actions.size()) std::abort();
+  if (d->mapping.input_source.size() != 51) std::abort();
+  const auto n = static_cast<std::int32_t>(d->layout.observation_size());
+  for (std::int32_t s : d->mapping.input_source)
+    if (s < -1 || s >= n) std::abort();
+  return 0;
+}
