@@ -27,6 +27,11 @@ CLI::App* AddImportOnnx(CLI::App& app, ImportOnnxOptions& o) {
                                "A trainer's deploy file (unitree_rl_lab deploy.yaml) in place of --map: the IO layout "
                                "and mapping are made from it and written beside the blob");
   map->excludes(deploy);
+  c->add_option("--joints", o.joints,
+                "--deploy with an Isaac Lab env.yaml: the articulation's joint order (env.scene['robot'].joint_names), "
+                "in the robot's joint names")
+      ->delimiter(',')
+      ->needs(deploy);
   c->add_option("--out", o.out, "Output blob path (golden vectors go beside it)")->required();
   c->add_option("--seed", o.seed, "Seed of the golden-vector observations")->check(cli_checks::NonNegativeInteger());
   return c;
@@ -51,7 +56,7 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   const std::string stem = policy::PathBeside(o.out, "");
   const std::string layout_path = stem + ".io_layout.yaml", mapping_path = stem + ".map.yaml";
   if (!o.deploy.empty()) {
-    auto d = onnx::ReadDeployFile(o.deploy, *robot, *model, layout_path, mapping_path);
+    auto d = onnx::ReadDeployFile(o.deploy, *robot, *model, layout_path, mapping_path, o.joints);
     if (!d) return fail(d.error().message);
     deployed = std::move(*d);
     layout = &deployed->layout;

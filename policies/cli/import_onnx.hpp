@@ -3,13 +3,15 @@
 // (policies/onnx, docs/onnx_import.md). Prints what was recognised and the check against the
 // graph's own float64 evaluation. Exit 0: written; 1: the model, the mapping or the robot refused
 // (naming the node, the field or the file), nothing written; 2: usage. With --deploy FILE in place
-// of --map (a trainer's deploy file: unitree_rl_lab's deploy.yaml), the IO layout and mapping are
+// of --map (a trainer's deploy file: unitree_rl_lab's deploy.yaml, or Isaac Lab's env.yaml with
+// --joints, its articulation's joint order), the IO layout and mapping are
 // made from it and written beside the blob (BLOB_STEM.io_layout.yaml, BLOB_STEM.map.yaml); the
 // blob is for that layout (a copy of the robot file whose files.io_layout names it runs it).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace CLI {
 class App;
@@ -19,6 +21,7 @@ namespace pbppo::cli {
 
 struct ImportOnnxOptions {
   std::string model, robot, map, deploy, out;
+  std::vector<std::string> joints;  // --joints: an Isaac Lab env.yaml's joint order
   std::uint64_t seed = 1;
 };
 

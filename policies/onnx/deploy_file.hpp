@@ -8,7 +8,14 @@
 //   unitree_rl_lab's deploy.yaml: joint_ids_map (the robot's motor index of each policy joint),
 //   step_dt, stiffness and damping (motor order), default_joint_pos (policy order), commands,
 //   actions.JointPositionAction {scale, offset, clip, joint_names, joint_ids}, observations (in
-//   order) {params, scale, clip, history_length}.
+//   order) {params, scale, clip, history_length};
+//
+//   Isaac Lab's params/env.yaml: sim.dt x decimation, scene.robot.init_state.joint_pos and the
+//   actuators' stiffness and damping (by joint-name patterns), the one JointPositionAction term,
+//   the observation group policy's terms (by their func) with the group's history; its joint order
+//   is the articulation's, which the file does not hold: given with the import (--joints). It is
+//   turned into the deploy.yaml it implies and read by the same reader (whose messages then name
+//   that file's fields).
 //
 // Observation terms the robot's signals give: base_ang_vel, projected_gravity, velocity_commands
 // (generated_commands of base_velocity), joint_pos_rel, joint_pos, joint_vel_rel, joint_vel,
@@ -38,11 +45,14 @@ struct DeployImport {
 // Reads a deploy file for `robot` and the model's graph input and output (and its state inputs,
 // paired with outputs by rsl_rl's names: X_in -> X_out). `layout_path` and `mapping_path` are the
 // names the texts will be written under (messages name them).
+// `joints`: an Isaac Lab env.yaml's joint order (the articulation's, in the robot's joint names),
+// which that file does not hold; empty for a deploy.yaml, which orders them itself.
 Result<DeployImport> ReadDeployFile(const std::string& path, const robot::RobotModel& robot, const Model& model,
-                                    const std::string& layout_path, const std::string& mapping_path);
+                                    const std::string& layout_path, const std::string& mapping_path,
+                                    const std::vector<std::string>& joints = {});
 // The same from the file's text; `origin` starts every error.
 Result<DeployImport> ParseDeployFile(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
                                      const Model& model, const std::string& layout_path,
-                                     const std::string& mapping_path);
+                                     const std::string& mapping_path, const std::vector<std::string>& joints = {});
 
 }  // namespace pbppo::onnx

@@ -1,11 +1,12 @@
 // libFuzzer target: any text as a deploy file (pbppo import-onnx --deploy, policies/onnx/
-// deploy_file.hpp) for the shipped quadruped and a model of 51 inputs and 12 outputs (the seed
-// unitree_walk.deploy.yaml fits it). The file is refused with a message naming it, or read into an
-// IO layout and a mapping that its own readers accepted, one action per policy joint and every
-// model input fed from the layout or a constant.
+// deploy_file.hpp: a deploy.yaml, or an Isaac Lab env.yaml read with the seed's joint order) for
+// the shipped quadruped and a model of 51 inputs and 12 outputs (the seeds fit it). The file is refused with a message
+// naming it, or read into an IO layout and a mapping that its own readers accepted, one action per policy joint and
+// every model input fed from the layout or a constant.
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "policies/onnx/deploy_file.hpp"
 #include "runtime/robot/robot_model.hpp"
@@ -28,6 +29,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }();
   const std::string text(reinterpret_cast<const char*>(data), size);
   auto d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml");
+  if (!d && d.error().message.find("does not hold the articulation's joint order") != std::string::npos) {
+    // An Isaac Lab env.yaml: again with the order of the seed's articulation.
+    static const std::vector<std::string> joints = {"LF_HAA", "RF_HAA", "LH_HAA", "RH_HAA", "LF_HFE", "RF_HFE",
+                                                    "LH_HFE", "RH_HFE", "LF_KFE", "RF_KFE", "LH_KFE", "RH_KFE"};
+    d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml", joints);
+  }
   if (!d) {
     const std::string& m = d.error().message;
     if (m.rfind("fuzz.yaml", 0) != 0 && m.rfind("l.yaml", 0) != 0 && m.rfind("m.yaml", 0) != 0) std::abort();

@@ -31,7 +31,8 @@ OUT_DIR/
                                 inputs [2, batch, 24] sliced per layer, the outputs concatenated
   unitree_walk.onnx + .deploy.yaml
                                 flat.blob as unitree_rl_lab exports an Isaac Lab policy: joints breadth
-                                first (joint_ids_map), two frames of base_ang_vel and projected_gravity
+                                first (joint_ids_map), two frames of base_ang_vel and projected_gravity;
+                                unitree_walk.env.yaml: the same as Isaac Lab's params/env.yaml
   bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
 
 The good models are what torch.onnx.export writes for these trainers (opset 17, producer
@@ -715,6 +716,55 @@ def unitree_walk(out_dir, flat, flat_layers, quad_actions):
                   f"    history_length: {history}"]
     with open(os.path.join(out_dir, "unitree_walk.deploy.yaml"), "w") as f:
         f.write("\n".join(lines) + "\n")
+    isaac_env(out_dir, offsets)
+
+
+def isaac_env(out_dir, offsets):
+    """The same policy's Isaac Lab params/env.yaml (as ManagerBasedRLEnvCfg dumps it, abridged: the
+    fields the importer reads and a few it skips, PyYAML's python tags included)."""
+    def tup(values, indent):
+        return " !!python/tuple\n" + "".join(f"{' ' * indent}- {v!r}\n" for v in values)
+
+    pose = {".*_HAA": 0.0}
+    for side, legs in (("(LF|RF)", ("LF", "RF")), ("(LH|RH)", ("LH", "RH"))):
+        for j in ("HFE", "KFE"):
+            pose[f"{side}_{j}"] = offsets[f"{legs[0]}_{j}"]
+    t = "viewer:\n  eye:" + tup([7.5, 7.5, 7.5], 2) + "  origin_type: world\n"
+    t += "sim:\n  physics_prim_path: /physicsScene\n  device: cuda:0\n  dt: 0.005\n  render_interval: 4\n"
+    t += "  gravity:" + tup([0.0, 0.0, -9.81], 2)
+    t += "seed: 42\ndecimation: 4\n"
+    t += "scene:\n  num_envs: 4096\n  robot:\n    class_type: isaaclab.assets.articulation.articulation:Articulation\n"
+    t += "    prim_path: /World/envs/env_.*/Robot\n    init_state:\n      pos:" + tup([0.0, 0.0, 0.5], 6)
+    t += "      joint_pos:\n" + "".join(f"        {k}: {v!r}\n" for k, v in pose.items())
+    t += "      joint_vel:\n        .*: 0.0\n"
+    t += "    actuators:\n      legs:\n        class_type: isaaclab.actuators.actuator_pd:ImplicitActuator\n"
+    t += "        joint_names_expr:\n        - .*_HAA\n        - .*_HFE\n        - .*_KFE\n"
+    t += "        effort_limit: null\n        stiffness: 20.0\n        damping: 0.5\n        armature: 0.01\n"
+    t += "observations:\n  policy:\n    concatenate_terms: true\n    concatenate_dim: -1\n"
+    t += "    enable_corruption: true\n    history_length: null\n    flatten_history_dim: true\n"
+    funcs = {"base_ang_vel": "base_ang_vel", "projected_gravity": "projected_gravity",
+             "velocity_commands": "generated_commands", "joint_pos_rel": "joint_pos_rel",
+             "joint_vel_rel": "joint_vel_rel", "last_action": "last_action"}
+    for name, width, scale, history, _ in UNITREE_TERMS:
+        t += f"    {name}:\n      func: isaaclab.envs.mdp.observations:{funcs[name]}\n"
+        t += ("      params:\n        command_name: base_velocity\n" if name == "velocity_commands"
+              else "      params: {}\n")
+        t += "      modifiers: null\n"
+        t += "      noise:\n        func: isaaclab.utils.noise.noise_model:uniform_noise\n        operation: add\n"
+        t += "        n_min: -0.05\n        n_max: 0.05\n"
+        t += "      clip:" + tup([-100.0, 100.0], 6)
+        t += ("      scale: " + repr(scale[0]) + "\n") if len(set(scale)) == 1 else ("      scale:" + tup(scale, 6))
+        t += f"      history_length: {history if history > 1 else 0}\n      flatten_history_dim: true\n"
+    t += "  critic:\n    concatenate_terms: true\n    base_lin_vel:\n"
+    t += "      func: isaaclab.envs.mdp.observations:base_lin_vel\n      params: {}\n"
+    t += "actions:\n  joint_pos:\n    class_type: isaaclab.envs.mdp.actions.joint_actions:JointPositionAction\n"
+    t += "    asset_name: robot\n    debug_vis: false\n    clip: null\n    joint_names:\n    - .*\n"
+    t += "    scale: 0.25\n    offset: 0.0\n    preserve_order: false\n    use_default_offset: true\n"
+    t += "commands:\n  base_velocity:\n    class_type: isaaclab.envs.mdp.commands.velocity_command:UniformVelocityCommand\n"
+    t += "    ranges:\n      lin_vel_x:" + tup([-1.0, 1.0], 6) + "      lin_vel_y:" + tup([-0.5, 0.5], 6)
+    t += "      ang_vel_z:" + tup([-1.0, 1.0], 6) + "      heading: null\n"
+    with open(os.path.join(out_dir, "unitree_walk.env.yaml"), "w") as f:
+        f.write("# Isaac Lab's params/env.yaml for unitree_walk.onnx (written by tools/onnx/make_models.py)\n" + t)
 
 
 # ------------------------------------------------------------------------------- f. bad models

@@ -15,7 +15,8 @@
 #   6. a policy exported with unitree_rl_lab's deploy.yaml (joints in another order, two frames of
 #      history on some terms) imports with --deploy alone: the IO layout and mapping it writes,
 #      put in a copy of the robot's folder, walk the demo schedule as the shipped policy does;
-#      deploy files the layout cannot express are refused naming the field.
+#      deploy files the layout cannot express are refused naming the field; the same policy's
+#      Isaac Lab env.yaml (with its joint order given) gives the same layout and blob.
 # usage: import_end_to_end.sh PBPPO HIL CONTROLLER SOURCE_DIR MODELS_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
@@ -225,4 +226,15 @@ sed 's/  joint_vel_rel:/  height_scan:/' "$models/unitree_walk.deploy.yaml" >"$d
 refuse_deploy "bad_deploy.yaml: observations.height_scan: an observation term no signal of robot 'quadruped' gives"
 sed 's/^joint_ids_map: .*/joint_ids_map: [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]/' "$models/unitree_walk.deploy.yaml" >"$d"
 refuse_deploy "bad_deploy.yaml: default_joint_pos\[1\]: 0 rad for policy joint 1 \(motor 1, LF_HFE\)"
+# The same policy's Isaac Lab env.yaml, with the articulation's joint order it does not hold: the
+# same layout and the same blob, byte for byte.
+isaac_joints=LF_HAA,RF_HAA,LH_HAA,RH_HAA,LF_HFE,RF_HFE,LH_HFE,RH_HFE,LF_KFE,RF_KFE,LH_KFE,RH_KFE
+"$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$models/unitree_walk.env.yaml" \
+  --joints "$isaac_joints" --out "$work/isaac_walk.blob" >"$work/isaac_walk.import.log" 2>&1 ||
+  { cat "$work/isaac_walk.import.log"; fail "isaac_walk: import-onnx --deploy env.yaml exited $?"; }
+expect "$work/isaac_walk.import.log" "\(Isaac Lab env.yaml\): 6 observation terms, 45 layout observations"
+cmp "$work/isaac_walk.blob" "$work/unitree_walk.blob" || fail "the env.yaml import differs from the deploy.yaml import"
+echo "   Isaac Lab env.yaml + --joints: the same blob, byte for byte (its layout's hash among the bytes), as the deploy.yaml gives"
+d=$models/unitree_walk.env.yaml
+refuse_deploy "unitree_walk.env.yaml: top level: an Isaac Lab env.yaml does not hold the articulation's joint order"
 echo "import end to end: ok"

@@ -186,3 +186,124 @@ TEST_CASE("deploy files: what the layout cannot express is refused naming the fi
   // The model against what the deploy file says: its input size.
   CHECK(Refusal(g, kInputs + 1).find("input.size is 37") != std::string::npos);
 }
+
+namespace {
+
+// An Isaac Lab env.yaml of the same policy as kGood (abridged; PyYAML's tuple tags included).
+const char* kEnv = R"(sim:
+  dt: 0.005
+  gravity: !!python/tuple
+  - 0.0
+  - 0.0
+  - -9.81
+decimation: 4
+scene:
+  robot:
+    init_state:
+      joint_pos:
+        .*_HAA: 0.0
+        (LF|RF)_HFE: 0.4
+        (LH|RH)_HFE: -0.4
+        (LF|RF)_KFE: -0.8
+        (LH|RH)_KFE: 0.8
+    actuators:
+      legs:
+        joint_names_expr: [.*_HAA, .*_HFE, .*_KFE]
+        stiffness: 20.0
+        damping: {.*: 0.5}
+observations:
+  policy:
+    concatenate_terms: true
+    history_length: null
+    base_ang_vel:
+      func: isaaclab.envs.mdp.observations:base_ang_vel
+      params: {}
+      modifiers: null
+      noise: {func: isaaclab.utils.noise.noise_model:uniform_noise, n_min: -0.2, n_max: 0.2}
+      clip: !!python/tuple [-100.0, 100.0]
+      scale: 0.25
+      history_length: 3
+    velocity_commands:
+      func: isaaclab.envs.mdp.observations:generated_commands
+      params: {command_name: base_velocity}
+      clip: null
+      scale: !!python/tuple [2.0, 2.0, 0.25]
+      history_length: 0
+    joint_pos_rel:
+      func: isaaclab.envs.mdp.observations:joint_pos_rel
+      params: {}
+      clip: null
+      scale: null
+      history_length: 0
+    last_action:
+      func: isaaclab.envs.mdp.observations:last_action
+      params: {}
+      clip: null
+      scale: null
+      history_length: 0
+actions:
+  joint_pos:
+    class_type: isaaclab.envs.mdp.actions.joint_actions:JointPositionAction
+    clip: null
+    joint_names: [.*]
+    scale: 0.25
+    offset: 0.0
+    use_default_offset: true
+)";
+const std::vector<std::string> kIsaacJoints = {"LF_HAA", "RF_HAA", "LH_HAA", "RH_HAA", "LF_HFE", "RF_HFE",
+                                               "LH_HFE", "RH_HFE", "LF_KFE", "RF_KFE", "LH_KFE", "RH_KFE"};
+
+Result<ox::DeployImport> ReadEnv(const std::string& text, const std::vector<std::string>& joints = kIsaacJoints) {
+  const ox::Model model = ModelOf(kInputs);
+  return ox::ParseDeployFile(text, "env.yaml", Quadruped(), model, "l.yaml", "m.yaml", joints);
+}
+
+std::string EnvRefusal(const std::string& text, const std::vector<std::string>& joints = kIsaacJoints) {
+  auto r = ReadEnv(text, joints);
+  REQUIRE_FALSE(r.ok());
+  return r.error().message;
+}
+
+}  // namespace
+
+TEST_CASE("Isaac Lab's env.yaml with its joint order: the layout and mapping the same deploy.yaml gives") {
+  auto env = ReadEnv(kEnv);
+  REQUIRE_MESSAGE(env.ok(), env.error().message);
+  auto deploy = Read(kGood);
+  REQUIRE_MESSAGE(deploy.ok(), deploy.error().message);
+  CHECK(env->layout.Hash() == deploy->layout.Hash());
+  CHECK(env->mapping.input_source == deploy->mapping.input_source);
+  CHECK(env->mapping.output_of_action == deploy->mapping.output_of_action);
+}
+
+TEST_CASE("Isaac Lab's env.yaml: no joint order, unknown joints, patterns and terms it cannot express are refused") {
+  using test::ReplaceOnce;
+  const std::string e = kEnv;
+  CHECK(EnvRefusal(e, {}) ==
+        "env.yaml: top level: an Isaac Lab env.yaml does not hold the articulation's joint order: give it with "
+        "--joints (Isaac Lab prints it as env.scene['robot'].joint_names), in the robot's joint names");
+  std::vector<std::string> wrong = kIsaacJoints;
+  wrong[3] = "RH_hip";
+  CHECK(EnvRefusal(e, wrong).rfind("--joints: 'RH_hip' is not a joint of robot 'quadruped' (LF_HAA, ", 0) == 0);
+  CHECK(EnvRefusal(ReplaceOnce(e, ".*_HAA: 0.0", ".*_HAA: 0.0\n        LF_.*: 0.1")) ==
+        "env.yaml: scene.robot.init_state.joint_pos: joint LF_HAA matches both '.*_HAA' and 'LF_.*'");
+  CHECK(EnvRefusal(ReplaceOnce(e, "[.*_HAA, .*_HFE, .*_KFE]", "[.*_HAA, .*_HFE]")) ==
+        "env.yaml: scene.robot.actuators: joint LF_KFE is in no actuator group");
+  CHECK(EnvRefusal(
+            ReplaceOnce(e, "actions.joint_actions:JointPositionAction", "actions.joint_actions:JointEffortAction")) ==
+        "env.yaml: actions.joint_pos.class_type: 'isaaclab.envs.mdp.actions.joint_actions:JointEffortAction': the "
+        "layout expresses JointPositionAction only");
+  CHECK(EnvRefusal(ReplaceOnce(e, "      modifiers: null", "      modifiers: [{func: scale}]")) ==
+        "env.yaml: observations.policy.base_ang_vel.modifiers: the layout cannot express a term's modifiers");
+  // What the deploy.yaml reader refuses, named in the deploy.yaml the env.yaml implies.
+  CHECK(EnvRefusal(ReplaceOnce(e, "stiffness: 20.0", "stiffness: 25.0"))
+            .rfind("env.yaml (as deploy.yaml): stiffness[0]: 25 for joint LF_HAA, but robot 'quadruped' tracks", 0) ==
+        0);
+  CHECK(EnvRefusal(ReplaceOnce(e, "dt: 0.005", "dt: 0.0025")).rfind("env.yaml (as deploy.yaml): step_dt: 0.01 s", 0) ==
+        0);
+  // A deploy.yaml orders its joints itself.
+  const ox::Model model = ModelOf(kInputs);
+  auto r = ox::ParseDeployFile(kGood, "d.yaml", Quadruped(), model, "l.yaml", "m.yaml", kIsaacJoints);
+  REQUIRE_FALSE(r.ok());
+  CHECK(r.error().message.rfind("--joints: a deploy.yaml orders the joints itself", 0) == 0);
+}
