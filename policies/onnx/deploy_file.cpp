@@ -50,6 +50,11 @@ bool Null(const YAML::Node& v) {
   return !v || v.IsNull();
 }
 
+// A map key as text ("" for a key that is not a scalar: refused by the name checks that follow).
+std::string Key(const YAML::Node& k) {
+  return k.IsScalar() ? k.Scalar() : std::string();
+}
+
 // A YAML number as the layout file writes it: exact for float32 and float64 values.
 std::string Num(double v) {
   char b[40];
@@ -185,7 +190,7 @@ Status Reader::Actions(const YAML::Node& root) {
   YAML::Node actions;
   PBPPO_TRY(f_.Map(root, "actions", "", &actions));
   for (const auto& kv : actions) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = Key(kv.first);
     if (name != "JointPositionAction")
       return f_.Fail("actions." + name,
                      "an action term the layout cannot express (only JointPositionAction: joint "
@@ -249,7 +254,7 @@ Result<TermSignals> Reader::Term(const std::string& name, const YAML::Node& term
   } else if (name == "projected_gravity") {
     t.signals = {"projected_gravity_x", "projected_gravity_y", "projected_gravity_z"};
   } else if (name == "velocity_commands" || name == "generated_commands") {
-    const bool base_velocity = params.IsMap() && params.size() == 1 && params["command_name"] &&
+    const bool base_velocity = !Null(params) && params.IsMap() && params.size() == 1 && params["command_name"] &&
                                params["command_name"].IsScalar() && params["command_name"].Scalar() == "base_velocity";
     if (!base_velocity)
       return f_.Fail(where + ".params", YamlFields::Quote(params) +
@@ -279,7 +284,7 @@ Status Reader::Observations(const YAML::Node& root) {
   PBPPO_TRY(f_.Map(root, "observations", "", &obs));
   if (obs.size() == 0) return f_.Fail("observations", "no term");
   for (const auto& kv : obs) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = Key(kv.first);
     const std::string where = "observations." + name;
     const YAML::Node term = kv.second;
     if (!term.IsMap()) return f_.Fail(where, "not a map");
@@ -402,8 +407,8 @@ Result<DeployImport> Reader::Run(const YAML::Node& node, const std::string& form
     std::string r;
     for (const auto& kv : c["base_velocity"]["ranges"])
       if (kv.second.IsSequence() && kv.second.size() == 2)
-        r += (r.empty() ? "" : ", ") + kv.first.as<std::string>() + " [" + kv.second[0].Scalar() + ", " +
-             kv.second[1].Scalar() + "]";
+        r +=
+            (r.empty() ? "" : ", ") + Key(kv.first) + " [" + kv.second[0].Scalar() + ", " + kv.second[1].Scalar() + "]";
     notes_.push_back("commands:    trained on " + r + " (the robot's operator limits apply, not these)");
   }
   DeployImport d;
@@ -460,7 +465,7 @@ Result<YAML::Node> EnvYaml::PerJoint(const YAML::Node& v, const std::string& whe
   YAML::Node found;
   std::string by;
   for (const auto& kv : v) {
-    const std::string pattern = kv.first.as<std::string>();
+    const std::string pattern = Key(kv.first);
     std::regex re;
     try {
       re = std::regex(pattern);
@@ -529,7 +534,7 @@ Result<YAML::Node> EnvYaml::Convert(const YAML::Node& env, std::vector<std::stri
     const std::string& j = joints_[i];
     std::string group;
     for (const auto& kv : actuators) {
-      const std::string name = kv.first.as<std::string>();
+      const std::string name = Key(kv.first);
       const YAML::Node exprs = kv.second.IsMap() ? kv.second["joint_names_expr"] : YAML::Node();
       if (!exprs || !exprs.IsSequence())
         return f_.Fail("scene.robot.actuators." + name + ".joint_names_expr", "missing: a list of joint patterns");
@@ -562,7 +567,7 @@ Result<YAML::Node> EnvYaml::Convert(const YAML::Node& env, std::vector<std::stri
   YAML::Node actions;
   PBPPO_TRY(f_.Map(env, "actions", "", &actions));
   if (actions.size() != 1) return f_.Fail("actions", std::to_string(actions.size()) + " terms; one expected");
-  const std::string term = actions.begin()->first.as<std::string>();
+  const std::string term = Key(actions.begin()->first);
   const YAML::Node a = actions.begin()->second;
   const std::string w = "actions." + term;
   if (!a.IsMap()) return f_.Fail(w, "not a map");
@@ -615,9 +620,11 @@ Result<YAML::Node> EnvYaml::Convert(const YAML::Node& env, std::vector<std::stri
   YAML::Node obs(YAML::NodeType::Map);
   for (const auto& kv : group) {
     if (!kv.second.IsMap() || !kv.second["func"]) continue;  // the group's own settings
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = Key(kv.first);
     const std::string tw = "observations.policy." + name;
-    const std::string func = kv.second["func"].as<std::string>();
+    if (!kv.second["func"].IsScalar())
+      return f_.Fail(tw + ".func", YamlFields::Quote(kv.second["func"]) + " is not a name");
+    const std::string func = kv.second["func"].Scalar();
     const auto colon = func.rfind(':');
     const std::string kind = colon == std::string::npos ? func : func.substr(colon + 1);
     if (kv.second["modifiers"] && !kv.second["modifiers"].IsNull())
@@ -638,7 +645,7 @@ Result<YAML::Node> EnvYaml::Convert(const YAML::Node& env, std::vector<std::stri
   if (commands && commands.IsMap() && commands["base_velocity"] && commands["base_velocity"]["ranges"]) {
     YAML::Node ranges(YAML::NodeType::Map);
     for (const auto& kv : commands["base_velocity"]["ranges"])
-      if (kv.second.IsSequence()) ranges[kv.first.as<std::string>()] = kv.second;
+      if (kv.second.IsSequence()) ranges[Key(kv.first)] = kv.second;
     d["commands"]["base_velocity"]["ranges"] = ranges;
   }
   std::string order;
@@ -647,9 +654,7 @@ Result<YAML::Node> EnvYaml::Convert(const YAML::Node& env, std::vector<std::stri
   return d;
 }
 
-}  // namespace
-
-Result<DeployImport> ParseDeployFile(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
+Result<DeployImport> ParseDeployText(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
                                      const Model& model, const std::string& layout_path,
                                      const std::string& mapping_path, const std::vector<std::string>& joints) {
   auto root = robot::ParseYaml(text, origin);
@@ -675,6 +680,20 @@ Result<DeployImport> ParseDeployFile(const std::string& text, const std::string&
   if (!d) return d;
   d->notes.insert(d->notes.begin() + 1, notes.begin(), notes.end());
   return d;
+}
+
+}  // namespace
+
+Result<DeployImport> ParseDeployFile(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
+                                     const Model& model, const std::string& layout_path,
+                                     const std::string& mapping_path, const std::vector<std::string>& joints) {
+  // The readers look before they take (Null, IsMap, Key); a YAML node used in a way they did not
+  // foresee still ends as a refusal naming the file, never as an exception out of the import.
+  try {
+    return ParseDeployText(text, origin, robot, model, layout_path, mapping_path, joints);
+  } catch (const YAML::Exception& e) {
+    return MakeError(ErrorCode::kFormat, origin + ": " + e.what());
+  }
 }
 
 Result<DeployImport> ReadDeployFile(const std::string& path, const robot::RobotModel& robot, const Model& model,
