@@ -14,7 +14,7 @@
 //   actuators' stiffness and damping (by joint-name patterns), the one JointPositionAction term,
 //   the observation group policy's terms (by their func) with the group's history; its joint order
 //   is the articulation's, which the file does not hold: given with the import (--joints). It is
-//   turned into the deploy.yaml it implies and read by the same reader (whose messages then name
+//   turned into the deploy.yaml it implies (isaac_env.hpp) and read by the same reader (whose messages then name
 //   that file's fields).
 //
 // Observation terms the robot's signals give: base_ang_vel, projected_gravity, velocity_commands

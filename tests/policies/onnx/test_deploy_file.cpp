@@ -3,7 +3,6 @@
 // refused naming it.
 #include <doctest/doctest.h>
 
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -76,17 +75,16 @@ ox::Model ModelOf(int inputs) {
   return std::move(*m);
 }
 
+// The text itself (no file: test cases of this binary run in parallel processes).
 Result<ox::DeployImport> Read(const std::string& text, int inputs = kInputs) {
-  const std::string path = test::ScratchDir("deploy_file") + "/deploy.yaml";
-  std::ofstream(path) << text;
   const ox::Model model = ModelOf(inputs);
-  return ox::ReadDeployFile(path, Quadruped(), model, "l.yaml", "m.yaml");
+  return ox::ParseDeployFile(text, "deploy.yaml", Quadruped(), model, "l.yaml", "m.yaml");
 }
 
 std::string Refusal(const std::string& text, int inputs = kInputs) {
   auto r = Read(text, inputs);
   REQUIRE_FALSE(r.ok());
-  const std::string prefix = test::ScratchDir("deploy_file") + "/deploy.yaml: ";
+  const std::string prefix = "deploy.yaml: ";
   const std::string& m = r.error().message;
   return m.rfind(prefix, 0) == 0 ? m.substr(prefix.size()) : m;
 }
