@@ -69,6 +69,7 @@ using namespace pbppo;
 
 struct Options {
   std::string robot, policy, trajectory, profile_json, profile_png, dds_profile, can, candump, commands;
+  std::string gamepad;  // the device of the robot's gamepad (a transport of kind evdev)
   std::string kernel = "auto";
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
@@ -145,6 +146,9 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
   app.add_option("--commands", o.commands,
                  "A schedule file in place of the transport of its stream (an operator's commands, played)");
+  app.add_option("--gamepad", o.gamepad,
+                 "The robot's gamepad (its transport of kind evdev) from this device (/dev/input/eventN, "
+                 "/dev/input/by-id/...) or recorded event file, in place of the robot file's");
   app.add_flag("--lockstep", o.lockstep,
                "One tick per sample of the robot's timing.lockstep stream (a simulator in lock-step)");
   app.add_option("--lockstep-timeout-ms", o.lockstep_timeout_ms, "--lockstep: tick anyway after this long")
@@ -234,6 +238,13 @@ Result<Transports> OpenTransports(const robot::RobotModel& robot, const Options&
   settings.can.receive_all = o.receive_all;
   settings.can.candump_path = o.candump;
   settings.can_lockstep_wait_ns = static_cast<std::int64_t>(o.lockstep_wait_ms) * 1'000'000;
+  if (!o.gamepad.empty()) {
+    if (std::none_of(robot.transports.begin(), robot.transports.end(),
+                     [](const robot::TransportSpec& t) { return t.kind == "evdev"; }))
+      return MakeError(ErrorCode::kInvalidValue,
+                       "--gamepad: " + robot.path + " has no gamepad (a transport of kind evdev) to read " + o.gamepad);
+    settings.evdev.device = o.gamepad;
+  }
   auto naming = dds::ParseDdsNaming(o.dds_naming);
   if (!naming) return MakeError(naming.error().code, "--dds-naming: " + naming.error().message);
   dds::DdsLinkOptions& d = settings.dds;
@@ -485,6 +496,8 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
   if (l.mode_change_count() > l.mode_changes().size())
     std::printf("mode change: %llu in all, the first %zu above\n",
                 static_cast<unsigned long long>(l.mode_change_count()), l.mode_changes().size());
+  if (const std::string op_line = loop::Describe(l.operator_status()); !op_line.empty())
+    std::printf("operator: %s\n", op_line.c_str());
   if (const loop::RecoveryStatus& rec = l.recovery(); rec.stops + rec.refused > 0)
     std::printf(
         "recovery: stopped %llu times, re-armed %llu (%llu automatically, %llu on request), %llu requests "
@@ -601,11 +614,18 @@ int Run(const Options& o) {
                  Progress(robot, o, &service, recorder.get()));
 
   // Every heap allocation of this (the control) thread while the loop runs is counted.
+  // A robot whose operator arms it (robot.yaml operator.arm: a gamepad's button) waits for the
+  // request, unless a schedule plays the operator's stream.
+  const bool operator_arms = robot.op.arm >= 0 && o.commands.empty() && !o.safe_stop;
+  if (operator_arms)
+    std::printf("waiting for the operator to arm (field '%s')\n",
+                robot.fields[static_cast<std::size_t>(robot.op.arm)].name.c_str());
+  std::fflush(stdout);
   std::uint64_t allocations = 0;
   loop::RunResult r;
   {
     AllocationScope scope;
-    r = loop::Run(robot, data, *loop, ts.all, *clock->clock, {MaxTicks(robot, o, ts), !o.safe_stop});
+    r = loop::Run(robot, data, *loop, ts.all, *clock->clock, {MaxTicks(robot, o, ts), !o.safe_stop && !operator_arms});
     allocations = scope.count();
   }
   done.store(true);

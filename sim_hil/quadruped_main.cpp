@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,6 +33,7 @@ struct Options {
   std::string operator_kind = "schedule", dds_naming = "native";
   std::string kernel = "auto";  // --in-process: the policy's forward kernel
   std::string dds_security, dds_identity = "controller";
+  std::string gamepad;  // --operator robot: the gamepad's device in place of the robot file's
   int domain = 0;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
@@ -95,6 +97,23 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
     p.series = {cmd, meas};
     ts.panels.push_back(p);
   }
+  if (rig.model().op.any()) {  // an operator's requests move the phases: show them
+    report::TimeSeriesPlot::Panel p;
+    p.ylabel = "phase, mode";
+    report::TimeSeriesPlot::Series phase, mode;
+    phase.title = "phase (2 stand-up, 3 hold, 4 run)";
+    mode.title = "mode (2 safe-stop, 3 e-stop)";
+    mode.dashed = true;
+    for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
+      const RigSample& s = rig.trace()[i];
+      phase.x.push_back(static_cast<double>(s.t_s));
+      phase.y.push_back(s.loop_phase);
+      mode.x.push_back(static_cast<double>(s.t_s));
+      mode.y.push_back(s.mode);
+    }
+    p.series = {phase, mode};
+    ts.panels.push_back(p);
+  }
   if (auto st = report::PlotTimeSeries(ts, png); !st) return st;
   report::MapPlot map;
   map.title = "quadruped HIL: base path (top view)";
@@ -114,10 +133,14 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
 }
 
 int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOptions hil) {
-  const bool dds_operator = o.operator_kind == "dds";
-  if (!dds_operator && o.commands.empty()) return Fail("--in-process needs --commands SCHEDULE (or --operator dds)", 2);
+  // --operator dds (the older name) and robot: the robot file's own transport of the velocity
+  // command, whatever its kind (DDS, a gamepad).
+  const bool dds_operator = o.operator_kind != "schedule";
+  if (!dds_operator && o.commands.empty())
+    return Fail("--in-process needs --commands SCHEDULE (or --operator robot)", 2);
   if (dds_operator && o.commands.empty() && o.duration_s <= 0)
-    return Fail("--operator dds needs --duration S or --commands SCHEDULE (the phases of the report)", 2);
+    return Fail(
+        "--operator " + o.operator_kind + " needs --duration S or --commands SCHEDULE (the phases of the report)", 2);
   // The schedule plays the operator, or (--operator dds) only names the report's phases.
   auto schedule = !o.commands.empty()
                       ? loop::LoadSchedule(o.commands, model)
@@ -125,8 +148,10 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
                                                 std::to_string(o.duration_s) + "}]\n",
                                             "--duration", model);
   if (!schedule) return Fail(schedule.error().message, 2);
-  // Over DDS, the robot's own transport of the schedule's stream, opened as pbppo-controller does.
+  // The robot's own transport of the schedule's stream, opened as pbppo-controller does.
   std::unique_ptr<robot::Transport> op;
+  std::string op_what;
+  bool wall_clock = false;  // the operator is on a wall clock: a DDS peer, a gamepad (not a recorded file)
   if (dds_operator) {
     transport::Settings s;
     auto naming = dds::ParseDdsNaming(o.dds_naming);
@@ -134,30 +159,45 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
     s.dds.domain_id = o.domain;
     s.dds.naming = *naming;
     s.dds.security = {o.dds_security, o.dds_identity};
+    s.evdev.device = o.gamepad;
     const int t = model.TransportIndex(model.streams[schedule->stream_index].transport);
-    auto opened = transport::Open(model, model.transports[static_cast<std::size_t>(t)], s);
+    const robot::TransportSpec& spec = model.transports[static_cast<std::size_t>(t)];
+    if (!o.gamepad.empty() && spec.kind != "evdev")
+      return Fail(
+          "--gamepad: the velocity command comes from transport '" + spec.name + "' (" + spec.kind + "), not a gamepad",
+          2);
+    auto opened = transport::Open(model, spec, s);
     if (!opened) return Fail(opened.error().message, 2);
     op = std::move(*opened);
+    if (spec.kind == "evdev") {
+      std::error_code ec;
+      const std::string& device = o.gamepad.empty() ? spec.evdev.device : o.gamepad;
+      wall_clock = !std::filesystem::is_regular_file(device, ec);
+      op_what = std::string(wall_clock ? "a gamepad, " : "a recorded gamepad session, ") + device;
+    } else {
+      wall_clock = true;
+      op_what = "velocity commands over DDS, domain " + std::to_string(o.domain) + ", " + o.dds_naming + " names";
+    }
   }
   RigOptions ro;
   ro.policy = o.policy;
   ro.self_test = !o.skip_self_test;
   ro.kernel = policy::KernelOption(o.kernel);
-  ro.realtime = o.realtime || dds_operator;  // an operator over DDS is on a wall clock
+  ro.realtime = o.realtime || wall_clock;
+  // An operator who arms the robot (robot.yaml operator.arm) does; else the run arms at once.
+  ro.arm = !(dds_operator && model.op.arm >= 0);
   ro.operator_transport = op.get();
   // With a DDS operator the run only needs the wall clock: late ticks (the plant shares the
   // thread) are counted in the profile, not acted on. --realtime alone measures the controller.
-  ro.supervise_deadlines = !dds_operator;
+  ro.supervise_deadlines = !wall_clock;
   auto rig = QuadrupedRig::Make(model, std::move(hil), std::move(*schedule), ro);
   if (!rig) return Fail(rig.error().message, 2);
-  std::printf(
-      "pbppo-hil quadruped: controller and HIL in one process, %s, %s, %s, %s (%.1f s)\n",
-      ro.realtime ? "free-running at the tick period" : "lock-step",
-      o.scenario.empty() ? "flat ground" : o.scenario.c_str(), o.policy.empty() ? "no policy" : o.policy.c_str(),
-      dds_operator
-          ? ("velocity commands over DDS, domain " + std::to_string(o.domain) + ", " + o.dds_naming + " names").c_str()
-          : ("schedule " + o.commands).c_str(),
-      (*rig)->operator_source().schedule().duration_s());
+  std::printf("pbppo-hil quadruped: controller and HIL in one process, %s, %s, %s, %s (%.1f s)\n",
+              ro.realtime ? "free-running at the tick period" : "lock-step",
+              o.scenario.empty() ? "flat ground" : o.scenario.c_str(),
+              o.policy.empty() ? "no policy" : o.policy.c_str(),
+              dds_operator ? op_what.c_str() : ("schedule " + o.commands).c_str(),
+              (*rig)->operator_source().schedule().duration_s());
   if (const policy::PolicyModel* p = (*rig)->policy())
     std::printf("controller: policy %s\n", policy::KernelNote(*p, o.skip_self_test).c_str());
   if (ro.realtime) {
@@ -192,6 +232,9 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
                 o.record.path.c_str(), static_cast<unsigned long long>(recorder->dropped()));
   }
   if (op) op->Finish(loop::StatusOf((*rig)->loop()));  // the final status out, delivered
+  if (op && !op->Summary().empty()) std::printf("operator: %s\n", op->Summary().c_str());
+  if (const std::string op_line = loop::Describe((*rig)->loop().operator_status()); !op_line.empty())
+    std::printf("operator: %s\n", op_line.c_str());
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double sim_s = static_cast<double>((*rig)->ticks()) * model.tick_period_s;
   const RigReport rep = (*rig)->Report(o.settle_s, dds_operator);
@@ -254,9 +297,13 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_option("--profile", o.profile, "--in-process: write the controller's tick profile (JSON)");
   loop::AddRecordOptions(app, o.record);
   app.add_option("--operator", o.operator_kind,
-                 "--in-process: the operator: schedule (--commands) or dds (velocity commands over DDS, e.g. from "
-                 "pbppo-operator; real time)")
-      ->check(CLI::IsMember({"schedule", "dds"}));
+                 "--in-process: the operator: schedule (--commands), or robot: the robot file's own transport of the "
+                 "velocity command (DDS, e.g. from pbppo-operator, or a gamepad; real time unless a recorded gamepad "
+                 "file); dds: the same")
+      ->check(CLI::IsMember({"schedule", "dds", "robot"}));
+  app.add_option("--gamepad", o.gamepad,
+                 "--operator robot: the gamepad's device (/dev/input/eventN) or a recorded event file, in place of "
+                 "the robot file's");
   app.add_option("--domain", o.domain, "--operator dds: DDS domain id")->check(CLI::Range(0, 232));
   app.add_option("--dds-naming", o.dds_naming, "--operator dds: native or ros2 names");
   app.add_option("--dds-security", o.dds_security, "--operator dds: DDS Security folder (make_dds_security.sh)");

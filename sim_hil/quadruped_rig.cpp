@@ -48,6 +48,7 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   r->transports_[0] = r->can_.get();
   r->transports_[1] = o.operator_transport != nullptr ? o.operator_transport : r->schedule_.get();
   r->supervise_deadlines_ = o.supervise_deadlines;
+  r->arm_ = o.arm;
   r->trace_every_ = o.trace_every;
   if (o.realtime)
     r->clock_ =
@@ -115,7 +116,7 @@ bool QuadrupedRig::RunSchedule(double extra_s) {
   const auto total =
       static_cast<std::uint64_t>(std::llround((schedule_->schedule().duration_s() + extra_s) / model_.tick_period_s));
   if (trace_every_ != 0) trace_.reserve(trace_.size() + total / trace_every_ + 1);
-  loop_->Arm();
+  if (arm_) loop_->Arm();
   if (clock_) clock_->Start();
   while (tick_ < total) {
     if (!Tick()) return false;
@@ -151,10 +152,16 @@ void FillBaseSample(const QuadrupedPlant& p, RigSample* t) noexcept {
 void PrintRigReport(const RigReport& r) {
   std::printf("%-10s %6s %6s | %8s %8s %8s | %8s %8s %8s\n", "phase", "from", "to", "cmd vx", "cmd vy", "cmd wz",
               "|e| vx", "|e| vy", "|e| wz");
-  for (const PhaseTracking& p : r.phases)
+  for (const PhaseTracking& p : r.phases) {
+    if (p.samples == 0) {  // shorter than the settling time
+      std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %26s\n", p.name.c_str(), p.start_s, p.end_s, p.command[0],
+                  p.command[1], p.command[2], "(settling)");
+      continue;
+    }
     std::printf("%-10s %6.1f %6.1f | %8.2f %8.2f %8.2f | %8.3f %8.3f %8.3f\n", p.name.c_str(), p.start_s, p.end_s,
                 p.command[0], p.command[1], p.command[2], p.mean_abs_error[0], p.mean_abs_error[1],
                 p.mean_abs_error[2]);
+  }
   std::printf("walked %.2f m; %s\n", r.distance_m,
               r.fell ? ("FELL at " + std::to_string(r.fell_at_s) + " s").c_str() : "no fall");
 }
@@ -170,7 +177,28 @@ RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedul
       t.end_s = ph.start_s + ph.duration_s;
       rep.phases.push_back(t);
     }
-  for (const RigSample& x : trace) {
+  // By command: a phase per command held at least kHeldS; the samples between (a ramp, a stick
+  // moving) are in none.
+  constexpr double kHeldS = 0.2;
+  std::vector<std::int32_t> phase_of(by_command ? trace.size() : 0, -1);
+  const auto same = [](const RigSample& a, const RigSample& b) {
+    return a.cmd_vx == b.cmd_vx && a.cmd_vy == b.cmd_vy && a.cmd_yaw_rate == b.cmd_yaw_rate;
+  };
+  for (std::size_t i = 0, j = 0; by_command && i < trace.size(); i = j) {
+    for (j = i + 1; j < trace.size() && same(trace[j], trace[i]);) ++j;
+    if (trace[j - 1].t_s - trace[i].t_s < kHeldS && !(i == 0 && j == trace.size())) continue;
+    PhaseTracking t;
+    t.name = "command " + std::to_string(rep.phases.size() + 1);
+    t.start_s = trace[i].t_s;
+    t.end_s = trace[j - 1].t_s;
+    t.command[0] = trace[i].cmd_vx;
+    t.command[1] = trace[i].cmd_vy;
+    t.command[2] = trace[i].cmd_yaw_rate;
+    for (std::size_t k = i; k < j; ++k) phase_of[k] = static_cast<std::int32_t>(rep.phases.size());
+    rep.phases.push_back(t);
+  }
+  for (std::size_t i = 0; i < trace.size(); ++i) {
+    const RigSample& x = trace[i];
     // A fall: tilted beyond 60 degrees, or the body on the ground while the controller held or
     // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state;
     // re-armed, it gets up from there in arming and stand-up).
@@ -183,19 +211,8 @@ RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedul
     }
     std::size_t phase = 0;
     if (by_command) {
-      // A phase per run of one command in force.
-      const double c[3] = {static_cast<double>(x.cmd_vx), static_cast<double>(x.cmd_vy),
-                           static_cast<double>(x.cmd_yaw_rate)};
-      if (rep.phases.empty() || c[0] != rep.phases.back().command[0] || c[1] != rep.phases.back().command[1] ||
-          c[2] != rep.phases.back().command[2]) {
-        PhaseTracking t;
-        t.name = "command " + std::to_string(rep.phases.size() + 1);
-        t.start_s = x.t_s;
-        std::copy(c, c + 3, t.command);
-        rep.phases.push_back(t);
-      }
-      rep.phases.back().end_s = x.t_s;
-      phase = rep.phases.size() - 1;
+      if (phase_of[i] < 0) continue;
+      phase = static_cast<std::size_t>(phase_of[i]);
     } else {
       if (x.schedule_phase < 0) continue;
       phase = static_cast<std::size_t>(x.schedule_phase);

@@ -46,6 +46,9 @@ struct RigOptions {
   // simulator, not the controller, makes ticks late; a run that only needs the wall clock (an
   // operator over DDS) turns this off.
   bool supervise_deadlines = true;
+  // RunSchedule arms the loop on its first tick; false: the operator's arm request does
+  // (robot.yaml operator.arm, through operator_transport).
+  bool arm = true;
   // Every how many ticks the trace keeps a sample (0: no trace; a run of days keeps it bounded).
   std::uint32_t trace_every = 1;
 };
@@ -96,9 +99,9 @@ class QuadrupedRig {
   bool TickPlant() noexcept;
   // The last controller tick's own time (loop::Tick, not the wait for its deadline), ns.
   std::int64_t last_tick_ns() const noexcept { return last_tick_ns_; }
-  // Arms, then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
+  // Arms (RigOptions::arm), then ticks until the schedule has ended (plus `extra_s`) or the loop stopped.
   bool RunSchedule(double extra_s = 0);
-  // Per schedule phase (`by_command`: per run of one command in force, as an operator over DDS
+  // Per schedule phase (`by_command`: per command held at least 0.2 s, as an operator over DDS
   // gives them on its own clock): mean |velocity error| after `settle_s` of each phase.
   RigReport Report(double settle_s, bool by_command = false) const;
 
@@ -134,6 +137,7 @@ class QuadrupedRig {
   std::int64_t wait_ns_ = 0;
   std::unique_ptr<rt::FreeRunningClock> clock_;  // realtime
   bool supervise_deadlines_ = true;
+  bool arm_ = true;
   bool memory_ = true;
   std::uint64_t tick_ = 0;
   loop::TickStatus status_ = loop::TickStatus::kRunning;
@@ -145,7 +149,7 @@ void PrintRigReport(const RigReport& report);
 // The base's part of a trace sample (pose, base-frame velocity, tilt, contacts) from the plant.
 void FillBaseSample(const QuadrupedPlant& plant, RigSample* sample) noexcept;
 
-// The report of a trace: per phase of `schedule` (`by_command`: per run of one command in force)
+// The report of a trace: per phase of `schedule` (`by_command`: per command held at least 0.2 s)
 // the mean |velocity error| after `settle_s`, falls and distance (QuadrupedRig::Report).
 RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedule& schedule, double settle_s,
                         bool by_command);

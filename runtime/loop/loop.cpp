@@ -43,7 +43,15 @@ std::unique_ptr<LoopData> MakeLoopData(const RobotModel& model, CommandSource* s
   l->limit_signals_ = std::move(robot::SignalProgram::Create(model, limited)).value();
   l->limit_values_.assign(limited.size(), 0.0);
   l->sup_ = safety::MakeSupervisorState(model.supervisor_model);
+  l->operator_ = model.op.any();
   return l;
+}
+
+std::string Describe(const OperatorStatus& s) {
+  if (s.requests == 0) return "";
+  std::string out = std::to_string(s.requests) + " requests, " + std::to_string(s.refused) + " refused";
+  if (s.refused > 0) out += "; the last: " + std::string(s.last);
+  return out;
 }
 
 LoopStatus LoopData::Status() const noexcept {
@@ -150,8 +158,69 @@ struct TickImpl {
     l.source_done_ = false;
   }
 
+  // The operator's requests from the robot's fields (Operator requests in loop.hpp).
+  static void OperatorRequests(const RobotModel& m, const RobotData& d, LoopData& l, TickEvents& ev) noexcept {
+    if (!l.operator_) return;
+    const robot::OperatorSpec& op = m.op;
+    const auto valid = [&](std::int32_t f) {
+      return d.streams[m.fields[static_cast<std::size_t>(f)].stream].invalid_input < 0;
+    };
+    const std::int32_t fields[5] = {op.arm, op.walk, op.stop, op.estop, op.rearm};
+    bool rise[5] = {};
+    for (std::size_t i = 0; i < 5; ++i) {
+      const std::int32_t f = fields[i];
+      if (f < 0 || (i != 3 && !valid(f))) continue;  // an invalid sample asks nothing (but e-stop), nor forgets
+      const bool held = d.fields[static_cast<std::size_t>(f)] >= 0.5;
+      rise[i] = held && l.operator_held_[i] == 0;
+      l.operator_held_[i] = held ? 1 : 0;
+      if (rise[i]) {
+        ev.operator_rises = static_cast<std::uint8_t>(ev.operator_rises | (1u << i));
+        ++l.operator_status_.requests;
+      }
+    }
+    ev.arm = ev.arm || rise[0];
+    ev.walk = rise[1];
+    if (rise[2]) {
+      l.stop_.store(true, std::memory_order_relaxed);
+      ev.stop = true;
+    }
+    ev.estop = ev.estop || rise[3];
+    ev.rearm = ev.rearm || rise[4];
+    if (op.deadman >= 0) ev.deadman = valid(op.deadman) && d.fields[static_cast<std::size_t>(op.deadman)] >= 0.5;
+  }
+
+  // An operator's request the phase did not take (OperatorStatus in loop.hpp).
+  static void Refuse(LoopData& l, std::uint64_t tick, const char* request, const char* why) noexcept {
+    OperatorStatus& st = l.operator_status_;
+    ++st.refused;
+    st.last_tick = tick;
+    std::snprintf(st.last, sizeof st.last, "%s refused at tick %llu: %s (%s)", request,
+                  static_cast<unsigned long long>(tick), why, ToString(l.phase_));
+  }
+
+  // Per motor: the measured pose, inside the commands' limits (a joint resting on its stop, a
+  // little past its limit, is commanded from the limit), where a stand-up starts.
+  static void MeasuredPose(const RobotModel& m, const RobotData& d, LoopData& l) noexcept {
+    for (std::size_t k = 0; k < m.motors.size(); ++k) {
+      const robot::MotorSpec& mo = m.motors[k];
+      const double q = d.fields[mo.q_field];
+      l.q0_[k] = mo.velocity_commanded() ? q : std::clamp(q, m.commands[mo.q].min, m.commands[mo.q].max);
+    }
+  }
+
+  // Stand-up (from the measured pose) and hold, or straight to hold without a stand-up.
+  static void EnterStandUp(const RobotModel& m, LoopData& l, std::uint64_t tick) noexcept {
+    if (m.phases.stand_up_ticks > 0) {
+      Enter(l, Phase::kStandUp, tick);
+      StandUp(m, l, 0);
+    } else {
+      Enter(l, Phase::kHold, tick);
+    }
+  }
+
   // Arm / disarm / stop requests, then the phase's own transitions and its command.
   static void Phases(const RobotModel& m, RobotData& d, LoopData& l, TickEvents ev) noexcept {
+    // (OperatorRequests, in Tick, added the operator's requests to ev.)
     const std::uint64_t tick = d.tick;
     const bool motors = m.phases.enable_motors;
     if (!ev.stop) {
@@ -162,6 +231,8 @@ struct TickImpl {
     for (std::size_t k = 0; k < m.motors.size(); ++k)
       if (d.fresh[m.motors[k].stream] != 0) l.answered_[k] = 1;
     if (ev.disarm && !motors && l.phase_ == Phase::kRun) Enter(l, Phase::kDisarmed, tick);
+    const auto rose = [&ev](OperatorRequest r) { return ((ev.operator_rises >> static_cast<unsigned>(r)) & 1u) != 0; };
+    if (rose(OperatorRequest::kArm) && l.phase_ != Phase::kDisarmed && !ev.stop) Refuse(l, tick, "arm", "not disarmed");
     if (ev.arm && l.phase_ == Phase::kDisarmed) {
       if (motors) {
         Enter(l, Phase::kArming, tick);
@@ -169,6 +240,9 @@ struct TickImpl {
         StartRun(m, d, l);
       }
     }
+    // Arming is not supervised (the motors are not answering yet): an e-stop request there switches
+    // them off at once, in motor-off, where the supervisor takes the request and latches e-stop.
+    if (ev.estop && l.phase_ == Phase::kArming) Enter(l, Phase::kMotorOff, tick);
     if (ev.stop) {
       switch (l.phase_) {
         case Phase::kArming: Enter(l, Phase::kMotorOff, tick); break;
@@ -184,23 +258,13 @@ struct TickImpl {
     for (std::size_t k = 0; k < m.commands.size(); ++k) l.desired_[k] = m.commands[k].neutral;
     const std::uint64_t in_phase = tick - l.phase_start_[static_cast<std::size_t>(l.phase_)];
     const bool all = std::all_of(l.answered_.begin(), l.answered_.end(), [](std::uint8_t a) { return a != 0; });
+    if (rose(OperatorRequest::kWalk) && l.phase_ != Phase::kHold) Refuse(l, tick, "walk", "not holding");
     switch (l.phase_) {
       case Phase::kArming:
         if (all) {
-          for (std::size_t k = 0; k < m.motors.size(); ++k) {
-            // Stand-up starts from the measured pose, inside the commands' limits (a joint resting
-            // on its stop, a little past its limit, is commanded from the limit).
-            const robot::MotorSpec& mo = m.motors[k];
-            const double q = d.fields[mo.q_field];
-            l.q0_[k] = mo.velocity_commanded() ? q : std::clamp(q, m.commands[mo.q].min, m.commands[mo.q].max);
-            d.streams[m.motors[k].stream].age_ticks = 0;
-          }
-          if (m.phases.stand_up_ticks > 0) {
-            Enter(l, Phase::kStandUp, tick);
-            StandUp(m, l, 0);
-          } else {
-            Enter(l, Phase::kHold, tick);
-          }
+          MeasuredPose(m, d, l);
+          for (const robot::MotorSpec& mo : m.motors) d.streams[mo.stream].age_ticks = 0;
+          EnterStandUp(m, l, tick);
         } else if (in_phase >= m.phases.arming_timeout_ticks) {
           Enter(l, Phase::kFailed, tick);
         }
@@ -209,9 +273,27 @@ struct TickImpl {
         if (StandUp(m, l, in_phase)) Enter(l, Phase::kHold, tick);
         break;
       case Phase::kHold:
-        if (l.source_ != nullptr && !l.source_done_ && in_phase >= m.phases.hold_ticks) StartRun(m, d, l);
+        if (l.source_ != nullptr && !l.source_done_ && in_phase >= m.phases.hold_ticks && ev.deadman &&
+            (m.op.walk < 0 || ev.walk)) {
+          StartRun(m, d, l);
+        } else if (rose(OperatorRequest::kWalk)) {
+          Refuse(l, tick, "walk",
+                 !ev.deadman            ? "the dead-man is not held"
+                 : l.source_ == nullptr ? "nothing to run"
+                 : l.source_done_       ? "the command source has finished"
+                                        : "hold_s is not over");
+        }
         break;
       case Phase::kRun:
+        if (!ev.deadman) {  // released: stand (a robot without motors disarms)
+          if (motors) {
+            MeasuredPose(m, d, l);
+            EnterStandUp(m, l, tick);
+          } else {
+            Enter(l, Phase::kDisarmed, tick);
+          }
+          break;
+        }
         if (l.source_ != nullptr && !l.source_->Compute(m, d, l, l.desired_)) {
           l.source_done_ = true;
           if (l.options_.shutdown_after_source) {
@@ -395,6 +477,7 @@ TickStatus TickImpl::Tick(const RobotModel& m, RobotData& d, LoopData& l, std::s
     l.recorder->Inputs(m, d, timing, ev);
   }
   CheckSample(m, d);
+  TickImpl::OperatorRequests(m, d, l, ev);
   const std::int64_t t1 = MonotonicNs();
   prof.Record(rt::Stage::kReceive, t1 - t0);
   // Observe, infer (the source, in the run phase), supervise.

@@ -20,7 +20,9 @@
 // hold zero speed), hold, and run the command source;
 // robots without motors run at once. RequestStop() shuts down: motors are damped (the
 // supervisor's safe-stop values), then switched off until each answers; a robot without motors
-// sends its e-stop command once (Shutdown). Every transition and every rise of the supervisor's
+// sends its e-stop command once (Shutdown). An e-stop request while arming (not supervised: the
+// motors are not answering yet) switches the motors off as a stop does, and the supervisor takes
+// the request there and latches e-stop. Every transition and every rise of the supervisor's
 // mode is logged with its tick and reason.
 //
 // Recovery (robot.yaml supervisor.recovery). The supervisor's modes latch; once it has stopped the
@@ -31,6 +33,22 @@
 //              with nothing to recover from is refused, counted and said (RecoveryStatus)
 //   automatic  the same at once, if every cause that raised the mode to safe-stop or e-stop is one
 //              the robot file lists, at most max_automatic times a run (then only a request)
+// Operator requests (robot.yaml operator: fields such as a gamepad's buttons; runtime/robot/
+// robot_model.hpp). A field's rise to at least 0.5 asks, at that tick, as the calls below do:
+//   arm      Arm(): from disarmed, arming, stand-up and hold (a robot without motors runs)
+//   walk     from hold, run the command source; without it the source starts after hold_s
+//   stop     RequestStop(): damping, then motors off
+//   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off)
+//   rearm    RequestRearm(): run again after a safe-stop or e-stop, by the recovery rule below
+//   deadman  its level: the source runs only while it is held (the hold phase waits for it);
+//            released while running, a robot with motors stands up from the measured pose to
+//            the default pose and holds (the source is started clean when it runs again); one
+//            without motors disarms (an arm request runs it again)
+// A stream whose sample the check found invalid makes no request but e-stop that tick. Which
+// field made which request is derived from the fields, so a recorded run replays them. A request
+// the phase does not take (arm while not disarmed, walk outside hold, without the dead-man or
+// before hold_s is over) changes nothing and is refused, counted and said (OperatorStatus).
+//
 // Re-arming is arming again at a tick boundary: the supervisor back to nominal (its counters kept),
 // then robots with motors arm, stand up from the measured pose and hold before the command source
 // starts again; robots without run the source at once. The source starts clean (a policy's history
@@ -42,6 +60,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "runtime/core/latest_mailbox.hpp"
@@ -96,7 +115,23 @@ struct LoopOptions {
 // The requests a tick consumed (LoopData::Arm ...), as the log records them.
 struct TickEvents {
   bool arm = false, disarm = false, stop = false, estop = false, rearm = false;
+  // From the operator's fields (not recorded: derived from the recorded fields).
+  bool walk = false, deadman = true;
+  std::uint8_t operator_rises = 0;  // bit i: request i of OperatorRequest rose this tick
 };
+
+// The operator's requests from fields (robot.yaml operator), in the order of their bits.
+enum class OperatorRequest : std::uint8_t { kArm, kWalk, kStop, kEStop, kRearm };
+
+// What became of the operator's requests: each counted, a refused one said (a re-arm's is
+// RecoveryStatus's).
+struct OperatorStatus {
+  std::uint64_t requests = 0, refused = 0;
+  std::uint64_t last_tick = 0;  // of the last refusal
+  char last[120] = {};          // "walk refused at tick 1200: not holding (stand-up)"
+};
+// "12 requests, 1 refused; the last: ..." for a summary; "" when there was none.
+std::string Describe(const OperatorStatus& status);
 
 // How the robot came back after the supervisor stopped it (see Recovery above).
 struct RecoveryStatus {
@@ -157,6 +192,7 @@ class LoopData {
   // A person's request to run again after a safe-stop or e-stop (Recovery above).
   void RequestRearm() noexcept { rearm_.store(true, std::memory_order_relaxed); }
   const RecoveryStatus& recovery() const noexcept { return recovery_; }
+  const OperatorStatus& operator_status() const noexcept { return operator_status_; }
   // Consecutive healthy supervised ticks (saturating at 2^32 - 1).
   std::uint32_t healthy_ticks() const noexcept { return healthy_ticks_; }
   // The run reached the robot's end field (LoopOptions::stop_at_end_field).
@@ -197,6 +233,11 @@ class LoopData {
   std::uint32_t healthy_ticks_ = 0;
   std::uint32_t stopped_by_ = 0;  // bit (1 << Cause) of each cause that raised the mode to safe-stop or e-stop
   RecoveryStatus recovery_;
+  // Operator requests (robot.yaml operator): each request field's level at the last tick (0, 1),
+  // for its rises: arm, walk, stop, estop, rearm. Kept in snapshots only for robots with one.
+  bool operator_ = false;
+  std::array<std::uint8_t, 5> operator_held_{};
+  OperatorStatus operator_status_;
 };
 
 // The loop's data for a model and a command source (null: hold the default pose); the only

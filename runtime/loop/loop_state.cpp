@@ -100,6 +100,12 @@ struct StateImpl {
     for (std::uint64_t v : {r.stops, r.automatic, r.requested, r.refused, r.last_tick}) o.Put(v);
     o.Put(r.last_refused);
     PutText(o, r.last, sizeof r.last);
+    if (l.operator_) {
+      o.PutSpan<std::uint8_t>(l.operator_held_);
+      const OperatorStatus& op = l.operator_status_;
+      for (std::uint64_t v : {op.requests, op.refused, op.last_tick}) o.Put(v);
+      PutText(o, op.last, sizeof op.last);
+    }
     // The source's.
     o.Put(l.source_ != nullptr);
     if (l.source_ != nullptr) l.source_->SaveState(o);
@@ -154,6 +160,11 @@ struct StateImpl {
          in.Get(r.automatic, "recovery.automatic") && in.Get(r.requested, "recovery.requested") &&
          in.Get(r.refused, "recovery.refused") && in.Get(r.last_tick, "recovery.last_tick") &&
          in.GetBool(r.last_refused, "recovery.last_refused") && GetText(in, r.last, sizeof r.last, "recovery.last");
+    OperatorStatus& op = l.operator_status_;
+    if (ok && l.operator_)
+      ok = in.GetSpan<std::uint8_t>(l.operator_held_, "loop.operator_held") &&
+           in.Get(op.requests, "operator.requests") && in.Get(op.refused, "operator.refused") &&
+           in.Get(op.last_tick, "operator.last_tick") && GetText(in, op.last, sizeof op.last, "operator.last");
     if (!ok) return false;
     bool has_source = false;
     if (!in.GetBool(has_source, "source")) return false;

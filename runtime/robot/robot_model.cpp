@@ -455,7 +455,7 @@ Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
   const YamlFields f(robot_yaml);
   PBPPO_TRY(f.Keys(root, "",
                    {"robot", "description", "files", "timing", "parameters", "transports", "streams", "motors", "imus",
-                    "phases", "signals", "commands", "supervisor", "service"}));
+                    "phases", "signals", "commands", "supervisor", "service", "operator"}));
   PBPPO_TRY(f.Text(root, "robot", "", &m.name, Rule::kToken));
   PBPPO_TRY(f.OptionalText(root, "description", "", &m.description));
   Loader l{{m, f}, files};
@@ -479,8 +479,10 @@ Result<RobotModel> LoadRobotModel(const std::string& name_or_path) {
   PBPPO_TRY(l.DeclaredCommands(root));
   PBPPO_TRY(l.Signals(root));
   PBPPO_TRY(l.DdsMessages(root, [&files](const std::string& path) { return files.Read(path); }, m.dir));
+  PBPPO_TRY(l.EvdevMappings(root));
   PBPPO_TRY(l.Lockstep(root));
   PBPPO_TRY(l.Phases(root));
+  PBPPO_TRY(l.Operator(root));
   PBPPO_TRY(l.Supervisor(root));
   if (root["service"]) {
     YAML::Node n;

@@ -144,6 +144,23 @@ struct ServiceSpec {
   bool rearm_after_failure = false;
 };
 
+// A person's requests through fields of the robot's inputs (robot.yaml `operator`): a gamepad's
+// buttons (a transport of kind evdev), a remote's keys in a DDS message. Each names a field (-1:
+// none); a request is the field's rise (from below 0.5 to at least 0.5), the dead-man its level.
+// runtime/loop/loop.hpp says what each does to the phases.
+//
+//   operator:
+//     arm: start_button       # stand up from the measured pose, then hold the default pose
+//     walk: walk_button       # from hold, run the command source (without it: after hold_s)
+//     stop: stop_button       # shut down: damping, then motors off
+//     estop: estop_button     # e-stop (the supervisor latches it)
+//     rearm: rearm_button     # run again after a safe-stop or e-stop (supervisor.recovery's rule)
+//     deadman: deadman_button # the command source runs only while it is held; released: stand
+struct OperatorSpec {
+  std::int32_t arm = -1, walk = -1, stop = -1, estop = -1, rearm = -1, deadman = -1;
+  bool any() const noexcept { return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0; }
+};
+
 // What it takes to run again after the supervisor stopped the armed robot (safe-stop or e-stop)
 // and the cause went away (robot.yaml supervisor.recovery; runtime/loop/loop.hpp says how).
 struct RecoverySpec {
@@ -197,6 +214,7 @@ struct RobotModel {
   PhaseSpec phases;
   SupervisorSpec supervisor;
   ServiceSpec service;
+  OperatorSpec op;                                 // robot.yaml operator
   std::optional<RobotDocument> dds_profile;        // files.dds_profile: Fast DDS XML profiles (transports of kind dds)
   std::optional<RobotDocument> stand_trajectory;   // files.stand_trajectory: the robot's own joint trajectory
   std::vector<TrustedKeyFile> trusted_keys;        // files.trusted_keys[.NAME] (PEM); none: unsigned blobs run

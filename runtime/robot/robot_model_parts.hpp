@@ -56,6 +56,11 @@ struct Builder {
   // The messages of DDS transports, mapped onto streams, fields and commands (after them); IDL
   // files (relative to `dir`) read through `read`.
   Status DdsMessages(const YAML::Node& root, const IdlFileReader& read, const std::string& dir);
+  // The axes and buttons of evdev transports, mapped onto their streams' fields (after the
+  // streams; robot_model_operator.cpp).
+  Status EvdevMappings(const YAML::Node& root);
+  // The operator section: requests from fields (after the streams; robot_model_operator.cpp).
+  Status Operator(const YAML::Node& root);
   // timing.lockstep (after the streams).
   Status Lockstep(const YAML::Node& root);
 

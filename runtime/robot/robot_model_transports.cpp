@@ -77,8 +77,12 @@ Status Builder::Transports(const YAML::Node& root) {
       PBPPO_TRY(f.OptionalText(n, "participant_profile", w, &d.participant_profile, Rule::kToken));
       PBPPO_TRY(f.OptionalText(n, "topic_prefix", w, &d.topic_prefix, Rule::kToken));
       PBPPO_TRY(f.Bool(n, "wait_for_peer", w, &d.wait_for_peer));
+    } else if (t.kind == "evdev") {
+      PBPPO_TRY(f.Keys(n, w, {"name", "kind", "when", "device", "reopen_s", "stream", "axes", "buttons"}));
+      PBPPO_TRY(f.Text(n, "device", w, &t.evdev.device));
+      PBPPO_TRY(f.OptionalNumber(n, "reopen_s", w, 0.01, 3600, &t.evdev.reopen_s));
     } else {
-      return f.Fail(w + ".kind", "'" + t.kind + "' is not can or dds");
+      return f.Fail(w + ".kind", "'" + t.kind + "' is not can, dds or evdev");
     }
     m.transports.push_back(std::move(t));
   }

@@ -145,10 +145,47 @@ struct DdsTransportSpec {
   std::vector<DdsMessageSpec> messages;
 };
 
+// A gamepad or joystick read through Linux evdev (kind evdev): its absolute axes and buttons
+// fill the fields of one stream every tick the device is there.
+//
+//   transports:
+//     - name: gamepad
+//       kind: evdev
+//       device: /dev/input/by-id/usb-045e_Controller-event-joystick  # or a recorded event file
+//       reopen_s: 0.5                     # a missing or lost device is looked for this often
+//       stream: velocity_command          # every field of it is an axis or a button below
+//       axes:                             # field: {code, range (the device's raw [min, max]), scale,
+//                                         # dead_zone (of the normalised value), rate_per_s}
+//         command_vx: {code: ABS_Y, range: [-32768, 32767], scale: -1.0, dead_zone: 0.1, rate_per_s: 2.0}
+//       buttons: {deadman: BTN_TL, arm: BTN_START}  # field: code, 1 while pressed
+//
+// An axis's raw value v in [min, max] is normalised to n = (2 v - min - max) / (max - min) in
+// [-1, 1]; inside the dead zone it is 0, outside it is rescaled so that it leaves the dead zone
+// from 0 (sign(n) (|n| - dz) / (1 - dz)); then times scale, then at most rate_per_s x the tick
+// period away from the field's value before. A raw value outside [min, max] is given unlimited
+// (n beyond 1): the sample check finds it outside the field's range, names it and stops the robot.
+struct EvdevAxisSpec {
+  std::uint32_t field = 0;
+  int code = 0;
+  double raw_min = 0, raw_max = 0, scale = 1, dead_zone = 0, rate_per_s = 0;  // rate 0: unlimited
+};
+struct EvdevButtonSpec {
+  std::uint32_t field = 0;
+  int code = 0;
+};
+struct EvdevTransportSpec {
+  std::string device;  // a character device (read live) or a regular file (recorded events, played on the tick clock)
+  std::uint32_t stream = 0;
+  double reopen_s = 0.5;
+  std::vector<EvdevAxisSpec> axes;
+  std::vector<EvdevButtonSpec> buttons;
+};
+
 struct TransportSpec {
-  std::string name, kind;    // kind: "can" or "dds"
+  std::string name, kind;    // kind: "can", "dds" or "evdev"
   bool policy_only = false;  // when: policy (a transport whose streams only a policy reads)
   DdsTransportSpec dds;      // kind dds
+  EvdevTransportSpec evdev;  // kind evdev
   // Its links, whose health the supervisor watches: one per CAN bus ("can/front"), else itself.
   std::uint32_t first_link = 0, link_count = 1;
 };

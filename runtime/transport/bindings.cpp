@@ -20,9 +20,17 @@ Result<std::unique_ptr<robot::Transport>> OpenDds(const robot::RobotModel& model
   return std::unique_ptr<robot::Transport>(std::move(*t));
 }
 
+Result<std::unique_ptr<robot::Transport>> OpenEvdev(const robot::RobotModel& model, const robot::TransportSpec& spec,
+                                                    const Settings& s) {
+  auto t = evdev::EvdevTransport::Open(model, spec.name, s.evdev);
+  if (!t) return std::move(t).error();
+  return std::unique_ptr<robot::Transport>(std::move(*t));
+}
+
 constexpr Binding kBindings[] = {
     {"can", "MIT motors and IMUs of the CAN map over SocketCAN (or an in-process network)", OpenCan},
     {"dds", "the messages robot.yaml declares (IDL), over Fast DDS", OpenDds},
+    {"evdev", "a gamepad's axes and buttons through Linux evdev (or a recorded event file)", OpenEvdev},
 };
 
 }  // namespace

@@ -5,6 +5,7 @@
 //   kind  binding
 //   can   can::CanTransport over the robot's CAN map (SocketCAN, or an in-process network)
 //   dds   dds::DdsTransport over the messages the robot file declares (runtime/robot/transport_spec.hpp)
+//   evdev evdev::EvdevTransport: a gamepad's axes and buttons (a device, or a recorded event file)
 //
 // A new kind of link is one entry here and its transport; a new robot on an existing kind is data.
 #pragma once
@@ -19,6 +20,7 @@
 #include "runtime/robot/robot_data.hpp"
 #include "runtime/transport/can/can_transport.hpp"
 #include "runtime/transport/dds/dds_link.hpp"
+#include "runtime/transport/evdev/evdev_transport.hpp"
 
 namespace pbppo::transport {
 
@@ -27,6 +29,7 @@ struct Settings {
   can::CanTransportOptions can;           // interfaces, candump, receive_all, an in-process network
   std::int64_t can_lockstep_wait_ns = 0;  // > 0: each tick waits this long for the replies owed
   dds::DdsLinkOptions dds;                // domain, naming, profile file, security, writer polling, lost_after_s
+  evdev::EvdevOptions evdev;              // a gamepad's device in place of the robot file's
 };
 
 struct Binding {

@@ -102,7 +102,7 @@ cd "$work/run"  # no models/ here: only the installed robots
 rc=0
 pbppo-controller --robot go3 --policy "$share/policies/auv_nav/auv_nav.blob" >unknown.log 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "an unknown robot's name: exit $rc"
-expect unknown.log "robot 'go3': no robot of that name in .*/usr/share/pbppo-rt/robots.*\(robots there: auv, go2, quadruped\)"
+expect unknown.log "robot 'go3': no robot of that name in .*/usr/share/pbppo-rt/robots.*\(robots there: auv, go2, quadruped, quadruped_gamepad\)"
 rc=0
 pbppo-controller --robot 'auv;rm' >badname.log 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "a malformed robot name: exit $rc"
@@ -124,6 +124,14 @@ pbppo-hil quadruped --in-process --policy "$share/policies/quadruped_walk/flat.b
 expect quadruped.log "controller: phase [a-z-]+, mode nominal"
 expect quadruped.json '"fell": false'
 grep -E "^walked|^controller:" quadruped.log | sed 's/^/   /'
+# The installed gamepad robot (its files beside the quadruped's) driven by its recorded session.
+pbppo-hil quadruped --robot quadruped_gamepad --in-process --operator robot --duration 20 \
+  --policy "$share/policies/quadruped_walk/flat.blob" --gamepad "$share/robots/quadruped_gamepad/sessions/demo.ev" \
+  --report gamepad.json >gamepad.log 2>&1 || fail "pbppo-hil quadruped (gamepad): $(tail -20 gamepad.log)"
+expect gamepad.log "operator: evdev .*demo.ev: 24 events in 24 reports, 0 unmapped"
+expect gamepad.log "controller: phase hold, mode nominal"
+expect gamepad.json '"fell": false'
+grep -E "^walked|^operator:" gamepad.log | sed 's/^/   /'
 
 echo "== 3: pbppo-controller@auv.service under systemd"
 [ -x /lib/systemd/systemd ] || fail "systemd is not installed (tools/setup.sh installs it)"

@@ -161,7 +161,7 @@ TEST_CASE("robot model: bad robot files are refused naming the file, the field a
   auto err = [&](const std::string& from, const std::string& to) { return edits.Error(from, to); };
   CHECK(err("io_layout: io_layout.yaml", "io_layout: missing.yaml") == dir + "/missing.yaml: cannot open");
   CHECK(err("tick_period_s: 0.1", "tick_period_s: -1") == p + ": timing.tick_period_s: '-1' is outside [1e-06, 10]");
-  CHECK(err("kind: dds", "kind: usb") == p + ": transports[0].kind: 'usb' is not can or dds");
+  CHECK(err("kind: dds", "kind: usb") == p + ": transports[0].kind: 'usb' is not can, dds or evdev");
   CHECK(err("transport: dds", "transport: can") == p + ": streams[0]: unknown transport 'can'");
   CHECK(err("{name: y_m, min: -1.0e5, max: 1.0e5}", "{name: x_m, min: -1.0e5, max: 1.0e5}") ==
         p + ": streams[0].fields[2]: field 'x_m' appears twice");

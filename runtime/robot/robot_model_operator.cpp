@@ -1,0 +1,152 @@
+// The operator's hands in robot.yaml: the axes and buttons of evdev transports (gamepads) mapped
+// onto a stream's fields, and the operator section's requests from fields (runtime/robot/
+// transport_spec.hpp, robot_model.hpp say what each means).
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "runtime/robot/input_codes.hpp"
+#include "runtime/robot/robot_model_parts.hpp"
+
+namespace pbppo::robot::detail {
+namespace {
+
+using Rule = YamlFields::TextRule;
+
+// The field `name` of stream `stream`, or an error at `where`.
+Status StreamField(const RobotModel& m, const YamlFields& f, std::uint32_t stream, const std::string& name,
+                   const std::string& where, std::uint32_t* out) {
+  const int field = m.FieldIndex(name);
+  if (field < 0 || m.fields[static_cast<std::size_t>(field)].stream != stream)
+    return f.Fail(where, "'" + name + "' is not a field of stream '" + m.streams[stream].name + "'");
+  *out = static_cast<std::uint32_t>(field);
+  return {};
+}
+
+// The field's range must hold [lo, hi] (every value the device can give in range), at `where`.
+Status Holds(const RobotModel& m, const YamlFields& f, std::uint32_t field, double lo, double hi,
+             const std::string& where) {
+  const FieldSpec& s = m.fields[field];
+  if (s.min > lo || s.max < hi)
+    return f.Fail(where, "field '" + s.name + "' has range [" + YamlFields::Num(s.min) + ", " + YamlFields::Num(s.max) +
+                             "], which does not hold [" + YamlFields::Num(lo) + ", " + YamlFields::Num(hi) +
+                             "] that it can take");
+  return {};
+}
+
+}  // namespace
+
+Status Builder::EvdevMappings(const YAML::Node& root) {
+  const YAML::Node list = root["transports"];
+  for (std::uint32_t t = 0; t < m.transports.size(); ++t) {
+    TransportSpec& spec = m.transports[t];
+    if (spec.kind != "evdev") continue;
+    const std::string w = "transports[" + std::to_string(t) + "]";
+    const YAML::Node& n = list[t];
+    EvdevTransportSpec& e = spec.evdev;
+    if (!e.device.empty() && e.device[0] != '/') e.device = (std::filesystem::path(m.dir) / e.device).string();
+    std::string stream;
+    PBPPO_TRY(f.Text(n, "stream", w, &stream, Rule::kToken));
+    const int s = m.StreamIndex(stream);
+    if (s < 0) return f.Fail(w + ".stream", "'" + stream + "' is not a stream of the robot");
+    e.stream = static_cast<std::uint32_t>(s);
+    if (m.streams[e.stream].transport != spec.name)
+      return f.Fail(w + ".stream", "stream '" + stream + "' is delivered by transport '" +
+                                       m.streams[e.stream].transport + "', not '" + spec.name + "'");
+    for (std::uint32_t other = 0; other < m.streams.size(); ++other)
+      if (other != e.stream && m.streams[other].transport == spec.name)
+        return f.Fail(w + ".stream", "transport '" + spec.name + "' delivers one stream; '" + m.streams[other].name +
+                                         "' names it too");
+    std::vector<int> filled(m.streams[e.stream].field_count, 0);
+    std::vector<int> axis_codes, button_codes;
+    if (const YAML::Node axes = n["axes"]) {
+      if (!axes.IsMap()) return f.Fail(w + ".axes", "expected a mapping field: {code, range, ...}");
+      for (const auto& kv : axes) {
+        const std::string field = kv.first.as<std::string>();
+        const std::string wa = w + ".axes." + field;
+        const YAML::Node& a = kv.second;
+        if (!a.IsMap()) return f.Fail(wa, "expected a mapping {code, range, scale, dead_zone, rate_per_s}");
+        PBPPO_TRY(f.Keys(a, wa, {"code", "range", "scale", "dead_zone", "rate_per_s"}));
+        EvdevAxisSpec x;
+        PBPPO_TRY(StreamField(m, f, e.stream, field, wa, &x.field));
+        std::string code;
+        PBPPO_TRY(f.Text(a, "code", wa, &code, Rule::kToken));
+        x.code = InputCode(InputCodeKind::kAxis, code);
+        if (x.code < 0)
+          return f.Fail(wa + ".code", "'" + code + "' is not an axis (" + InputCodeNames(InputCodeKind::kAxis) + ")");
+        if (std::count(axis_codes.begin(), axis_codes.end(), x.code) > 0)
+          return f.Fail(wa + ".code", code + " drives two fields");
+        std::array<double, 2> range{};
+        PBPPO_TRY(f.Range(a, "range", wa, -2147483648.0, 2147483647.0, &range));
+        if (!(range[1] > range[0]) || range[0] != std::floor(range[0]) || range[1] != std::floor(range[1]))
+          return f.Fail(wa + ".range", "[" + YamlFields::Num(range[0]) + ", " + YamlFields::Num(range[1]) +
+                                           "] is not two whole numbers, the first below the second");
+        x.raw_min = range[0];
+        x.raw_max = range[1];
+        PBPPO_TRY(f.Number(a, "scale", wa, -1e6, 1e6, &x.scale));
+        if (x.scale == 0) return f.Fail(wa + ".scale", "0 gives nothing");
+        PBPPO_TRY(f.OptionalNumber(a, "dead_zone", wa, 0.0, 0.9, &x.dead_zone));
+        PBPPO_TRY(f.OptionalNumber(a, "rate_per_s", wa, 1e-6, 1e9, &x.rate_per_s));
+        PBPPO_TRY(Holds(m, f, x.field, -std::abs(x.scale), std::abs(x.scale), wa + ".scale"));
+        axis_codes.push_back(x.code);
+        ++filled[x.field - m.streams[e.stream].first_field];
+        e.axes.push_back(x);
+      }
+    }
+    if (const YAML::Node buttons = n["buttons"]) {
+      if (!buttons.IsMap()) return f.Fail(w + ".buttons", "expected a mapping field: code");
+      for (const auto& kv : buttons) {
+        const std::string field = kv.first.as<std::string>();
+        const std::string wb = w + ".buttons." + field;
+        EvdevButtonSpec b;
+        PBPPO_TRY(StreamField(m, f, e.stream, field, wb, &b.field));
+        std::string code;
+        PBPPO_TRY(f.Text(buttons, field.c_str(), w + ".buttons", &code, Rule::kToken));
+        b.code = InputCode(InputCodeKind::kButton, code);
+        if (b.code < 0)
+          return f.Fail(wb, "'" + code + "' is not a button (" + InputCodeNames(InputCodeKind::kButton) + ")");
+        if (std::count(button_codes.begin(), button_codes.end(), b.code) > 0)
+          return f.Fail(wb, code + " drives two fields");
+        PBPPO_TRY(Holds(m, f, b.field, 0.0, 1.0, wb));
+        button_codes.push_back(b.code);
+        ++filled[b.field - m.streams[e.stream].first_field];
+        e.buttons.push_back(b);
+      }
+    }
+    for (std::size_t k = 0; k < filled.size(); ++k) {
+      const std::string& name = m.fields[m.streams[e.stream].first_field + k].name;
+      if (filled[k] == 0) return f.Fail(w, "field '" + name + "' of stream '" + stream + "' is no axis or button");
+      if (filled[k] > 1) return f.Fail(w, "field '" + name + "' is both an axis and a button");
+    }
+  }
+  return {};
+}
+
+Status Builder::Operator(const YAML::Node& root) {
+  if (!root["operator"]) return {};
+  YAML::Node n;
+  PBPPO_TRY(f.Map(root, "operator", "", &n));
+  PBPPO_TRY(f.Keys(n, "operator", {"arm", "walk", "stop", "estop", "rearm", "deadman"}));
+  OperatorSpec& op = m.op;
+  const std::pair<const char*, std::int32_t*> requests[] = {{"arm", &op.arm},     {"walk", &op.walk},
+                                                            {"stop", &op.stop},   {"estop", &op.estop},
+                                                            {"rearm", &op.rearm}, {"deadman", &op.deadman}};
+  std::vector<std::string> used;
+  for (const auto& [key, out] : requests) {
+    std::string name;
+    PBPPO_TRY(f.OptionalText(n, key, "operator", &name, Rule::kToken));
+    if (name.empty()) continue;
+    const std::string w = std::string("operator.") + key;
+    *out = m.FieldIndex(name);
+    if (*out < 0) return f.Fail(w, "'" + name + "' is not a field of the robot");
+    if (std::find(used.begin(), used.end(), name) != used.end())
+      return f.Fail(w, "field '" + name + "' makes another request already");
+    used.push_back(name);
+    PBPPO_TRY(Holds(m, f, static_cast<std::uint32_t>(*out), 0.0, 1.0, w));
+  }
+  if (op.walk >= 0 && m.phases.enable_motors == false)
+    return f.Fail("operator.walk", "the robot has no motors, so no hold to walk from (arm runs it)");
+  return {};
+}
+
+}  // namespace pbppo::robot::detail

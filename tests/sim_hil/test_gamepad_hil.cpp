@@ -1,0 +1,152 @@
+// The quadruped driven from a gamepad in the Simbody HIL, natively: the shipped robot file
+// models/quadruped_gamepad (a gamepad through evdev, its buttons the operator's requests) with a
+// recorded event file in place of the pad's device (as --gamepad gives it), played on the
+// controller's tick clock: models/quadruped_gamepad/sessions/demo.ev, one session: arm on START,
+// walk on A with the dead-man (LB) held and the left stick forward, the dead-man released (the
+// robot stands), walking again, e-stop on BACK (latched), re-armed on the Xbox button, walking,
+// and the pad gone mid-walk (the file's end: the robot stands). The controller's recording of the
+// session replays bit for bit.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "runtime/loop/log.hpp"
+#include "runtime/loop/replay.hpp"
+#include "runtime/loop/schedule.hpp"
+#include "runtime/loop/source_files.hpp"
+#include "runtime/transport/bindings.hpp"
+#include "runtime/transport/evdev/evdev_transport.hpp"
+#include "sim_hil/quadruped_rig.hpp"
+#include "sim_hil/quadruped_scenario.hpp"
+#include "tests/support/command_limits.hpp"
+#include "tests/support/robot_models.hpp"
+
+using namespace pbppo;
+using loop::Phase;
+using safety::Mode;
+
+namespace {
+
+const std::string kPolicy = "policies/frozen/quadruped_walk/flat.blob";
+
+// The session's times (tools/gamepad_session.py wrote it): arm at 0.2 s, the dead-man at 1.8 and A
+// at 1.9, 0.5 m/s from 2.1 to 7.5, the dead-man released at 8.5, walking again from 10.1 (0.5 m/s
+// 10.5-12.0), released at 12.5, e-stop at 13.0, re-arm at 14.0, walking from 16.1 (0.5 m/s from
+// 16.5), the pad gone after its last report at 18.0.
+constexpr double kRelease1 = 8.5, kWalk2 = 10.1, kEStop = 13.0, kRearm = 14.0, kWalk3 = 16.1, kGone = 18.0;
+
+std::size_t At(double t_s) {
+  return static_cast<std::size_t>(std::llround(t_s / 0.001));
+}
+
+}  // namespace
+
+TEST_CASE(
+    "gamepad HIL: a recorded session drives the walking quadruped - stand, walk, dead-man, e-stop, re-arm, pad lost - "
+    "replays bit for bit") {
+  const std::string session_path = test::SourcePath("models/quadruped_gamepad/sessions/demo.ev");
+  const robot::RobotModel& m = test::LoadShipped("quadruped_gamepad");
+  const int op = m.TransportIndex("gamepad");
+  REQUIRE(op >= 0);
+  transport::Settings settings;
+  settings.evdev.device = session_path;
+  auto pad = transport::Open(m, m.transports[static_cast<std::size_t>(op)], settings);
+  REQUIRE_MESSAGE(pad.ok(), pad.error().message);
+  sim::RigOptions o;
+  o.policy = test::SourcePath(kPolicy);
+  o.operator_transport = pad->get();
+  o.command_record_capacity = 1 << 16;
+  auto schedule =
+      loop::ParseSchedule("stream: velocity_command\nphases:\n  - {name: session, duration_s: 20.0}\n", "session", m);
+  REQUIRE_MESSAGE(schedule.ok(), schedule.error().message);
+  auto flat = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
+  REQUIRE_MESSAGE(flat.ok(), flat.error().message);
+  auto rig = sim::QuadrupedRig::Make(m, flat->hil, std::move(*schedule), o);
+  REQUIRE_MESSAGE(rig.ok(), rig.error().message);
+  sim::QuadrupedRig& r = **rig;
+  const std::string log_path = test::ScratchDir("gamepad_hil_log") + "/session.pbppolog";
+  auto recorder = loop::Recorder::Open(log_path, m, loop::MakeLogHeader(m, r.source().kind, r.source().hash));
+  REQUIRE_MESSAGE(recorder.ok(), recorder.error().message);
+  REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), recorder->get()).ok());
+  // 20 s; the operator arms (nobody calls Arm here).
+  std::vector<Phase> phase;
+  std::vector<Mode> mode;
+  for (std::size_t k = 0; k < At(20.0); ++k) {
+    REQUIRE(r.Tick());
+    phase.push_back(r.loop().phase());
+    mode.push_back(r.loop().supervisor().mode);
+  }
+  REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), nullptr).ok());
+  REQUIRE((*recorder)->Stop().ok());
+  CHECK((*recorder)->dropped() == 0);
+  const std::vector<sim::RigSample>& trace = r.trace();
+  REQUIRE(trace.size() == phase.size());
+  const auto mean_vx = [&](double from, double to) {
+    double sum = 0;
+    for (std::size_t k = At(from); k < At(to); ++k) sum += trace[k].vx_mps;
+    return sum / static_cast<double>(At(to) - At(from));
+  };
+  const auto upright = [&](double from, double to) {
+    float worst = 0;
+    for (std::size_t k = At(from); k < At(to); ++k) worst = std::max(worst, trace[k].tilt_rad);
+    return worst < 0.35f;
+  };
+  // Disarmed until START; arming at its press, standing, then holding (no walk without A).
+  CHECK(phase[At(0.19)] == Phase::kDisarmed);
+  CHECK(phase[At(0.25)] == Phase::kStandUp);
+  CHECK(phase[At(1.85)] == Phase::kHold);
+  CHECK(phase[At(2.05)] == Phase::kRun);
+  // Walking on the stick: 0.5 m/s tracked within 0.2 (settled, 3.5-7.5 s).
+  const double v1 = mean_vx(3.5, 7.5);
+  MESSAGE("walk 1: mean vx " << v1 << " m/s for 0.5");
+  CHECK(std::abs(v1 - 0.5) <= 0.2);
+  CHECK(upright(2.0, kRelease1));
+  // The dead-man released: standing up from the measured pose, then holding; upright.
+  CHECK(phase[At(kRelease1) - 1] == Phase::kRun);
+  CHECK(phase[At(kRelease1) + 1] == Phase::kStandUp);
+  CHECK(phase[At(kRelease1 + 1.5)] == Phase::kHold);
+  CHECK(upright(kRelease1, kWalk2));
+  CHECK(std::abs(mean_vx(kRelease1 + 1.0, kWalk2)) < 0.1);
+  // Walking again (the policy started clean).
+  CHECK(phase[At(kWalk2) + 2] == Phase::kRun);
+  const double v2 = mean_vx(11.2, 12.0);
+  MESSAGE("walk 2: mean vx " << v2 << " m/s for 0.5");
+  CHECK(std::abs(v2 - 0.5) <= 0.2);
+  CHECK(upright(kWalk2, kEStop));
+  // E-stop: within 3 ticks of the press, motors off, latched after the release, until MODE.
+  const std::size_t e = At(kEStop);
+  CHECK(mode[e - 1] < Mode::kEStop);
+  bool within3 = false;
+  for (std::size_t k = e; k <= e + 3; ++k) within3 = within3 || mode[k] == Mode::kEStop;
+  CHECK(within3);
+  for (std::size_t k = e + 3; k < At(kRearm); ++k) REQUIRE(mode[k] == Mode::kEStop);
+  CHECK(r.loop().recovery().requested == 1);
+  CHECK(r.loop().recovery().refused == 0);
+  // Re-armed: arming, standing up, holding, upright.
+  CHECK(mode[At(kRearm) + 2] == Mode::kNominal);
+  CHECK(phase[At(kRearm + 1.6)] == Phase::kHold);
+  CHECK(upright(kRearm + 1.6, 16.0));
+  // Walking a third time; the pad gone mid-walk: the command stops, the robot stands, upright.
+  CHECK(phase[At(kWalk3) + 2] == Phase::kRun);
+  CHECK(phase[At(kGone) + 2] == Phase::kStandUp);
+  CHECK(phase[At(kGone + 1.5)] == Phase::kHold);
+  CHECK(trace[At(kGone) + 2].cmd_vx == 0.0f);
+  CHECK(upright(kGone, 20.0));
+  CHECK(mode.back() == Mode::kNominal);
+  const auto& stats = dynamic_cast<evdev::EvdevTransport&>(**pad).stats();
+  CHECK(stats.losses == 1);
+  CHECK(stats.unmapped == 0);
+  CHECK(test::CommandsOutsideLimits(m, r.can().RecordedCommands()) == 0);
+  // The recording replays to the same commands, bit for bit (the requests from the fields).
+  auto log = loop::ReadLog(log_path);
+  REQUIRE_MESSAGE(log.ok(), log.error().message);
+  auto source = loop::LoadSource(m, {test::SourcePath(kPolicy), "", true, policy::Kernel::kAuto});
+  REQUIRE_MESSAGE(source.ok(), source.error().message);
+  auto replay = loop::Replay(m, *log, source->source.get(), source->hash);
+  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+  CHECK(replay->ticks == At(20.0));
+  CHECK(replay->compared == At(20.0));
+  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+}

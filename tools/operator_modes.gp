@@ -1,0 +1,39 @@
+# The controller's phases and the operator's requests, as docs/operator.md shows them:
+#   gnuplot tools/operator_modes.gp   (writes docs/images/operator_modes.png)
+set terminal pngcairo size 1000,380 font "DejaVu Sans,10" noenhanced
+set output "docs/images/operator_modes.png"
+unset border; unset xtics; unset ytics; unset key
+set xrange [0:100]; set yrange [0:38]
+set lmargin 0; set rmargin 0; set tmargin 0; set bmargin 0
+set style arrow 1 head filled size 1,15 lw 1.3 lc rgb "#333333"
+set style arrow 2 head filled size 1,15 lw 1.3 lc rgb "#c0392b"
+# A phase: a box at (x, y) with its name.
+box(n, x, y, w, c) = sprintf("set object %d rect center %f,%f size %f,4 fc rgb '%s' fs solid 0.25 border lc rgb '%s'", n, x, y, w, c, c)
+eval box(1, 7, 26, 11, "#2a6ebb");  set label "disarmed" at 7,26 center
+eval box(2, 25, 26, 11, "#2a6ebb"); set label "arming" at 25,26 center
+eval box(3, 43, 26, 11, "#2a6ebb"); set label "stand-up" at 43,26 center
+eval box(4, 61, 26, 11, "#2a6ebb"); set label "hold" at 61,26 center
+eval box(5, 88, 26, 14, "#2a8a2a"); set label "run (the policy)" at 88,26 center
+eval box(6, 43, 10, 11, "#2a6ebb"); set label "damping" at 43,10 center
+eval box(7, 61, 10, 11, "#2a6ebb"); set label "motor-off" at 61,10 center
+eval box(8, 88, 10, 11, "#2a6ebb"); set label "done" at 88,10 center
+set object 9 rect center 14,10 size 24,6 fc rgb "#c0392b" fs solid 0.15 border lc rgb "#c0392b"
+set label "e-stop (latched): motors off" at 14,11 center tc rgb "#c0392b" font ",10:Bold"
+set label "BACK, from any phase" at 14,8.6 center tc rgb "#c0392b" font ",9"
+# Transitions and what asks for them.
+set arrow from 12.5,26 to 19.5,26 as 1; set label "START (arm)" at 16,28.4 center font ",9"
+set arrow from 30.5,26 to 37.5,26 as 1; set label "motors answer" at 34,28.4 center font ",9"
+set arrow from 48.5,26 to 55.5,26 as 1; set label "pose reached" at 52,28.4 center font ",9"
+set arrow from 66.5,26 to 81,26 as 1; set label "A (walk), LB held" at 73.7,28.4 center font ",9"
+set arrow from 88,28 to 88,33 nohead lw 1.3 lc rgb "#333333"
+set arrow from 88,33 to 43,33 nohead lw 1.3 lc rgb "#333333"
+set arrow from 43,33 to 43,28 as 1
+set label "LB released: stand up from the measured pose, then hold (A with LB walks again)" at 65.5,35 center font ",9"
+set arrow from 61,24 to 46,12 as 1
+set arrow from 86,24 to 48.5,11 as 1; set label "B (stop)" at 66,18.5 center font ",9"
+set arrow from 48.5,10 to 55.5,10 as 1; set label "0.5 s" at 52,7.8 center font ",9"
+set arrow from 66.5,10 to 82.5,10 as 1; set label "motors answer" at 74.5,12.2 center font ",9"
+set arrow from 20,13 to 24,24 as 2; set label "Xbox (re-arm), 0.5 s healthy" at 27,17.5 left tc rgb "#c0392b" font ",9"
+set label "Sticks: left up/down vx, left left/right vy, right left/right yaw rate; dead zone 10 %, 1 m/s per s. The pad gone: command 0 and LB released, so the robot stands." at 1,2.5 left font ",9"
+set label "The controller's phases and the operator's requests (models/quadruped_gamepad)" at 50,37 center font ",11:Bold"
+plot -10 notitle
