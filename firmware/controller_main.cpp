@@ -69,7 +69,8 @@ using namespace pbppo;
 
 struct Options {
   std::string robot, policy, trajectory, profile_json, profile_png, dds_profile, can, candump, commands;
-  std::string gamepad;  // the device of the robot's gamepad (a transport of kind evdev)
+  std::string gamepad;                       // the device of the robot's gamepad (a transport of kind evdev)
+  std::vector<std::string> switch_policies;  // --switch-policy: more policies the operator switches to
   std::string kernel = "auto";
   std::string dds_naming = "native";
   std::string dds_security, dds_identity = "controller";
@@ -146,6 +147,9 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
   app.add_option("--commands", o.commands,
                  "A schedule file in place of the transport of its stream (an operator's commands, played)");
+  app.add_option("--switch-policy", o.switch_policies,
+                 "Another policy blob the operator's switch request (robot.yaml operator.switch_policy) moves to, "
+                 "in the order given, then back to --policy; each loaded and self-tested at start");
   app.add_option("--gamepad", o.gamepad,
                  "The robot's gamepad (its transport of kind evdev) from this device (/dev/input/eventN, "
                  "/dev/input/by-id/...) or recorded event file, in place of the robot file's");
@@ -549,11 +553,16 @@ int Run(const Options& o) {
       robot::WithTickPeriod(*loaded, o.period_ms > 0 && !o.lockstep ? o.period_ms * 1e-3 : loaded->tick_period_s);
   if (!ticking) return Fail(ticking.error().message);
   const robot::RobotModel& robot = *ticking;
-  auto source = loop::LoadSource(robot, {o.policy, o.trajectory, !o.skip_self_test, policy::KernelOption(o.kernel)});
+  auto source = loop::LoadSource(
+      robot, {o.policy, o.trajectory, !o.skip_self_test, policy::KernelOption(o.kernel), o.switch_policies});
   if (!source) return Fail(source.error().message);
   if (source->policy)
     std::printf("pbppo-controller: policy %s %s\n", o.policy.c_str(),
                 policy::KernelNote(*source->policy, o.skip_self_test).c_str());
+  for (std::size_t k = 0; k < source->more_policies.size(); ++k)
+    std::printf("pbppo-controller: policy %s %s (field '%s' switches to it in turn)\n", o.switch_policies[k].c_str(),
+                policy::KernelNote(*source->more_policies[k], o.skip_self_test).c_str(),
+                robot.fields[static_cast<std::size_t>(robot.op.switch_policy)].name.c_str());
   loop::LoopOptions lopt;
   lopt.shutdown_after_source = false;
   lopt.stop_at_end_field = o.lockstep && robot.lockstep_end_field >= 0 && !o.lockstep_through_ends;

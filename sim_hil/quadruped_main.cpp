@@ -34,6 +34,7 @@ struct Options {
   std::string kernel = "auto";  // --in-process: the policy's forward kernel
   std::string dds_security, dds_identity = "controller";
   std::string gamepad;  // --operator robot: the gamepad's device in place of the robot file's
+  std::vector<std::string> switch_policies;
   int domain = 0;
   bool stand = false, lockstep = false, in_process = false, skip_self_test = false, realtime = false;
   double duration_s = 0, settle_s = 1.0;
@@ -181,6 +182,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   }
   RigOptions ro;
   ro.policy = o.policy;
+  ro.switch_policies = o.switch_policies;
   ro.self_test = !o.skip_self_test;
   ro.kernel = policy::KernelOption(o.kernel);
   ro.realtime = o.realtime || wall_clock;
@@ -288,6 +290,8 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_flag("--in-process", o.in_process, "Run the controller in this process too (lock-step, no SocketCAN)");
   app.add_option("--policy", o.policy, "--in-process: the policy blob");
   app.add_option("--commands", o.commands, "--in-process: the velocity command schedule");
+  app.add_option("--switch-policy", o.switch_policies,
+                 "--in-process: another policy blob the operator's switch request moves to (in order, then back)");
   app.add_flag("--skip-self-test", o.skip_self_test, "--in-process: arm without the blob's golden vectors");
   policy::AddKernelOption(app, o.kernel);
   app.add_option("--trace", o.trace, "--in-process: write the trace (CSV, every 10 ms)");

@@ -40,7 +40,7 @@ Result<std::unique_ptr<QuadrupedRig>> QuadrupedRig::Make(const robot::RobotModel
   auto s = loop::ScheduleTransport::Create(model, std::move(schedule));
   if (!s) return std::move(s).error();
   r->schedule_ = std::move(*s);
-  auto src = loop::LoadSource(model, {o.policy, "", o.self_test, o.kernel});
+  auto src = loop::LoadSource(model, {o.policy, "", o.self_test, o.kernel, o.switch_policies});
   if (!src) return std::move(src).error();
   r->source_ = std::move(*src);
   r->data_ = robot::MakeRobotData(model);

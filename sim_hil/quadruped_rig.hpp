@@ -28,6 +28,7 @@ namespace pbppo::sim {
 
 struct RigOptions {
   std::string policy;                             // blob ("" : hold the default pose)
+  std::vector<std::string> switch_policies;       // more blobs the operator switches to (loop::PolicySet)
   bool self_test = true;                          // the blob's golden vectors at arming
   policy::Kernel kernel = policy::Kernel::kAuto;  // the policy's forward kernel (one this CPU has)
   std::vector<std::string> interfaces;            // SocketCAN interfaces; empty: the in-process network

@@ -1,11 +1,14 @@
 #!/usr/bin/python3
-"""Writes the quadruped's demo gamepad session (models/quadruped_gamepad/sessions/demo.ev): the
-events an Xbox-style pad gives through Linux evdev, as reading /dev/input/eventN returns them on a
-64-bit machine (24-byte records: s64 seconds, s64 microseconds, u16 type, u16 code, s32 value,
-little-endian), for a person who stands the robot up, walks it, lets go of the dead-man, walks
-again, presses the e-stop, re-arms and walks until the pad is unplugged.
+"""Writes the quadruped's gamepad sessions (models/quadruped_gamepad/sessions/): the events an
+Xbox-style pad gives through Linux evdev, as reading /dev/input/eventN returns them on a 64-bit
+machine (24-byte records: s64 seconds, s64 microseconds, u16 type, u16 code, s32 value,
+little-endian).
 
-  /usr/bin/python3 tools/gamepad_session.py models/quadruped_gamepad/sessions/demo.ev
+  demo    a person stands the robot up, walks it, lets go of the dead-man, walks again, presses
+          the e-stop, re-arms and walks until the pad is unplugged
+  switch  stands up, walks, switches to the next policy (RB) while walking, then back
+
+  /usr/bin/python3 tools/gamepad_session.py demo models/quadruped_gamepad/sessions/demo.ev
 
 pbppo-hil plays it (--gamepad FILE) on the controller's tick clock; tests/sim_hil/test_gamepad_hil.cpp
 checks each step at the times below.
@@ -17,7 +20,7 @@ import sys
 EV_SYN, EV_KEY, EV_ABS, EV_MSC = 0, 1, 3, 4
 SYN_REPORT, MSC_SCAN = 0, 4
 ABS_X, ABS_Y, ABS_RX = 0, 1, 3
-BTN_SOUTH, BTN_EAST, BTN_TL, BTN_SELECT, BTN_START, BTN_MODE = 0x130, 0x131, 0x136, 0x13A, 0x13B, 0x13C
+BTN_SOUTH, BTN_EAST, BTN_TL, BTN_TR, BTN_SELECT, BTN_START, BTN_MODE = 0x130, 0x131, 0x136, 0x137, 0x13A, 0x13B, 0x13C
 EPOCH_US = 1_764_000_000_000_000  # a wall-clock time: the file's times are the kernel's
 
 
@@ -69,10 +72,27 @@ def demo():
     return s
 
 
+def switch():
+    s = Session()
+    s.forward(0.0, 0.0)
+    s.press(0.2, BTN_START)      # arm
+    s.key(1.8, BTN_TL, True)     # the dead-man, held throughout
+    s.press(1.9, BTN_SOUTH)      # walk (the first policy)
+    s.forward(2.1, 0.5)
+    s.press(5.0, BTN_TR)         # RB: the next policy, blended in over 0.5 s, walking
+    s.press(9.0, BTN_TR)         # RB: back to the first
+    s.forward(12.0, 0.0)
+    s.key(12.5, BTN_TL, False)   # stand
+    s.press(14.0, BTN_EAST)      # B: shut down
+    return s
+
+
+SESSIONS = {"demo": demo, "switch": switch}
+
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: gamepad_session.py OUT.ev")
-    with open(sys.argv[1] + ".part", "wb") as f:
-        f.write(b"".join(demo().records))
+    if len(sys.argv) != 3 or sys.argv[1] not in SESSIONS:
+        sys.exit("usage: gamepad_session.py demo|switch OUT.ev")
+    with open(sys.argv[2] + ".part", "wb") as f:
+        f.write(b"".join(SESSIONS[sys.argv[1]]().records))
     import os
-    os.replace(sys.argv[1] + ".part", sys.argv[1])
+    os.replace(sys.argv[2] + ".part", sys.argv[2])

@@ -25,12 +25,14 @@ set arrow from 12.5,26 to 19.5,26 as 1; set label "START (arm)" at 16,28.4 cente
 set arrow from 30.5,26 to 37.5,26 as 1; set label "motors answer" at 34,28.4 center font ",9"
 set arrow from 48.5,26 to 55.5,26 as 1; set label "pose reached" at 52,28.4 center font ",9"
 set arrow from 66.5,26 to 81,26 as 1; set label "A (walk), LB held" at 73.7,28.4 center font ",9"
+set label "RB: the next policy," at 90,21.3 center font ",9"
+set label "blended in" at 90,19.3 center font ",9"
 set arrow from 88,28 to 88,33 nohead lw 1.3 lc rgb "#333333"
 set arrow from 88,33 to 43,33 nohead lw 1.3 lc rgb "#333333"
 set arrow from 43,33 to 43,28 as 1
 set label "LB released: stand up from the measured pose, then hold (A with LB walks again)" at 65.5,35 center font ",9"
 set arrow from 61,24 to 46,12 as 1
-set arrow from 86,24 to 48.5,11 as 1; set label "B (stop)" at 66,18.5 center font ",9"
+set arrow from 84,24 to 48.5,11 as 1; set label "B (stop)" at 66,18.5 center font ",9"
 set arrow from 48.5,10 to 55.5,10 as 1; set label "0.5 s" at 52,7.8 center font ",9"
 set arrow from 66.5,10 to 82.5,10 as 1; set label "motors answer" at 74.5,12.2 center font ",9"
 set arrow from 20,13 to 24,24 as 2; set label "Xbox (re-arm), 0.5 s healthy" at 27,17.5 left tc rgb "#c0392b" font ",9"

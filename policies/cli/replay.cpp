@@ -30,6 +30,8 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
       ->required();
   c->add_option("--robot", o.robot, "The robot of the recording: a name or its robot.yaml")->required();
   c->add_option("--policy", o.policy, "The recording's policy blob");
+  c->add_option("--switch-policy", o.switch_policies,
+                "The recording's other policies (pbppo-controller --switch-policy), in the same order");
   c->add_option("--trajectory", o.trajectory, "The recording's joint trajectory file");
   c->add_option("--out", o.out, "Write the replayed commands (one line per tick, hexadecimal floats)");
   auto* trace = c->add_option("--trace", o.trace,
@@ -133,11 +135,12 @@ int Replay(const ReplayOptions& o) {
     run = h.run;
     sequence = h.sequence;
     // The self-test ran when the recording armed; a replay compares the commands instead.
-    auto source = loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel)});
+    auto source =
+        loop::LoadSource(*robot, {o.policy, o.trajectory, false, policy::KernelOption(o.kernel), o.switch_policies});
     if (!source) return Fail(source.error().message);
     if (obs_file) {
       policy_source = dynamic_cast<const loop::PolicySource*>(source->source.get());
-      if (policy_source == nullptr) return Fail("--policy-io: the recording's source is not a policy");
+      if (policy_source == nullptr) return Fail("--policy-io: the recording's source is not one policy");
       // policy_runs goes on from the file before: a rotated file's snapshot restores the count.
     }
     auto r = loop::Replay(*robot, *log, source->source.get(), source->hash,

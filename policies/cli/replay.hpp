@@ -25,7 +25,8 @@ struct ReplayOptions {
   std::string robot, policy, trajectory, out, trace;
   std::string policy_io;  // PREFIX: each policy run's observation and action, PREFIX.obs.f32 / .act.f32
   std::vector<std::string> trace_fields;
-  std::string kernel = "auto";  // the recording's forward kernel
+  std::vector<std::string> switch_policies;  // the recording's --switch-policy blobs, in order
+  std::string kernel = "auto";               // the recording's forward kernel
 };
 
 // Adds the subcommand to `app`; Replay runs it.

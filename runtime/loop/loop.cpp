@@ -165,9 +165,9 @@ struct TickImpl {
     const auto valid = [&](std::int32_t f) {
       return d.streams[m.fields[static_cast<std::size_t>(f)].stream].invalid_input < 0;
     };
-    const std::int32_t fields[5] = {op.arm, op.walk, op.stop, op.estop, op.rearm};
-    bool rise[5] = {};
-    for (std::size_t i = 0; i < 5; ++i) {
+    const std::int32_t fields[6] = {op.arm, op.walk, op.stop, op.estop, op.rearm, op.switch_policy};
+    bool rise[6] = {};
+    for (std::size_t i = 0; i < 6; ++i) {
       const std::int32_t f = fields[i];
       if (f < 0 || (i != 3 && !valid(f))) continue;  // an invalid sample asks nothing (but e-stop), nor forgets
       const bool held = d.fields[static_cast<std::size_t>(f)] >= 0.5;
@@ -259,6 +259,15 @@ struct TickImpl {
     const std::uint64_t in_phase = tick - l.phase_start_[static_cast<std::size_t>(l.phase_)];
     const bool all = std::all_of(l.answered_.begin(), l.answered_.end(), [](std::uint8_t a) { return a != 0; });
     if (rose(OperatorRequest::kWalk) && l.phase_ != Phase::kHold) Refuse(l, tick, "walk", "not holding");
+    if (rose(OperatorRequest::kSwitch)) {
+      if (l.phase_ != Phase::kHold && l.phase_ != Phase::kRun) {
+        Refuse(l, tick, "switch", "not holding or running");
+      } else if (l.sup_.mode >= Mode::kSafeStop) {
+        Refuse(l, tick, "switch", l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched");
+      } else if (l.source_ == nullptr || !l.source_->Switch()) {
+        Refuse(l, tick, "switch", "one command source");
+      }
+    }
     switch (l.phase_) {
       case Phase::kArming:
         if (all) {

@@ -40,6 +40,8 @@
 //   stop     RequestStop(): damping, then motors off
 //   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off)
 //   rearm    RequestRearm(): run again after a safe-stop or e-stop, by the recovery rule below
+//   switch_policy  the next of several command sources (runtime/loop/policy_set.hpp), in hold or
+//            run and while no fault is latched (safe-stop, e-stop)
 //   deadman  its level: the source runs only while it is held (the hold phase waits for it);
 //            released while running, a robot with motors stands up from the measured pose to
 //            the default pose and holds (the source is started clean when it runs again); one
@@ -47,7 +49,8 @@
 // A stream whose sample the check found invalid makes no request but e-stop that tick. Which
 // field made which request is derived from the fields, so a recorded run replays them. A request
 // the phase does not take (arm while not disarmed, walk outside hold, without the dead-man or
-// before hold_s is over) changes nothing and is refused, counted and said (OperatorStatus).
+// before hold_s is over, a switch with one source, outside hold and run or with a fault latched)
+// changes nothing and is refused, counted and said (OperatorStatus).
 //
 // Re-arming is arming again at a tick boundary: the supervisor back to nominal (its counters kept),
 // then robots with motors arm, stand up from the measured pose and hold before the command source
@@ -103,6 +106,9 @@ class CommandSource {
     (void)in;
     return true;
   }
+  // The operator asks for the next of several sources (runtime/loop/policy_set.hpp): true if
+  // taken (at the next Compute), false: there is no other.
+  virtual bool Switch() noexcept { return false; }
 };
 
 struct LoopOptions {
@@ -121,7 +127,7 @@ struct TickEvents {
 };
 
 // The operator's requests from fields (robot.yaml operator), in the order of their bits.
-enum class OperatorRequest : std::uint8_t { kArm, kWalk, kStop, kEStop, kRearm };
+enum class OperatorRequest : std::uint8_t { kArm, kWalk, kStop, kEStop, kRearm, kSwitch };
 
 // What became of the operator's requests: each counted, a refused one said (a re-arm's is
 // RecoveryStatus's).
@@ -234,9 +240,9 @@ class LoopData {
   std::uint32_t stopped_by_ = 0;  // bit (1 << Cause) of each cause that raised the mode to safe-stop or e-stop
   RecoveryStatus recovery_;
   // Operator requests (robot.yaml operator): each request field's level at the last tick (0, 1),
-  // for its rises: arm, walk, stop, estop, rearm. Kept in snapshots only for robots with one.
+  // for its rises (OperatorRequest's order). Kept in snapshots only for robots with one.
   bool operator_ = false;
-  std::array<std::uint8_t, 5> operator_held_{};
+  std::array<std::uint8_t, 6> operator_held_{};
   OperatorStatus operator_status_;
 };
 

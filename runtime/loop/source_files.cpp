@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "runtime/loop/policy_set.hpp"
 #include "runtime/loop/policy_source.hpp"
 #include "runtime/policy/self_test.hpp"
 #include "runtime/robot/text_file.hpp"
@@ -38,27 +39,63 @@ Status CheckSignature(std::span<const policy::PublicKey> trusted, const std::str
   return policy::VerifyBlob(blob, blob_path, &*text, sig_path, trusted);
 }
 
+// One blob: checked (signature, the engine, the self-test, the robot's layout) into a source.
+struct LoadedPolicy {
+  std::unique_ptr<policy::PolicyModel> model;
+  std::unique_ptr<CommandSource> source;
+  std::uint64_t hash = 0;
+};
+Result<LoadedPolicy> LoadPolicy(const robot::RobotModel& robot, const std::string& path, const SourceFiles& files,
+                                std::span<const policy::PublicKey> keys) {
+  LoadedPolicy p;
+  auto bytes = robot::ReadTextFile(path);
+  if (!bytes) return std::move(bytes).error();
+  if (auto st = CheckSignature(keys, path, Bytes(*bytes)); !st) return st.error();
+  auto model = policy::PolicyModel::FromBlob(Bytes(*bytes), {.kernel = files.kernel});
+  if (!model) return MakeError(model.error().code, path + ": " + model.error().message);
+  p.model = std::make_unique<policy::PolicyModel>(std::move(*model));
+  if (files.self_test)
+    if (auto st = policy::SelfTest(*p.model, path); !st)
+      return MakeError(st.error().code, "refusing to arm: " + st.error().message);
+  auto src = PolicySource::Create(robot, *p.model);
+  if (!src) return MakeError(src.error().code, path + " on " + robot.path + ": " + src.error().message);
+  p.source = std::move(*src);
+  p.hash = LogHash(Bytes(*bytes));
+  return p;
+}
+
 Result<LoadedSource> LoadSource(const robot::RobotModel& robot, const SourceFiles& files) {
   LoadedSource s;
   if (!files.policy.empty() && !files.trajectory.empty())
     return MakeError(ErrorCode::kInvalidValue, "--policy and --trajectory: one command source at a time");
+  if (files.policy.empty() && !files.more_policies.empty())
+    return MakeError(ErrorCode::kInvalidValue, "--switch-policy: needs --policy, the policy that runs first");
+  if (!files.more_policies.empty() && robot.op.switch_policy < 0)
+    return MakeError(ErrorCode::kInvalidValue,
+                     "--switch-policy: " + robot.path + " has no operator.switch_policy field to switch with");
   if (!files.policy.empty()) {
-    auto bytes = robot::ReadTextFile(files.policy);
-    if (!bytes) return std::move(bytes).error();
     auto keys = TrustedKeys(robot);
     if (!keys) return std::move(keys).error();
-    if (auto st = CheckSignature(*keys, files.policy, Bytes(*bytes)); !st) return st.error();
-    auto model = policy::PolicyModel::FromBlob(Bytes(*bytes), {.kernel = files.kernel});
-    if (!model) return MakeError(model.error().code, files.policy + ": " + model.error().message);
-    s.policy = std::make_unique<policy::PolicyModel>(std::move(*model));
-    if (files.self_test)
-      if (auto st = policy::SelfTest(*s.policy, files.policy); !st)
-        return MakeError(st.error().code, "refusing to arm: " + st.error().message);
-    auto src = PolicySource::Create(robot, *s.policy);
-    if (!src) return MakeError(src.error().code, files.policy + " on " + robot.path + ": " + src.error().message);
-    s.source = std::move(*src);
+    auto first = LoadPolicy(robot, files.policy, files, *keys);
+    if (!first) return std::move(first).error();
+    s.policy = std::move(first->model);
+    s.source = std::move(first->source);
     s.kind = SourceKind::kPolicy;
-    s.hash = LogHash(Bytes(*bytes));
+    s.hash = first->hash;
+    if (!files.more_policies.empty()) {
+      std::vector<std::unique_ptr<CommandSource>> sources;
+      sources.push_back(std::move(s.source));
+      std::vector<std::uint64_t> hashes{s.hash};
+      for (const std::string& path : files.more_policies) {
+        auto p = LoadPolicy(robot, path, files, *keys);
+        if (!p) return std::move(p).error();
+        s.more_policies.push_back(std::move(p->model));
+        sources.push_back(std::move(p->source));
+        hashes.push_back(p->hash);
+      }
+      s.source = std::make_unique<PolicySet>(robot, std::move(sources));
+      s.hash = LogHash({reinterpret_cast<const std::uint8_t*>(hashes.data()), hashes.size() * sizeof(std::uint64_t)});
+    }
   } else if (!files.trajectory.empty()) {
     // The robot's own trajectory was read with the robot; another file is read here.
     const std::optional<robot::RobotDocument>& own_file = robot.stand_trajectory;

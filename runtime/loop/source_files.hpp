@@ -25,14 +25,18 @@ struct SourceFiles {
   std::string trajectory;                         // a trajectory file ("": none)
   bool self_test = true;                          // run the blob's golden vectors (refuse to arm on a mismatch)
   policy::Kernel kernel = policy::Kernel::kAuto;  // the forward kernel (one this CPU has)
+  // More blobs: with them the source is a PolicySet (runtime/loop/policy_set.hpp) that the
+  // operator's switch request moves through, `policy` first.
+  std::vector<std::string> more_policies;
 };
 
 struct LoadedSource {
   std::unique_ptr<policy::PolicyModel> policy;
-  std::unique_ptr<CommandSource> source;   // null: none
-  TrajectorySource* trajectory = nullptr;  // source, when it is a trajectory
+  std::vector<std::unique_ptr<policy::PolicyModel>> more_policies;  // SourceFiles::more_policies
+  std::unique_ptr<CommandSource> source;                            // null: none
+  TrajectorySource* trajectory = nullptr;                           // source, when it is a trajectory
   SourceKind kind = SourceKind::kNone;
-  std::uint64_t hash = 0;
+  std::uint64_t hash = 0;  // several policies: LogHash of their hashes in order
 };
 
 // Errors name the file and what is wrong ("refusing to arm: golden vectors: row 3 ...").

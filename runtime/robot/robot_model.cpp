@@ -384,6 +384,7 @@ Status Derive(RobotModel& m, double tick_s) {
   p.damping_ticks = Ticks(p.damping_s, tick_s);
   p.motor_off_timeout_ticks = Ticks(p.motor_off_timeout_s, tick_s);
   m.supervisor.recovery.healthy_ticks = std::max<std::uint32_t>(1, Ticks(m.supervisor.recovery.healthy_s, tick_s));
+  m.op.switch_ticks = Ticks(m.op.switch_s, tick_s);
   return {};
 }
 

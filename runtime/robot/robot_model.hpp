@@ -156,9 +156,17 @@ struct ServiceSpec {
 //     estop: estop_button     # e-stop (the supervisor latches it)
 //     rearm: rearm_button     # run again after a safe-stop or e-stop (supervisor.recovery's rule)
 //     deadman: deadman_button # the command source runs only while it is held; released: stand
+//     switch_policy: next_button   # the next of several policies (runtime/loop/policy_set.hpp)
+//     switch: {rule: blend, duration_s: 0.5}  # blend the commands in, or hold the default pose
+enum class SwitchRule : std::uint8_t { kBlend, kHold };
 struct OperatorSpec {
-  std::int32_t arm = -1, walk = -1, stop = -1, estop = -1, rearm = -1, deadman = -1;
-  bool any() const noexcept { return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0; }
+  std::int32_t arm = -1, walk = -1, stop = -1, estop = -1, rearm = -1, deadman = -1, switch_policy = -1;
+  SwitchRule switch_rule = SwitchRule::kBlend;
+  double switch_s = 0.5;
+  std::uint32_t switch_ticks = 0;  // derived
+  bool any() const noexcept {
+    return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0;
+  }
 };
 
 // What it takes to run again after the supervisor stopped the armed robot (safe-stop or e-stop)

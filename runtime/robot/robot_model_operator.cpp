@@ -126,11 +126,15 @@ Status Builder::Operator(const YAML::Node& root) {
   if (!root["operator"]) return {};
   YAML::Node n;
   PBPPO_TRY(f.Map(root, "operator", "", &n));
-  PBPPO_TRY(f.Keys(n, "operator", {"arm", "walk", "stop", "estop", "rearm", "deadman"}));
+  PBPPO_TRY(f.Keys(n, "operator", {"arm", "walk", "stop", "estop", "rearm", "deadman", "switch_policy", "switch"}));
   OperatorSpec& op = m.op;
-  const std::pair<const char*, std::int32_t*> requests[] = {{"arm", &op.arm},     {"walk", &op.walk},
-                                                            {"stop", &op.stop},   {"estop", &op.estop},
-                                                            {"rearm", &op.rearm}, {"deadman", &op.deadman}};
+  const std::pair<const char*, std::int32_t*> requests[] = {{"arm", &op.arm},
+                                                            {"walk", &op.walk},
+                                                            {"stop", &op.stop},
+                                                            {"estop", &op.estop},
+                                                            {"rearm", &op.rearm},
+                                                            {"deadman", &op.deadman},
+                                                            {"switch_policy", &op.switch_policy}};
   std::vector<std::string> used;
   for (const auto& [key, out] : requests) {
     std::string name;
@@ -143,6 +147,16 @@ Status Builder::Operator(const YAML::Node& root) {
       return f.Fail(w, "field '" + name + "' makes another request already");
     used.push_back(name);
     PBPPO_TRY(Holds(m, f, static_cast<std::uint32_t>(*out), 0.0, 1.0, w));
+  }
+  if (n["switch"]) {
+    YAML::Node sw;
+    PBPPO_TRY(f.Map(n, "switch", "operator", &sw));
+    PBPPO_TRY(f.Keys(sw, "operator.switch", {"rule", "duration_s"}));
+    std::string rule;
+    PBPPO_TRY(f.Text(sw, "rule", "operator.switch", &rule, Rule::kToken));
+    if (rule != "blend" && rule != "hold") return f.Fail("operator.switch.rule", "'" + rule + "' is not blend or hold");
+    op.switch_rule = rule == "blend" ? SwitchRule::kBlend : SwitchRule::kHold;
+    PBPPO_TRY(f.Number(sw, "duration_s", "operator.switch", 0.0, 60.0, &op.switch_s));
   }
   if (op.walk >= 0 && m.phases.enable_motors == false)
     return f.Fail("operator.walk", "the robot has no motors, so no hold to walk from (arm runs it)");

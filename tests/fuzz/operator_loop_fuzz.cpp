@@ -1,8 +1,8 @@
 // libFuzzer target: the operator's mode machine (runtime/loop/loop.hpp: Operator requests) on the
 // quadruped with a gamepad (models/quadruped_gamepad), for any sequence of button presses
 // and releases, stick values (NaN, Inf, out of range), motor replies and IMU samples that come,
-// stop or carry bad values, bus faults, and a command source whose commands are anything. After
-// every tick:
+// stop or carry bad values, bus faults, and two command sources (switched between by the robot
+// file's blend rule) whose commands are anything. After every tick:
 //   - every command sent is finite and inside the model's limits (whatever the source asked);
 //   - an e-stop press wins: at its tick the mode is e-stop (arming too: the motors are switched
 //     off), and while it is, no motor is commanded;
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "runtime/loop/loop.hpp"
+#include "runtime/loop/policy_set.hpp"
 #include "runtime/robot/robot_model.hpp"
 #include "tests/fuzz/supervisor_fuzz_common.hpp"
 
@@ -93,8 +94,15 @@ class Feed final : public robot::Transport {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const robot::RobotModel& m = Model();
   fuzz::Bytes b(data, size);
-  FuzzSource source(m.commands.size());
-  auto l = loop::MakeLoopData(m, &source, loop::LoopOptions{});
+  // Two sources the switch request moves between (a PolicySet, the robot file's blend rule).
+  auto first = std::make_unique<FuzzSource>(m.commands.size()),
+       second = std::make_unique<FuzzSource>(m.commands.size());
+  FuzzSource* sources[2] = {first.get(), second.get()};
+  std::vector<std::unique_ptr<loop::CommandSource>> owned;
+  owned.push_back(std::move(first));
+  owned.push_back(std::move(second));
+  loop::PolicySet set(m, std::move(owned));
+  auto l = loop::MakeLoopData(m, &set, loop::LoopOptions{});
   robot::RobotData d = robot::MakeRobotData(m);
   Feed feed(m);
   // Nominal samples: every field at 0 inside its range, the IMU upright.
@@ -105,7 +113,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const robot::OperatorSpec& op = m.op;
   const std::uint32_t pad = m.fields[static_cast<std::size_t>(op.deadman)].stream;
-  const std::int32_t buttons[6] = {op.deadman, op.arm, op.walk, op.estop, op.rearm, op.stop};
+  const std::int32_t buttons[7] = {op.deadman, op.arm, op.walk, op.estop, op.rearm, op.stop, op.switch_policy};
   robot::Transport* transports[] = {&feed};
   double estop_level = 0;
   loop::Phase before = loop::Phase::kDisarmed;
@@ -116,9 +124,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // The pad: buttons pressed or released, sticks.
     if (flags & 1) {  // which buttons change, and to what (pressed 1, released 0; or any value)
       const std::uint8_t change = b.U8(), value = b.U8();
-      for (std::size_t i = 0; i < 6; ++i)
+      for (std::size_t i = 0; i < 7; ++i)
         if ((change >> i) & 1) feed.values[static_cast<std::size_t>(buttons[i])] = (value >> i) & 1 ? 1.0 : 0.0;
-      if (change & 0x80) feed.values[static_cast<std::size_t>(buttons[b.U8() % 6])] = b.Real();
+      if (change & 0x80) feed.values[static_cast<std::size_t>(buttons[b.U8() % 7])] = b.Real();
     }
     if (flags & 2) {
       const std::uint32_t first = m.streams[pad].first_field;
@@ -139,7 +147,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       feed.health[1] = {(h & 8) != 0, (h & 16) != 0, false};
     }
     if (flags & 64) l->RequestStop();
-    source.Draw(b);
+    for (FuzzSource* f : sources) f->Draw(b);
     for (std::uint32_t r = 0; r < repeat && tick < 6000; ++r, ++tick) {
       rt::TickTiming timing;
       timing.tick = tick;

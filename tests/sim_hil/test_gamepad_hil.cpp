@@ -8,11 +8,14 @@
 // session replays bit for bit.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "runtime/loop/log.hpp"
+#include "runtime/loop/policy_set.hpp"
 #include "runtime/loop/replay.hpp"
 #include "runtime/loop/schedule.hpp"
 #include "runtime/loop/source_files.hpp"
@@ -41,80 +44,126 @@ std::size_t At(double t_s) {
   return static_cast<std::size_t>(std::llround(t_s / 0.001));
 }
 
+// A session (models/quadruped_gamepad/sessions/NAME.ev) played for `duration_s` through the rig,
+// the controller recording; per tick its phase, mode and the largest step of a q command.
+struct SessionRun {
+  const robot::RobotModel& m = test::LoadShipped("quadruped_gamepad");
+  std::unique_ptr<robot::Transport> pad;
+  std::unique_ptr<sim::QuadrupedRig> rig;
+  std::string log_path;
+  std::vector<Phase> phase;
+  std::vector<Mode> mode;
+  std::vector<double> q_step;  // max over the joints of |q_des(t) - q_des(t - 1)|
+
+  SessionRun(const std::string& name, double duration_s, const std::vector<std::string>& switch_policies = {}) {
+    const int op = m.TransportIndex("gamepad");
+    REQUIRE(op >= 0);
+    transport::Settings settings;
+    settings.evdev.device = test::SourcePath("models/quadruped_gamepad/sessions/" + name + ".ev");
+    auto opened = transport::Open(m, m.transports[static_cast<std::size_t>(op)], settings);
+    REQUIRE_MESSAGE(opened.ok(), opened.error().message);
+    pad = std::move(*opened);
+    sim::RigOptions o;
+    o.policy = test::SourcePath(kPolicy);
+    for (const std::string& p : switch_policies) o.switch_policies.push_back(test::SourcePath(p));
+    o.operator_transport = pad.get();
+    o.command_record_capacity = 1 << 16;
+    auto schedule = loop::ParseSchedule(
+        "stream: velocity_command\nphases:\n  - {name: session, duration_s: " + std::to_string(duration_s) + "}\n",
+        "session", m);
+    REQUIRE_MESSAGE(schedule.ok(), schedule.error().message);
+    auto flat =
+        sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
+    REQUIRE_MESSAGE(flat.ok(), flat.error().message);
+    auto made = sim::QuadrupedRig::Make(m, flat->hil, std::move(*schedule), o);
+    REQUIRE_MESSAGE(made.ok(), made.error().message);
+    rig = std::move(*made);
+    sim::QuadrupedRig& r = *rig;
+    log_path = test::ScratchDir("gamepad_hil_" + name) + "/session.pbppolog";
+    auto recorder = loop::Recorder::Open(log_path, m, loop::MakeLogHeader(m, r.source().kind, r.source().hash));
+    REQUIRE_MESSAGE(recorder.ok(), recorder.error().message);
+    REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), recorder->get()).ok());
+    std::vector<double> q_before;
+    for (const robot::MotorSpec& mo : m.motors) q_before.push_back(r.data().command[mo.q]);
+    for (std::size_t k = 0; k < At(duration_s); ++k) {  // the operator arms (nobody calls Arm here)
+      REQUIRE(r.Tick());
+      phase.push_back(r.loop().phase());
+      mode.push_back(r.loop().supervisor().mode);
+      double step = 0;
+      for (std::size_t j = 0; j < m.motors.size(); ++j) {
+        const double q = r.data().command[m.motors[j].q];
+        step = std::max(step, std::abs(q - q_before[j]));
+        q_before[j] = q;
+      }
+      q_step.push_back(step);
+    }
+    REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), nullptr).ok());
+    REQUIRE((*recorder)->Stop().ok());
+    CHECK((*recorder)->dropped() == 0);
+    REQUIRE(r.trace().size() == phase.size());
+  }
+  double MeanVx(double from, double to) const {
+    double sum = 0;
+    for (std::size_t k = At(from); k < At(to); ++k) sum += rig->trace()[k].vx_mps;
+    return sum / static_cast<double>(At(to) - At(from));
+  }
+  bool Upright(double from, double to) const {
+    float worst = 0;
+    for (std::size_t k = At(from); k < At(to); ++k) worst = std::max(worst, rig->trace()[k].tilt_rad);
+    return worst < 0.35f;
+  }
+  double MaxStep(double from, double to) const {
+    return *std::max_element(q_step.begin() + static_cast<std::ptrdiff_t>(At(from)),
+                             q_step.begin() + static_cast<std::ptrdiff_t>(At(to)));
+  }
+  // The recording replays to the same commands, bit for bit (the requests from the fields).
+  void CheckReplay(const std::vector<std::string>& switch_policies = {}) const {
+    auto log = loop::ReadLog(log_path);
+    REQUIRE_MESSAGE(log.ok(), log.error().message);
+    std::vector<std::string> more;
+    for (const std::string& p : switch_policies) more.push_back(test::SourcePath(p));
+    auto source = loop::LoadSource(m, {test::SourcePath(kPolicy), "", true, policy::Kernel::kAuto, more});
+    REQUIRE_MESSAGE(source.ok(), source.error().message);
+    auto replay = loop::Replay(m, *log, source->source.get(), source->hash);
+    REQUIRE_MESSAGE(replay.ok(), replay.error().message);
+    CHECK(replay->ticks == phase.size());
+    CHECK(replay->compared == phase.size());
+    CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+  }
+};
+
 }  // namespace
 
 TEST_CASE(
     "gamepad HIL: a recorded session drives the walking quadruped - stand, walk, dead-man, e-stop, re-arm, pad lost - "
     "replays bit for bit") {
-  const std::string session_path = test::SourcePath("models/quadruped_gamepad/sessions/demo.ev");
-  const robot::RobotModel& m = test::LoadShipped("quadruped_gamepad");
-  const int op = m.TransportIndex("gamepad");
-  REQUIRE(op >= 0);
-  transport::Settings settings;
-  settings.evdev.device = session_path;
-  auto pad = transport::Open(m, m.transports[static_cast<std::size_t>(op)], settings);
-  REQUIRE_MESSAGE(pad.ok(), pad.error().message);
-  sim::RigOptions o;
-  o.policy = test::SourcePath(kPolicy);
-  o.operator_transport = pad->get();
-  o.command_record_capacity = 1 << 16;
-  auto schedule =
-      loop::ParseSchedule("stream: velocity_command\nphases:\n  - {name: session, duration_s: 20.0}\n", "session", m);
-  REQUIRE_MESSAGE(schedule.ok(), schedule.error().message);
-  auto flat = sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
-  REQUIRE_MESSAGE(flat.ok(), flat.error().message);
-  auto rig = sim::QuadrupedRig::Make(m, flat->hil, std::move(*schedule), o);
-  REQUIRE_MESSAGE(rig.ok(), rig.error().message);
-  sim::QuadrupedRig& r = **rig;
-  const std::string log_path = test::ScratchDir("gamepad_hil_log") + "/session.pbppolog";
-  auto recorder = loop::Recorder::Open(log_path, m, loop::MakeLogHeader(m, r.source().kind, r.source().hash));
-  REQUIRE_MESSAGE(recorder.ok(), recorder.error().message);
-  REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), recorder->get()).ok());
-  // 20 s; the operator arms (nobody calls Arm here).
-  std::vector<Phase> phase;
-  std::vector<Mode> mode;
-  for (std::size_t k = 0; k < At(20.0); ++k) {
-    REQUIRE(r.Tick());
-    phase.push_back(r.loop().phase());
-    mode.push_back(r.loop().supervisor().mode);
-  }
-  REQUIRE(loop::AttachRecorder(m, r.data(), r.loop(), nullptr).ok());
-  REQUIRE((*recorder)->Stop().ok());
-  CHECK((*recorder)->dropped() == 0);
-  const std::vector<sim::RigSample>& trace = r.trace();
-  REQUIRE(trace.size() == phase.size());
-  const auto mean_vx = [&](double from, double to) {
-    double sum = 0;
-    for (std::size_t k = At(from); k < At(to); ++k) sum += trace[k].vx_mps;
-    return sum / static_cast<double>(At(to) - At(from));
-  };
-  const auto upright = [&](double from, double to) {
-    float worst = 0;
-    for (std::size_t k = At(from); k < At(to); ++k) worst = std::max(worst, trace[k].tilt_rad);
-    return worst < 0.35f;
-  };
+  SessionRun s("demo", 20.0);
+  const std::vector<Phase>& phase = s.phase;
+  const std::vector<Mode>& mode = s.mode;
+  sim::QuadrupedRig& r = *s.rig;
+  const robot::RobotModel& m = s.m;
   // Disarmed until START; arming at its press, standing, then holding (no walk without A).
   CHECK(phase[At(0.19)] == Phase::kDisarmed);
   CHECK(phase[At(0.25)] == Phase::kStandUp);
   CHECK(phase[At(1.85)] == Phase::kHold);
   CHECK(phase[At(2.05)] == Phase::kRun);
   // Walking on the stick: 0.5 m/s tracked within 0.2 (settled, 3.5-7.5 s).
-  const double v1 = mean_vx(3.5, 7.5);
+  const double v1 = s.MeanVx(3.5, 7.5);
   MESSAGE("walk 1: mean vx " << v1 << " m/s for 0.5");
   CHECK(std::abs(v1 - 0.5) <= 0.2);
-  CHECK(upright(2.0, kRelease1));
+  CHECK(s.Upright(2.0, kRelease1));
   // The dead-man released: standing up from the measured pose, then holding; upright.
   CHECK(phase[At(kRelease1) - 1] == Phase::kRun);
   CHECK(phase[At(kRelease1) + 1] == Phase::kStandUp);
   CHECK(phase[At(kRelease1 + 1.5)] == Phase::kHold);
-  CHECK(upright(kRelease1, kWalk2));
-  CHECK(std::abs(mean_vx(kRelease1 + 1.0, kWalk2)) < 0.1);
+  CHECK(s.Upright(kRelease1, kWalk2));
+  CHECK(std::abs(s.MeanVx(kRelease1 + 1.0, kWalk2)) < 0.1);
   // Walking again (the policy started clean).
   CHECK(phase[At(kWalk2) + 2] == Phase::kRun);
-  const double v2 = mean_vx(11.2, 12.0);
+  const double v2 = s.MeanVx(11.2, 12.0);
   MESSAGE("walk 2: mean vx " << v2 << " m/s for 0.5");
   CHECK(std::abs(v2 - 0.5) <= 0.2);
-  CHECK(upright(kWalk2, kEStop));
+  CHECK(s.Upright(kWalk2, kEStop));
   // E-stop: within 3 ticks of the press, motors off, latched after the release, until MODE.
   const std::size_t e = At(kEStop);
   CHECK(mode[e - 1] < Mode::kEStop);
@@ -127,26 +176,47 @@ TEST_CASE(
   // Re-armed: arming, standing up, holding, upright.
   CHECK(mode[At(kRearm) + 2] == Mode::kNominal);
   CHECK(phase[At(kRearm + 1.6)] == Phase::kHold);
-  CHECK(upright(kRearm + 1.6, 16.0));
+  CHECK(s.Upright(kRearm + 1.6, 16.0));
   // Walking a third time; the pad gone mid-walk: the command stops, the robot stands, upright.
   CHECK(phase[At(kWalk3) + 2] == Phase::kRun);
   CHECK(phase[At(kGone) + 2] == Phase::kStandUp);
   CHECK(phase[At(kGone + 1.5)] == Phase::kHold);
-  CHECK(trace[At(kGone) + 2].cmd_vx == 0.0f);
-  CHECK(upright(kGone, 20.0));
+  CHECK(r.trace()[At(kGone) + 2].cmd_vx == 0.0f);
+  CHECK(s.Upright(kGone, 20.0));
   CHECK(mode.back() == Mode::kNominal);
-  const auto& stats = dynamic_cast<evdev::EvdevTransport&>(**pad).stats();
+  const auto& stats = dynamic_cast<evdev::EvdevTransport&>(*s.pad).stats();
   CHECK(stats.losses == 1);
   CHECK(stats.unmapped == 0);
+  CHECK(r.loop().operator_status().refused == 0);
   CHECK(test::CommandsOutsideLimits(m, r.can().RecordedCommands()) == 0);
-  // The recording replays to the same commands, bit for bit (the requests from the fields).
-  auto log = loop::ReadLog(log_path);
-  REQUIRE_MESSAGE(log.ok(), log.error().message);
-  auto source = loop::LoadSource(m, {test::SourcePath(kPolicy), "", true, policy::Kernel::kAuto});
-  REQUIRE_MESSAGE(source.ok(), source.error().message);
-  auto replay = loop::Replay(m, *log, source->source.get(), source->hash);
-  REQUIRE_MESSAGE(replay.ok(), replay.error().message);
-  CHECK(replay->ticks == At(20.0));
-  CHECK(replay->compared == At(20.0));
-  CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+  s.CheckReplay();
+}
+
+TEST_CASE(
+    "gamepad HIL: switching policy mid-walk (RB, blended over 0.5 s) and back - no fall, no jump, tracked - replays "
+    "bit for bit") {
+  // tools/gamepad_session.py switch: walking 0.5 m/s from 2.1 s on the flat policy, RB at 5.0
+  // (mixed.blob, blended in), RB at 9.0 (flat again), the stick back at 12.0, stand at 12.5.
+  const std::vector<std::string> more = {"policies/frozen/quadruped_walk/mixed.blob"};
+  SessionRun s("switch", 13.5, more);
+  const auto& set = dynamic_cast<const loop::PolicySet&>(*s.rig->source().source);
+  CHECK(set.switches() == 2);
+  CHECK(set.current() == 0);
+  for (const auto& [from, to] : {std::pair{3.5, 5.0}, std::pair{6.0, 9.0}, std::pair{10.0, 12.0}}) {
+    const double v = s.MeanVx(from, to);
+    MESSAGE("walking " << from << "-" << to << " s: mean vx " << v << " m/s for 0.5");
+    CHECK(std::abs(v - 0.5) <= 0.2);
+  }
+  CHECK(s.Upright(2.0, 13.5));
+  for (double t : {4.9, 5.3, 7.0, 9.3, 11.0}) CHECK(s.phase[At(t)] == Phase::kRun);
+  CHECK(s.mode.back() == Mode::kNominal);
+  // No jump: the largest step of a joint's target within each blend is no larger than walking's own
+  // (the policy's action changes every 20 ticks).
+  const double walking = s.MaxStep(3.0, 5.0), blend1 = s.MaxStep(5.0, 5.6), blend2 = s.MaxStep(9.0, 9.6);
+  MESSAGE("largest q target step: walking " << walking << ", switching " << blend1 << ", back " << blend2 << " rad");
+  CHECK(blend1 <= walking);
+  CHECK(blend2 <= walking);
+  CHECK(s.rig->loop().operator_status().refused == 0);
+  CHECK(test::CommandsOutsideLimits(s.m, s.rig->can().RecordedCommands()) == 0);
+  s.CheckReplay(more);
 }

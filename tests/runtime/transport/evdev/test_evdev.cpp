@@ -456,6 +456,17 @@ TEST_CASE(
   set(m.op.walk, 1);  // no command source here
   run(10);
   CHECK(std::string(l->operator_status().last).find("nothing to run") != std::string::npos);
-  CHECK(l->operator_status().refused == 3);
-  CHECK(l->operator_status().requests == 4);
+  set(m.op.switch_policy, 1);  // one command source (none here)
+  run(10);
+  CHECK(std::string(l->operator_status().last).find("switch refused at tick 1250: one command source (hold)") == 0);
+  set(m.op.switch_policy, 0);
+  set(m.op.estop, 1);
+  run(10);
+  CHECK(l->supervisor().mode == safety::Mode::kEStop);
+  set(m.op.switch_policy, 1);  // no switch while a fault is latched
+  run(10);
+  CHECK_MESSAGE(std::string(l->operator_status().last) == "switch refused at tick 1270: e-stop is latched (hold)",
+                l->operator_status().last);
+  CHECK(l->operator_status().refused == 5);
+  CHECK(l->operator_status().requests == 7);
 }
