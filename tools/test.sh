@@ -116,7 +116,7 @@ echo "ASan+UBSan, TSan, arm64, arm64 ASan+UBSan and libFuzzer builds started in 
 stage "tests: optimised build"
 ctest --preset default -j "$jobs" -LE vcan --no-tests=error
 
-stage "SocketCAN tests (label vcan)"
+stage "SocketCAN and uinput tests (label vcan)"
 if python3 -c 'import socket; socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)' 2>/dev/null &&
    ip link show vcan0 >/dev/null 2>&1; then
   echo "AF_CAN and vcan0 present: running natively"

@@ -231,7 +231,9 @@ struct TickImpl {
     for (std::size_t k = 0; k < m.motors.size(); ++k)
       if (d.fresh[m.motors[k].stream] != 0) l.answered_[k] = 1;
     if (ev.disarm && !motors && l.phase_ == Phase::kRun) Enter(l, Phase::kDisarmed, tick);
-    const auto rose = [&ev](OperatorRequest r) { return ((ev.operator_rises >> static_cast<unsigned>(r)) & 1u) != 0; };
+    const auto rose = [&ev](OperatorRequest r) {
+      return ((static_cast<unsigned>(ev.operator_rises) >> static_cast<unsigned>(r)) & 1u) != 0;
+    };
     if (rose(OperatorRequest::kArm) && l.phase_ != Phase::kDisarmed && !ev.stop) Refuse(l, tick, "arm", "not disarmed");
     if (ev.arm && l.phase_ == Phase::kDisarmed) {
       if (motors) {

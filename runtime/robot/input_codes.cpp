@@ -78,6 +78,13 @@ int Find(const Named (&table)[N], std::string_view name) noexcept {
 }
 
 template <std::size_t N>
+const char* NameOf(const Named (&table)[N], int code) noexcept {
+  for (const Named& n : table)
+    if (n.code == code) return n.name;
+  return nullptr;
+}
+
+template <std::size_t N>
 std::string Names(const Named (&table)[N]) {
   std::string s;
   for (const Named& n : table) s += (s.empty() ? "" : ", ") + std::string(n.name);
@@ -88,6 +95,10 @@ std::string Names(const Named (&table)[N]) {
 
 int InputCode(InputCodeKind kind, std::string_view name) noexcept {
   return kind == InputCodeKind::kAxis ? Find(kAxes, name) : Find(kButtons, name);
+}
+
+const char* InputCodeName(InputCodeKind kind, int code) noexcept {
+  return kind == InputCodeKind::kAxis ? NameOf(kAxes, code) : NameOf(kButtons, code);
 }
 
 std::string InputCodeNames(InputCodeKind kind) {

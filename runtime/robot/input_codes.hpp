@@ -14,6 +14,8 @@ enum class InputCodeKind : std::uint8_t { kAxis, kButton };
 // The code of `name` ("ABS_Y", "BTN_SOUTH", aliases such as "BTN_A" included) of that kind; -1:
 // not one of them.
 int InputCode(InputCodeKind kind, std::string_view name) noexcept;
+// The name of `code` of that kind ("ABS_Y"; the first of its aliases); nullptr: not one of them.
+const char* InputCodeName(InputCodeKind kind, int code) noexcept;
 // The names of that kind, comma-separated (for errors).
 std::string InputCodeNames(InputCodeKind kind);
 

@@ -47,7 +47,7 @@ std::size_t At(double t_s) {
 // A session (models/quadruped_gamepad/sessions/NAME.ev) played for `duration_s` through the rig,
 // the controller recording; per tick its phase, mode and the largest step of a q command.
 struct SessionRun {
-  const robot::RobotModel& m = test::LoadShipped("quadruped_gamepad");
+  const robot::RobotModel& m = test::GamepadRobot();
   std::unique_ptr<robot::Transport> pad;
   std::unique_ptr<sim::QuadrupedRig> rig;
   std::string log_path;

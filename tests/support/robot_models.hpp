@@ -55,6 +55,12 @@ inline const robot::RobotModel& QuadrupedRobot() {
   return m;
 }
 
+// The quadruped driven from a gamepad (models/quadruped_gamepad).
+inline const robot::RobotModel& GamepadRobot() {
+  static const robot::RobotModel& m = LoadShipped("quadruped_gamepad");
+  return m;
+}
+
 // The two-wheeled robot on CAN that exists only as test data (tests/data/diffbot): continuous,
 // velocity-commanded wheels and a position-commanded head.
 inline const robot::RobotModel& DiffbotRobot() {

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "runtime/robot/input_codes.hpp"
+
 namespace pbppo::evdev {
 
 static_assert(sizeof(input_event) == sizeof(EventRecord), "a 64-bit input_event");
@@ -99,11 +101,12 @@ void EvdevTransport::TryOpen(std::uint64_t tick) noexcept {
     const bool ok = ::ioctl(fd, EVIOCGABS(static_cast<unsigned>(a.code)), &info) == 0;
     if (!ok || info.minimum != static_cast<std::int32_t>(a.raw_min) ||
         info.maximum != static_cast<std::int32_t>(a.raw_max)) {
+      const char* name = robot::InputCodeName(robot::InputCodeKind::kAxis, a.code);
       if (ok) {
-        std::snprintf(refusal_, sizeof refusal_, "%s: axis %d has range [%d, %d], the robot file says [%.0f, %.0f]",
-                      spec_.device.c_str(), a.code, info.minimum, info.maximum, a.raw_min, a.raw_max);
+        std::snprintf(refusal_, sizeof refusal_, "%s: axis %s has range [%d, %d], the robot file says [%.0f, %.0f]",
+                      spec_.device.c_str(), name, info.minimum, info.maximum, a.raw_min, a.raw_max);
       } else {
-        std::snprintf(refusal_, sizeof refusal_, "%s: has no axis %d (%s)", spec_.device.c_str(), a.code,
+        std::snprintf(refusal_, sizeof refusal_, "%s: has no axis %s (%s)", spec_.device.c_str(), name,
                       std::strerror(errno));
       }
       ++stats_.refused;
@@ -141,7 +144,8 @@ void EvdevTransport::Resync() noexcept {
     if (::ioctl(fd_, EVIOCGKEY(sizeof keys), keys) >= 0) {
       for (std::size_t i = 0; i < spec_.buttons.size(); ++i) {
         const int c = spec_.buttons[i].code;
-        button_pending_[i] = (keys[c / 8] >> (c % 8)) & 1u;
+        const auto bit = static_cast<unsigned>(c);
+        button_pending_[i] = static_cast<std::uint8_t>((static_cast<unsigned>(keys[bit / 8]) >> (bit % 8)) & 1u);
       }
     }
   }
@@ -275,8 +279,8 @@ std::string EvdevTransport::Summary() const {
   if (refusal_[0] != '\0') s += " (the last: " + std::string(refusal_) + ")";
   s += ", " + n(stats_.out_of_range) + " axis values outside their range";
   if (stats_.out_of_range > 0)
-    s += " (the last: axis " + std::to_string(last_out_of_range_code_) + " gave " + std::to_string(last_out_of_range_) +
-         ")";
+    s += " (the last: axis " + std::string(robot::InputCodeName(robot::InputCodeKind::kAxis, last_out_of_range_code_)) +
+         " gave " + std::to_string(last_out_of_range_) + ")";
   return s;
 }
 

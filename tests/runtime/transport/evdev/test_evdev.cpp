@@ -241,7 +241,7 @@ TEST_CASE(
   }
   CHECK(t->stats().dropped == 1);
   CHECK(t->stats().out_of_range == 5);
-  CHECK_MESSAGE(t->Summary().find("gave -40000") != std::string::npos, t->Summary());
+  CHECK_MESSAGE(t->Summary().find("axis ABS_Y gave -40000") != std::string::npos, t->Summary());
 }
 
 TEST_CASE(
@@ -278,7 +278,7 @@ TEST_CASE(
   CHECK(e.stats().refused >= 2);  // every 5 ticks
   CHECK(e.stats().refused <= 4);
   CHECK_FALSE(e.present());
-  CHECK_MESSAGE(std::string(e.refusal()).find("has no axis 1") != std::string::npos, e.refusal());
+  CHECK_MESSAGE(std::string(e.refusal()).find("has no axis ABS_Y") != std::string::npos, e.refusal());
   CHECK_MESSAGE(t.Summary().find("refused") != std::string::npos, t.Summary());
 }
 
@@ -412,7 +412,7 @@ TEST_CASE(
 
 TEST_CASE(
     "evdev operator: on a robot with motors, walk is taken only in hold with the dead-man held - refusals named") {
-  const robot::RobotModel& m = test::LoadShipped("quadruped_gamepad");
+  const robot::RobotModel& m = test::GamepadRobot();
   test::ScriptedTransport feed(m);
   robot::RobotData d = robot::MakeRobotData(m);
   auto l = loop::MakeLoopData(m, nullptr, loop::LoopOptions{});
