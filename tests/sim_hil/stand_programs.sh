@@ -5,6 +5,8 @@
 # 2) SIGINT during the trajectory -> damping -> motor off -> exit 0.
 # 3) the controller killed (SIGKILL) while standing up, its motors left enabled; then
 #    --safe-stop (what the service runs after any end): damping -> motor off -> exit 0.
+# 4) the gamepad robot (--robot quadruped_gamepad, a recorded session as --gamepad): the
+#    controller waits for START, stands up, walks on A with LB held, and says the requests.
 # usage: stand_programs.sh HIL CONTROLLER SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 src=$3 work=$4
@@ -74,4 +76,18 @@ grep -q "disarmed -> damping" "$work/ctl.3s.log"
 grep -q "motor-off -> done" "$work/ctl.3s.log"
 grep -q "stopped by --safe-stop, its stop done" "$work/ctl.3s.log"
 [ "$(grep -Ec "motor_mode 0" "$work/hil.3.log")" -eq 12 ] || { echo "not every motor off after --safe-stop"; exit 1; }
+echo "== 4: the gamepad robot: waiting for START, then the session's requests"
+run_hil 4
+rc=0
+"$ctl" --robot quadruped_gamepad --can "$can" --policy policies/frozen/quadruped_walk/flat.blob \
+  --gamepad models/quadruped_gamepad/sessions/demo.ev --duration 3 --lockstep-wait-ms 2000 >"$work/ctl.4.log" 2>&1 ||
+  rc=$?
+cat "$work/ctl.4.log"
+stop_hil 4
+[ "$rc" -eq 0 ] || { echo "controller exited with $rc"; exit 1; }
+grep -q "waiting for the operator to arm (field 'arm')" "$work/ctl.4.log"
+grep -q "disarmed -> arming" "$work/ctl.4.log"
+grep -q "hold -> run" "$work/ctl.4.log"
+grep -q "operator: 2 requests, 0 refused" "$work/ctl.4.log"
+grep -q "motor-off -> done" "$work/ctl.4.log"
 echo "stand_programs: OK"
