@@ -147,9 +147,13 @@ void AddOptions(CLI::App& app, Options& o) {
   app.add_option("--trajectory", o.trajectory, "Joint trajectory (a stand_trajectory.yaml) instead of a policy");
   app.add_option("--commands", o.commands,
                  "A schedule file in place of the transport of its stream (an operator's commands, played)");
-  app.add_option("--switch-policy", o.switch_policies,
-                 "Another policy blob the operator's switch request (robot.yaml operator.switch_policy) moves to, "
-                 "in the order given, then back to --policy; each loaded and self-tested at start");
+  // (Each occurrence appended as it is parsed: a std::vector option makes GCC 12 report a null
+  // dereference inside CLI11's string split in the ThreadSanitizer build.)
+  app.add_option_function<std::string>(
+         "--switch-policy", [&o](const std::string& blob) { o.switch_policies.push_back(blob); },
+         "Another policy blob the operator's switch request (robot.yaml operator.switch_policy) moves to, "
+         "in the order given, then back to --policy; each loaded and self-tested at start")
+      ->trigger_on_parse();
   app.add_option("--gamepad", o.gamepad,
                  "The robot's gamepad (its transport of kind evdev) from this device (/dev/input/eventN, "
                  "/dev/input/by-id/...) or recorded event file, in place of the robot file's");

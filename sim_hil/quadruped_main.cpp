@@ -290,8 +290,10 @@ int RunQuadrupedHil(int argc, char** argv, const std::atomic<bool>& stop) {
   app.add_flag("--in-process", o.in_process, "Run the controller in this process too (lock-step, no SocketCAN)");
   app.add_option("--policy", o.policy, "--in-process: the policy blob");
   app.add_option("--commands", o.commands, "--in-process: the velocity command schedule");
-  app.add_option("--switch-policy", o.switch_policies,
-                 "--in-process: another policy blob the operator's switch request moves to (in order, then back)");
+  app.add_option_function<std::string>(
+         "--switch-policy", [&o](const std::string& blob) { o.switch_policies.push_back(blob); },
+         "--in-process: another policy blob the operator's switch request moves to (in order, then back)")
+      ->trigger_on_parse();
   app.add_flag("--skip-self-test", o.skip_self_test, "--in-process: arm without the blob's golden vectors");
   policy::AddKernelOption(app, o.kernel);
   app.add_option("--trace", o.trace, "--in-process: write the trace (CSV, every 10 ms)");

@@ -30,8 +30,10 @@ CLI::App* AddReplay(CLI::App& app, ReplayOptions& o) {
       ->required();
   c->add_option("--robot", o.robot, "The robot of the recording: a name or its robot.yaml")->required();
   c->add_option("--policy", o.policy, "The recording's policy blob");
-  c->add_option("--switch-policy", o.switch_policies,
-                "The recording's other policies (pbppo-controller --switch-policy), in the same order");
+  c->add_option_function<std::string>(
+       "--switch-policy", [&o](const std::string& blob) { o.switch_policies.push_back(blob); },
+       "The recording's other policies (pbppo-controller --switch-policy), in the same order")
+      ->trigger_on_parse();
   c->add_option("--trajectory", o.trajectory, "The recording's joint trajectory file");
   c->add_option("--out", o.out, "Write the replayed commands (one line per tick, hexadecimal floats)");
   auto* trace = c->add_option("--trace", o.trace,
