@@ -342,6 +342,7 @@ TEST_CASE("evdev: robot files that map a gamepad wrongly are refused naming the 
       {{"operator: {arm: arm,", "operator: {walk: arm,"}, "operator.walk: the robot has no motors"},
       {{"operator: {arm: arm,", "operator: {arm: yaw,"}, "operator.arm: field 'yaw' has range [-0.5, 0.5]"},
       {{"operator: {arm: arm,", "operator: {arm: arm, sit: vx,"}, "operator"},
+      {{"      vx: {code", "      [vx, vy]: {code"}, "a mapping key that is not a name"},
   };
   for (const auto& [edit, expected] : cases) {
     INFO(std::string(edit.second));
