@@ -73,13 +73,15 @@ Result<std::unique_ptr<EvdevTransport>> EvdevTransport::Open(const robot::RobotM
                        model.path + ": transport '" + transport + "': event file " + path + " holds no event");
     e->file_.resize(bytes.size() / sizeof(EventRecord));
     std::memcpy(e->file_.data(), bytes.data(), bytes.size());
-    for (std::size_t i = 1; i < e->file_.size(); ++i) {
-      const EventRecord &a = e->file_[i - 1], &b = e->file_[i];
-      if (b.usec < 0 || b.usec >= 1000000 || b.sec < a.sec || (b.sec == a.sec && b.usec < a.usec))
+    constexpr std::int64_t kMaxSec = 1'000'000'000'000;  // 31,700 years: differences cannot overflow
+    for (std::size_t i = 0; i < e->file_.size(); ++i) {
+      const EventRecord &a = e->file_[i > 0 ? i - 1 : 0], &b = e->file_[i];
+      if (b.sec < 0 || b.sec > kMaxSec || b.usec < 0 || b.usec >= 1000000 || b.sec < a.sec ||
+          (b.sec == a.sec && b.usec < a.usec))
         return MakeError(ErrorCode::kInvalidValue, model.path + ": transport '" + transport + "': event file " + path +
                                                        ": record " + std::to_string(i) + " has time " +
                                                        std::to_string(b.sec) + " s " + std::to_string(b.usec) +
-                                                       " us, before the one before it or not a time");
+                                                       " us, before the one before it or not a time (0 to 10^12 s)");
     }
     e->is_file_ = true;
     e->file_open_ = true;
