@@ -15,22 +15,11 @@
 
 #include "runtime/robot/robot_model.hpp"
 #include "runtime/transport/evdev/evdev_transport.hpp"
+#include "tests/fuzz/gamepad_robot.hpp"
 
 namespace {
 
 using namespace pbppo;
-
-const robot::RobotModel& Model() {
-  static const robot::RobotModel* model = [] {
-    auto m = robot::LoadRobotModel(std::string(PBPPO_SOURCE_DIR) + "/models/quadruped_gamepad/robot.yaml");
-    if (!m) {
-      std::fprintf(stderr, "%s\n", m.error().message.c_str());
-      std::abort();
-    }
-    return new robot::RobotModel(std::move(*m));
-  }();
-  return *model;
-}
 
 const std::string& EventFile() {
   static const std::string* path = new std::string(
@@ -47,7 +36,7 @@ const std::string& EventFile() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const robot::RobotModel& m = Model();
+  const robot::RobotModel& m = fuzz::GamepadRobot();
   {
     std::ofstream out(EventFile(), std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));

@@ -18,23 +18,12 @@
 #include "runtime/loop/loop.hpp"
 #include "runtime/loop/policy_set.hpp"
 #include "runtime/robot/robot_model.hpp"
+#include "tests/fuzz/gamepad_robot.hpp"
 #include "tests/fuzz/supervisor_fuzz_common.hpp"
 
 namespace {
 
 using namespace pbppo;
-
-const robot::RobotModel& Model() {
-  static const robot::RobotModel* model = [] {
-    auto m = robot::LoadRobotModel(std::string(PBPPO_SOURCE_DIR) + "/models/quadruped_gamepad/robot.yaml");
-    if (!m) {
-      std::fprintf(stderr, "%s\n", m.error().message.c_str());
-      std::abort();
-    }
-    return new robot::RobotModel(std::move(*m));
-  }();
-  return *model;
-}
 
 // Commands from the bytes, drawn once per run of ticks (Draw): anything (special values, raw
 // bits), small offsets from the phase's neutral command, or the neutral command; 255: finished.
@@ -92,7 +81,7 @@ class Feed final : public robot::Transport {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const robot::RobotModel& m = Model();
+  const robot::RobotModel& m = fuzz::GamepadRobot();
   fuzz::Bytes b(data, size);
   // Two sources the switch request moves between (a PolicySet, the robot file's blend rule).
   auto first = std::make_unique<FuzzSource>(m.commands.size()),
