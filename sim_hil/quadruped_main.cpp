@@ -102,7 +102,7 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
     report::TimeSeriesPlot::Panel p;
     p.ylabel = "phase, mode";
     report::TimeSeriesPlot::Series phase, mode;
-    phase.title = "phase (2 stand-up, 3 hold, 4 run)";
+    phase.title = "phase (2 stand-up, 3 hold, 4 run, 9 sit-down, 10 passive)";
     mode.title = "mode (2 safe-stop, 3 e-stop)";
     mode.dashed = true;
     for (std::size_t i = 0; i < rig.trace().size(); i += 10) {

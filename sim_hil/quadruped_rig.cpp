@@ -200,12 +200,13 @@ RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedul
   for (std::size_t i = 0; i < trace.size(); ++i) {
     const RigSample& x = trace[i];
     // A fall: tilted beyond 60 degrees, or the body on the ground while the controller held or
-    // walked (after a safe-stop the damped robot sits down onto its body: that is the safe state;
-    // re-armed, it gets up from there in arming and stand-up).
+    // walked. Elsewhere the body may rest on the ground: after a safe-stop the damped robot sits
+    // down onto it (the safe state), as it does in passive after a sit-down and in the shutdown's
+    // damping; re-armed, or armed from passive, it gets up from there in arming and stand-up.
     const bool stopped = x.mode >= static_cast<std::uint8_t>(safety::Mode::kSafeStop);
     const auto loop_phase = static_cast<loop::Phase>(x.loop_phase);
-    const bool getting_up = loop_phase == loop::Phase::kArming || loop_phase == loop::Phase::kStandUp;
-    if (!rep.fell && ((x.body_contact && !stopped && !getting_up) || x.tilt_rad > 1.047f)) {
+    const bool standing = loop_phase == loop::Phase::kHold || loop_phase == loop::Phase::kRun;
+    if (!rep.fell && ((x.body_contact && !stopped && standing) || x.tilt_rad > 1.047f)) {
       rep.fell = true;
       rep.fell_at_s = x.t_s;
     }

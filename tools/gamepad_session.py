@@ -7,6 +7,8 @@ little-endian).
   demo    a person stands the robot up, walks it, lets go of the dead-man, walks again, presses
           the e-stop, re-arms and walks until the pad is unplugged
   switch  stands up, walks, switches to the next policy (RB) while walking, then back
+  sit     stands up, walks, sits down (R3) from the walk, is passive, stands up again from the
+          ground (START), walks, stands, sits and shuts down (B) from passive
 
   /usr/bin/python3 tools/gamepad_session.py demo models/quadruped_gamepad/sessions/demo.ev
 
@@ -21,6 +23,7 @@ EV_SYN, EV_KEY, EV_ABS, EV_MSC = 0, 1, 3, 4
 SYN_REPORT, MSC_SCAN = 0, 4
 ABS_X, ABS_Y, ABS_RX = 0, 1, 3
 BTN_SOUTH, BTN_EAST, BTN_TL, BTN_TR, BTN_SELECT, BTN_START, BTN_MODE = 0x130, 0x131, 0x136, 0x137, 0x13A, 0x13B, 0x13C
+BTN_THUMBR = 0x13E
 EPOCH_US = 1_764_000_000_000_000  # a wall-clock time: the file's times are the kernel's
 
 
@@ -87,11 +90,33 @@ def switch():
     return s
 
 
-SESSIONS = {"demo": demo, "switch": switch}
+def sit():
+    s = Session()
+    s.forward(0.0, 0.0)
+    s.press(0.2, BTN_START)      # arm: stand up, hold
+    s.key(1.8, BTN_TL, True)
+    s.press(1.9, BTN_SOUTH)      # walk
+    s.forward(2.1, 0.5)
+    s.forward(5.0, 0.0)
+    s.press(6.0, BTN_THUMBR)     # R3 while walking: sit down (1.5 s), then passive
+    s.key(6.5, BTN_TL, False)
+    s.press(8.5, BTN_SOUTH)      # walk from passive: refused
+    s.press(10.0, BTN_START)     # stand up from the ground (1 s), hold
+    s.key(11.5, BTN_TL, True)
+    s.press(11.6, BTN_SOUTH)     # walk again
+    s.forward(11.8, 0.5)
+    s.forward(15.0, 0.0)
+    s.key(16.0, BTN_TL, False)   # stand
+    s.press(17.3, BTN_THUMBR)    # sit down from hold
+    s.press(19.5, BTN_EAST)      # B from passive: damping, motors off, done
+    return s
+
+
+SESSIONS = {"demo": demo, "switch": switch, "sit": sit}
 
 if __name__ == "__main__":
     if len(sys.argv) != 3 or sys.argv[1] not in SESSIONS:
-        sys.exit("usage: gamepad_session.py demo|switch OUT.ev")
+        sys.exit("usage: gamepad_session.py demo|switch|sit OUT.ev")
     with open(sys.argv[2] + ".part", "wb") as f:
         f.write(b"".join(SESSIONS[sys.argv[1]]().records))
     import os

@@ -26,6 +26,8 @@ const char* ToString(Phase phase) noexcept {
     case Phase::kMotorOff: return "motor-off";
     case Phase::kDone: return "done";
     case Phase::kFailed: return "failed";
+    case Phase::kSitDown: return "sit-down";
+    case Phase::kPassive: return "passive";
   }
   return "?";
 }
@@ -92,7 +94,8 @@ struct TickImpl {
   }
 
   static bool Armed(const RobotModel& m, Phase p) noexcept {
-    return p == Phase::kRun || (m.phases.enable_motors && (p == Phase::kStandUp || p == Phase::kHold));
+    return p == Phase::kRun || (m.phases.enable_motors && (p == Phase::kStandUp || p == Phase::kHold ||
+                                                           p == Phase::kSitDown || p == Phase::kPassive));
   }
 
   // "lost peer, stale sample" (the causes of `bits`) into buf.
@@ -165,9 +168,10 @@ struct TickImpl {
     const auto valid = [&](std::int32_t f) {
       return d.streams[m.fields[static_cast<std::size_t>(f)].stream].invalid_input < 0;
     };
-    const std::int32_t fields[6] = {op.arm, op.walk, op.stop, op.estop, op.rearm, op.switch_policy};
-    bool rise[6] = {};
-    for (std::size_t i = 0; i < 6; ++i) {
+    const std::int32_t fields[kOperatorRequestCount] = {op.arm,   op.walk,          op.stop, op.estop,
+                                                        op.rearm, op.switch_policy, op.sit};
+    bool rise[kOperatorRequestCount] = {};
+    for (std::size_t i = 0; i < kOperatorRequestCount; ++i) {
       const std::int32_t f = fields[i];
       if (f < 0 || (i != 3 && !valid(f))) continue;  // an invalid sample asks nothing (but e-stop), nor forgets
       const bool held = d.fields[static_cast<std::size_t>(f)] >= 0.5;
@@ -212,10 +216,25 @@ struct TickImpl {
   static void EnterStandUp(const RobotModel& m, LoopData& l, std::uint64_t tick) noexcept {
     if (m.phases.stand_up_ticks > 0) {
       Enter(l, Phase::kStandUp, tick);
-      StandUp(m, l, 0);
+      Ramp(m, l, 0, false);
     } else {
       Enter(l, Phase::kHold, tick);
     }
+  }
+
+  // Sit-down (from the measured pose), then passive.
+  static void EnterSitDown(const RobotModel& m, const RobotData& d, LoopData& l, std::uint64_t tick) noexcept {
+    MeasuredPose(m, d, l);
+    Enter(l, Phase::kSitDown, tick);
+    Ramp(m, l, 0, true);
+  }
+
+  // Why the phase does not take a sit request, or nullptr.
+  static const char* NoSit(const LoopData& l) noexcept {
+    if (l.phase_ != Phase::kStandUp && l.phase_ != Phase::kHold && l.phase_ != Phase::kRun) return "not standing";
+    if (l.sup_.mode >= Mode::kSafeStop)
+      return l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched";
+    return nullptr;
   }
 
   // Arm / disarm / stop requests, then the phase's own transitions and its command.
@@ -234,7 +253,24 @@ struct TickImpl {
     const auto rose = [&ev](OperatorRequest r) {
       return ((static_cast<unsigned>(ev.operator_rises) >> static_cast<unsigned>(r)) & 1u) != 0;
     };
-    if (rose(OperatorRequest::kArm) && l.phase_ != Phase::kDisarmed && !ev.stop) Refuse(l, tick, "arm", "not disarmed");
+    if (rose(OperatorRequest::kArm) && !ev.stop) {
+      if (l.phase_ != Phase::kDisarmed && l.phase_ != Phase::kPassive) {
+        Refuse(l, tick, "arm", m.phases.sit_down_ticks > 0 ? "not disarmed or passive" : "not disarmed");
+      } else if (l.phase_ == Phase::kPassive && l.sup_.mode >= Mode::kSafeStop) {
+        Refuse(l, tick, "arm", l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched");
+      }
+    }
+    if (ev.arm && l.phase_ == Phase::kPassive && l.sup_.mode < Mode::kSafeStop && !ev.stop) {
+      MeasuredPose(m, d, l);  // stand up from where it sits
+      EnterStandUp(m, l, tick);
+    }
+    if (rose(OperatorRequest::kSit) && !ev.stop) {
+      if (const char* why = NoSit(l); why != nullptr) {
+        Refuse(l, tick, "sit", why);
+      } else {
+        EnterSitDown(m, d, l, tick);
+      }
+    }
     if (ev.arm && l.phase_ == Phase::kDisarmed) {
       if (motors) {
         Enter(l, Phase::kArming, tick);
@@ -252,6 +288,8 @@ struct TickImpl {
         case Phase::kStandUp:
         case Phase::kHold:
         case Phase::kRun:
+        case Phase::kSitDown:
+        case Phase::kPassive:
           Enter(l, !motors ? Phase::kDone : m.phases.damping_ticks > 0 ? Phase::kDamping : Phase::kMotorOff, tick);
           break;
         default: break;
@@ -281,7 +319,10 @@ struct TickImpl {
         }
         break;
       case Phase::kStandUp:
-        if (StandUp(m, l, in_phase)) Enter(l, Phase::kHold, tick);
+        if (Ramp(m, l, in_phase, false)) Enter(l, Phase::kHold, tick);
+        break;
+      case Phase::kSitDown:
+        if (Ramp(m, l, in_phase, true)) Enter(l, Phase::kPassive, tick);
         break;
       case Phase::kHold:
         if (l.source_ != nullptr && !l.source_done_ && in_phase >= m.phases.hold_ticks && ev.deadman &&
@@ -320,25 +361,29 @@ struct TickImpl {
       case Phase::kMotorOff:
         if (in_phase > 0 && (all || in_phase >= m.phases.motor_off_timeout_ticks)) Enter(l, Phase::kDone, tick);
         break;
+      case Phase::kPassive:
       case Phase::kDisarmed:
       case Phase::kDone:
       case Phase::kFailed: break;
     }
-    if (l.phase_ == Phase::kDamping)
+    if (l.phase_ == Phase::kDamping || l.phase_ == Phase::kPassive)
       for (std::size_t k = 0; k < m.commands.size(); ++k) l.desired_[k] = StopValue(m, d, k);
   }
 
-  // The stand-up ramp: a smoothstep from the measured pose to the default pose. True at its end.
-  // Velocity-commanded motors (wheels) hold zero speed throughout (their neutral commands).
-  static bool StandUp(const RobotModel& m, LoopData& l, std::uint64_t in_phase) noexcept {
-    const double T = static_cast<double>(m.phases.stand_up_ticks) * m.tick_period_s;
-    const double x = std::min(1.0, static_cast<double>(in_phase) / static_cast<double>(m.phases.stand_up_ticks));
+  // The stand-up (sit-down) ramp: a smoothstep from the measured pose to the default (sit) pose.
+  // True at its end. Velocity-commanded motors (wheels) hold zero speed throughout (their neutral
+  // commands).
+  static bool Ramp(const RobotModel& m, LoopData& l, std::uint64_t in_phase, bool sit) noexcept {
+    const std::uint32_t ticks = sit ? m.phases.sit_down_ticks : m.phases.stand_up_ticks;
+    const double T = static_cast<double>(ticks) * m.tick_period_s;
+    const double x = std::min(1.0, static_cast<double>(in_phase) / static_cast<double>(ticks));
     const double s = x * x * (3 - 2 * x), ds = 6 * x * (1 - x) / T;
     for (std::size_t k = 0; k < m.motors.size(); ++k) {
       const robot::MotorSpec& mo = m.motors[k];
       if (mo.velocity_commanded()) continue;
-      l.desired_[mo.q] = l.q0_[k] + (mo.default_q_rad - l.q0_[k]) * s;
-      l.desired_[mo.dq] = (mo.default_q_rad - l.q0_[k]) * ds;
+      const double target = sit ? mo.sit_q_rad : mo.default_q_rad;
+      l.desired_[mo.q] = l.q0_[k] + (target - l.q0_[k]) * s;
+      l.desired_[mo.dq] = (target - l.q0_[k]) * ds;
     }
     return x >= 1.0;
   }

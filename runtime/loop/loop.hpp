@@ -18,7 +18,10 @@
 // Phases. Arm() starts arming: robots with motors switch each on until it answers, then stand up
 // (a smoothstep from the measured pose to the default pose; velocity-commanded motors, wheels,
 // hold zero speed), hold, and run the command source;
-// robots without motors run at once. RequestStop() shuts down: motors are damped (the
+// robots without motors run at once. A robot that sits (robot.yaml phases.sit_down_s, its
+// description's sit_pose) sits down on the operator's request: the same smoothstep from the
+// measured pose to the sit pose, then passive (the damping values, motors on) until arm stands it
+// up again from where it is. RequestStop() shuts down: motors are damped (the
 // supervisor's safe-stop values), then switched off until each answers; a robot without motors
 // sends its e-stop command once (Shutdown). An e-stop request while arming (not supervised: the
 // motors are not answering yet) switches the motors off as a stop does, and the supervisor takes
@@ -35,8 +38,9 @@
 //              the robot file lists, at most max_automatic times a run (then only a request)
 // Operator requests (robot.yaml operator: fields such as a gamepad's buttons; runtime/robot/
 // robot_model.hpp). A field's rise to at least 0.5 asks, at that tick, as the calls below do:
-//   arm      Arm(): from disarmed, arming, stand-up and hold (a robot without motors runs)
+//   arm      Arm(): from disarmed (a robot without motors runs), and from passive: stand up
 //   walk     from hold, run the command source; without it the source starts after hold_s
+//   sit      from stand-up, hold and run (no fault latched): sit down, then passive; arm stands up
 //   stop     RequestStop(): damping, then motors off
 //   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off)
 //   rearm    RequestRearm(): run again after a safe-stop or e-stop, by the recovery rule below
@@ -48,9 +52,10 @@
 //            without motors disarms (an arm request runs it again)
 // A stream whose sample the check found invalid makes no request but e-stop that tick. Which
 // field made which request is derived from the fields, so a recorded run replays them. A request
-// the phase does not take (arm while not disarmed, walk outside hold, without the dead-man or
+// the phase does not take (arm outside disarmed and passive, walk outside hold, without the dead-man or
 // before hold_s is over, a switch with one source, outside hold and run or with a fault latched)
-// changes nothing and is refused, counted and said (OperatorStatus).
+// changes nothing and is refused, counted and said (OperatorStatus); so is a sit outside stand-up,
+// hold and run or with a fault latched, and an arm from passive with a fault latched.
 //
 // Re-arming is arming again at a tick boundary: the supervisor back to nominal (its counters kept),
 // then robots with motors arm, stand up from the measured pose and hold before the command source
@@ -78,8 +83,21 @@
 
 namespace pbppo::loop {
 
-enum class Phase : std::uint8_t { kDisarmed, kArming, kStandUp, kHold, kRun, kDamping, kMotorOff, kDone, kFailed };
-inline constexpr std::size_t kPhaseCount = 9;
+// (Numbered as logs store them: later phases come last.)
+enum class Phase : std::uint8_t {
+  kDisarmed,
+  kArming,
+  kStandUp,
+  kHold,
+  kRun,
+  kDamping,
+  kMotorOff,
+  kDone,
+  kFailed,
+  kSitDown,
+  kPassive
+};
+inline constexpr std::size_t kPhaseCount = 11;
 const char* ToString(Phase phase) noexcept;
 
 class LoopData;
@@ -127,7 +145,8 @@ struct TickEvents {
 };
 
 // The operator's requests from fields (robot.yaml operator), in the order of their bits.
-enum class OperatorRequest : std::uint8_t { kArm, kWalk, kStop, kEStop, kRearm, kSwitch };
+enum class OperatorRequest : std::uint8_t { kArm, kWalk, kStop, kEStop, kRearm, kSwitch, kSit };
+inline constexpr std::size_t kOperatorRequestCount = 7;
 
 // What became of the operator's requests: each counted, a refused one said (a re-arm's is
 // RecoveryStatus's).
@@ -242,7 +261,7 @@ class LoopData {
   // Operator requests (robot.yaml operator): each request field's level at the last tick (0, 1),
   // for its rises (OperatorRequest's order). Kept in snapshots only for robots with one.
   bool operator_ = false;
-  std::array<std::uint8_t, 6> operator_held_{};
+  std::array<std::uint8_t, kOperatorRequestCount> operator_held_{};
   OperatorStatus operator_status_;
 };
 

@@ -132,7 +132,7 @@ struct StateImpl {
         return in.Fail("field 'data.motors': " + std::to_string(static_cast<int>(c)) + " is not a motor command");
     safety::SupervisorState& s = l.sup_;
     ok = in.GetBelow(l.phase_, kPhaseCount, "loop.phase") &&
-         in.GetSpan<std::uint64_t>(l.phase_start_, "loop.phase_start") &&
+         in.GetSpanUpTo<std::uint64_t>(l.phase_start_, "loop.phase_start") &&
          in.GetBool(l.source_done_, "loop.source_done") && in.GetBool(l.ended_, "loop.ended") &&
          in.GetSpan<std::uint8_t>(l.answered_, "loop.answered") && in.GetSpan<double>(l.q0_, "loop.q0") &&
          in.GetSpan<double>(l.desired_, "loop.desired") && in.GetSpan<double>(l.limit_values_, "loop.limit_values") &&
@@ -162,7 +162,7 @@ struct StateImpl {
          in.GetBool(r.last_refused, "recovery.last_refused") && GetText(in, r.last, sizeof r.last, "recovery.last");
     OperatorStatus& op = l.operator_status_;
     if (ok && l.operator_)
-      ok = in.GetSpan<std::uint8_t>(l.operator_held_, "loop.operator_held") &&
+      ok = in.GetSpanUpTo<std::uint8_t>(l.operator_held_, "loop.operator_held") &&
            in.Get(op.requests, "operator.requests") && in.Get(op.refused, "operator.refused") &&
            in.Get(op.last_tick, "operator.last_tick") && GetText(in, op.last, sizeof op.last, "operator.last");
     if (!ok) return false;

@@ -9,6 +9,7 @@
 // field by their owners (no padding bytes in a log: the same run writes the same bytes).
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -79,6 +80,22 @@ class StateReader {
     if (!GetCount(s.size(), field) || !Need(s.size_bytes(), field)) return false;
     if (!s.empty()) std::memcpy(s.data(), b_.data() + at_, s.size_bytes());
     at_ += s.size_bytes();
+    return true;
+  }
+  // A span that a later build lengthened (the loop's phases, the operator's requests): up to the
+  // span's size stored, the rest zero.
+  template <typename T>
+  bool GetSpanUpTo(std::span<T> s, const char* field) {
+    static_assert((std::is_arithmetic_v<T> || std::is_enum_v<T>) && !std::is_same_v<T, bool>);
+    std::uint32_t n = 0;
+    if (!Get(n, field)) return false;
+    if (n > s.size())
+      return Fail(std::string("field '") + field + "': " + std::to_string(n) + " values, this build has " +
+                  std::to_string(s.size()));
+    if (!Need(n * sizeof(T), field)) return false;
+    std::fill(s.begin(), s.end(), T{});
+    if (n > 0) std::memcpy(s.data(), b_.data() + at_, n * sizeof(T));
+    at_ += n * sizeof(T);
     return true;
   }
   bool GetBool(bool& v, const char* field) {

@@ -1,6 +1,7 @@
 #include "runtime/robot/robot_model.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 
@@ -231,11 +232,13 @@ struct Loader : detail::Builder {
     }
     YAML::Node n;
     PBPPO_TRY(f.Map(root, "phases", "", &n));
-    PBPPO_TRY(f.Keys(n, "phases", {"arming_timeout_s", "stand_up_s", "hold_s", "damping_s", "motor_off_timeout_s"}));
+    PBPPO_TRY(f.Keys(n, "phases",
+                     {"arming_timeout_s", "stand_up_s", "hold_s", "damping_s", "motor_off_timeout_s", "sit_down_s"}));
     for (const Status& st : {f.Number(n, "arming_timeout_s", "phases", 1e-6, 3600.0, &p.arming_timeout_s),
                              f.OptionalNumber(n, "stand_up_s", "phases", 0.0, 3600.0, &p.stand_up_s),
                              f.OptionalNumber(n, "hold_s", "phases", 0.0, 3600.0, &p.hold_s),
                              f.OptionalNumber(n, "damping_s", "phases", 0.0, 3600.0, &p.damping_s),
+                             f.OptionalNumber(n, "sit_down_s", "phases", 0.0, 3600.0, &p.sit_down_s),
                              f.Number(n, "motor_off_timeout_s", "phases", 1e-6, 3600.0, &p.motor_off_timeout_s)}) {
       PBPPO_TRY(st);
     }
@@ -383,6 +386,14 @@ Status Derive(RobotModel& m, double tick_s) {
   p.hold_ticks = Ticks(p.hold_s, tick_s);
   p.damping_ticks = Ticks(p.damping_s, tick_s);
   p.motor_off_timeout_ticks = Ticks(p.motor_off_timeout_s, tick_s);
+  p.sit_down_ticks = Ticks(p.sit_down_s, tick_s);
+  if (p.sit_down_s > 0) {
+    if (m.motors.empty()) return fail("phases.sit_down_s: the robot has no motors to sit with");
+    for (const MotorSpec& mo : m.motors)
+      if (!mo.velocity_commanded() && !std::isfinite(mo.sit_q_rad))
+        return fail("phases.sit_down_s: the robot's description gives no sit_pose (joint " + mo.joint +
+                    ") to sit down to");
+  }
   m.supervisor.recovery.healthy_ticks = std::max<std::uint32_t>(1, Ticks(m.supervisor.recovery.healthy_s, tick_s));
   m.op.switch_ticks = Ticks(m.op.switch_s, tick_s);
   return {};

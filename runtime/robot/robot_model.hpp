@@ -107,6 +107,7 @@ struct MotorSpec {
   // unwraps from the driver's position, which wraps in the MIT range [p_min, p_max).
   bool continuous = false;
   double default_q_rad = 0;  // position-commanded: the pose stand-up ends in and hold keeps
+  double sit_q_rad = 0;      // position-commanded: the pose a sit-down ends in (the description's sit_pose)
   // The gains a policy's position targets are tracked with (robot.yaml motors.policy_gains); < 0: the
   // commands' neutral gains. Position-commanded motors only.
   double policy_kp = -1, policy_kd = -1;
@@ -126,9 +127,12 @@ struct SignalSpec {
 struct PhaseSpec {
   bool enable_motors = false;  // arming switches motors on (the robot has motors)
   double arming_timeout_s = 0, stand_up_s = 0, hold_s = 0, damping_s = 0, motor_off_timeout_s = 0;
+  // A sit-down (a ramp from the measured pose to the description's sit_pose, then passive: damped,
+  // motors on) takes sit_down_s; 0: the robot does not sit (its description has no sit pose).
+  double sit_down_s = 0;
   // Per tick (derived).
   std::uint32_t arming_timeout_ticks = 0, stand_up_ticks = 0, hold_ticks = 0, damping_ticks = 0,
-                motor_off_timeout_ticks = 0;
+                motor_off_timeout_ticks = 0, sit_down_ticks = 0;
 };
 
 struct SignalLimitSpec {
@@ -152,6 +156,8 @@ struct ServiceSpec {
 //   operator:
 //     arm: start_button       # stand up from the measured pose, then hold the default pose
 //     walk: walk_button       # from hold, run the command source (without it: after hold_s)
+//     sit: sit_button         # sit down (to the description's sit_pose), then passive: damped, motors
+//                             # on, until arm stands it up again (phases.sit_down_s)
 //     stop: stop_button       # shut down: damping, then motors off
 //     estop: estop_button     # e-stop (the supervisor latches it)
 //     rearm: rearm_button     # run again after a safe-stop or e-stop (supervisor.recovery's rule)
@@ -160,12 +166,13 @@ struct ServiceSpec {
 //     switch: {rule: blend, duration_s: 0.5}  # blend the commands in, or hold the default pose
 enum class SwitchRule : std::uint8_t { kBlend, kHold };
 struct OperatorSpec {
-  std::int32_t arm = -1, walk = -1, stop = -1, estop = -1, rearm = -1, deadman = -1, switch_policy = -1;
+  std::int32_t arm = -1, walk = -1, stop = -1, estop = -1, rearm = -1, deadman = -1, switch_policy = -1, sit = -1;
   SwitchRule switch_rule = SwitchRule::kBlend;
   double switch_s = 0.5;
   std::uint32_t switch_ticks = 0;  // derived
   bool any() const noexcept {
-    return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0;
+    return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0 ||
+           sit >= 0;
   }
 };
 

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 
 #include "runtime/robot/robot_model_parts.hpp"
 
@@ -191,6 +192,7 @@ Status Builder::Motor(const std::string& joint, std::uint32_t device, const Driv
   mo.control = body.control[j];
   mo.continuous = uj.continuous();
   mo.default_q_rad = body.default_q_rad[j];
+  mo.sit_q_rad = body.sit_q_rad.empty() ? std::nan("") : body.sit_q_rad[j];
   mo.policy_kp = velocity ? -1 : ms.policy_kp;
   mo.policy_kd = velocity ? -1 : ms.policy_kd;
   mo.q_field = static_cast<std::uint32_t>(m.fields.size());

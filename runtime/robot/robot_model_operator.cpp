@@ -126,15 +126,12 @@ Status Builder::Operator(const YAML::Node& root) {
   if (!root["operator"]) return {};
   YAML::Node n;
   PBPPO_TRY(f.Map(root, "operator", "", &n));
-  PBPPO_TRY(f.Keys(n, "operator", {"arm", "walk", "stop", "estop", "rearm", "deadman", "switch_policy", "switch"}));
+  PBPPO_TRY(
+      f.Keys(n, "operator", {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch"}));
   OperatorSpec& op = m.op;
-  const std::pair<const char*, std::int32_t*> requests[] = {{"arm", &op.arm},
-                                                            {"walk", &op.walk},
-                                                            {"stop", &op.stop},
-                                                            {"estop", &op.estop},
-                                                            {"rearm", &op.rearm},
-                                                            {"deadman", &op.deadman},
-                                                            {"switch_policy", &op.switch_policy}};
+  const std::pair<const char*, std::int32_t*> requests[] = {
+      {"arm", &op.arm},     {"walk", &op.walk},   {"sit", &op.sit},         {"stop", &op.stop},
+      {"estop", &op.estop}, {"rearm", &op.rearm}, {"deadman", &op.deadman}, {"switch_policy", &op.switch_policy}};
   std::vector<std::string> used;
   for (const auto& [key, out] : requests) {
     std::string name;
@@ -160,6 +157,10 @@ Status Builder::Operator(const YAML::Node& root) {
   }
   if (op.walk >= 0 && m.phases.enable_motors == false)
     return f.Fail("operator.walk", "the robot has no motors, so no hold to walk from (arm runs it)");
+  if (op.sit >= 0 && m.phases.sit_down_s <= 0)
+    return f.Fail("operator.sit",
+                  "the robot does not sit: phases.sit_down_s is not given (nor, for a robot "
+                  "without motors, anything to sit with)");
   return {};
 }
 

@@ -478,7 +478,8 @@ Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, con
   if (!doc) return std::move(doc).error();
   const YAML::Node root = *doc;
   const YamlFields f(origin);
-  if (auto st = f.Keys(root, "", {"urdf", "joints", "velocity_control", "default_pose", "stand", "gains"}); !st)
+  if (auto st = f.Keys(root, "", {"urdf", "joints", "velocity_control", "default_pose", "sit_pose", "stand", "gains"});
+      !st)
     return st.error();
   constexpr double kInf = HUGE_VAL;
   RobotDescription d;
@@ -538,33 +539,42 @@ Result<RobotDescription> ParseRobotDescription(const std::string& yaml_text, con
   }
 
   // The default pose: every position-commanded joint, none of the others (a robot of wheels only
-  // may leave it out).
-  YAML::Node pose, stand, gains;
+  // may leave it out). The sit pose (optional) likewise: where a sit-down ends, before damping.
+  YAML::Node stand, gains;
   const bool positions = std::count(d.control.begin(), d.control.end(), JointControl::kPosition) > 0;
-  if (positions || (root["default_pose"] && !root["default_pose"].IsNull()))
-    if (auto st = f.Map(root, "default_pose", "", &pose); !st) return st.error();
-  for (const auto& kv : pose) {
-    const std::string key = kv.first.as<std::string>();
-    if (seen.count(key) == 0) return f.Fail("default_pose." + key, "is not an actuated joint");
-  }
-  d.default_q_rad.assign(d.joint.size(), 0.0);
-  for (std::size_t i = 0; i < d.joint.size(); ++i) {
-    const UrdfJoint& j = d.joint_at(i);
-    const std::string& name = d.joint_names[i];
-    if (d.velocity_commanded(i)) {
-      if (pose[name])
-        return f.Fail("default_pose." + name, YamlFields::Quote(pose[name]) + ": joint '" + name + "' is " +
-                                                  (j.continuous() ? "continuous and " : "") +
-                                                  "velocity-commanded: it takes no position target (it holds zero "
-                                                  "speed where others hold their default pose)");
-      continue;
+  const auto read_pose = [&](const char* key, bool required, std::vector<double>* out) -> Status {
+    YAML::Node pose;
+    if (required || (root[key] && !root[key].IsNull()))
+      if (auto st = f.Map(root, key, "", &pose); !st) return st.error();
+    for (const auto& kv : pose) {
+      const std::string name = kv.first.as<std::string>();
+      if (seen.count(name) == 0) return f.Fail(std::string(key) + "." + name, "is not an actuated joint");
     }
-    if (auto st = f.Number(pose, name.c_str(), "default_pose", -kInf, kInf, &d.default_q_rad[i]); !st)
-      return st.error();
-    if (d.default_q_rad[i] < j.lower_rad || d.default_q_rad[i] > j.upper_rad)
-      return f.Fail("default_pose." + name, YamlFields::Quote(pose[name]) + " is outside the joint's limits [" +
-                                                YamlFields::Num(j.lower_rad) + ", " + YamlFields::Num(j.upper_rad) +
-                                                "]");
+    out->assign(d.joint.size(), 0.0);
+    for (std::size_t i = 0; i < d.joint.size(); ++i) {
+      const UrdfJoint& j = d.joint_at(i);
+      const std::string& name = d.joint_names[i];
+      const std::string w = std::string(key) + "." + name;
+      if (d.velocity_commanded(i)) {
+        if (pose[name])
+          return f.Fail(w, YamlFields::Quote(pose[name]) + ": joint '" + name + "' is " +
+                               (j.continuous() ? "continuous and " : "") +
+                               "velocity-commanded: it takes no position target (it holds zero speed where others "
+                               "hold their " +
+                               (std::string(key) == "default_pose" ? "default pose)" : "sit pose)"));
+        continue;
+      }
+      if (auto st = f.Number(pose, name.c_str(), key, -kInf, kInf, &(*out)[i]); !st) return st.error();
+      if ((*out)[i] < j.lower_rad || (*out)[i] > j.upper_rad)
+        return f.Fail(w, YamlFields::Quote(pose[name]) + " is outside the joint's limits [" +
+                             YamlFields::Num(j.lower_rad) + ", " + YamlFields::Num(j.upper_rad) + "]");
+    }
+    return {};
+  };
+  if (auto st = read_pose("default_pose", positions, &d.default_q_rad); !st) return st.error();
+  if (root["sit_pose"] && !root["sit_pose"].IsNull()) {
+    if (!positions) return f.Fail("sit_pose", "the robot has no position-commanded joint to sit with");
+    if (auto st = read_pose("sit_pose", true, &d.sit_q_rad); !st) return st.error();
   }
   if (auto st = f.Map(root, "stand", "", &stand); !st) return st.error();
   if (auto st = f.Keys(stand, "stand", {"base_height_m"}); !st) return st.error();

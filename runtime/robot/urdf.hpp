@@ -100,6 +100,7 @@ struct RobotDescription {
   std::vector<std::string> joint_names;      // actuated joints in runtime order
   std::vector<std::uint32_t> joint;          // index into urdf.joints, per actuated joint
   std::vector<double> default_q_rad;         // per actuated joint (a velocity-commanded one: 0, unused)
+  std::vector<double> sit_q_rad;             // the same for sit_pose (a sit-down ends in it); empty: none
   std::vector<JointControl> control;         // per actuated joint
   std::vector<double> velocity_kd_nm_s_rad;  // per actuated joint: a velocity-commanded one's kd (else 0)
   double stand_base_height_m = 0;

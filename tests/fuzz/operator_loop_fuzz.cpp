@@ -1,5 +1,6 @@
 // libFuzzer target: the operator's mode machine (runtime/loop/loop.hpp: Operator requests) on the
-// quadruped with a gamepad (models/quadruped_gamepad), for any sequence of button presses
+// quadruped with a gamepad (models/quadruped_gamepad), for any sequence of button presses (sit
+// included)
 // and releases, stick values (NaN, Inf, out of range), motor replies and IMU samples that come,
 // stop or carry bad values, bus faults, and two command sources (switched between by the robot
 // file's blend rule) whose commands are anything. After every tick:
@@ -7,7 +8,8 @@
 //   - an e-stop press wins: at its tick the mode is e-stop (arming too: the motors are switched
 //     off), and while it is, no motor is commanded;
 //   - the command source runs only with the dead-man held in a valid sample, and a run starts
-//     only from hold (after a stand-up).
+//     only from hold (after a stand-up);
+//   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down.
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -102,7 +104,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const robot::OperatorSpec& op = m.op;
   const std::uint32_t pad = m.fields[static_cast<std::size_t>(op.deadman)].stream;
-  const std::int32_t buttons[7] = {op.deadman, op.arm, op.walk, op.estop, op.rearm, op.stop, op.switch_policy};
+  const std::int32_t buttons[8] = {op.deadman, op.arm, op.walk, op.estop, op.rearm, op.stop, op.switch_policy, op.sit};
   robot::Transport* transports[] = {&feed};
   double estop_level = 0;
   loop::Phase before = loop::Phase::kDisarmed;
@@ -114,8 +116,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (flags & 1) {  // which buttons change, and to what (pressed 1, released 0; or any value)
       const std::uint8_t change = b.U8(), value = b.U8();
       for (std::size_t i = 0; i < 7; ++i)
-        if ((change >> i) & 1) feed.values[static_cast<std::size_t>(buttons[i])] = (value >> i) & 1 ? 1.0 : 0.0;
-      if (change & 0x80) feed.values[static_cast<std::size_t>(buttons[b.U8() % 7])] = b.Real();
+        if ((change >> i) & 1)
+          feed.values[static_cast<std::size_t>(buttons[(i + (value >> 7)) % 8])] = (value >> i) & 1 ? 1.0 : 0.0;
+      if (change & 0x80) feed.values[static_cast<std::size_t>(buttons[b.U8() % 8])] = b.Real();
     }
     if (flags & 2) {
       const std::uint32_t first = m.streams[pad].first_field;
@@ -161,6 +164,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (!(d.fields[dm] >= 0.5) || d.streams[pad].invalid_input >= 0) Fail("running without the dead-man", tick);
         if (before != loop::Phase::kRun && before != loop::Phase::kHold) Fail("a run not from hold", tick);
       }
+      if (now == loop::Phase::kSitDown && before != loop::Phase::kSitDown && before != loop::Phase::kStandUp &&
+          before != loop::Phase::kHold && before != loop::Phase::kRun)
+        Fail("a sit-down not from standing", tick);
+      if (now == loop::Phase::kPassive && before != loop::Phase::kPassive && before != loop::Phase::kSitDown)
+        Fail("passive not after a sit-down", tick);
       before = now;
       if (now == loop::Phase::kDone || now == loop::Phase::kFailed) return 0;
     }

@@ -5,7 +5,8 @@
 // walk on A with the dead-man (LB) held and the left stick forward, the dead-man released (the
 // robot stands), walking again, e-stop on BACK (latched), re-armed on the Xbox button, walking,
 // and the pad gone mid-walk (the file's end: the robot stands). The controller's recording of the
-// session replays bit for bit.
+// session replays bit for bit. sessions/switch.ev switches policy mid-walk, sessions/sit.ev sits
+// the robot down and stands it up again.
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -219,4 +220,58 @@ TEST_CASE(
   CHECK(s.rig->loop().operator_status().refused == 0);
   CHECK(test::CommandsOutsideLimits(s.m, s.rig->can().RecordedCommands()) == 0);
   s.CheckReplay(more);
+}
+
+TEST_CASE(
+    "gamepad HIL: sit down from a walk (R3), passive on the ground, stand up again (START), walk, sit from hold, stop "
+    "from passive - no fall, replays bit for bit") {
+  // tools/gamepad_session.py sit: walking 0.5 m/s from 2.1 s, the stick back at 5.0, R3 at 6.0
+  // (sit-down 1.5 s, then passive), A at 8.5 (refused), START at 10.0 (stand up), walking 0.5 m/s
+  // from 11.8 to 15.0, the dead-man released at 16.0, R3 at 17.3, B at 19.5 (damping, motors off).
+  constexpr double kSit1 = 6.0, kStand = 10.0, kSit2 = 17.3, kStop = 19.5;
+  SessionRun s("sit", 19.9);
+  const std::vector<Phase>& phase = s.phase;
+  const std::vector<sim::RigSample>& trace = s.rig->trace();
+  const robot::RobotModel& m = s.m;
+  CHECK(phase[At(kSit1) - 1] == Phase::kRun);
+  CHECK(phase[At(kSit1)] == Phase::kSitDown);  // at the press's tick, from the walk
+  CHECK(phase[At(kSit1) + 1499] == Phase::kSitDown);
+  CHECK(phase[At(kSit1) + 1500] == Phase::kPassive);
+  // Seated, upright: the base lowered from standing (0.46 m in hold) to about the sit pose's 0.19 m.
+  const float seated = trace[At(kSit1) + 1499].z_m, standing = trace[At(1.7)].z_m;
+  MESSAGE("base height: standing " << standing << " m, seated " << seated << " m, passive " << trace[At(kStand) - 1].z_m
+                                   << " m");
+  CHECK(standing > 0.40f);
+  CHECK(seated > 0.15f);
+  CHECK(seated < 0.22f);
+  CHECK(s.Upright(kSit1, kStand + 1.5));
+  // The sit-down starts from the measured pose (its first target is where each joint is, so the
+  // stand gains take over without a torque step), then moves smoothly: its largest step per tick
+  // after the first a small fraction of the walk's own.
+  const double walking = s.MaxStep(3.0, 5.0), sitting = s.MaxStep(kSit1 + 0.001, kSit1 + 1.5);
+  MESSAGE("largest q target step: walking " << walking << ", sitting down " << sitting << " rad");
+  CHECK(sitting <= 0.01 * walking);
+  // Passive: damped (kp 0), resting on its body by the time START comes; walking refused.
+  CHECK(trace[At(kStand) - 1].body_contact);
+  CHECK(std::string(s.rig->loop().operator_status().last).find("walk refused at tick 8500: not holding (passive)") ==
+        0);
+  // START: up again from the ground, holding, then walking 0.5 m/s within 0.2.
+  CHECK(phase[At(kStand)] == Phase::kStandUp);
+  CHECK(phase[At(kStand + 1.1)] == Phase::kHold);
+  CHECK(trace[At(kStand + 1.4)].z_m > 0.40f);
+  CHECK_FALSE(trace[At(kStand + 1.4)].body_contact);
+  const double v = s.MeanVx(12.8, 15.0);
+  MESSAGE("walking after standing up from passive: mean vx " << v << " m/s for 0.5");
+  CHECK(std::abs(v - 0.5) <= 0.2);
+  CHECK(s.Upright(kStand, kStop));
+  // Sit from hold, then B from passive: damping, motors off.
+  CHECK(phase[At(kSit2) - 1] == Phase::kHold);
+  CHECK(phase[At(kSit2)] == Phase::kSitDown);
+  CHECK(phase[At(kSit2 + 1.6)] == Phase::kPassive);
+  CHECK(phase[At(kStop)] == Phase::kDamping);
+  CHECK(s.mode.back() == Mode::kNominal);
+  CHECK_FALSE(s.rig->Report(1.0, true).fell);
+  CHECK(s.rig->loop().operator_status().refused == 1);
+  CHECK(test::CommandsOutsideLimits(m, s.rig->can().RecordedCommands()) == 0);
+  s.CheckReplay();
 }

@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 #include <sys/resource.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -25,6 +26,7 @@
 #include "runtime/loop/log.hpp"
 #include "runtime/loop/policy_source.hpp"
 #include "runtime/loop/replay.hpp"
+#include "runtime/loop/state_bytes.hpp"
 #include "runtime/policy/blob.hpp"
 #include "tests/support/robot_models.hpp"
 #include "tests/support/scripted_transport.hpp"
@@ -704,4 +706,25 @@ TEST_CASE(
   CHECK(replay->ticks == 160);
   CHECK(replay->compared == replay->ticks);
   CHECK_MESSAGE(replay->mismatches == 0, replay->first_mismatch);
+}
+
+TEST_CASE("log: a snapshot written by a build with fewer phases or operator requests loads, the rest zero") {
+  // The loop's per-phase and per-request arrays grow at their end as phases and requests are added.
+  const std::uint64_t older[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  std::vector<std::uint8_t> bytes(4 + sizeof older + 4 + 13 * 8);
+  loop::StateWriter w(bytes.data(), bytes.size());
+  w.PutSpan<std::uint64_t>(older);
+  std::uint64_t longer[13] = {};
+  w.PutSpan<std::uint64_t>(longer);
+  REQUIRE_FALSE(w.overflow());
+  std::array<std::uint64_t, 11> now{};
+  now.fill(77);
+  loop::StateReader r(bytes);
+  REQUIRE(r.GetSpanUpTo<std::uint64_t>(now, "loop.phase_start"));
+  CHECK(now[0] == 1);
+  CHECK(now[8] == 9);
+  CHECK(now[9] == 0);
+  CHECK(now[10] == 0);
+  CHECK_FALSE(r.GetSpanUpTo<std::uint64_t>(now, "loop.phase_start"));  // a later build's: more than this one has
+  CHECK(r.error() == "field 'loop.phase_start': 13 values, this build has 11");
 }

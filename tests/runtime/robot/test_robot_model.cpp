@@ -389,6 +389,11 @@ TEST_CASE("robot model: continuous joints and velocity-commanded motors - bad da
   CHECK(edits.ErrorIn("diffbot.yaml", "  head_pan: 0.3", "  head_pan: 0.3\n  right_wheel: 0") ==
         "diffbot.yaml: default_pose.right_wheel: '0': joint 'right_wheel' is continuous and velocity-commanded: it "
         "takes no position target (it holds zero speed where others hold their default pose)");
+  // A robot that sits needs its description's sit pose.
+  CHECK(edits.Error("  motor_off_timeout_s: 0.1", "  motor_off_timeout_s: 0.1\n  sit_down_s: 1.0") ==
+        p + ": phases.sit_down_s: the robot's description gives no sit_pose (joint head_pan) to sit down to");
+  CHECK(edits.Error("  motor_off_timeout_s: 0.1", "  motor_off_timeout_s: 0.1\n  sit_down_s: -1") ==
+        p + ": phases.sit_down_s: '-1' is outside [0, 3600]");
 }
 
 TEST_CASE("robot model: the Go2 - motors of the description over DDS, one message fills several streams") {

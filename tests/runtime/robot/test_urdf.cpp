@@ -269,4 +269,19 @@ TEST_CASE("robot description: continuous and velocity-commanded joints - errors 
   CHECK(err(ReplaceOnce(good, "velocity_control:", "velocity_control:\n  head_pan: {kd_nm_s_rad: 0.05}")) ==
         "diffbot.yaml: default_pose.head_pan: '0.3': joint 'head_pan' is velocity-commanded: it takes no position "
         "target (it holds zero speed where others hold their default pose)");
+  // The sit pose (optional): the position-commanded joints, as the default pose.
+  auto sits = parse(good + "\nsit_pose: {head_pan: 0.1}\n", *urdf);
+  REQUIRE_MESSAGE(sits.ok(), sits.error().message);
+  CHECK(sits->sit_q_rad == std::vector<double>{0.0, 0.0, 0.1});
+  CHECK(parse(good, *urdf)->sit_q_rad.empty());
+  CHECK(err(good + "\nsit_pose: {head_pan: 0.1, left_wheel: 1.0}\n") ==
+        "diffbot.yaml: sit_pose.left_wheel: '1.0': joint 'left_wheel' is continuous and velocity-commanded: it "
+        "takes no position target (it holds zero speed where others hold their sit pose)");
+  CHECK(err(good + "\nsit_pose: {head_pan: 0.1, neck: 0}\n") ==
+        "diffbot.yaml: sit_pose.neck: is not an actuated joint");
+  CHECK(err(good + "\nsit_pose: {left_wheel: 0}\n").find("diffbot.yaml: sit_pose.left_wheel: '0'") == 0);
+  CHECK(err(good + "\nsit_pose: {}\n") == "diffbot.yaml: sit_pose: missing field 'head_pan'");
+  CHECK(err(good + "\nsit_pose: {head_pan: 9}\n")
+            .find("diffbot.yaml: sit_pose.head_pan: '9' is outside the joint's limits [") == 0);
+  CHECK(err(good + "\nsit_pose: [0.1]\n").find("diffbot.yaml: sit_pose") == 0);
 }

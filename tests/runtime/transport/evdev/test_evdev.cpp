@@ -135,6 +135,39 @@ std::string LoadError(const std::string& scratch, const std::string& from, const
   return m.error().message;
 }
 
+// The gamepad robot's loop fed every tick with nominal samples (the IMU upright, every other field
+// 0 inside its range) whose operator fields a test sets; per tick its phase and the first motor's
+// (LF_HFE's) position command.
+struct GamepadLoop {
+  const robot::RobotModel& m = test::GamepadRobot();
+  test::ScriptedTransport feed{m};
+  robot::RobotData d = robot::MakeRobotData(m);
+  std::unique_ptr<loop::LoopData> l = loop::MakeLoopData(m, nullptr, loop::LoopOptions{});
+  std::vector<double> nominal;
+  std::vector<loop::Phase> phase;
+  std::vector<double> q;
+
+  GamepadLoop() {
+    for (const robot::FieldSpec& f : m.fields)
+      nominal.push_back(f.name == "base_imu_qw" ? 1.0 : std::clamp(0.0, f.min, f.max));
+  }
+  void Set(std::int32_t field, double v) { nominal[static_cast<std::size_t>(field)] = v; }
+  void Run(std::uint64_t ticks) {
+    robot::Transport* ts[] = {&feed};
+    for (std::uint64_t k = 0; k < ticks; ++k) {
+      for (std::uint32_t s = 0; s < m.streams.size(); ++s) {
+        const robot::StreamSpec& sp = m.streams[s];
+        feed.Put(m, s, std::span<const double>(nominal.data() + sp.first_field, sp.field_count));
+      }
+      rt::TickTiming t;
+      t.tick = phase.size();
+      loop::Tick(m, d, *l, ts, t);
+      phase.push_back(l->phase());
+      q.push_back(d.command[m.motors[1].q]);
+    }
+  }
+  std::string Last() const { return l->operator_status().last; }
+};
 }  // namespace
 
 TEST_CASE("evdev: a recorded file's axes and buttons at their times - dead zone, scale, rate limit, reports") {
@@ -341,7 +374,9 @@ TEST_CASE("evdev: robot files that map a gamepad wrongly are refused naming the 
       {{"stop: stop,", "stop: arm,"}, "operator.stop: field 'arm' makes another request already"},
       {{"operator: {arm: arm,", "operator: {walk: arm,"}, "operator.walk: the robot has no motors"},
       {{"operator: {arm: arm,", "operator: {arm: yaw,"}, "operator.arm: field 'yaw' has range [-0.5, 0.5]"},
-      {{"operator: {arm: arm,", "operator: {arm: arm, sit: vx,"}, "operator"},
+      {{"operator: {arm: arm,", "operator: {arm: arm, nap: vx,"}, "operator"},
+      {{"operator: {arm: arm,", "operator: {arm: arm, sit: vx,"},
+       "operator.sit: the robot does not sit: phases.sit_down_s is not given"},
       {{"      vx: {code", "      [vx, vy]: {code"}, "a mapping key that is not a name"},
   };
   for (const auto& [edit, expected] : cases) {
@@ -413,30 +448,12 @@ TEST_CASE(
 
 TEST_CASE(
     "evdev operator: on a robot with motors, walk is taken only in hold with the dead-man held - refusals named") {
-  const robot::RobotModel& m = test::GamepadRobot();
-  test::ScriptedTransport feed(m);
-  robot::RobotData d = robot::MakeRobotData(m);
-  auto l = loop::MakeLoopData(m, nullptr, loop::LoopOptions{});
-  std::vector<double> nominal(m.fields.size());
-  for (std::size_t f = 0; f < m.fields.size(); ++f)
-    nominal[f] = m.fields[f].name == "base_imu_qw" ? 1.0 : std::clamp(0.0, m.fields[f].min, m.fields[f].max);
-  const std::uint32_t pad = m.fields[static_cast<std::size_t>(m.op.deadman)].stream;
-  const auto set = [&](std::int32_t field, double v) { nominal[static_cast<std::size_t>(field)] = v; };
-  robot::Transport* ts[] = {&feed};
-  std::vector<loop::Phase> phase;
-  const auto run = [&](std::uint64_t ticks) {
-    for (std::uint64_t k = 0; k < ticks; ++k) {
-      for (std::uint32_t s = 0; s < m.streams.size(); ++s) {
-        const robot::StreamSpec& sp = m.streams[s];
-        feed.Put(m, s, std::span<const double>(nominal.data() + sp.first_field, sp.field_count));
-      }
-      rt::TickTiming t;
-      t.tick = phase.size();
-      loop::Tick(m, d, *l, ts, t);
-      phase.push_back(l->phase());
-    }
-  };
-  (void)pad;
+  GamepadLoop g;
+  const robot::RobotModel& m = g.m;
+  const auto set = [&](std::int32_t field, double v) { g.Set(field, v); };
+  const auto run = [&](std::uint64_t ticks) { g.Run(ticks); };
+  const std::vector<loop::Phase>& phase = g.phase;
+  auto& l = g.l;
   set(m.op.arm, 1);
   run(10);  // arming, stand-up (1 s)
   CHECK(phase.back() == loop::Phase::kStandUp);
@@ -470,4 +487,90 @@ TEST_CASE(
                 l->operator_status().last);
   CHECK(l->operator_status().refused == 5);
   CHECK(l->operator_status().requests == 7);
+}
+
+TEST_CASE(
+    "evdev operator: sit down from hold to the sit pose, passive (damped), stand up on arm, refusals named, stop from "
+    "passive") {
+  GamepadLoop g;
+  const robot::RobotModel& m = g.m;
+  REQUIRE(m.op.sit >= 0);
+  REQUIRE(m.phases.sit_down_ticks == 1500);
+  const auto set = [&](std::int32_t field, double v) { g.Set(field, v); };
+  const auto run = [&](std::uint64_t ticks) { g.Run(ticks); };
+  const auto last = [&] { return g.Last(); };
+  const std::vector<loop::Phase>& phase = g.phase;
+  const std::vector<double>& q0 = g.q;
+  const robot::RobotData& d = g.d;
+  auto& l = g.l;
+  using loop::Phase;
+  set(m.op.sit, 1);  // disarmed: nothing to sit from
+  run(5);
+  CHECK_MESSAGE(last() == "sit refused at tick 0: not standing (disarmed)", last());
+  set(m.op.sit, 0);
+  set(m.op.arm, 1);
+  run(1300);  // arming, stand-up (1 s), hold
+  REQUIRE(phase.back() == Phase::kHold);
+  set(m.op.arm, 0);
+  set(m.op.sit, 1);  // sit: from the measured pose (all 0 here) to the sit pose over 1.5 s
+  run(1);
+  const std::size_t sat = phase.size() - 1;
+  CHECK(phase[sat] == Phase::kSitDown);
+  run(1600);
+  CHECK(phase[sat + 1499] == Phase::kSitDown);
+  CHECK(phase[sat + 1500] == Phase::kPassive);
+  CHECK(q0[sat + 1499] == doctest::Approx(m.motors[1].sit_q_rad).epsilon(1e-3));     // LF_HFE 1.2 rad
+  CHECK(q0[sat + 750] == doctest::Approx(m.motors[1].sit_q_rad / 2).epsilon(1e-2));  // the smoothstep's middle
+  // Passive: the damping values (kp 0), the motors commanded.
+  CHECK(d.command[m.motors[1].kp] == 0.0);
+  CHECK(d.command[m.motors[1].kd] > 0.0);
+  CHECK(d.motors[1] == robot::MotorCommand::kCommand);
+  set(m.op.sit, 0);
+  set(m.op.deadman, 1);
+  set(m.op.walk, 1);  // no walking from passive
+  run(10);
+  CHECK_MESSAGE(last() == "walk refused at tick 2906: not holding (passive)", last());
+  set(m.op.walk, 0);
+  set(m.op.sit, 1);
+  run(10);
+  CHECK_MESSAGE(last() == "sit refused at tick 2916: not standing (passive)", last());
+  set(m.op.sit, 0);
+  set(m.op.arm, 1);  // stand up from where it sits (the measured pose)
+  run(1);
+  CHECK(phase.back() == Phase::kStandUp);
+  run(1100);
+  CHECK(phase.back() == Phase::kHold);
+  set(m.op.arm, 0);
+  set(m.op.sit, 1);
+  run(1600);
+  CHECK(phase.back() == Phase::kPassive);
+  set(m.op.sit, 0);
+  set(m.op.estop, 1);  // e-stop in passive: latched; arm refused until a re-arm
+  run(10);
+  CHECK(l->supervisor().mode == safety::Mode::kEStop);
+  CHECK(d.motors[1] == robot::MotorCommand::kDisable);
+  set(m.op.estop, 0);
+  set(m.op.arm, 1);
+  run(10);
+  CHECK(phase.back() == Phase::kPassive);
+  CHECK(last().find("arm refused at tick ") == 0);
+  CHECK(last().find(": e-stop is latched (passive)") != std::string::npos);
+  set(m.op.arm, 0);
+  run(600);
+  set(m.op.rearm, 1);  // healthy 0.5 s after the e-stop's release: re-armed, stands up
+  run(5);
+  CHECK(l->supervisor().mode == safety::Mode::kNominal);
+  CHECK(l->recovery().requested == 1);
+  set(m.op.rearm, 0);
+  run(1300);
+  CHECK(phase.back() == Phase::kHold);
+  set(m.op.sit, 1);
+  run(1600);
+  CHECK(phase.back() == Phase::kPassive);
+  set(m.op.stop, 1);  // stop from passive: damping, motors off, done
+  run(1);
+  CHECK(phase.back() == Phase::kDamping);
+  run(700);
+  CHECK(phase.back() == Phase::kDone);
+  CHECK(l->operator_status().refused == 4);
 }
