@@ -2,6 +2,7 @@
 // onto a stream's fields, and the operator section's requests from fields (runtime/robot/
 // transport_spec.hpp, robot_model.hpp say what each means).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 
@@ -35,6 +36,29 @@ Status Holds(const RobotModel& m, const YamlFields& f, std::uint32_t field, doub
 }
 
 }  // namespace
+
+Status ReadAxisShape(const RobotModel& m, const YamlFields& f, const YAML::Node& a, const std::string& wa,
+                     std::uint32_t field, bool device_range, AxisShape* out) {
+  std::array<double, 2> range{-1.0, 1.0};
+  if (device_range || a["range"]) {
+    PBPPO_TRY(f.Range(a, "range", wa, -2147483648.0, 2147483647.0, &range));
+    const bool whole = range[0] == std::floor(range[0]) && range[1] == std::floor(range[1]);
+    if (!(range[1] > range[0]) || (device_range && !whole)) {
+      std::string what(1, '[');
+      what += YamlFields::Num(range[0]);
+      what += ", ";
+      what += YamlFields::Num(range[1]);
+      what += device_range ? "] is not two whole numbers" : "] is not two numbers";
+      return f.Fail(wa + ".range", what + ", the first below the second");
+    }
+  }
+  out->raw_min = range[0];
+  out->raw_max = range[1];
+  PBPPO_TRY(f.Number(a, "scale", wa, -1e6, 1e6, &out->scale));
+  if (out->scale == 0) return f.Fail(wa + ".scale", "0 gives nothing");
+  PBPPO_TRY(f.OptionalNumber(a, "dead_zone", wa, 0.0, 0.9, &out->dead_zone));
+  return Holds(m, f, field, -std::abs(out->scale), std::abs(out->scale), wa + ".scale");
+}
 
 Status Builder::EvdevMappings(const YAML::Node& root) {
   const YAML::Node list = root["transports"];
@@ -76,18 +100,8 @@ Status Builder::EvdevMappings(const YAML::Node& root) {
           return f.Fail(wa + ".code", "'" + code + "' is not an axis (" + InputCodeNames(InputCodeKind::kAxis) + ")");
         if (std::count(axis_codes.begin(), axis_codes.end(), x.code) > 0)
           return f.Fail(wa + ".code", code + " drives two fields");
-        std::array<double, 2> range{};
-        PBPPO_TRY(f.Range(a, "range", wa, -2147483648.0, 2147483647.0, &range));
-        if (!(range[1] > range[0]) || range[0] != std::floor(range[0]) || range[1] != std::floor(range[1]))
-          return f.Fail(wa + ".range", "[" + YamlFields::Num(range[0]) + ", " + YamlFields::Num(range[1]) +
-                                           "] is not two whole numbers, the first below the second");
-        x.raw_min = range[0];
-        x.raw_max = range[1];
-        PBPPO_TRY(f.Number(a, "scale", wa, -1e6, 1e6, &x.scale));
-        if (x.scale == 0) return f.Fail(wa + ".scale", "0 gives nothing");
-        PBPPO_TRY(f.OptionalNumber(a, "dead_zone", wa, 0.0, 0.9, &x.dead_zone));
+        PBPPO_TRY(ReadAxisShape(m, f, a, wa, x.field, true, &x.shape));
         PBPPO_TRY(f.OptionalNumber(a, "rate_per_s", wa, 1e-6, 1e9, &x.rate_per_s));
-        PBPPO_TRY(Holds(m, f, x.field, -std::abs(x.scale), std::abs(x.scale), wa + ".scale"));
         axis_codes.push_back(x.code);
         ++filled[x.field - m.streams[e.stream].first_field];
         e.axes.push_back(x);

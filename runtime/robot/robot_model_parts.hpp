@@ -36,6 +36,12 @@ struct MotorCommandSpec {
   std::int32_t motor = -1, hold_input = -1;
 };
 
+// An axis's shaping in robot.yaml (range, scale, dead_zone: AxisShape) for field `field`, whose
+// range must hold what it can give. `device_range`: the range is required and whole (a device's raw
+// counts); else it is optional, [-1, 1] by default (robot_model_operator.cpp).
+Status ReadAxisShape(const RobotModel& m, const YamlFields& f, const YAML::Node& a, const std::string& wa,
+                     std::uint32_t field, bool device_range, AxisShape* out);
+
 struct Builder {
   RobotModel& m;
   const YamlFields& f;

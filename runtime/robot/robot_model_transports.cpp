@@ -214,7 +214,7 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
   for (const std::uint32_t s : out->streams)
     for (std::uint32_t k = 0; k < m.streams[s].field_count; ++k) field_list.push_back(m.streams[s].first_field + k);
   std::vector<int> leaf_of(field_list.size(), -1);
-  std::vector<std::uint8_t> increase_of(field_list.size(), 0);
+  std::vector<FieldLeaf> read_of(field_list.size());  // how each slot's leaf is read (FieldLeaf)
   const auto slot_of = [&](int fi) -> int {
     const auto at = std::find(field_list.begin(), field_list.end(), static_cast<std::uint32_t>(fi));
     return at == field_list.end() ? -1 : static_cast<int>(at - field_list.begin());
@@ -229,10 +229,23 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
     leaf_of[static_cast<std::size_t>(slot)] = static_cast<int>(out->checksum.leaf);
   }
   auto bind = [&](const std::string& field, const std::string& member, const std::string& fw) -> Status {
-    // "increase(LEAF)": how much a counter grew since the previous sample.
-    static constexpr std::string_view kIncrease = "increase(";
-    const bool increase = member.starts_with(kIncrease) && member.ends_with(")");
-    const std::string leaf = increase ? member.substr(kIncrease.size(), member.size() - kIncrease.size() - 1) : member;
+    // LEAF, or a function of it: increase(LEAF), bit(LEAF, N), float32(LEAF) (FieldLeaf).
+    FieldLeaf how;
+    std::string leaf = member, bit;
+    for (const auto& [name, read] : {std::pair{std::string_view("increase("), FieldLeaf::Read::kIncrease},
+                                     std::pair{std::string_view("bit("), FieldLeaf::Read::kBit},
+                                     std::pair{std::string_view("float32("), FieldLeaf::Read::kFloat32}}) {
+      if (!member.starts_with(name) || !member.ends_with(")")) continue;
+      how.read = read;
+      leaf = member.substr(name.size(), member.size() - name.size() - 1);
+      if (read == FieldLeaf::Read::kBit) {
+        const auto comma = leaf.rfind(',');
+        if (comma == std::string::npos) return f.Fail(fw, "'" + member + "': expected bit(LEAF, N)");
+        bit = leaf.substr(comma + 1);
+        leaf = leaf.substr(0, comma);
+        while (!bit.empty() && bit.front() == ' ') bit.erase(bit.begin());
+      }
+    }
     const int fi = m.FieldIndex(field), li = type.LeafIndex(leaf);
     const int slot = fi < 0 ? -1 : slot_of(fi);
     if (slot < 0)
@@ -241,11 +254,38 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
     if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
     if (leaf_of[static_cast<std::size_t>(slot)] >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
     const IdlScalar t = type.leaves[static_cast<std::size_t>(li)].type;
-    if (increase && IdlCounterMask(t) == 0)
+    const std::uint32_t mask = IdlCounterMask(t);
+    if (how.read == FieldLeaf::Read::kIncrease && mask == 0)
       return f.Fail(fw,
                     "'" + member + "': " + leaf + " is a " + ToString(t) + ", not a counter (uint8, uint16 or uint32)");
+    if (how.read == FieldLeaf::Read::kBit) {
+      if (mask == 0)
+        return f.Fail(fw, "'" + member + "': " + leaf + " is a " + ToString(t) +
+                              ", not an unsigned integer (uint8, uint16 or uint32) to take a bit of");
+      const int width = mask == 0xffu ? 8 : mask == 0xffffu ? 16 : 32;
+      const bool digits = !bit.empty() && bit.size() <= 2 &&
+                          std::all_of(bit.begin(), bit.end(), [](char c) { return c >= '0' && c <= '9'; });
+      if (!digits || std::stoi(bit) >= width)
+        return f.Fail(fw, "'" + member + "': bit '" + bit + "' is not one of the " + std::to_string(width) +
+                              " bits of " + leaf + " (0 to " + std::to_string(width - 1) + ")");
+      how.bit = static_cast<std::uint8_t>(std::stoi(bit));
+    }
+    if (how.read == FieldLeaf::Read::kFloat32) {
+      const auto& leaves = type.leaves;
+      const auto at = static_cast<std::size_t>(li);
+      // Four octets of one array: the leaves' names the same up to the index.
+      const auto array_of = [](const std::string& name) { return name.substr(0, name.rfind('[')); };
+      bool octets = at + 4 <= leaves.size();
+      for (std::size_t k = 0; octets && k < 4; ++k)
+        octets = leaves[at + k].type == IdlScalar::kUint8 && leaves[at + k].cdr_offset == leaves[at].cdr_offset + k &&
+                 leaves[at].path.find('[') != std::string::npos &&
+                 array_of(leaves[at + k].path) == array_of(leaves[at].path);
+      if (!octets)
+        return f.Fail(fw, "'" + member + "': " + leaf + " does not begin four octets of one array (a " + ToString(t) +
+                              " leaf; float32() reads a float inside a byte array)");
+    }
     leaf_of[static_cast<std::size_t>(slot)] = li;
-    increase_of[static_cast<std::size_t>(slot)] = increase ? 1 : 0;
+    read_of[static_cast<std::size_t>(slot)] = how;
     return {};
   };
   if (const YAML::Node map = n["fields"]) {
@@ -262,6 +302,27 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
       if (i == 0) return f.Fail(fw, "no field matches '" + field + "'");
     }
   }
+  // Fields shaped as a stick: {field: {range, scale, dead_zone}}.
+  if (const YAML::Node axes = n["axes"]) {
+    if (!axes.IsMap()) return f.Fail(w + ".axes", "expected a mapping field: {scale, dead_zone, range}");
+    for (const auto& kv : axes) {
+      const std::string field = kv.first.IsScalar() ? kv.first.as<std::string>() : YamlFields::Quote(kv.first);
+      const std::string wa = w + ".axes." + field;
+      const int fi = m.FieldIndex(field);
+      const int slot = fi < 0 ? -1 : slot_of(fi);
+      if (slot < 0)
+        return f.Fail(wa,
+                      "'" + field + "' is not a field of " + (names.size() == 1 ? "stream '" + stream + "'" : stream));
+      if (!kv.second.IsMap()) return f.Fail(wa, "expected a mapping {scale, dead_zone, range}");
+      PBPPO_TRY(f.Keys(kv.second, wa, {"scale", "dead_zone", "range"}));
+      FieldLeaf& how = read_of[static_cast<std::size_t>(slot)];
+      if (how.read == FieldLeaf::Read::kIncrease || how.read == FieldLeaf::Read::kBit ||
+          static_cast<std::int32_t>(fi) == out->checksum.field)
+        return f.Fail(wa, "field '" + field + "' is a count, a bit or a checksum's verdict, not a stick");
+      PBPPO_TRY(ReadAxisShape(m, f, kv.second, wa, static_cast<std::uint32_t>(fi), false, &how.axis));
+      how.shaped = true;
+    }
+  }
   for (std::size_t k = 0; k < field_list.size(); ++k) {
     const FieldSpec& field = m.fields[field_list[k]];
     if (leaf_of[k] < 0) leaf_of[k] = type.LeafIndex(field.name);
@@ -270,7 +331,10 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
                            "' is filled by no member of " + type.type_name + " (name it under fields)");
     // The checksum's field is set by the transport, not decoded from a leaf.
     if (static_cast<std::int32_t>(field_list[k]) == out->checksum.field) continue;
-    out->fields.push_back({field_list[k], static_cast<std::uint32_t>(leaf_of[k]), increase_of[k] != 0});
+    FieldLeaf fl = read_of[k];
+    fl.field = field_list[k];
+    fl.leaf = static_cast<std::uint32_t>(leaf_of[k]);
+    out->fields.push_back(fl);
   }
   if (const YAML::Node map = n["peer"]) {
     if (!map.IsMap()) return f.Fail(w + ".peer", "expected a mapping of members to clock_ns or sequence");
@@ -353,8 +417,8 @@ Status Builder::Checksum(const YAML::Node& n, const std::string& w, DdsMessageSp
 Status Builder::DdsMessage(const YAML::Node& n, const std::string& w, std::uint32_t t, const IdlFileReader& read,
                            const std::string& dir) {
   PBPPO_TRY(f.Keys(n, w,
-                   {"topic", "idl", "type", "direction", "stream", "fields", "peer", "lost_after_s", "durability",
-                    "values", "checksum"}));
+                   {"topic", "idl", "type", "direction", "stream", "fields", "axes", "peer", "lost_after_s",
+                    "durability", "values", "checksum"}));
   DdsMessageSpec msg;
   std::string idl, type, direction;
   PBPPO_TRY(f.Text(n, "topic", w, &msg.topic, Rule::kToken));
@@ -368,7 +432,7 @@ Status Builder::DdsMessage(const YAML::Node& n, const std::string& w, std::uint3
   if (!in && direction != "out" && direction != "status")
     return f.Fail(w + ".direction", "'" + direction + "' is not in, out or status");
   msg.direction = in ? MessageDirection::kIn : direction == "out" ? MessageDirection::kOut : MessageDirection::kStatus;
-  static constexpr const char* kInOnly[] = {"stream", "fields", "peer", "lost_after_s", "durability"};
+  static constexpr const char* kInOnly[] = {"stream", "fields", "axes", "peer", "lost_after_s", "durability"};
   static constexpr const char* kOutOnly[] = {"values"};
   for (const char* key : in ? std::span<const char* const>(kOutOnly) : std::span<const char* const>(kInOnly))
     if (n[key])

@@ -22,7 +22,10 @@
 //           fields: {"sonar_{i}_m": "sonar_m[{i}]"}  # field: leaf; a field named like a leaf
 //                                             # needs no entry; every field of the streams is filled;
 //                                             # "{joint}" and "{motor}" repeat an entry per motor
-//                                             # (its joint's name, its index in the robot's order)
+//                                             # (its joint's name, its index in the robot's order);
+//                                             # the leaf may be read through a function (below)
+//           axes: {command_vx: {scale: 1.0, dead_zone: 0.1}}  # in: a field shaped as a stick
+//                                             # (AxisShape below: range [-1, 1] unless given)
 //           peer: {stamp_ns: clock_ns}        # in: what the other side writes in leaves no field reads
 //           lost_after_s: 2.0                 # in: the link is lost when its writer is gone or silent
 //           durability: transient_local       # in: or volatile (matches ROS 2's default publishers)
@@ -92,13 +95,46 @@ struct LeafValue {
   std::vector<ValueTerm> terms;
 };
 
-// A field of an incoming message's stream and the leaf that fills it: its value, or (`increase`,
-// mapped as "increase(LEAF)" of an unsigned leaf of at most 32 bits: a device's counter) how much
-// the leaf grew since the previous sample, modulo its range (a wrap is a step; 0 at the first).
+// An input axis shaped into a field (a gamepad's stick through evdev, a remote's stick in a DDS
+// message): the raw range onto [-1, 1], a dead zone around 0 (rescaled, so the value leaves 0
+// without a step at the zone's edge), times the scale. A raw value outside the range (or not a
+// number) gives NaN, which the sample check names.
+struct AxisShape {
+  double raw_min = -1, raw_max = 1, scale = 1, dead_zone = 0;
+};
+inline double ShapeAxis(const AxisShape& a, double raw) noexcept {
+  if (!(raw >= a.raw_min && raw <= a.raw_max)) return __builtin_nan("");
+  const double n = (2 * raw - a.raw_min - a.raw_max) / (a.raw_max - a.raw_min);
+  const double mag = n < 0 ? -n : n;
+  if (mag <= a.dead_zone) return 0.0;
+  const double out = (mag - a.dead_zone) / (1 - a.dead_zone) * a.scale;
+  return n < 0 ? -out : out;
+}
+// The raw value ShapeAxis takes to `value` (0: the middle of the range): what a peer writes.
+inline double UnshapeAxis(const AxisShape& a, double value) noexcept {
+  const double u = value / a.scale;
+  const double mag = u < 0 ? -u : u;
+  const double n = mag == 0 ? 0.0 : (u < 0 ? -1 : 1) * (mag * (1 - a.dead_zone) + a.dead_zone);
+  return (n * (a.raw_max - a.raw_min) + a.raw_min + a.raw_max) / 2;
+}
+
+// A field of an incoming message's stream and the leaf that fills it, as the robot file maps it:
+//   LEAF                  its value
+//   increase(LEAF)        an unsigned leaf of at most 32 bits (a device's counter): how much it grew
+//                         since the previous sample, modulo its range (a wrap is a step; 0 at the first)
+//   bit(LEAF, N)          bit N (0: the least significant) of an unsigned leaf: 0 or 1 (a remote's key)
+//   float32(LEAF)         the little-endian float32 in four octets from LEAF (an octet of an array,
+//                         as a remote's stick inside a byte record), whatever the sample's byte order
+// and, when the message's axes section names the field, shaped by `axis` (AxisShape).
 struct FieldLeaf {
+  enum class Read : std::uint8_t { kValue, kIncrease, kBit, kFloat32 };
   std::uint32_t field = 0;
   std::uint32_t leaf = 0;
-  bool increase = false;
+  Read read = Read::kValue;
+  std::uint8_t bit = 0;  // kBit
+  bool shaped = false;
+  AxisShape axis;
+  bool increase() const noexcept { return read == Read::kIncrease; }
 };
 
 // What the other side writes in a leaf that no field reads (a simulator or an operator speaking
@@ -167,7 +203,8 @@ struct DdsTransportSpec {
 struct EvdevAxisSpec {
   std::uint32_t field = 0;
   int code = 0;
-  double raw_min = 0, raw_max = 0, scale = 1, dead_zone = 0, rate_per_s = 0;  // rate 0: unlimited
+  AxisShape shape;
+  double rate_per_s = 0;  // 0: unlimited
 };
 struct EvdevButtonSpec {
   std::uint32_t field = 0;

@@ -56,7 +56,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if ((*pad)->present() && d.fresh[spec.stream] == 0) std::abort();
     for (const robot::EvdevAxisSpec& a : spec.axes) {
       const double v = d.fields[a.field];
-      if (!std::isnan(v) && !(std::abs(v) <= std::abs(a.scale) + 1e-12)) std::abort();
+      if (!std::isnan(v) && !(std::abs(v) <= std::abs(a.shape.scale) + 1e-12)) std::abort();
     }
     for (const robot::EvdevButtonSpec& b : spec.buttons)
       if (d.fields[b.field] != 0.0 && d.fields[b.field] != 1.0) std::abort();

@@ -1,8 +1,8 @@
 // libFuzzer target: any text as a robot file (runtime/robot/robot_model.hpp), read from a copy of
-// the shipped quadruped's folder (its CAN map, URDF, layout, DDS messages beside it) so that the
-// reader gets past the file's own fields into the pieces it names. The file is refused with a
-// message naming it, or loaded into a model whose supervisor limits are valid; never a crash or an
-// exception.
+// the shipped quadruped's folder (its CAN map, URDF, layout, DDS messages beside it, and the Go2's
+// folder beside that) so that the reader gets past the file's own fields into the pieces it
+// names. The file is refused with a message naming it, or loaded into a model whose supervisor
+// limits are valid; never a crash or an exception.
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
@@ -32,6 +32,8 @@ const std::string& RobotFile() {
     });
     fs::create_directories(root);
     fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/quadruped", root / "quadruped", fs::copy_options::recursive);
+    // A robot file may name the Go2's files beside it (the seed go2_remote.yaml: ../go2/...).
+    fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/go2", root / "go2", fs::copy_options::recursive);
     fs::copy_file(fs::path(PBPPO_SOURCE_DIR) / "models/dds_profile.xml", root / "dds_profile.xml");
     fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/ros2", root / "ros2", fs::copy_options::recursive);
     return new std::string((root / "quadruped/robot.yaml").string());

@@ -28,6 +28,9 @@ inline std::string CopyRobotFolder(const std::string& name, const std::string& s
       std::filesystem::copy_file(e.path(), root + "/quadruped/idl/" + e.path().filename().string(),
                                  std::filesystem::copy_options::overwrite_existing);
   }
+  // The robot whose files another one names (../go2/go2.yaml ...).
+  if (name == "go2_remote")
+    std::filesystem::copy(SourcePath("models/go2"), root + "/go2", std::filesystem::copy_options::recursive);
   return dir;
 }
 
@@ -58,6 +61,11 @@ inline const robot::RobotModel& QuadrupedRobot() {
 // The quadruped driven from a gamepad (models/quadruped_gamepad).
 inline const robot::RobotModel& GamepadRobot() {
   static const robot::RobotModel& m = LoadShipped("quadruped_gamepad");
+  return m;
+}
+
+inline const robot::RobotModel& Go2RemoteRobot() {
+  static const robot::RobotModel& m = LoadShipped("go2_remote");
   return m;
 }
 

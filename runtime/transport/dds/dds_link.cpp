@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <thread>
 
 #include "runtime/core/clock.hpp"
@@ -184,8 +185,22 @@ int DdsLink::domain_id() const noexcept {
 void DdsLink::FillFromFields(std::size_t message, std::span<const double> fields, DdsSample* sample) noexcept {
   const robot::DdsMessageSpec& m = spec_->dds.messages[message];
   for (const robot::FieldLeaf& fl : m.fields) {
-    if (!fl.increase) {
-      sample->Set(fl.leaf, fields[fl.field]);
+    const double value = fl.shaped ? robot::UnshapeAxis(fl.axis, fields[fl.field]) : fields[fl.field];
+    if (fl.read == robot::FieldLeaf::Read::kValue) {
+      sample->Set(fl.leaf, value);
+      continue;
+    }
+    if (fl.read == robot::FieldLeaf::Read::kBit) {  // the leaf's other bits kept
+      const auto word = static_cast<std::uint32_t>(sample->Get(fl.leaf));
+      const std::uint32_t bit = 1u << fl.bit;
+      sample->Set(fl.leaf, static_cast<double>(value >= 0.5 ? word | bit : word & ~bit));
+      continue;
+    }
+    if (fl.read == robot::FieldLeaf::Read::kFloat32) {  // four octets, little-endian
+      const auto f = static_cast<float>(value);
+      std::uint32_t bits = 0;
+      std::memcpy(&bits, &f, sizeof bits);
+      for (std::uint32_t k = 0; k < 4; ++k) sample->Set(fl.leaf + k, static_cast<double>((bits >> (8 * k)) & 0xffu));
       continue;
     }
     // A counter's increase: added to the count the sample holds (modulo the leaf's range).

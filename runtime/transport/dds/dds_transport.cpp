@@ -52,8 +52,16 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
       In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, m.streams, {}, {}, -1, 0};
       for (const robot::FieldLeaf& fl : m.fields) {
         const robot::IdlScalar type = m.type.leaves[fl.leaf].type;
-        in.steps.push_back(
-            {fl.field, m.type.leaves[fl.leaf].cdr_offset, type, fl.increase ? robot::IdlCounterMask(type) : 0u});
+        DecodeStep step;
+        step.field = fl.field;
+        step.offset = m.type.leaves[fl.leaf].cdr_offset;
+        step.type = type;
+        step.read = fl.read;
+        step.bit = fl.bit;
+        step.mask = fl.increase() ? robot::IdlCounterMask(type) : 0u;
+        step.shaped = fl.shaped;
+        step.axis = fl.axis;
+        in.steps.push_back(step);
       }
       if (m.checksum.present) {
         in.checksum.emplace(m.type, m.checksum.leaf);
@@ -128,17 +136,21 @@ void DdsTransport::Read(const robot::RobotModel&, robot::RobotData& d) noexcept 
       }
       if (take) {
         for (DecodeStep& s : in.steps) {
-          const double value = DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
-          if (s.mask == 0) {
-            d.fields[s.field] = value;
-            continue;
+          using Read = robot::FieldLeaf::Read;
+          // float32(): four octets, little-endian whatever the sample's byte order.
+          double value = s.read == Read::kFloat32
+                             ? DecodeScalar(robot::IdlScalar::kFloat, s.offset, in.sample.data(), false)
+                             : DecodeScalar(s.type, s.offset, in.sample.data(), big_endian);
+          if (s.read == Read::kBit) value = static_cast<double>((static_cast<std::uint32_t>(value) >> s.bit) & 1u);
+          if (s.read == Read::kIncrease) {
+            // A counter: how much it grew since the sample before (modulo its range: a wrap is a
+            // step, a restart from 0 a large one).
+            const auto now_count = static_cast<std::uint32_t>(value);
+            value = s.primed ? static_cast<double>((now_count - s.last) & s.mask) : 0.0;
+            s.last = now_count;
+            s.primed = true;
           }
-          // A counter: how much it grew since the sample before (modulo its range: a wrap is a
-          // step, a restart from 0 a large one).
-          const auto now_count = static_cast<std::uint32_t>(value);
-          d.fields[s.field] = s.primed ? static_cast<double>((now_count - s.last) & s.mask) : 0.0;
-          s.last = now_count;
-          s.primed = true;
+          d.fields[s.field] = s.shaped ? robot::ShapeAxis(s.axis, value) : value;
         }
         for (const std::uint32_t s : in.streams) d.fresh[s] = 1;
       }

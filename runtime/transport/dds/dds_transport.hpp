@@ -50,14 +50,18 @@ class DdsTransport final : public robot::Transport {
  private:
   // The messages' mappings flattened at Open, so that a tick reads a few contiguous cache lines
   // rather than the robot file's nested declarations.
-  struct DecodeStep {  // a field of an in message's stream from its leaf
+  struct DecodeStep {  // a field of an in message's stream from its leaf (robot::FieldLeaf)
     std::uint32_t field = 0;
     std::uint32_t offset = 0;  // the leaf's CDR offset
     robot::IdlScalar type = robot::IdlScalar::kDouble;
-    // A counter's increase (FieldLeaf::increase): the leaf's range as a mask, its previous value.
-    std::uint32_t mask = 0;  // 0: the leaf's value itself
+    robot::FieldLeaf::Read read = robot::FieldLeaf::Read::kValue;
+    std::uint8_t bit = 0;
+    // A counter's increase: the leaf's range as a mask, its previous value.
+    std::uint32_t mask = 0;
     std::uint32_t last = 0;
     bool primed = false;  // a previous value was taken
+    bool shaped = false;
+    robot::AxisShape axis;
   };
   struct EncodeStep {  // a term of an out or status message's value; `last` closes the sum
     robot::ValueTerm term;

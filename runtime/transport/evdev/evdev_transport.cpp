@@ -51,7 +51,7 @@ Result<std::unique_ptr<EvdevTransport>> EvdevTransport::Open(const robot::RobotM
   for (std::size_t i = 0; i < e->spec_.axes.size(); ++i) {
     // Centred until the device says otherwise.
     const robot::EvdevAxisSpec& a = e->spec_.axes[i];
-    e->axis_value_[i] = static_cast<std::int32_t>(std::floor((a.raw_min + a.raw_max) / 2));
+    e->axis_value_[i] = static_cast<std::int32_t>(std::floor((a.shape.raw_min + a.shape.raw_max) / 2));
   }
   e->axis_pending_ = e->axis_value_;
   e->button_value_.assign(e->spec_.buttons.size(), 0);
@@ -101,12 +101,12 @@ void EvdevTransport::TryOpen(std::uint64_t tick) noexcept {
   for (const robot::EvdevAxisSpec& a : spec_.axes) {
     input_absinfo info{};
     const bool ok = ::ioctl(fd, EVIOCGABS(static_cast<unsigned>(a.code)), &info) == 0;
-    if (!ok || info.minimum != static_cast<std::int32_t>(a.raw_min) ||
-        info.maximum != static_cast<std::int32_t>(a.raw_max)) {
+    if (!ok || info.minimum != static_cast<std::int32_t>(a.shape.raw_min) ||
+        info.maximum != static_cast<std::int32_t>(a.shape.raw_max)) {
       const char* name = robot::InputCodeName(robot::InputCodeKind::kAxis, a.code);
       if (ok) {
         std::snprintf(refusal_, sizeof refusal_, "%s: axis %s has range [%d, %d], the robot file says [%.0f, %.0f]",
-                      spec_.device.c_str(), name, info.minimum, info.maximum, a.raw_min, a.raw_max);
+                      spec_.device.c_str(), name, info.minimum, info.maximum, a.shape.raw_min, a.shape.raw_max);
       } else {
         std::snprintf(refusal_, sizeof refusal_, "%s: has no axis %s (%s)", spec_.device.c_str(), name,
                       std::strerror(errno));
@@ -130,7 +130,7 @@ void EvdevTransport::Lose() noexcept {
   discard_ = false;
   for (std::size_t i = 0; i < spec_.axes.size(); ++i) {
     const robot::EvdevAxisSpec& a = spec_.axes[i];
-    axis_value_[i] = axis_pending_[i] = static_cast<std::int32_t>(std::floor((a.raw_min + a.raw_max) / 2));
+    axis_value_[i] = axis_pending_[i] = static_cast<std::int32_t>(std::floor((a.shape.raw_min + a.shape.raw_max) / 2));
   }
   std::fill(button_value_.begin(), button_value_.end(), std::uint8_t{0});
   std::fill(button_pending_.begin(), button_pending_.end(), std::uint8_t{0});
@@ -205,17 +205,14 @@ void EvdevTransport::Emit(const robot::RobotModel&, robot::RobotData& data) noex
       const robot::EvdevAxisSpec& a = spec_.axes[i];
       double& out = out_[a.field - first_field_];
       const double raw = axis_value_[i];
-      double n = (2 * raw - a.raw_min - a.raw_max) / (a.raw_max - a.raw_min);
-      if (raw < a.raw_min || raw > a.raw_max) {
-        out = std::nan("");  // not a value the device can give: the sample check names the field
+      const double target = robot::ShapeAxis(a.shape, raw);
+      if (std::isnan(target)) {
+        out = target;  // not a value the device can give: the sample check names the field
         ++stats_.out_of_range;
         last_out_of_range_ = axis_value_[i];
         last_out_of_range_code_ = a.code;
         continue;
       }
-      const double mag = std::abs(n);
-      n = mag <= a.dead_zone ? 0.0 : std::copysign((mag - a.dead_zone) / (1 - a.dead_zone), n);
-      const double target = n * a.scale;
       if (a.rate_per_s > 0 && std::isfinite(out)) {
         const double step = a.rate_per_s * tick_s_;
         out += std::clamp(target - out, -step, step);

@@ -443,9 +443,10 @@ TEST_CASE("robot model: the Go2 - motors of the description over DDS, one messag
     return static_cast<int>(fl.field) == m.motors[7].lost_field;
   });
   REQUIRE(lost != state.fields.end());
-  CHECK(lost->increase);
+  CHECK(lost->increase());
   CHECK(state.type.leaves[lost->leaf].path == "motor_state[7].lost");
-  CHECK(std::count_if(state.fields.begin(), state.fields.end(), [](const FieldLeaf& fl) { return fl.increase; }) == 12);
+  CHECK(std::count_if(state.fields.begin(), state.fields.end(), [](const FieldLeaf& fl) { return fl.increase(); }) ==
+        12);
   // rt/lowcmd: per motor its mode and five commands, and the CRC.
   const DdsMessageSpec& cmd = t.dds.messages[1];
   CHECK(cmd.checksum.present);
@@ -544,4 +545,68 @@ TEST_CASE("robot model: zero_after - a command source whose silence stops the co
                     "max: 1.0}") ==
         p + ": streams[0].fields[0]: 'command_vx': [0.1, 1] does not hold 0, what the stream's fields read after "
             "zero_after");
+}
+
+TEST_CASE(
+    "robot model: the Go2's remote - keys as bits, sticks as float32 inside the record, shaped, bad mappings named") {
+  const RobotModel m = Load("models/go2_remote/robot.yaml");
+  const DdsMessageSpec& state = m.transports[0].dds.messages[0];
+  const auto leaf_of = [&](const char* field) -> const FieldLeaf& {
+    const auto at = std::find_if(state.fields.begin(), state.fields.end(), [&](const FieldLeaf& fl) {
+      return fl.field == static_cast<std::uint32_t>(m.FieldIndex(field));
+    });
+    REQUIRE(at != state.fields.end());
+    return *at;
+  };
+  const FieldLeaf& sit = leaf_of("sit");
+  CHECK(sit.read == FieldLeaf::Read::kBit);
+  CHECK(sit.bit == 6);
+  CHECK(state.type.leaves[sit.leaf].path == "wireless_remote[3]");
+  const FieldLeaf& vy = leaf_of("command_vy");
+  CHECK(vy.read == FieldLeaf::Read::kFloat32);
+  CHECK(state.type.leaves[vy.leaf].path == "wireless_remote[4]");
+  CHECK(vy.shaped);
+  CHECK(vy.axis.scale == -0.5);
+  CHECK(vy.axis.dead_zone == 0.1);
+  CHECK(vy.axis.raw_min == -1.0);
+  CHECK(ShapeAxis(vy.axis, 0.55) == doctest::Approx(-0.25));
+  CHECK(ShapeAxis(vy.axis, UnshapeAxis(vy.axis, 0.3)) == doctest::Approx(0.3));
+  CHECK(std::isnan(ShapeAxis(vy.axis, 1.01)));
+  CHECK(m.op.sit >= 0);
+  CHECK(m.phases.sit_down_ticks == 1000);
+  CHECK(m.motors[1].sit_q_rad == 1.2);
+
+  const test::RobotFileEdits edits("go2_remote", "robot_model_go2_remote");
+  const std::string& p = edits.path();
+  const std::string w = p + ": transports[0].messages[0]";
+  CHECK(
+      edits.Error("bit(wireless_remote[3], 6)", "bit(wireless_remote[3], 8)") ==
+      w + ".fields.sit: 'bit(wireless_remote[3], 8)': bit '8' is not one of the 8 bits of wireless_remote[3] (0 to 7)");
+  CHECK(edits.Error("bit(wireless_remote[3], 6)", "bit(wireless_remote[3], x)").find("bit 'x' is not one of") !=
+        std::string::npos);
+  CHECK(edits.Error("bit(wireless_remote[3], 6)", "bit(wireless_remote[3])") ==
+        w + ".fields.sit: 'bit(wireless_remote[3])': expected bit(LEAF, N)");
+  CHECK(edits.Error("bit(wireless_remote[3], 6)", "bit(imu_state.gyroscope[0], 1)") ==
+        w + ".fields.sit: 'bit(imu_state.gyroscope[0], 1)': imu_state.gyroscope[0] is a float, not an unsigned "
+            "integer (uint8, uint16 or uint32) to take a bit of");
+  CHECK(edits.Error("float32(wireless_remote[20])", "float32(wireless_remote[37])") ==
+        w + ".fields.command_vx: 'float32(wireless_remote[37])': wireless_remote[37] does not begin four octets of "
+            "one array (a uint8 leaf; float32() reads a float inside a byte array)");
+  CHECK(edits.Error("float32(wireless_remote[20])", "float32(tick)").find("tick does not begin four octets") !=
+        std::string::npos);
+  CHECK(edits.Error("float32(wireless_remote[20])", "float32(wireless_remote[40])") ==
+        w + ".fields.command_vx: 'wireless_remote[40]' is not a member of unitree_go::msg::dds_::LowState_");
+  CHECK(edits.Error("command_vx: {scale: 1.0, dead_zone: 0.1}", "deadman: {scale: 1.0, dead_zone: 0.1}") ==
+        w + ".axes.deadman: field 'deadman' is a count, a bit or a checksum's verdict, not a stick");
+  CHECK(edits.Error("command_vy: {scale: -0.5,", "command_vy: {scale: -2.5,") ==
+        w + ".axes.command_vy.scale: field 'command_vy' has range [-1, 1], which does not hold [-2.5, 2.5] that it can "
+            "take");
+  CHECK(edits.Error("command_vx: {scale: 1.0, dead_zone: 0.1}", "command_vx: {scale: 1.0, range: [1, -1]}") ==
+        w + ".axes.command_vx.range: low 1 is above high -1");
+  CHECK(edits.Error("command_vx: {scale: 1.0, dead_zone: 0.1}", "command_vx: {scale: 1.0, dead_zone: 0.95}")
+            .find(w + ".axes.command_vx.dead_zone: '0.95' is outside") == 0);
+  CHECK(edits.Error("command_vx: {scale: 1.0, dead_zone: 0.1}", "speed: {scale: 1.0}") ==
+        w + ".axes.speed: 'speed' is not a field of the message's streams");
+  CHECK(edits.Error("command_vx: {scale: 1.0, dead_zone: 0.1}", "command_vx: {scale: 1.0, rate_per_s: 1}") ==
+        w + ".axes.command_vx.rate_per_s: unknown field");
 }

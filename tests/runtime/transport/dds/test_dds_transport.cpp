@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "runtime/core/alloc_probe.hpp"
+#include "runtime/loop/loop.hpp"
 #include "runtime/robot/robot_data.hpp"
 #include "runtime/transport/dds/cdr.hpp"
 #include "runtime/transport/dds/dds_transport.hpp"
@@ -98,10 +99,10 @@ struct Pair {
 
 // The Go2's controller side and the robot's side of its low-level transport on one domain, matched.
 struct Go2Pair {
-  const robot::RobotModel& m = test::Go2Robot();
+  const robot::RobotModel& m;
   std::unique_ptr<DdsTransport> controller;
   std::unique_ptr<DdsLink> robot;
-  explicit Go2Pair(int domain) {
+  explicit Go2Pair(int domain, const robot::RobotModel& model = test::Go2Robot()) : m(model) {
     auto c = DdsTransport::Open(m, "lowlevel", Options(domain));
     REQUIRE_MESSAGE(c.ok(), c.error().message);
     controller = std::move(*c);
@@ -503,4 +504,121 @@ TEST_CASE("dds transport: a motor's count of lost frames arrives as its growth p
   CHECK(go2.ChecksumMatches(si, s));
   // Other motors' counters stay where they were.
   CHECK(s.Get("motor_state[6].lost").value() == 0.0);
+}
+
+TEST_CASE(
+    "dds transport: the Go2's wireless remote inside LowState_ - keys as bits, sticks as float32 shaped, a NaN stick "
+    "is invalid") {
+  // models/go2_remote: the 40-byte record's keys (uint16 from byte 2: bit 1 L1, 2 START, 14 DOWN)
+  // and sticks (float32: lx from byte 4, rx from 8, ly from 20) onto the remote stream's fields.
+  const Go2Pair pair(test::TestDomain(11), test::Go2RemoteRobot());
+  const robot::RobotModel& m = pair.m;
+  DdsTransport& controller = *pair.controller;
+  DdsLink& go2 = *pair.robot;
+  robot::RobotData d = robot::MakeRobotData(m);
+  const std::size_t si = Message(go2, "lowstate");
+  const std::uint32_t remote = m.fields[FieldOf(m, "deadman")].stream;
+  std::vector<double> fields(m.fields.size(), 0.0);
+  fields[FieldOf(m, "imu_qw")] = 1.0;
+  fields[FieldOf(m, "arm")] = 1;
+  fields[FieldOf(m, "deadman")] = 1;
+  fields[FieldOf(m, "sit")] = 1;
+  fields[FieldOf(m, "command_vy")] = -0.25;      // lx 0.55: right, past the 0.1 dead zone, x -0.5
+  fields[FieldOf(m, "command_yaw_rate")] = 0.5;  // rx -0.55: left
+  DdsSample s(go2.message(si).type);
+  go2.FillFromFields(si, fields, &s);
+  // The record as the robot lays it out.
+  CHECK(s.Get("wireless_remote[2]").value() == 6);   // L1 | START
+  CHECK(s.Get("wireless_remote[3]").value() == 64);  // DOWN (bit 14)
+  const auto float_at = [&](int at) {
+    std::uint32_t bits = 0;
+    for (int k = 0; k < 4; ++k)
+      bits |= static_cast<std::uint32_t>(s.Get("wireless_remote[" + std::to_string(at + k) + "]").value()) << (8 * k);
+    float f = 0;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+  };
+  CHECK(float_at(4) == 0.55f);
+  CHECK(float_at(8) == -0.55f);
+  CHECK(float_at(20) == 0.0f);
+  std::uint64_t version = 0;
+  const auto send = [&] {
+    REQUIRE(go2.writer(si)->Write(s.bytes()).ok());
+    REQUIRE(controller.WaitForSample(remote, &version, 5 * kSecond));
+    controller.Read(m, d);
+    loop::CheckSample(m, d);
+  };
+  send();
+  CHECK(d.fields[FieldOf(m, "arm")] == 1.0);
+  CHECK(d.fields[FieldOf(m, "deadman")] == 1.0);
+  CHECK(d.fields[FieldOf(m, "sit")] == 1.0);
+  CHECK(d.fields[FieldOf(m, "walk")] == 0.0);
+  CHECK(d.fields[FieldOf(m, "estop")] == 0.0);
+  CHECK(d.fields[FieldOf(m, "command_vy")] == doctest::Approx(-0.25).epsilon(1e-6));
+  CHECK(d.fields[FieldOf(m, "command_yaw_rate")] == doctest::Approx(0.5).epsilon(1e-6));
+  CHECK(d.fields[FieldOf(m, "command_vx")] == 0.0);
+  CHECK(d.streams[remote].invalid_input < 0);
+  // Written by hand: ly 0.05 (inside the dead zone: 0) and 1.0 (full forward: 1 m/s); the other
+  // keys' bits untouched by a field's.
+  const auto put_float = [&](int at, float f) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &f, sizeof bits);
+    for (int k = 0; k < 4; ++k)
+      REQUIRE(s.Set("wireless_remote[" + std::to_string(at + k) + "]", static_cast<double>((bits >> (8 * k)) & 0xffu))
+                  .ok());
+    go2.Seal(si, &s);
+  };
+  put_float(20, 0.05f);
+  send();
+  CHECK(d.fields[FieldOf(m, "command_vx")] == 0.0);
+  put_float(20, 1.0f);
+  send();
+  CHECK(d.fields[FieldOf(m, "command_vx")] == 1.0);
+  // A stick that is no number, or outside [-1, 1]: NaN, and the sample check names the field.
+  put_float(20, std::nanf(""));
+  send();
+  CHECK(std::isnan(d.fields[FieldOf(m, "command_vx")]));
+  CHECK(d.streams[remote].invalid_input == static_cast<std::int32_t>(FieldOf(m, "command_vx")));
+  put_float(20, 0.0f);
+  put_float(8, 1.5f);
+  send();
+  CHECK(d.streams[remote].invalid_input == static_cast<std::int32_t>(FieldOf(m, "command_yaw_rate")));
+  // A key released: its bit clears, the others stay.
+  fields[FieldOf(m, "sit")] = 0;
+  go2.FillFromFields(si, fields, &s);
+  CHECK(s.Get("wireless_remote[3]").value() == 0);
+  CHECK(s.Get("wireless_remote[2]").value() == 6);
+  send();
+  CHECK(d.fields[FieldOf(m, "sit")] == 0.0);
+  CHECK(d.fields[FieldOf(m, "arm")] == 1.0);
+  CHECK(d.streams[remote].invalid_input < 0);
+
+  // In the loop: START arms (the motors answering: stand-up), SELECT is the e-stop at its sample's
+  // tick, the motors then switched off.
+  std::fill(fields.begin(), fields.end(), 0.0);
+  fields[FieldOf(m, "imu_qw")] = 1.0;
+  for (const robot::MotorSpec& mo : m.motors) fields[mo.q_field] = mo.default_q_rad;
+  robot::RobotData ld = robot::MakeRobotData(m);
+  auto l = loop::MakeLoopData(m, nullptr);
+  robot::Transport* ts[] = {&controller};
+  const auto tick = [&](std::uint64_t k) {
+    go2.FillFromFields(si, fields, &s);
+    REQUIRE(go2.writer(si)->Write(s.bytes()).ok());
+    REQUIRE(controller.WaitForSample(remote, &version, 5 * kSecond));
+    rt::TickTiming t;
+    t.tick = k;
+    (void)loop::Tick(m, ld, *l, ts, t);
+  };
+  tick(0);
+  CHECK(l->phase() == loop::Phase::kDisarmed);
+  fields[FieldOf(m, "arm")] = 1;
+  tick(1);
+  CHECK(l->phase() == loop::Phase::kArming);
+  tick(2);
+  CHECK(l->phase() == loop::Phase::kStandUp);
+  fields[FieldOf(m, "estop")] = 1;
+  tick(3);
+  CHECK(l->supervisor().mode == safety::Mode::kEStop);
+  CHECK(ld.motors[0] == robot::MotorCommand::kDisable);
+  CHECK(l->operator_status().requests == 2);
 }
