@@ -27,7 +27,7 @@
 // clock (--realtime: its tick latency). --operator dds: the velocity commands come over DDS from
 // another process (pbppo-operator, a ROS 2 node with --dds-naming ros2), at real time.
 //
-//   pbppo-hil go2 [--robot models/go2/robot.yaml] [--commands SCHEDULE] [--realtime] [--domain D]
+//   pbppo-hil go2 [--robot models/go2/robot.yaml] [--commands SCHEDULE] [--remote SCHEDULE] [--realtime] [--domain D]
 //             [--duration S] [--fault KIND@S[+D][:MOTOR]]... [--report out.json] [--trace out.csv]
 //
 // A legged robot whose motors speak DDS (the Go2's rt/lowstate and rt/lowcmd) on flat ground,
@@ -131,6 +131,9 @@ void AddLeggedDdsOptions(CLI::App& app, pbppo::sim::LeggedDdsHilOptions& o) {
       ->check(positive);
   app.add_option("--report", o.report, "Write the run's report (JSON)");
   app.add_option("--trace", o.trace, "Write the base's trace, every 10 periods (CSV)");
+  app.add_option("--remote", o.remote,
+                 "A schedule of a stream the state message carries (the robot's remote: its keys and sticks), "
+                 "played on the robot's clock");
   app.add_option_function<std::string>(
          "--fault",
          [&o](const std::string& v) {

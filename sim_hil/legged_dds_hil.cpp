@@ -149,6 +149,17 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
     columns = *c;
   }
 
+  // The remote's schedule: a stream the state message fills.
+  std::optional<loop::Schedule> remote;
+  if (!o.remote.empty()) {
+    auto s = loop::LoadSchedule(o.remote, m);
+    if (!s) return Fail(s.error().message);
+    const auto& carried = link.message(static_cast<std::size_t>(state)).streams;
+    if (std::count(carried.begin(), carried.end(), s->stream_index) == 0)
+      return Fail("--remote " + o.remote + ": stream '" + s->stream + "' is not carried by the state message");
+    remote = std::move(*s);
+  }
+
   // The plant on flat ground at the default pose, dropped from the training's start height.
   QuadrupedPlantOptions po;
   po.tick_s = 0.001;
@@ -189,7 +200,7 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
   std::uint64_t period = 0, published = 0, answered = 0, bad_crc = 0, out_of_limits = 0, faulty_samples = 0;
   std::string first_violation;
   const auto t0 = std::chrono::steady_clock::now();
-  bool plant_ok = true, controller_left = false, controller_lost = false;
+  bool plant_ok = true, controller_left = false, controller_lost = false, getting_up = true;
 
   const auto active = [&](const LeggedDdsFault& f, double t) { return t >= f.start_s && t < f.start_s + f.duration_s; };
   // A motor that stops answering: what it reported last (q, dq, tau), held while the fault lasts.
@@ -220,6 +231,12 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
       fields[static_cast<std::size_t>(foot_field[i])] =
           (feet >> i & 1u) != 0 ? std::round(weight_n / std::max(down, 1)) : 0.0;
     if (tick_field >= 0) fields[static_cast<std::size_t>(tick_field)] = static_cast<double>(published % 4294967296ull);
+    if (remote) {
+      const robot::StreamSpec& rs = m.streams[remote->stream_index];
+      const int p = remote->PhaseAt(t);
+      for (std::uint32_t k = 0; k < rs.field_count; ++k)
+        fields[rs.first_field + k] = p < 0 ? 0.0 : remote->phases[static_cast<std::size_t>(p)].values[k];
+    }
     for (std::size_t i = 0; i < o.faults.size(); ++i) {
       const LeggedDdsFault& f = o.faults[i];
       if (!active(f, t)) {
@@ -355,7 +372,16 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
     const bool damping =
         !passive && std::all_of(cmd.begin(), cmd.end(), [](const MotorCmd& x) { return x.kp == 0 && x.kd > 0; });
     r.mode = static_cast<std::uint8_t>(damping || passive ? safety::Mode::kSafeStop : safety::Mode::kNominal);
-    r.loop_phase = static_cast<std::uint8_t>(passive ? loop::Phase::kArming : loop::Phase::kRun);
+    // Commanded again after passive or damping (the robot on the ground, or sitting), it is getting
+    // up until its body leaves the ground: the body's contact then is no fall.
+    if (damping || passive) {
+      getting_up = true;
+    } else if (!r.body_contact) {
+      getting_up = false;
+    }
+    r.loop_phase = static_cast<std::uint8_t>(passive      ? loop::Phase::kArming
+                                             : getting_up ? loop::Phase::kStandUp
+                                                          : loop::Phase::kRun);
     if (schedule) {
       r.schedule_phase = schedule->PhaseAt(now - period_s);
       if (r.schedule_phase >= 0) {

@@ -48,6 +48,10 @@ struct LeggedDdsHilOptions {
   double settle_s = 1.0;
   double peer_timeout_s = 30, command_timeout_s = 10;
   std::vector<LeggedDdsFault> faults;
+  // The robot's side of a person's hands: a schedule (runtime/loop/schedule.hpp) of a stream its
+  // state message carries (the Go2's remote: models/go2_remote's stream remote), played on the
+  // robot's clock into every state sample; after its end every field 0 (released, centred).
+  std::string remote;
 };
 
 // Parses "KIND@SECONDS[+DURATION][:MOTOR]"; the error names the text.

@@ -10,7 +10,10 @@
 #   3. faults as data in the HIL (a wrong CRC, a NaN or out-of-range position, a motor losing
 #      frames, a motor that stops answering, the state stopping):
 #      the commands reach damping within 3 periods of the controller's detection, the controller
-#      naming the cause.
+#      naming the cause;
+#   4. the Go2's remote (models/go2_remote) played by the HIL's robot into LowState_: START stands
+#      the robot up, DOWN sits it down (passive on its belly), START stands it up again, SELECT is
+#      the e-stop; the trunk's heights, no fall, the recording replays bit for bit.
 # usage: go2_programs.sh HIL CONTROLLER PBPPO CYCLONE_GO2_ROBOT SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 cyclone=$4 src=$5 work=$6
@@ -38,15 +41,23 @@ wait "$robot_pid" || true
 expect "$work/ctl2.log" "checksum mismatches [1-9]"
 expect "$work/ctl2.log" "mode change: tick [0-9]+: safe-stop: invalid sample: crc_ok = 0"
 
-echo "== 2: the HIL in lock-step: stand up and hold, recorded and replayed"
+# The HIL and the controller of ROBOT in lock-step for TICKS, the controller recording RUN; the
+# HIL's output in HIL_LOG (printed), the controller's in CTL_LOG; more HIL flags after them.
 # Without a policy the controller holds until told to stop (--ticks); the HIL ends when it leaves.
-"$hil" go2 --domain "$domain" --report "$work/hil2.json" >"$work/hil2.log" 2>&1 &
-hil_pid=$!
-"$ctl" --robot "$robot" --domain "$domain" --lockstep --lockstep-timeout-ms 100 --no-mlock --ticks 2000 \
-  --record "$work/run2.log" >"$work/ctl2b.log" 2>&1 || true
-rc=0; wait "$hil_pid" || rc=$?
-cat "$work/hil2.log"
-[ "$rc" -eq 0 ] || { cat "$work/ctl2b.log"; fail "pbppo-hil go2 exit $rc"; }
+hil_and_controller() {  # ROBOT TICKS RUN HIL_LOG CTL_LOG [HIL FLAGS...]
+  local robot_file=$1 ticks=$2 run=$3 hil_log=$4 ctl_log=$5
+  shift 5
+  "$hil" go2 --robot "$robot_file" --domain "$domain" "$@" >"$hil_log" 2>&1 &
+  local pid=$! status=0
+  "$ctl" --robot "$robot_file" --domain "$domain" --lockstep --lockstep-timeout-ms 100 --no-mlock --ticks "$ticks" \
+    --record "$run" >"$ctl_log" 2>&1 || true
+  wait "$pid" || status=$?
+  cat "$hil_log"
+  [ "$status" -eq 0 ] || { cat "$ctl_log"; fail "pbppo-hil go2 --robot $robot_file exit $status"; }
+}
+
+echo "== 2: the HIL in lock-step: stand up and hold, recorded and replayed"
+hil_and_controller "$robot" 2000 "$work/run2.log" "$work/hil2.log" "$work/ctl2b.log" --report "$work/hil2.json"
 expect "$work/hil2.log" "commands [0-9]+ \(checksum mismatches 0, outside the limits 0\)"
 expect "$work/hil2.log" "no fall"
 expect "$work/ctl2b.log" "now hold"
@@ -75,4 +86,34 @@ check_fault lost@3.0:7 "safe-stop: invalid sample: lost_RR_thigh = 1" 3
 check_fault silent@3.0:11 "safe-stop: invalid sample: lost_RL_calf = 1" 3
 # The state stops: detected when stale (degraded after 2 periods) or lost; damping 3 periods after.
 check_fault stop@3.0+0.5 "(degraded: stale sample|e-stop: lost peer)" 8
+echo "== 4: the Go2's remote (models/go2_remote) in the HIL: stand up, sit down, passive, up again, e-stop"
+remote=models/go2_remote/robot.yaml
+hil_and_controller "$remote" 6400 "$work/run4.log" "$work/hil4.log" "$work/ctl4.log" \
+  --remote models/go2_remote/sessions/stand_sit.yaml --trace "$work/hil4.csv"
+grep -E "^(phase|mode change|operator):" "$work/ctl4.log"
+expect "$work/ctl4.log" "waiting for the operator to arm \(field 'arm'\)"
+expect "$work/ctl4.log" "phase: tick 0: disarmed -> arming"           # START at once
+expect "$work/ctl4.log" "phase: tick 2000: hold -> sit-down"           # DOWN at 4.0 s
+expect "$work/ctl4.log" "phase: tick 3000: sit-down -> passive"        # 2 s later
+expect "$work/ctl4.log" "phase: tick 4000: passive -> stand-up"        # START at 8.0 s
+expect "$work/ctl4.log" "phase: tick 5000: stand-up -> hold"
+expect "$work/ctl4.log" "mode change: tick 5750: e-stop: e-stop request"  # SELECT at 11.5 s
+expect "$work/ctl4.log" "operator: 4 requests, 0 refused"
+expect "$work/hil4.log" "outside the limits 0\)"
+expect "$work/hil4.log" "no fall"
+# The trunk's height (m) and whether it touches the ground, at a time of the trace.
+at() { awk -F, -v T="$1" 'NR > 1 && $1 >= T { print $4, $17; exit }' "$work/hil4.csv"; }
+check_height() {  # TIME MIN MAX CONTACT WHAT
+  local z c
+  read -r z c <<<"$(at "$1")"
+  echo "  $5 at $1 s: trunk ${z} m, on the ground ${c}"
+  awk -v z="$z" -v lo="$2" -v hi="$3" 'BEGIN { exit !(z >= lo && z <= hi) }' || fail "$5: trunk at ${z} m, not in [$2, $3]"
+  [ "$c" = "$4" ] || fail "$5: body contact ${c}, expected $4"
+}
+check_height 3.9 0.25 0.40 0 "standing"
+check_height 5.98 0.08 0.16 0 "seated (the sit pose)"
+check_height 7.9 0.0 0.08 1 "passive (on its belly)"
+check_height 9.9 0.25 0.40 0 "standing again"
+"$pbppo" replay "$work/run4.log" --robot "$remote" >"$work/replay4.log" 2>&1 || { cat "$work/replay4.log"; fail "replay"; }
+expect "$work/replay4.log" "commands compared, 0 different$"
 echo "go2 programs: ok"
