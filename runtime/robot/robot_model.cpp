@@ -387,6 +387,9 @@ Status Derive(RobotModel& m, double tick_s) {
   p.damping_ticks = Ticks(p.damping_s, tick_s);
   p.motor_off_timeout_ticks = Ticks(p.motor_off_timeout_s, tick_s);
   p.sit_down_ticks = Ticks(p.sit_down_s, tick_s);
+  if (p.sit_down_s > 0 && p.sit_down_ticks == 0)
+    return fail("phases.sit_down_s: " + YamlFields::Num(p.sit_down_s) + " s is shorter than half a tick (" +
+                YamlFields::Num(tick_s) + " s): a sit-down takes at least one");
   if (p.sit_down_s > 0) {
     if (m.motors.empty()) return fail("phases.sit_down_s: the robot has no motors to sit with");
     for (const MotorSpec& mo : m.motors)

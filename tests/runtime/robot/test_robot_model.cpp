@@ -394,6 +394,8 @@ TEST_CASE("robot model: continuous joints and velocity-commanded motors - bad da
         p + ": phases.sit_down_s: the robot's description gives no sit_pose (joint head_pan) to sit down to");
   CHECK(edits.Error("  motor_off_timeout_s: 0.1", "  motor_off_timeout_s: 0.1\n  sit_down_s: -1") ==
         p + ": phases.sit_down_s: '-1' is outside [0, 3600]");
+  CHECK(edits.Error("  motor_off_timeout_s: 0.1", "  motor_off_timeout_s: 0.1\n  sit_down_s: 0.0001") ==
+        p + ": phases.sit_down_s: 0.0001 s is shorter than half a tick (0.001 s): a sit-down takes at least one");
 }
 
 TEST_CASE("robot model: the Go2 - motors of the description over DDS, one message fills several streams") {
