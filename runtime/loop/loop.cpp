@@ -229,12 +229,16 @@ struct TickImpl {
     Ramp(m, l, 0, true);
   }
 
+  // The fault a request is refused for while the supervisor holds the robot, or nullptr.
+  static const char* Latched(const LoopData& l) noexcept {
+    if (l.sup_.mode < Mode::kSafeStop) return nullptr;
+    return l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched";
+  }
+
   // Why the phase does not take a sit request, or nullptr.
   static const char* NoSit(const LoopData& l) noexcept {
     if (l.phase_ != Phase::kStandUp && l.phase_ != Phase::kHold && l.phase_ != Phase::kRun) return "not standing";
-    if (l.sup_.mode >= Mode::kSafeStop)
-      return l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched";
-    return nullptr;
+    return Latched(l);
   }
 
   // Arm / disarm / stop requests, then the phase's own transitions and its command.
@@ -256,11 +260,11 @@ struct TickImpl {
     if (rose(OperatorRequest::kArm) && !ev.stop) {
       if (l.phase_ != Phase::kDisarmed && l.phase_ != Phase::kPassive) {
         Refuse(l, tick, "arm", m.phases.sit_down_ticks > 0 ? "not disarmed or passive" : "not disarmed");
-      } else if (l.phase_ == Phase::kPassive && l.sup_.mode >= Mode::kSafeStop) {
-        Refuse(l, tick, "arm", l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched");
+      } else if (l.phase_ == Phase::kPassive && Latched(l) != nullptr) {
+        Refuse(l, tick, "arm", Latched(l));
       }
     }
-    if (ev.arm && l.phase_ == Phase::kPassive && l.sup_.mode < Mode::kSafeStop && !ev.stop) {
+    if (ev.arm && l.phase_ == Phase::kPassive && Latched(l) == nullptr && !ev.stop) {
       MeasuredPose(m, d, l);  // stand up from where it sits
       EnterStandUp(m, l, tick);
     }
@@ -302,8 +306,8 @@ struct TickImpl {
     if (rose(OperatorRequest::kSwitch)) {
       if (l.phase_ != Phase::kHold && l.phase_ != Phase::kRun) {
         Refuse(l, tick, "switch", "not holding or running");
-      } else if (l.sup_.mode >= Mode::kSafeStop) {
-        Refuse(l, tick, "switch", l.sup_.mode == Mode::kEStop ? "e-stop is latched" : "safe-stop is latched");
+      } else if (Latched(l) != nullptr) {
+        Refuse(l, tick, "switch", Latched(l));
       } else if (l.source_ == nullptr || !l.source_->Switch()) {
         Refuse(l, tick, "switch", "one command source");
       }

@@ -60,6 +60,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/robot/axis_shape.hpp"
 #include "runtime/robot/idl.hpp"
 
 namespace pbppo::robot {
@@ -94,29 +95,6 @@ struct LeafValue {
   std::uint32_t leaf = 0;
   std::vector<ValueTerm> terms;
 };
-
-// An input axis shaped into a field (a gamepad's stick through evdev, a remote's stick in a DDS
-// message): the raw range onto [-1, 1], a dead zone around 0 (rescaled, so the value leaves 0
-// without a step at the zone's edge), times the scale. A raw value outside the range (or not a
-// number) gives NaN, which the sample check names.
-struct AxisShape {
-  double raw_min = -1, raw_max = 1, scale = 1, dead_zone = 0;
-};
-inline double ShapeAxis(const AxisShape& a, double raw) noexcept {
-  if (!(raw >= a.raw_min && raw <= a.raw_max)) return __builtin_nan("");
-  const double n = (2 * raw - a.raw_min - a.raw_max) / (a.raw_max - a.raw_min);
-  const double mag = n < 0 ? -n : n;
-  if (mag <= a.dead_zone) return 0.0;
-  const double out = (mag - a.dead_zone) / (1 - a.dead_zone) * a.scale;
-  return n < 0 ? -out : out;
-}
-// The raw value ShapeAxis takes to `value` (0: the middle of the range): what a peer writes.
-inline double UnshapeAxis(const AxisShape& a, double value) noexcept {
-  const double u = value / a.scale;
-  const double mag = u < 0 ? -u : u;
-  const double n = mag == 0 ? 0.0 : (u < 0 ? -1 : 1) * (mag * (1 - a.dead_zone) + a.dead_zone);
-  return (n * (a.raw_max - a.raw_min) + a.raw_min + a.raw_max) / 2;
-}
 
 // A field of an incoming message's stream and the leaf that fills it, as the robot file maps it:
 //   LEAF                  its value
