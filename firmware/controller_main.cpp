@@ -492,18 +492,8 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
     std::printf("%s%s %llu", i ? ", " : "", safety::ToString(static_cast<safety::Cause>(i)),
                 static_cast<unsigned long long>(sup.counts.n[i]));
   std::printf("\n");
-  if (robot.phases.enable_motors)
-    for (const auto& p : l.phase_changes())
-      std::printf("phase: tick %llu: %s -> %s\n", static_cast<unsigned long long>(p.tick), loop::ToString(p.from),
-                  loop::ToString(p.to));
-  if (robot.phases.enable_motors && l.phase_change_count() > l.phase_changes().size())
-    std::printf("phase: %llu changes in all, the first %zu above\n",
-                static_cast<unsigned long long>(l.phase_change_count()), l.phase_changes().size());
-  for (const auto& m : l.mode_changes())
-    std::printf("mode change: tick %llu: %s\n", static_cast<unsigned long long>(m.tick), m.reason);
-  if (l.mode_change_count() > l.mode_changes().size())
-    std::printf("mode change: %llu in all, the first %zu above\n",
-                static_cast<unsigned long long>(l.mode_change_count()), l.mode_changes().size());
+  for (const std::string& line : loop::DescribeChanges(l, robot.phases.enable_motors))
+    std::printf("%s\n", line.c_str());
   if (const std::string op_line = loop::Describe(l.operator_status()); !op_line.empty())
     std::printf("operator: %s\n", op_line.c_str());
   if (const loop::RecoveryStatus& rec = l.recovery(); rec.stops + rec.refused > 0)

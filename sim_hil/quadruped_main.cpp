@@ -246,6 +246,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
               loop::ToString((*rig)->loop().phase()), safety::ToString(sup.mode),
               static_cast<unsigned long long>((*rig)->hil().imu_samples()),
               static_cast<unsigned long long>((*rig)->can().commands_sent(0)));
+  for (const std::string& line : loop::DescribeChanges((*rig)->loop(), true)) std::printf("%s\n", line.c_str());
   std::printf("%.2f s simulated in %.2f s wall: real-time factor %.2f (%s, Simbody RK2 4 x 0.25 ms per tick)\n", sim_s,
               wall, sim_s / wall, ro.realtime ? "free-running" : "lock-step");
   // The controller's own tick, stage by stage (the HIL's step is outside it); free-running, also

@@ -49,6 +49,42 @@ std::unique_ptr<LoopData> MakeLoopData(const RobotModel& model, CommandSource* s
   return l;
 }
 
+std::vector<std::string> DescribeChanges(const LoopData& l, bool with_phases) {
+  std::vector<std::string> out;
+  // "phase: 40 changes in all, the first 32 above"
+  const auto more = [&](const char* what, const char* changes, std::uint64_t all, std::size_t shown) {
+    if (all <= shown) return;
+    std::string line = what;
+    line += std::to_string(all);
+    line += changes;
+    line += " in all, the first ";
+    line += std::to_string(shown);
+    line += " above";
+    out.push_back(std::move(line));
+  };
+  if (with_phases) {
+    for (const PhaseChange& p : l.phase_changes()) {
+      std::string line = "phase: tick ";
+      line += std::to_string(p.tick);
+      line += ": ";
+      line += ToString(p.from);
+      line += " -> ";
+      line += ToString(p.to);
+      out.push_back(std::move(line));
+    }
+    more("phase: ", " changes", l.phase_change_count(), l.phase_changes().size());
+  }
+  for (const ModeChange& m : l.mode_changes()) {
+    std::string line = "mode change: tick ";
+    line += std::to_string(m.tick);
+    line += ": ";
+    line += m.reason;
+    out.push_back(std::move(line));
+  }
+  more("mode change: ", "", l.mode_change_count(), l.mode_changes().size());
+  return out;
+}
+
 std::string Describe(const OperatorStatus& s) {
   if (s.requests == 0) return "";
   std::string out = std::to_string(s.requests) + " requests, " + std::to_string(s.refused) + " refused";
@@ -260,8 +296,8 @@ struct TickImpl {
     if (rose(OperatorRequest::kArm) && !ev.stop) {
       if (l.phase_ != Phase::kDisarmed && l.phase_ != Phase::kPassive) {
         Refuse(l, tick, "arm", m.phases.sit_down_ticks > 0 ? "not disarmed or passive" : "not disarmed");
-      } else if (l.phase_ == Phase::kPassive && Latched(l) != nullptr) {
-        Refuse(l, tick, "arm", Latched(l));
+      } else if (Latched(l) != nullptr) {
+        Refuse(l, tick, "arm", Latched(l));  // re-arm first (the recovery rule)
       }
     }
     if (ev.arm && l.phase_ == Phase::kPassive && Latched(l) == nullptr && !ev.stop) {
@@ -275,7 +311,7 @@ struct TickImpl {
         EnterSitDown(m, d, l, tick);
       }
     }
-    if (ev.arm && l.phase_ == Phase::kDisarmed) {
+    if (ev.arm && l.phase_ == Phase::kDisarmed && Latched(l) == nullptr) {
       if (motors) {
         Enter(l, Phase::kArming, tick);
       } else {
@@ -365,8 +401,13 @@ struct TickImpl {
       case Phase::kMotorOff:
         if (in_phase > 0 && (all || in_phase >= m.phases.motor_off_timeout_ticks)) Enter(l, Phase::kDone, tick);
         break;
-      case Phase::kPassive:
       case Phase::kDisarmed:
+        // Nothing is sent to the motors, so they do not answer (a motor replies to a command): their
+        // silence is not judged until arming has them answering (as at arming's end).
+        if (motors)
+          for (const robot::MotorSpec& mo : m.motors) d.streams[mo.stream].age_ticks = 0;
+        break;
+      case Phase::kPassive:
       case Phase::kDone:
       case Phase::kFailed: break;
     }

@@ -38,7 +38,9 @@
 //              the robot file lists, at most max_automatic times a run (then only a request)
 // Operator requests (robot.yaml operator: fields such as a gamepad's buttons; runtime/robot/
 // robot_model.hpp). A field's rise to at least 0.5 asks, at that tick, as the calls below do:
-//   arm      Arm(): from disarmed (a robot without motors runs), and from passive: stand up
+//   arm      Arm(): from disarmed (a robot without motors runs), and from passive: stand up; not
+//            while a fault is latched (re-arm first). Disarmed, nothing is sent to the motors, and
+//            their silence is not judged until arming has them answering
 //   walk     from hold, run the command source; without it the source starts after hold_s
 //   sit      from stand-up, hold and run (no fault latched): sit down, then passive; arm stands up
 //   stop     RequestStop(): damping, then motors off
@@ -55,7 +57,7 @@
 // the phase does not take (arm outside disarmed and passive, walk outside hold, without the dead-man or
 // before hold_s is over, a switch with one source, outside hold and run or with a fault latched)
 // changes nothing and is refused, counted and said (OperatorStatus); so is a sit outside stand-up,
-// hold and run or with a fault latched, and an arm from passive with a fault latched.
+// hold and run or with a fault latched, and an arm with a fault latched.
 //
 // Re-arming is arming again at a tick boundary: the supervisor back to nominal (its counters kept),
 // then robots with motors arm, stand up from the measured pose and hold before the command source
@@ -264,6 +266,11 @@ class LoopData {
   std::array<std::uint8_t, kOperatorRequestCount> operator_held_{};
   OperatorStatus operator_status_;
 };
+
+// The summary's lines of the first kMaxChanges phase changes ("phase: tick 200: arming ->
+// stand-up"; with_phases false: none) and mode changes ("mode change: tick 730: e-stop: ..."),
+// and a line for each when there were more.
+std::vector<std::string> DescribeChanges(const LoopData& loop, bool with_phases);
 
 // The loop's data for a model and a command source (null: hold the default pose); the only
 // allocation. The source must outlive it.

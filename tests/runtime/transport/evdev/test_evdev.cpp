@@ -151,13 +151,22 @@ struct GamepadLoop {
     for (const robot::FieldSpec& f : m.fields)
       nominal.push_back(f.name == "base_imu_qw" ? 1.0 : std::clamp(0.0, f.min, f.max));
   }
+  // As a motor does: it answers only the tick after it was sent something (else every tick).
+  bool motors_answer_commands = false;
+
   void Set(std::int32_t field, double v) { nominal[static_cast<std::size_t>(field)] = v; }
+  bool Silent(std::uint32_t stream) const {
+    if (!motors_answer_commands) return false;
+    for (std::size_t k = 0; k < m.motors.size(); ++k)
+      if (m.motors[k].stream == stream) return d.motors[k] == robot::MotorCommand::kNone;
+    return false;
+  }
   void Run(std::uint64_t ticks) {
     robot::Transport* ts[] = {&feed};
     for (std::uint64_t k = 0; k < ticks; ++k) {
       for (std::uint32_t s = 0; s < m.streams.size(); ++s) {
         const robot::StreamSpec& sp = m.streams[s];
-        feed.Put(m, s, std::span<const double>(nominal.data() + sp.first_field, sp.field_count));
+        if (!Silent(s)) feed.Put(m, s, std::span<const double>(nominal.data() + sp.first_field, sp.field_count));
       }
       rt::TickTiming t;
       t.tick = phase.size();
@@ -487,6 +496,33 @@ TEST_CASE(
                 l->operator_status().last);
   CHECK(l->operator_status().refused == 5);
   CHECK(l->operator_status().requests == 7);
+}
+
+TEST_CASE(
+    "evdev operator: waiting disarmed for START with the motors silent is no fault; arm with an e-stop latched is "
+    "refused") {
+  GamepadLoop g;
+  g.motors_answer_commands = true;  // disarmed, nothing is sent: no motor answers
+  const robot::RobotModel& m = g.m;
+  g.Run(2000);  // 2 s: four times the motors' lost limit
+  CHECK(g.phase.back() == loop::Phase::kDisarmed);
+  CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
+  CHECK(g.l->mode_change_count() == 0);
+  g.Set(m.op.arm, 1);  // arming has them answering, then stand-up and hold
+  g.Run(1300);
+  CHECK(g.phase.back() == loop::Phase::kHold);
+  CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
+  // Another robot: an e-stop pressed while it waits latches; START is then refused, said.
+  GamepadLoop h;
+  h.motors_answer_commands = true;
+  h.Set(m.op.estop, 1);
+  h.Run(10);
+  CHECK(h.l->supervisor().mode == safety::Mode::kEStop);
+  h.Set(m.op.estop, 0);
+  h.Set(m.op.arm, 1);
+  h.Run(10);
+  CHECK(h.phase.back() == loop::Phase::kDisarmed);
+  CHECK_MESSAGE(h.Last() == "arm refused at tick 10: e-stop is latched (disarmed)", h.Last());
 }
 
 TEST_CASE(
