@@ -33,6 +33,31 @@ bool IsNameChar(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_';
 }
 
+// Lays out a message with strings or sequences: each member after the one before, aligned to its
+// size (a length to 4), each string empty, each sequence with its `elements`. False when the
+// layout exceeds kMaxCdrBytes (the offsets are then not to be used).
+bool LayOut(IdlMessage* m) {
+  std::uint64_t at = 0;
+  auto place = [&](std::uint32_t size) {
+    at = (at + size - 1) / size * size;
+    const std::uint64_t here = at;
+    at += size;
+    return static_cast<std::uint32_t>(std::min<std::uint64_t>(here, kMaxCdrBytes));
+  };
+  for (IdlItem& item : m->items) {
+    if (item.kind == IdlItem::Kind::kLeaf) {
+      IdlLeaf& l = m->leaves[item.leaf];
+      l.cdr_offset = place(IdlScalarSize(l.type));
+      continue;
+    }
+    item.cdr_offset = place(4);
+    if (item.kind == IdlItem::Kind::kString) at += 1;  // the NUL of an empty string
+    for (const std::uint32_t e : item.elements) m->leaves[e].cdr_offset = place(IdlScalarSize(item.element));
+  }
+  m->cdr_size = static_cast<std::uint32_t>(std::min<std::uint64_t>(at, kMaxCdrBytes + 1));
+  return at <= kMaxCdrBytes;
+}
+
 // Tokens of a file and, in place of each #include, of the included file (each file once).
 class Lexer {
  public:
@@ -142,6 +167,9 @@ Status Lexer::Add(const std::string& text, const std::string& path, int depth) {
 // struct, with the array dimensions a typedef adds.
 struct TypeRef {
   bool is_struct = false;
+  bool is_string = false;    // string, string<N>
+  bool is_sequence = false;  // sequence<scalar>, sequence<scalar, N>; the element in `scalar`
+  std::uint32_t bound = 0;   // a string's or sequence's; 0 unbounded
   IdlScalar scalar = IdlScalar::kInt32;
   std::string name;  // the struct's qualified name
   std::vector<std::uint32_t> dims;
@@ -463,8 +491,42 @@ Result<TypeRef> Parser::Type() {
     t.scalar = Accept("long") ? IdlScalar::kInt64 : IdlScalar::kInt32;
     return t;
   }
-  for (const char* v : {"string", "wstring", "sequence", "map", "wchar", "any", "fixed", "Object", "ValueBase"})
-    if (w.text == v) return Fail(std::string(v) + " is not supported (a message is one fixed size: use fixed arrays)");
+  // string<N>, sequence<T, N>: the bound, a positive constant.
+  auto bound = [&](const std::string& what) -> Status {
+    auto n = ConstExpr();
+    if (!n) return std::move(n).error();
+    if (*n == 0) return Fail(what + " bounded to 0");
+    t.bound = *n;
+    return {};
+  };
+  if (w.text == "string") {
+    ++i_;
+    t.is_string = true;
+    if (Accept("<")) {
+      PBPPO_TRY(bound("string"));
+      PBPPO_TRY(Expect(">"));
+    }
+    return t;
+  }
+  if (w.text == "sequence") {
+    ++i_;
+    PBPPO_TRY(Expect("<"));
+    const Token& e = Peek();
+    auto element = Type();
+    if (!element) return std::move(element).error();
+    if (element->is_struct || element->is_string || element->is_sequence || !element->dims.empty())
+      return IdlError(*e.file, e.line,
+                      "sequence<" + e.text +
+                          ">: only sequences of primitives are read (not of structs, strings, "
+                          "sequences or arrays)");
+    t.is_sequence = true;
+    t.scalar = element->scalar;
+    if (Accept(",")) PBPPO_TRY(bound("sequence"));
+    PBPPO_TRY(Expect(">"));
+    return t;
+  }
+  for (const char* v : {"wstring", "map", "wchar", "any", "fixed", "Object", "ValueBase"})
+    if (w.text == v) return Fail(std::string(v) + " is not supported (primitives, structs, strings and sequences)");
   if (const auto it = kScalars.find(w.text); it != kScalars.end()) {
     ++i_;
     t.scalar = it->second;
@@ -520,8 +582,11 @@ Status Parser::Declarators(const TypeRef& type, std::vector<Member>* out) {
 Parser::CLayout Parser::StructLayout(const std::string& name) const {
   CLayout s;
   for (const Member& m : structs_.at(name).members) {
+    // A string or sequence has no fixed place in memory: the message has no C layout (c_size 0).
     const CLayout e = m.type.is_struct ? StructLayout(m.type.name)
-                                       : CLayout{IdlScalarSize(m.type.scalar), IdlScalarSize(m.type.scalar)};
+                      : m.type.is_string || m.type.is_sequence
+                          ? CLayout{8, 8}
+                          : CLayout{IdlScalarSize(m.type.scalar), IdlScalarSize(m.type.scalar)};
     std::uint32_t count = 1;
     for (const std::uint32_t d : m.type.dims) count *= d;
     s.size = (s.size + e.align - 1) / e.align * e.align + e.size * count;
@@ -536,7 +601,9 @@ Status Parser::FlattenMembers(const std::string& struct_name, const std::string&
   std::uint32_t c = 0;
   for (const Member& m : structs_.at(struct_name).members) {
     if (depth >= kMaxDepth) return IdlError(*m.file, m.line, "member '" + m.name + "' nests deeper than 16 structs");
+    const bool variable = m.type.is_string || m.type.is_sequence;
     const CLayout e = m.type.is_struct ? StructLayout(m.type.name)
+                      : variable       ? CLayout{8, 8}
                                        : CLayout{IdlScalarSize(m.type.scalar), IdlScalarSize(m.type.scalar)};
     std::uint32_t count = 1;
     for (const std::uint32_t d : m.type.dims) count *= d;
@@ -554,8 +621,22 @@ Status Parser::FlattenMembers(const std::string& struct_name, const std::string&
         PBPPO_TRY(FlattenMembers(m.type.name, path + ".", at, out, cdr, depth + 1));
         continue;
       }
+      if (variable) {
+        // Its length (and a string's NUL) in the layout; laid out again at the end.
+        IdlItem item;
+        item.kind = m.type.is_string ? IdlItem::Kind::kString : IdlItem::Kind::kSequence;
+        item.path = std::move(path);
+        item.element = m.type.scalar;
+        item.bound = m.type.bound;
+        out->items.push_back(std::move(item));
+        *cdr = (*cdr + 3u) / 4u * 4u + 5u;
+        continue;
+      }
       const std::uint32_t size = IdlScalarSize(m.type.scalar);
       *cdr = (*cdr + size - 1) / size * size;
+      IdlItem item;
+      item.leaf = static_cast<std::uint32_t>(out->leaves.size());
+      out->items.push_back(std::move(item));
       out->leaves.push_back({std::move(path), m.type.scalar, *cdr, at});
       *cdr += size;
       if (*cdr > kMaxCdrBytes || out->leaves.size() > kMaxLeaves)
@@ -588,6 +669,13 @@ Result<IdlMessage> Parser::Flatten(const std::string& type_name, const std::stri
   PBPPO_TRY(FlattenMembers(name, "", 0, &m, &cdr, 0));
   m.cdr_size = cdr;
   m.c_size = StructLayout(name).size;
+  if (std::none_of(m.items.begin(), m.items.end(), [](const IdlItem& i) { return i.kind != IdlItem::Kind::kLeaf; })) {
+    m.items.clear();  // one fixed size: the leaves are the layout
+  } else {
+    m.c_size = 0;
+    for (IdlLeaf& l : m.leaves) l.c_offset = 0;
+    LayOut(&m);  // every sequence empty until the robot file names its elements
+  }
   return m;
 }
 
@@ -642,6 +730,40 @@ int IdlMessage::LeafIndex(std::string_view path) const noexcept {
   for (std::size_t i = 0; i < leaves.size(); ++i)
     if (leaves[i].path == path) return static_cast<int>(i);
   return -1;
+}
+
+int IdlMessage::Element(std::string_view path) {
+  if (const int k = LeafIndex(path); k >= 0 || items.empty()) return k;
+  const std::size_t open = path.rfind('[');
+  if (open == std::string_view::npos || path.back() != ']' || path.size() - open < 3 || path.size() - open > 7)
+    return -1;
+  std::uint32_t index = 0;
+  for (const char c : path.substr(open + 1, path.size() - open - 2)) {
+    if (c < '0' || c > '9') return -1;
+    index = index * 10 + static_cast<std::uint32_t>(c - '0');
+  }
+  const auto it = std::find_if(items.begin(), items.end(), [&](const IdlItem& i) {
+    return i.kind == IdlItem::Kind::kSequence && i.path == path.substr(0, open);
+  });
+  if (it == items.end() || (it->bound != 0 && index >= it->bound) || index >= kMaxArray ||
+      leaves.size() + (index + 1 - it->elements.size()) > kMaxLeaves)
+    return -1;
+  const std::size_t had = it->elements.size();
+  while (it->elements.size() <= index) {
+    it->elements.push_back(static_cast<std::uint32_t>(leaves.size()));
+    std::string name = it->path;
+    name += "[";
+    name += std::to_string(it->elements.size() - 1);
+    name += "]";
+    leaves.push_back({std::move(name), it->element, 0, 0});
+  }
+  if (!LayOut(this)) {  // too large: as it was
+    leaves.resize(leaves.size() - (it->elements.size() - had));
+    it->elements.resize(had);
+    LayOut(this);
+    return -1;
+  }
+  return static_cast<int>(it->elements.back());
 }
 
 Result<IdlMessage> ParseIdlMessage(const std::string& text, const std::string& path, const std::string& type_name,

@@ -8,10 +8,18 @@
 // is fine); members of the primitive types (boolean, char, octet, short, long, long long and
 // their unsigned forms, the IDL 4 int8 ... uint64, float, double), enums (32 bits), nested
 // structs and typedefs of them, fixed arrays of any of them in any number of dimensions, sized by
-// literals or integer constants; comments; #include "file" (resolved beside the including file,
-// each file once), include guards and #pragma lines. Refused with the file, line and member named:
-// strings, sequences, maps, unions, long double, wchar, @key, @optional, @external and appendable
-// or mutable extensibility: a message has one size and converts without allocation.
+// literals or integer constants; strings (string, string<N>: skipped, their text is not read) and
+// sequences of primitives (sequence<T>, sequence<T, N>: ROS 2's float32[] and int32[], as in
+// sensor_msgs/Joy); comments; #include "file" (resolved beside the including file, each file
+// once), include guards and #pragma lines. Refused with the file, line and member named:
+// sequences of structs, strings or sequences, maps, unions, long double, wchar, @key, @optional,
+// @external and appendable or mutable extensibility.
+//
+// A message with strings or sequences has a layout of its own (IdlMessage::items): each sequence
+// with as many elements as the robot file names (IdlMessage::Element grows it), each string empty.
+// Samples are held in that layout, one size, so that the tick converts them without allocation; a
+// received sample is rewritten into it (runtime/transport/dds/cdr.hpp), and one whose sequence is
+// shorter than the layout's is refused as malformed.
 #pragma once
 
 #include <cstdint>
@@ -58,15 +66,38 @@ struct IdlLeaf {
   std::uint32_t c_offset = 0;
 };
 
+// A member of a message with strings or sequences, in wire order: a primitive (one leaf), a
+// string (a 4-byte length with its terminating NUL, then the characters) or a sequence (a 4-byte
+// count, then the elements, of which the layout holds `elements`).
+struct IdlItem {
+  enum class Kind : std::uint8_t { kLeaf, kString, kSequence };
+  Kind kind = Kind::kLeaf;
+  std::uint32_t leaf = 0;                 // kLeaf
+  std::string path;                       // kString, kSequence: the member ("header.frame_id", "axes")
+  IdlScalar element = IdlScalar::kFloat;  // kSequence
+  std::uint32_t bound = 0;                // kString, kSequence: the largest length; 0 unbounded
+  std::uint32_t cdr_offset = 0;           // kString, kSequence: where its length is in the layout
+  std::vector<std::uint32_t> elements;    // kSequence: the leaves of the layout's elements, in order
+};
+
 struct IdlMessage {
   std::string type_name;  // qualified: pbppo_idl::auv::SensorState
   std::string file;       // the file it was declared in
   std::vector<IdlLeaf> leaves;
   std::uint32_t cdr_size = 0;  // bytes of CDR data (without the encapsulation header)
-  std::uint32_t c_size = 0;    // the C struct's size, padded to its alignment
+  std::uint32_t c_size = 0;    // the C struct's size, padded to its alignment (0: strings or sequences)
+  // Empty for a message of fixed size (leaves in wire order); otherwise its members in wire order
+  // (a sequence's element leaves are added at the end of `leaves` as Element names them).
+  std::vector<IdlItem> items;
 
+  bool variable() const noexcept { return !items.empty(); }
   // The leaf at `path`; -1 when there is none.
   int LeafIndex(std::string_view path) const noexcept;
+  // The same, and for an element of a sequence the layout does not hold yet ("axes[7]"), the
+  // layout grows to hold the sequence's elements up to it (leaves added, offsets laid out again).
+  // -1 when there is none, the index is past the sequence's bound, or the layout would exceed the
+  // limits of ParseIdlMessage. Set-up time.
+  int Element(std::string_view path);
 };
 
 // Reads an included file by the path the include resolved to (relative paths joined to the

@@ -18,6 +18,22 @@ const char* ToString(MessageDirection d) noexcept {
 namespace detail {
 namespace {
 
+// Why `leaf` names no leaf of `type`: not a member, or an element past a sequence's bound.
+std::string NotAMember(const IdlMessage& type, const std::string& leaf) {
+  std::string why = "'";
+  why += leaf;
+  why += "' is not a member of ";
+  why += type.type_name;
+  const std::string sequence = leaf.substr(0, leaf.rfind('['));
+  for (const IdlItem& item : type.items)
+    if (item.kind == IdlItem::Kind::kSequence && item.path == sequence)
+      why += " (sequence '" + sequence + "' holds " +
+             (item.bound != 0 ? "at most " + std::to_string(item.bound) + " elements, from [0]"
+                              : "elements [0] to [65535]") +
+             ", within 65536 bytes)";
+  return why;
+}
+
 using Rule = YamlFields::TextRule;
 using Kind = ValueTerm::Kind;
 
@@ -208,7 +224,7 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
   if (durability != "transient_local" && durability != "volatile")
     return f.Fail(w + ".durability", "'" + durability + "' is not transient_local or volatile");
   out->transient_local = durability == "transient_local";
-  const IdlMessage& type = out->type;
+  IdlMessage& type = out->type;  // a sequence's elements are added as the mapping names them
   // The message's fields, stream by stream; the leaf that fills each.
   std::vector<std::uint32_t> field_list;
   for (const std::uint32_t s : out->streams)
@@ -246,12 +262,12 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
         while (!bit.empty() && bit.front() == ' ') bit.erase(bit.begin());
       }
     }
-    const int fi = m.FieldIndex(field), li = type.LeafIndex(leaf);
+    const int fi = m.FieldIndex(field), li = type.Element(leaf);
     const int slot = fi < 0 ? -1 : slot_of(fi);
     if (slot < 0)
       return f.Fail(fw,
                     "'" + field + "' is not a field of " + (names.size() == 1 ? "stream '" + stream + "'" : stream));
-    if (li < 0) return f.Fail(fw, "'" + leaf + "' is not a member of " + type.type_name);
+    if (li < 0) return f.Fail(fw, NotAMember(type, leaf));
     if (leaf_of[static_cast<std::size_t>(slot)] >= 0) return f.Fail(fw, "field '" + field + "' is filled twice");
     const IdlScalar t = type.leaves[static_cast<std::size_t>(li)].type;
     const std::uint32_t mask = IdlCounterMask(t);
@@ -343,8 +359,8 @@ Status Builder::InMessage(const YAML::Node& n, const std::string& w, std::uint32
       if (!kv.second.IsScalar())
         return f.Fail(w + ".peer." + leaf, "expected clock_ns or sequence, got " + YamlFields::Quote(kv.second));
       const std::string what = kv.second.as<std::string>();
-      const int li = type.LeafIndex(leaf);
-      if (li < 0) return f.Fail(w + ".peer." + leaf, "'" + leaf + "' is not a member of " + type.type_name);
+      const int li = type.Element(leaf);
+      if (li < 0) return f.Fail(w + ".peer." + leaf, NotAMember(type, leaf));
       if (what != "clock_ns" && what != "sequence")
         return f.Fail(w + ".peer." + leaf, "'" + what + "' is not clock_ns or sequence");
       out->peer.push_back(
@@ -364,8 +380,8 @@ Status Builder::OutMessage(const YAML::Node& n, const std::string& w, DdsMessage
   PBPPO_TRY(Checksum(n, w, out));
   for (const auto& [leaf, value] : PerMotor(map)) {
     const std::string vw = w + ".values." + leaf;
-    const int li = out->type.LeafIndex(leaf);
-    if (li < 0) return f.Fail(vw, "'" + leaf + "' is not a member of " + out->type.type_name);
+    const int li = out->type.Element(leaf);
+    if (li < 0) return f.Fail(vw, NotAMember(out->type, leaf));
     if (out->checksum.present && static_cast<std::uint32_t>(li) == out->checksum.leaf)
       return f.Fail(vw, "'" + leaf + "' carries the checksum");
     auto terms = Value(value, out->direction == MessageDirection::kStatus, vw);
@@ -393,6 +409,8 @@ Status Builder::Checksum(const YAML::Node& n, const std::string& w, DdsMessageSp
   if (algorithm != "crc32_mpeg2_words")
     return f.Fail(cw + ".algorithm", "'" + algorithm + "' is not crc32_mpeg2_words");
   const IdlMessage& type = out->type;
+  if (type.variable())
+    return f.Fail(cw, type.type_name + " has strings or sequences: no fixed memory layout for a checksum to cover");
   const int li = type.LeafIndex(leaf);
   if (li < 0) return f.Fail(cw + ".leaf", "'" + leaf + "' is not a member of " + type.type_name);
   const IdlLeaf& l = type.leaves[static_cast<std::size_t>(li)];

@@ -19,53 +19,22 @@
 #include "Twist_.h"
 #include "ros2_qos.h"
 
-static long long NowNs(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return (long long)t.tv_sec * 1000000000LL + t.tv_nsec;
-}
-
 int main(int argc, char** argv) {
   if (argc != 2) {
     fprintf(stderr, "usage: cyclone_cmd_vel DOMAIN\n");
     return 2;
   }
   const dds_domainid_t domain = (dds_domainid_t)atoi(argv[1]);
-  const dds_entity_t participant = dds_create_participant(domain, NULL, NULL);
-  if (participant < 0) {
-    fprintf(stderr, "cyclone_cmd_vel: dds_create_participant: %s\n", dds_strretcode(-participant));
-    return 1;
-  }
-  const dds_entity_t topic =
-      dds_create_topic(participant, &geometry_msgs_msg_dds__Twist__desc, "rt/cmd_vel", NULL, NULL);
-  if (topic < 0) {
-    fprintf(stderr, "cyclone_cmd_vel: dds_create_topic: %s\n", dds_strretcode(-topic));
-    return 1;
-  }
-  dds_qos_t* qos = Ros2DefaultQos();
-  const dds_entity_t writer = dds_create_writer(participant, topic, qos, NULL);
-  dds_delete_qos(qos);
-  if (writer < 0) {
-    fprintf(stderr, "cyclone_cmd_vel: dds_create_writer: %s\n", dds_strretcode(-writer));
-    return 1;
-  }
-  dds_publication_matched_status_t matched = {0};
-  const long long wait_end = NowNs() + 30000000000LL;
-  while (matched.current_count == 0 && NowNs() < wait_end) {
-    dds_get_publication_matched_status(writer, &matched);
-    dds_sleepfor(DDS_MSECS(5));
-  }
-  if (matched.current_count == 0) {
-    fprintf(stderr, "cyclone_cmd_vel: no reader of rt/cmd_vel within 30 s\n");
-    dds_delete(participant);
-    return 3;
-  }
+  dds_entity_t participant = 0;
+  const dds_entity_t writer =
+      Ros2Publisher("cyclone_cmd_vel", domain, &geometry_msgs_msg_dds__Twist__desc, "rt/cmd_vel", &participant);
+  if (writer < 0) return -writer;
   unsigned long long published = 0;
   int last_sent = 0, nan_sent = 0;
-  const long long t0 = NowNs();
+  const long long t0 = Ros2NowNs();
   long long next = t0;
   for (;;) {
-    const double s = (double)(NowNs() - t0) * 1e-9;
+    const double s = (double)(Ros2NowNs() - t0) * 1e-9;
     if (s >= 9.5) break;
     geometry_msgs_msg_dds__Twist_ twist = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     int send = 1;
@@ -82,7 +51,7 @@ int main(int argc, char** argv) {
     }
     if (send && dds_write(writer, &twist) == DDS_RETCODE_OK) ++published;
     next += 50000000LL; /* 20 Hz */
-    const long long wait = next - NowNs();
+    const long long wait = next - Ros2NowNs();
     if (wait > 0) dds_sleepfor(wait);
   }
   printf("published %llu\n", published);

@@ -47,6 +47,70 @@ void WriteCdrHeader(std::byte* sample) noexcept {
   sample[3] = std::byte{0x00};
 }
 
+void WriteCdrLayout(const robot::IdlMessage& type, std::byte* sample) noexcept {
+  WriteCdrHeader(sample);
+  for (const robot::IdlItem& item : type.items) {
+    if (item.kind == robot::IdlItem::Kind::kLeaf) continue;
+    const bool string = item.kind == robot::IdlItem::Kind::kString;
+    Store(string ? 1u : item.elements.size(), 4, sample + kCdrHeaderBytes + item.cdr_offset);
+    if (string) sample[kCdrHeaderBytes + item.cdr_offset + 4] = std::byte{0};
+  }
+}
+
+bool NormalizeCdrSample(const robot::IdlMessage& type, const std::byte* wire, std::size_t length,
+                        std::byte* out) noexcept {
+  bool big_endian = false;
+  if (length < kCdrHeaderBytes || !ReadCdrHeader(wire, &big_endian)) return false;
+  const std::byte* data = wire + kCdrHeaderBytes;
+  const std::size_t size = length - kCdrHeaderBytes;
+  std::byte* to = out + kCdrHeaderBytes;
+  std::memcpy(out, wire, kCdrHeaderBytes);
+  std::size_t at = 0;
+  // The next `n`-byte primitive's place (aligned to its size), false past the end.
+  auto next = [&](std::uint32_t n, std::size_t* where) {
+    at = (at + n - 1) / n * n;
+    if (at > size || size - at < n) return false;
+    *where = at;
+    at += n;
+    return true;
+  };
+  // A length in the layout, in the sample's byte order.
+  auto store_length = [&](std::uint32_t value, std::uint32_t offset) {
+    for (std::uint32_t k = 0; k < 4; ++k)
+      to[offset + (big_endian ? 3 - k : k)] = static_cast<std::byte>((value >> (8 * k)) & 0xffu);
+  };
+  for (const robot::IdlItem& item : type.items) {
+    std::size_t where = 0;
+    if (item.kind == robot::IdlItem::Kind::kLeaf) {
+      const robot::IdlLeaf& l = type.leaves[item.leaf];
+      const std::uint32_t n = robot::IdlScalarSize(l.type);
+      if (!next(n, &where)) return false;
+      std::memcpy(to + l.cdr_offset, data + where, n);
+      continue;
+    }
+    if (!next(4, &where)) return false;
+    const auto count = static_cast<std::uint32_t>(Load(data + where, 4, big_endian));
+    if (item.kind == robot::IdlItem::Kind::kString) {
+      // The length counts the terminating NUL (0: an empty string some writers send without one).
+      if (count > size - at || (item.bound != 0 && count > item.bound + 1u)) return false;
+      if (count > 0 && data[at + count - 1] != std::byte{0}) return false;
+      at += count;
+      store_length(1, item.cdr_offset);
+      to[item.cdr_offset + 4] = std::byte{0};
+      continue;
+    }
+    const std::uint32_t n = robot::IdlScalarSize(item.element);
+    if (count < item.elements.size() || (item.bound != 0 && count > item.bound)) return false;
+    if (count > 0) at = (at + n - 1) / n * n;
+    if (at > size || (size - at) / n < count) return false;
+    for (std::size_t k = 0; k < item.elements.size(); ++k)
+      std::memcpy(to + type.leaves[item.elements[k]].cdr_offset, data + at + k * n, n);
+    at += static_cast<std::size_t>(count) * n;
+    store_length(static_cast<std::uint32_t>(item.elements.size()), item.cdr_offset);
+  }
+  return true;
+}
+
 bool ReadCdrHeader(const std::byte* sample, bool* big_endian) noexcept {
   if (sample[0] != std::byte{0x00} || (sample[1] != std::byte{0x00} && sample[1] != std::byte{0x01})) return false;
   *big_endian = sample[1] == std::byte{0x00};

@@ -24,6 +24,20 @@ inline std::size_t CdrSampleBytes(const robot::IdlMessage& type) noexcept {
 
 // Writes the header of a little-endian plain CDR sample (CDR_LE, no options).
 void WriteCdrHeader(std::byte* sample) noexcept;
+// Writes the header and, for a message with strings or sequences, the lengths of its layout (each
+// string empty, each sequence with the layout's count): a sample of `type` ready for its leaves.
+void WriteCdrLayout(const robot::IdlMessage& type, std::byte* sample) noexcept;
+
+// The largest sample of a message with strings or sequences taken from the wire (header included).
+inline constexpr std::size_t kMaxWireSampleBytes = kCdrHeaderBytes + 65536;
+// A sample of a message with strings or sequences as it came (`wire`, `length` bytes, the header
+// first) rewritten into the message's layout at `out` (CdrSampleBytes of `type`), in its byte
+// order: each leaf's value, each sequence's first elements (the layout's count), each string
+// empty. False, `out` not to be used, when the sample is not plain CDR, a length runs past its
+// end, a sequence holds fewer elements than the layout or more than its bound, or a string is
+// longer than its bound or not terminated. No allocation.
+bool NormalizeCdrSample(const robot::IdlMessage& type, const std::byte* wire, std::size_t length,
+                        std::byte* out) noexcept;
 // Reads a header: true for plain CDR (CDR_BE or CDR_LE), with its byte order in *big_endian;
 // false for anything else (parameter lists, XCDR2).
 bool ReadCdrHeader(const std::byte* sample, bool* big_endian) noexcept;

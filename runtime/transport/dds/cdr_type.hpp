@@ -1,6 +1,7 @@
 // Internal to pbppo::dds: the Fast DDS type of a robot's message, from its IDL (no generated
 // code). Its samples are CdrSample objects: the plain CDR bytes as they travel (cdr.hpp), copied
-// as they are to and from the wire.
+// as they are to and from the wire (a message with strings or sequences: written in its layout,
+// read into it by NormalizeCdrSample).
 #pragma once
 
 #include <fastdds/dds/topic/TopicDataType.hpp>
@@ -29,10 +30,11 @@ class CdrTopicType final : public eprosima::fastdds::dds::TopicDataType {
   void* createData() override;
   void deleteData(void* data) override;
   bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle, bool force_md5) override;
-  bool is_bounded() const override { return true; }
+  bool is_bounded() const override { return !type_->variable(); }
 
  private:
-  std::uint32_t bytes_ = 0;  // header and data
+  const robot::IdlMessage* type_;  // the robot model's, which outlives the participant's topics
+  std::uint32_t bytes_ = 0;        // header and data (a message with strings or sequences: its layout's)
 };
 
 }  // namespace pbppo::dds

@@ -15,7 +15,7 @@ namespace pbppo::dds {
 using robot::MessageDirection;
 
 DdsSample::DdsSample(const robot::IdlMessage& type) : type_(&type), bytes_(CdrSampleBytes(type), std::byte{0}) {
-  WriteCdrHeader(bytes_.data());
+  WriteCdrLayout(type, bytes_.data());
 }
 
 double DdsSample::Get(std::uint32_t leaf) const noexcept {
@@ -31,7 +31,7 @@ void DdsSample::Set(std::uint32_t leaf, double value) noexcept {
     // A sample read in another byte order is rewritten little-endian, leaf by leaf, first.
     std::vector<double> values;
     for (std::uint32_t k = 0; k < type_->leaves.size(); ++k) values.push_back(Get(k));
-    WriteCdrHeader(bytes_.data());
+    WriteCdrLayout(*type_, bytes_.data());
     for (std::uint32_t k = 0; k < type_->leaves.size(); ++k) EncodeLeaf(type_->leaves[k], values[k], bytes_.data());
   }
   EncodeLeaf(type_->leaves[leaf], value, bytes_.data());

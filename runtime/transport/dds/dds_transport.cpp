@@ -46,7 +46,7 @@ Result<std::unique_ptr<DdsTransport>> DdsTransport::Open(const robot::RobotModel
   for (std::size_t i = 0; i < t->link_->message_count(); ++i) {
     const robot::DdsMessageSpec& m = t->link_->message(i);
     std::vector<std::byte> sample(CdrSampleBytes(m.type), std::byte{0});
-    WriteCdrHeader(sample.data());
+    WriteCdrLayout(m.type, sample.data());
     if (m.direction == MessageDirection::kIn) {
       const double lost_s = m.lost_after_s > 0 && options.lost_after_s > 0 ? options.lost_after_s : m.lost_after_s;
       In in{i, std::move(sample), 0, static_cast<std::int64_t>(lost_s * 1e9), m.stream, m.streams, {}, {}, -1, 0};

@@ -195,8 +195,15 @@ TEST_CASE("idl: what a message cannot be is refused naming the file, the line an
     const char* text;
     const char* want;
   } cases[] = {
-      {"struct S {\n string name; };", "msg.idl:2: string is not supported"},
-      {"struct S { sequence<double> v; };", "msg.idl:1: sequence is not supported"},
+      {"struct T { double v; };\nstruct S {\n sequence<T> v; };",
+       "msg.idl:3: sequence<T>: only sequences of primitives"},
+      {"struct S { sequence<string> v; };", "sequence<string>: only sequences of primitives"},
+      {"struct S { sequence<sequence<float> > v; };", "only sequences of primitives"},
+      {"struct S { sequence<float, 0> v; };", "sequence bounded to 0"},
+      {"struct S { string<0> v; };", "string bounded to 0"},
+      {"struct S { sequence<float v; };", "expected '>'"},
+      {"struct S { wstring name; };", "wstring is not supported"},
+      {"struct S { map<long, long> m; };", "map is not supported"},
       {"struct S { @key long id; double v; };", "@key: not supported"},
       {"@appendable struct S { double v; };", "@appendable: only final structs"},
       {"@extensibility(MUTABLE) struct S { double v; };", "@extensibility(mutable): only final structs"},
@@ -236,4 +243,89 @@ TEST_CASE("idl: what a message cannot be is refused naming the file, the line an
   Files files;
   files.text["dir/x.idl"] = "#include \"msg.idl\"\nstruct X { double x; };";
   CHECK(Ok("#include \"x.idl\"\nstruct S { X x; };", "", files).leaves.size() == 1);
+}
+
+TEST_CASE("idl: strings and sequences (ROS 2's sensor_msgs/Joy) are laid out with the elements the robot file names") {
+  Files files;
+  files.text["dir/Time_.idl"] =
+      "module builtin_interfaces { module msg { module dds_ {\n"
+      "struct Time_ { int32 sec; uint32 nanosec; }; }; }; };";
+  files.text["dir/Header_.idl"] =
+      "#include \"Time_.idl\"\n"
+      "module std_msgs { module msg { module dds_ {\n"
+      "struct Header_ { builtin_interfaces::msg::dds_::Time_ stamp; string frame_id; };"
+      " }; }; };";
+  const std::string joy =
+      "#include \"Header_.idl\"\n"
+      "module sensor_msgs { module msg { module dds_ {\n"
+      "struct Joy_ { std_msgs::msg::dds_::Header_ header; sequence<float> axes;"
+      " sequence<int32> buttons; }; }; }; };";
+  IdlMessage m = Ok(joy, "", files);
+  CHECK(m.type_name == "sensor_msgs::msg::dds_::Joy_");
+  REQUIRE(m.variable());
+  CHECK(m.c_size == 0);  // no fixed memory layout
+  // The wire order: sec, nanosec, frame_id's length, axes' count, buttons' count.
+  REQUIRE(m.items.size() == 5);
+  CHECK(m.items[2].kind == IdlItem::Kind::kString);
+  CHECK(m.items[2].path == "header.frame_id");
+  CHECK(m.items[3].kind == IdlItem::Kind::kSequence);
+  CHECK(m.items[3].path == "axes");
+  CHECK(m.items[3].element == IdlScalar::kFloat);
+  CHECK(m.items[4].element == IdlScalar::kInt32);
+  // No element until one is named: sec 0, nanosec 4, frame_id's length 8 and its NUL 12, axes' count
+  // at 16, buttons' at 20.
+  CHECK(m.leaves.size() == 2);
+  CHECK(m.items[2].cdr_offset == 8);
+  CHECK(m.items[3].cdr_offset == 16);
+  CHECK(m.items[4].cdr_offset == 20);
+  CHECK(m.cdr_size == 24);
+  CHECK(m.LeafIndex("axes[1]") == -1);
+  // Naming axes[1] holds axes[0] and axes[1]; buttons[2] holds three buttons, after them.
+  const int a1 = m.Element("axes[1]");
+  REQUIRE(a1 >= 0);
+  CHECK(m.leaves[static_cast<std::size_t>(a1)].path == "axes[1]");
+  CHECK(Leaf(m, "axes[0]").cdr_offset == 20);
+  CHECK(Leaf(m, "axes[1]").cdr_offset == 24);
+  CHECK(m.items[4].cdr_offset == 28);
+  CHECK(m.Element("buttons[2]") >= 0);
+  CHECK(Leaf(m, "buttons[0]").cdr_offset == 32);
+  CHECK(Leaf(m, "buttons[2]").cdr_offset == 40);
+  CHECK(m.cdr_size == 44);
+  // Naming one held already changes nothing; the leaves named before keep their indices.
+  CHECK(m.Element("axes[0]") == m.LeafIndex("axes[0]"));
+  CHECK(m.Element("axes[1]") == a1);
+  CHECK(m.leaves.size() == 7);
+  // Not members: a string's characters, an element past 65535, no index, another name.
+  CHECK(m.Element("header.frame_id[0]") == -1);
+  CHECK(m.Element("axes[65536]") == -1);
+  CHECK(m.Element("axes[]") == -1);
+  CHECK(m.Element("axes[x]") == -1);
+  CHECK(m.Element("wheels[0]") == -1);
+  CHECK(m.leaves.size() == 7);
+}
+
+TEST_CASE("idl: bounded strings and sequences, doubles after a string, and a layout that would grow past 65536 bytes") {
+  IdlMessage m = Ok("const long N = 3;\nstruct S { string<8> name; double d; sequence<double, N> v; octet tail; };");
+  REQUIRE(m.variable());
+  CHECK(m.items[0].bound == 8);
+  CHECK(m.items[2].bound == 3);
+  // name: length at 0 and its NUL at 4; d aligned to 8; v's count at 16.
+  CHECK(Leaf(m, "d").cdr_offset == 8);
+  CHECK(m.items[2].cdr_offset == 16);
+  CHECK(Leaf(m, "tail").cdr_offset == 20);
+  CHECK(m.Element("v[3]") == -1);  // past the bound of 3
+  REQUIRE(m.Element("v[2]") >= 0);
+  CHECK(Leaf(m, "v[0]").cdr_offset == 24);  // doubles aligned to 8 after the count
+  CHECK(Leaf(m, "v[2]").cdr_offset == 40);
+  CHECK(Leaf(m, "tail").cdr_offset == 48);
+  CHECK(m.cdr_size == 49);
+  // Arrays of strings: one string per element; a struct with a string nested in an array.
+  IdlMessage n = Ok("struct P { string id; float x; };\nstruct S { string names[2]; P p[2]; };");
+  CHECK(n.items.size() == 6);
+  CHECK(n.items[1].path == "names[1]");
+  CHECK(n.items[4].path == "p[1].id");
+  // Lengths at 0, 8 (names), 16 (p[0].id), p[0].x at 24, p[1].id's length at 28 and its NUL at 32.
+  CHECK(Leaf(n, "p[0].x").cdr_offset == 24);
+  CHECK(Leaf(n, "p[1].x").cdr_offset == 36);
+  CHECK(n.cdr_size == 40);
 }
