@@ -265,6 +265,13 @@ struct TickImpl {
     Ramp(m, l, 0, true);
   }
 
+  // Whether this hold follows a walk (run after the last arming and the last passive): the stand
+  // after the dead-man's release (or the command source's end).
+  static bool AfterRelease(const LoopData& l) noexcept {
+    const auto start = [&](Phase p) { return l.phase_start_[static_cast<std::size_t>(p)]; };
+    return start(Phase::kRun) > start(Phase::kArming) && start(Phase::kRun) > start(Phase::kPassive);
+  }
+
   // The fault a request is refused for while the supervisor holds the robot, or nullptr.
   static const char* Latched(const LoopData& l) noexcept {
     if (l.sup_.mode < Mode::kSafeStop) return nullptr;
@@ -374,6 +381,9 @@ struct TickImpl {
                  : l.source_ == nullptr ? "nothing to run"
                  : l.source_done_       ? "the command source has finished"
                                         : "hold_s is not over");
+        } else if (m.op.deadman_sit_after_ticks > 0 && in_phase == m.op.deadman_sit_after_ticks && !ev.deadman &&
+                   AfterRelease(l) && Latched(l) == nullptr) {
+          EnterSitDown(m, d, l, tick);  // released and not held again: sit down, then passive
         }
         break;
       case Phase::kRun:

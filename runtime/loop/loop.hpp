@@ -51,7 +51,8 @@
 //   deadman  its level: the source runs only while it is held (the hold phase waits for it);
 //            released while running, a robot with motors stands up from the measured pose to
 //            the default pose and holds (the source is started clean when it runs again); one
-//            without motors disarms (an arm request runs it again)
+//            without motors disarms (an arm request runs it again). With deadman_sit_after_s, a
+//            robot not holding the dead-man again that long into that hold sits down (passive)
 // A stream whose sample the check found invalid makes no request but e-stop that tick. Which
 // field made which request is derived from the fields, so a recorded run replays them. A request
 // the phase does not take (arm outside disarmed and passive, walk outside hold, without the dead-man or

@@ -399,6 +399,8 @@ Status Derive(RobotModel& m, double tick_s) {
   }
   m.supervisor.recovery.healthy_ticks = std::max<std::uint32_t>(1, Ticks(m.supervisor.recovery.healthy_s, tick_s));
   m.op.switch_ticks = Ticks(m.op.switch_s, tick_s);
+  m.op.deadman_sit_after_ticks =
+      m.op.deadman_sit_after_s > 0 ? std::max<std::uint32_t>(1, Ticks(m.op.deadman_sit_after_s, tick_s)) : 0;
   return {};
 }
 

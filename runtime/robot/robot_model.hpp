@@ -170,6 +170,10 @@ struct OperatorSpec {
   SwitchRule switch_rule = SwitchRule::kBlend;
   double switch_s = 0.5;
   std::uint32_t switch_ticks = 0;  // derived
+  // After the dead-man's release the robot stands up and holds; not held again by this long into
+  // the hold, it sits down (then passive). 0: it holds.
+  double deadman_sit_after_s = 0;
+  std::uint32_t deadman_sit_after_ticks = 0;  // derived
   bool any() const noexcept {
     return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0 ||
            sit >= 0;

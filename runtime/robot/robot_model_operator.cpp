@@ -140,8 +140,9 @@ Status Builder::Operator(const YAML::Node& root) {
   if (!root["operator"]) return {};
   YAML::Node n;
   PBPPO_TRY(f.Map(root, "operator", "", &n));
-  PBPPO_TRY(
-      f.Keys(n, "operator", {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch"}));
+  PBPPO_TRY(f.Keys(
+      n, "operator",
+      {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch", "deadman_sit_after_s"}));
   OperatorSpec& op = m.op;
   const std::pair<const char*, std::int32_t*> requests[] = {
       {"arm", &op.arm},     {"walk", &op.walk},   {"sit", &op.sit},         {"stop", &op.stop},
@@ -175,6 +176,12 @@ Status Builder::Operator(const YAML::Node& root) {
     return f.Fail("operator.sit",
                   "the robot does not sit: phases.sit_down_s is not given (nor, for a robot "
                   "without motors, anything to sit with)");
+  if (n["deadman_sit_after_s"]) {
+    const char* w = "operator.deadman_sit_after_s";
+    PBPPO_TRY(f.Number(n, "deadman_sit_after_s", "operator", 0.001, 3600.0, &op.deadman_sit_after_s));
+    if (op.deadman < 0) return f.Fail(w, "no dead-man to release (operator.deadman is not given)");
+    if (m.phases.sit_down_s <= 0) return f.Fail(w, "the robot does not sit: phases.sit_down_s is not given");
+  }
   return {};
 }
 

@@ -9,7 +9,8 @@
 //     off), and while it is, no motor is commanded;
 //   - the command source runs only with the dead-man held in a valid sample, and a run starts
 //     only from hold (after a stand-up);
-//   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down.
+//   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down
+//     (half the inputs on the robot that also sits down after the dead-man's release).
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -80,10 +81,22 @@ class Feed final : public robot::Transport {
   std::abort();
 }
 
+// The gamepad robot, and the same with deadman_sit_after_s (0.2 s: sits down when the dead-man's
+// release is not followed by a press within 0.2 s of the hold).
+const robot::RobotModel& Robot(bool sit_after_release) {
+  static const robot::RobotModel* sitting = [] {
+    auto* m = new robot::RobotModel(fuzz::GamepadRobot());
+    m->op.deadman_sit_after_s = 0.2;
+    m->op.deadman_sit_after_ticks = 200;
+    return m;
+  }();
+  return sit_after_release ? *sitting : fuzz::GamepadRobot();
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const robot::RobotModel& m = fuzz::GamepadRobot();
+  const robot::RobotModel& m = Robot(size % 2 == 1);
   fuzz::Bytes b(data, size);
   // Two sources the switch request moves between (a PolicySet, the robot file's blend rule).
   auto first = std::make_unique<FuzzSource>(m.commands.size()),

@@ -387,6 +387,11 @@ TEST_CASE("evdev: robot files that map a gamepad wrongly are refused naming the 
       {{"operator: {arm: arm,", "operator: {arm: arm, sit: vx,"},
        "operator.sit: the robot does not sit: phases.sit_down_s is not given"},
       {{"      vx: {code", "      [vx, vy]: {code"}, "a mapping key that is not a name"},
+      {{"operator: {arm: arm,", "operator: {arm: arm, deadman_sit_after_s: 2,"},
+       "operator.deadman_sit_after_s: the robot does not sit: phases.sit_down_s is not given"},
+      {{"operator: {arm: arm,", "operator: {arm: arm, deadman_sit_after_s: -1,"}, "operator.deadman_sit_after_s"},
+      {{"deadman: deadman}", "deadman_sit_after_s: 2}"},
+       "operator.deadman_sit_after_s: no dead-man to release (operator.deadman is not given)"},
   };
   for (const auto& [edit, expected] : cases) {
     INFO(std::string(edit.second));
@@ -499,7 +504,7 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "evdev operator: waiting disarmed for START with the motors silent is no fault; arm with an e-stop latched is "
+    "evdev operator: waiting disarmed for START with the motors silent is no fault, arm with an e-stop latched is "
     "refused") {
   GamepadLoop g;
   g.motors_answer_commands = true;  // disarmed, nothing is sent: no motor answers
