@@ -492,8 +492,7 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
     std::printf("%s%s %llu", i ? ", " : "", safety::ToString(static_cast<safety::Cause>(i)),
                 static_cast<unsigned long long>(sup.counts.n[i]));
   std::printf("\n");
-  for (const std::string& line : loop::DescribeChanges(l, robot.phases.enable_motors))
-    std::printf("%s\n", line.c_str());
+  for (const std::string& line : loop::DescribeChanges(l, true)) std::printf("%s\n", line.c_str());
   if (const std::string op_line = loop::Describe(l.operator_status()); !op_line.empty())
     std::printf("operator: %s\n", op_line.c_str());
   if (const loop::RecoveryStatus& rec = l.recovery(); rec.stops + rec.refused > 0)
@@ -503,10 +502,12 @@ void PrintSummary(const robot::RobotModel& robot, const loop::LoopData& l, const
         static_cast<unsigned long long>(rec.stops), static_cast<unsigned long long>(rec.automatic + rec.requested),
         static_cast<unsigned long long>(rec.automatic), static_cast<unsigned long long>(rec.requested),
         static_cast<unsigned long long>(rec.refused));
-  const char* end = r.ended                                            ? nullptr
-                    : r.stopped                                        ? "a signal"
-                    : safe_stop && r.status == loop::TickStatus::kDone ? "--safe-stop, its stop done"
-                                                                       : "--ticks or --duration";
+  const bool done = r.status == loop::TickStatus::kDone;
+  const char* end = r.ended             ? nullptr
+                    : r.stopped         ? "a signal"
+                    : safe_stop && done ? "--safe-stop, its stop done"
+                    : done              ? "its stop done (the operator's stop request or the command source's end)"
+                                        : "--ticks or --duration";
   std::printf("stopped by %s%s\n", end != nullptr ? end : "the end field ",
               end != nullptr ? "" : robot.fields[static_cast<std::size_t>(robot.lockstep_end_field)].name.c_str());
 }

@@ -32,8 +32,10 @@ const std::string& RobotFile() {
     });
     fs::create_directories(root);
     fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/quadruped", root / "quadruped", fs::copy_options::recursive);
-    // A robot file may name the Go2's files beside it (the seed go2_remote.yaml: ../go2/...).
+    // A robot file may name the Go2's and the AUV's files beside it (the seeds go2_remote.yaml:
+    // ../go2/..., auv_joy.yaml: ../auv/...).
     fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/go2", root / "go2", fs::copy_options::recursive);
+    fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/auv", root / "auv", fs::copy_options::recursive);
     fs::copy_file(fs::path(PBPPO_SOURCE_DIR) / "models/dds_profile.xml", root / "dds_profile.xml");
     fs::copy(fs::path(PBPPO_SOURCE_DIR) / "models/ros2", root / "ros2", fs::copy_options::recursive);
     return new std::string((root / "quadruped/robot.yaml").string());

@@ -4,39 +4,45 @@
  * stamp from the clock), at its autorepeat rate of 20 Hz. The C type comes from the project's IDL
  * (models/ros2/idl/Joy_.idl) through Cyclone's idlc: sequences and a string as Cyclone lays them.
  *
- *   cyclone_joy DOMAIN [AXES BUTTONS]
+ *   cyclone_joy DOMAIN [SESSION [AXES BUTTONS]]
  *
  * Waits (at most 30 s) until a reader matches, then 2 s more (the controller starts its loop),
- * then plays a session on its own clock (seconds from then):
+ * then plays a session on its own clock (seconds from then). SESSION walk (the default):
  *   0.0-1.0 START (arm: stand up)       3.0-9.0 LB (the dead-man)     3.5-4.0 A (walk)
- *   4.0-8.5 left stick up 0.55 (past the dead zone of 0.1: 0.5 m/s)   10.0-10.3 R3 (sit down)
- *   13.0-13.3 BACK (e-stop)             14.0 silence (the pad gone)
+ *   4.0-8.5 left stick up 0.55 (past the dead zone of 0.1: 0.5 m/s)   (released: stand, then sit)
+ *   15.0-15.5 START (stand up)          16.5-16.8 R3 (sit down)       18.5-18.8 BACK (e-stop)
+ *   19.0 silence (the pad gone)
+ * SESSION run (a vehicle's mission):
+ *   0.0-1.0 START (run)   6.0-6.3 BACK (e-stop)   9.0-9.3 GUIDE (re-arm)   13.0-13.3 B (stop)
+ *   14.0 silence
  * AXES and BUTTONS (default 6 and 15) make a pad with fewer. Prints "published N" and exits 0; 1
  * when DDS fails, 3 when no reader came. Transport: CYCLONEDDS_URI. */
 #include <dds/dds.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "Joy_.h"
 #include "ros2_qos.h"
 
-enum { kA = 0, kBack = 4, kStart = 6, kRightStick = 8, kLeftShoulder = 9 };
+enum { kA = 0, kB = 1, kBack = 4, kGuide = 5, kStart = 6, kRightStick = 8, kLeftShoulder = 9 };
 
 static int Held(double s, double from, double to) {
   return s >= from && s < to;
 }
 
 int main(int argc, char** argv) {
-  if (argc != 2 && argc != 4) {
-    fprintf(stderr, "usage: cyclone_joy DOMAIN [AXES BUTTONS]\n");
+  if (argc != 2 && argc != 3 && argc != 5) {
+    fprintf(stderr, "usage: cyclone_joy DOMAIN [SESSION [AXES BUTTONS]]\n");
     return 2;
   }
   const dds_domainid_t domain = (dds_domainid_t)atoi(argv[1]);
-  const unsigned axes = argc == 4 ? (unsigned)atoi(argv[2]) : 6u;
-  const unsigned buttons = argc == 4 ? (unsigned)atoi(argv[3]) : 15u;
-  if (axes > 6 || buttons > 15) {
-    fprintf(stderr, "cyclone_joy: at most 6 axes and 15 buttons\n");
+  const int walk = argc < 3 || strcmp(argv[2], "walk") == 0;
+  const unsigned axes = argc == 5 ? (unsigned)atoi(argv[3]) : 6u;
+  const unsigned buttons = argc == 5 ? (unsigned)atoi(argv[4]) : 15u;
+  if ((!walk && strcmp(argv[2], "run") != 0) || axes > 6 || buttons > 15) {
+    fprintf(stderr, "cyclone_joy: SESSION walk or run, at most 6 axes and 15 buttons\n");
     return 2;
   }
   dds_entity_t participant = 0;
@@ -52,15 +58,22 @@ int main(int argc, char** argv) {
   long long next = t0;
   for (;;) {
     const double s = (double)(Ros2NowNs() - t0) * 1e-9;
-    if (s >= 14.0) break;
+    if (s >= (walk ? 19.0 : 14.0)) break;
     for (unsigned k = 0; k < 6; ++k) axis[k] = 0.0f;
     for (unsigned k = 0; k < 15; ++k) button[k] = 0;
     button[kStart] = Held(s, 0.0, 1.0);
-    button[kLeftShoulder] = Held(s, 3.0, 9.0);
-    button[kA] = Held(s, 3.5, 4.0);
-    button[kRightStick] = Held(s, 10.0, 10.3);
-    button[kBack] = Held(s, 13.0, 13.3);
-    axis[1] = Held(s, 4.0, 8.5) ? 0.55f : 0.0f;
+    if (walk) {
+      button[kStart] = Held(s, 0.0, 1.0) || Held(s, 15.0, 15.5);
+      button[kLeftShoulder] = Held(s, 3.0, 9.0);
+      button[kA] = Held(s, 3.5, 4.0);
+      button[kRightStick] = Held(s, 16.5, 16.8);
+      button[kBack] = Held(s, 18.5, 18.8);
+      axis[1] = Held(s, 4.0, 8.5) ? 0.55f : 0.0f;
+    } else {
+      button[kBack] = Held(s, 6.0, 6.3);
+      button[kGuide] = Held(s, 9.0, 9.3);
+      button[kB] = Held(s, 13.0, 13.3);
+    }
     struct timespec wall;
     clock_gettime(CLOCK_REALTIME, &wall);
     sensor_msgs_msg_dds__Joy_ joy;

@@ -102,7 +102,7 @@ cd "$work/run"  # no models/ here: only the installed robots
 rc=0
 pbppo-controller --robot go3 --policy "$share/policies/auv_nav/auv_nav.blob" >unknown.log 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "an unknown robot's name: exit $rc"
-expect unknown.log "robot 'go3': no robot of that name in .*/usr/share/pbppo-rt/robots.*\(robots there: auv, go2, go2_remote, quadruped, quadruped_gamepad, quadruped_joy\)"
+expect unknown.log "robot 'go3': no robot of that name in .*/usr/share/pbppo-rt/robots.*\(robots there: auv, auv_joy, go2, go2_remote, quadruped, quadruped_gamepad, quadruped_joy\)"
 rc=0
 pbppo-controller --robot 'auv;rm' >badname.log 2>&1 || rc=$?
 [ "$rc" -eq 2 ] || fail "a malformed robot name: exit $rc"
