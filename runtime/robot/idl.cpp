@@ -630,6 +630,9 @@ Status Parser::FlattenMembers(const std::string& struct_name, const std::string&
         item.bound = m.type.bound;
         out->items.push_back(std::move(item));
         *cdr = (*cdr + 3u) / 4u * 4u + 5u;
+        if (*cdr > kMaxCdrBytes || out->items.size() > kMaxLeaves)
+          return IdlError(*m.file, m.line,
+                          "member '" + m.name + "': the message exceeds 65536 bytes or 16384 primitives");
         continue;
       }
       const std::uint32_t size = IdlScalarSize(m.type.scalar);
@@ -674,7 +677,8 @@ Result<IdlMessage> Parser::Flatten(const std::string& type_name, const std::stri
   } else {
     m.c_size = 0;
     for (IdlLeaf& l : m.leaves) l.c_offset = 0;
-    LayOut(&m);  // every sequence empty until the robot file names its elements
+    if (!LayOut(&m))  // every sequence empty until the robot file names its elements
+      return MakeError(ErrorCode::kInvalidValue, file + ": " + name + " exceeds 65536 bytes");
   }
   return m;
 }

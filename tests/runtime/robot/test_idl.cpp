@@ -204,6 +204,7 @@ TEST_CASE("idl: what a message cannot be is refused naming the file, the line an
       {"struct S { sequence<float v; };", "expected '>'"},
       {"struct S { wstring name; };", "wstring is not supported"},
       {"struct S { map<long, long> m; };", "map is not supported"},
+      {"struct S { string names[20000]; };", "msg.idl:1: member 'names': the message exceeds 65536 bytes"},
       {"struct S { @key long id; double v; };", "@key: not supported"},
       {"@appendable struct S { double v; };", "@appendable: only final structs"},
       {"@extensibility(MUTABLE) struct S { double v; };", "@extensibility(mutable): only final structs"},
