@@ -15,23 +15,6 @@ using robot::RobotData;
 using robot::RobotModel;
 using safety::Mode;
 
-const char* ToString(Phase phase) noexcept {
-  switch (phase) {
-    case Phase::kDisarmed: return "disarmed";
-    case Phase::kArming: return "arming";
-    case Phase::kStandUp: return "stand-up";
-    case Phase::kHold: return "hold";
-    case Phase::kRun: return "run";
-    case Phase::kDamping: return "damping";
-    case Phase::kMotorOff: return "motor-off";
-    case Phase::kDone: return "done";
-    case Phase::kFailed: return "failed";
-    case Phase::kSitDown: return "sit-down";
-    case Phase::kPassive: return "passive";
-  }
-  return "?";
-}
-
 std::unique_ptr<LoopData> MakeLoopData(const RobotModel& model, CommandSource* source, const LoopOptions& options) {
   std::unique_ptr<LoopData> l(new LoopData());
   l->source_ = source;
@@ -206,6 +189,13 @@ struct TickImpl {
     };
     const std::int32_t fields[kOperatorRequestCount] = {op.arm,   op.walk,          op.stop, op.estop,
                                                         op.rearm, op.switch_policy, op.sit};
+    // The phases the robot file narrowed a request to (operator.from; 0: the controller's own).
+    const robot::PhaseSet from[kOperatorRequestCount] = {op.from_arm, 0, 0, 0, 0, op.from_switch, op.from_sit};
+    static constexpr const char* kFromWhy[kOperatorRequestCount] = {
+        "not a phase operator.from.arm names", "", "", "", "", "not a phase operator.from.switch_policy names",
+        "not a phase operator.from.sit names"};
+    static constexpr const char* kName[kOperatorRequestCount] = {"arm",   "walk",   "stop", "estop",
+                                                                 "rearm", "switch", "sit"};
     bool rise[kOperatorRequestCount] = {};
     for (std::size_t i = 0; i < kOperatorRequestCount; ++i) {
       const std::int32_t f = fields[i];
@@ -213,10 +203,14 @@ struct TickImpl {
       const bool held = d.fields[static_cast<std::size_t>(f)] >= 0.5;
       rise[i] = held && l.operator_held_[i] == 0;
       l.operator_held_[i] = held ? 1 : 0;
-      if (rise[i]) {
-        ev.operator_rises = static_cast<std::uint8_t>(ev.operator_rises | (1u << i));
-        ++l.operator_status_.requests;
+      if (!rise[i]) continue;
+      ++l.operator_status_.requests;
+      if (from[i] != 0 && !robot::InPhases(from[i], l.phase_)) {
+        Refuse(l, d.tick, kName[i], kFromWhy[i]);
+        rise[i] = false;
+        continue;
       }
+      ev.operator_rises = static_cast<std::uint8_t>(ev.operator_rises | (1u << i));
     }
     ev.arm = ev.arm || rise[0];
     ev.walk = rise[1];

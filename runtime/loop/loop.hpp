@@ -87,21 +87,10 @@
 namespace pbppo::loop {
 
 // (Numbered as logs store them: later phases come last.)
-enum class Phase : std::uint8_t {
-  kDisarmed,
-  kArming,
-  kStandUp,
-  kHold,
-  kRun,
-  kDamping,
-  kMotorOff,
-  kDone,
-  kFailed,
-  kSitDown,
-  kPassive
-};
-inline constexpr std::size_t kPhaseCount = 11;
-const char* ToString(Phase phase) noexcept;
+// The phases (runtime/robot/phase.hpp, where a robot file's operator.from names them).
+using robot::kPhaseCount;
+using robot::Phase;
+using robot::ToString;
 
 class LoopData;
 class Recorder;

@@ -31,6 +31,7 @@
 #include "runtime/core/result.hpp"
 #include "runtime/robot/can_map.hpp"
 #include "runtime/robot/io_layout.hpp"
+#include "runtime/robot/phase.hpp"
 #include "runtime/robot/transport_spec.hpp"
 #include "runtime/robot/urdf.hpp"
 #include "runtime/robot/yaml_fields.hpp"
@@ -174,6 +175,9 @@ struct OperatorSpec {
   // the hold, it sits down (then passive). 0: it holds.
   double deadman_sit_after_s = 0;
   std::uint32_t deadman_sit_after_ticks = 0;  // derived
+  // operator.from: the phases a request is taken in, a subset of the controller's (phase.hpp); 0:
+  // all of the controller's.
+  PhaseSet from_arm = 0, from_sit = 0, from_switch = 0;
   bool any() const noexcept {
     return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0 ||
            sit >= 0;

@@ -136,13 +136,58 @@ Status Builder::EvdevMappings(const YAML::Node& root) {
   return {};
 }
 
+Status Builder::From(const YAML::Node& n) {
+  // operator.from: {request: [phase, ...]}: the phases, among the controller's, a request is taken in.
+  if (!n.IsMap()) return f.Fail("operator.from", "expected a mapping of requests to lists of phases");
+  PBPPO_TRY(f.Keys(n, "operator.from", {"arm", "sit", "switch_policy"}));
+  OperatorSpec& op = m.op;
+  const struct {
+    const char* key;
+    std::int32_t field;
+    PhaseSet controller;
+    PhaseSet* out;
+  } narrowed[] = {{"arm", op.arm, kArmPhases, &op.from_arm},
+                  {"sit", op.sit, kSitPhases, &op.from_sit},
+                  {"switch_policy", op.switch_policy, kSwitchPhases, &op.from_switch}};
+  const auto names = [](PhaseSet set) {
+    std::string out;
+    for (std::size_t k = 0; k < kPhaseCount; ++k)
+      if (InPhases(set, static_cast<Phase>(k))) {
+        if (!out.empty()) out += ", ";
+        out += ToString(static_cast<Phase>(k));
+      }
+    return out;
+  };
+  for (const auto& r : narrowed) {
+    if (!n[r.key]) continue;
+    const std::string w = std::string("operator.from.") + r.key;
+    if (r.field < 0) return f.Fail(w, std::string("operator.") + r.key + " is not given: no request to take");
+    YAML::Node list;
+    PBPPO_TRY(f.List(n, r.key, "operator.from", true, &list));
+    if (list.size() == 0) return f.Fail(w, "empty: the request would never be taken (leave it out of operator)");
+    PhaseSet set = 0;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string at = w + "[" + std::to_string(i) + "]";
+      const std::string name = list[i].IsScalar() ? list[i].Scalar() : YamlFields::Quote(list[i]);
+      const int p = PhaseIndex(name);
+      if (p < 0) return f.Fail(at, "'" + name + "' is not a phase (" + names(kAllPhases) + ")");
+      if (!InPhases(r.controller, static_cast<Phase>(p)))
+        return f.Fail(at, "the controller does not take " + std::string(r.key) + " in " + name + " (it does in " +
+                              names(r.controller) + ")");
+      set = static_cast<PhaseSet>(set | (1u << static_cast<unsigned>(p)));
+    }
+    *r.out = set;
+  }
+  return {};
+}
+
 Status Builder::Operator(const YAML::Node& root) {
   if (!root["operator"]) return {};
   YAML::Node n;
   PBPPO_TRY(f.Map(root, "operator", "", &n));
-  PBPPO_TRY(f.Keys(
-      n, "operator",
-      {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch", "deadman_sit_after_s"}));
+  PBPPO_TRY(f.Keys(n, "operator",
+                   {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch",
+                    "deadman_sit_after_s", "from"}));
   OperatorSpec& op = m.op;
   const std::pair<const char*, std::int32_t*> requests[] = {
       {"arm", &op.arm},     {"walk", &op.walk},   {"sit", &op.sit},         {"stop", &op.stop},
@@ -176,6 +221,7 @@ Status Builder::Operator(const YAML::Node& root) {
     return f.Fail("operator.sit",
                   "the robot does not sit: phases.sit_down_s is not given (nor, for a robot "
                   "without motors, anything to sit with)");
+  if (n["from"]) PBPPO_TRY(From(n["from"]));
   if (n["deadman_sit_after_s"]) {
     const char* w = "operator.deadman_sit_after_s";
     PBPPO_TRY(f.Number(n, "deadman_sit_after_s", "operator", 0.001, 3600.0, &op.deadman_sit_after_s));

@@ -67,6 +67,7 @@ struct Builder {
   Status EvdevMappings(const YAML::Node& root);
   // The operator section: requests from fields (after the streams; robot_model_operator.cpp).
   Status Operator(const YAML::Node& root);
+  Status From(const YAML::Node& from);  // operator.from
   // timing.lockstep (after the streams).
   Status Lockstep(const YAML::Node& root);
 

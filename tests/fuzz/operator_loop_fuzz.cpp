@@ -10,7 +10,8 @@
 //   - the command source runs only with the dead-man held in a valid sample, and a run starts
 //     only from hold (after a stand-up);
 //   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down
-//     (half the inputs on the robot that also sits down after the dead-man's release).
+//     (half the inputs on a robot that also sits down after the dead-man's release and whose
+//     operator.from takes sit only in hold and arm only disarmed: then only from there).
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -82,12 +83,14 @@ class Feed final : public robot::Transport {
 }
 
 // The gamepad robot, and the same with deadman_sit_after_s (0.2 s: sits down when the dead-man's
-// release is not followed by a press within 0.2 s of the hold).
+// release is not followed by a press within 0.2 s of the hold) and operator.from.
 const robot::RobotModel& Robot(bool sit_after_release) {
   static const robot::RobotModel* sitting = [] {
     auto* m = new robot::RobotModel(fuzz::GamepadRobot());
     m->op.deadman_sit_after_s = 0.2;
     m->op.deadman_sit_after_ticks = 200;
+    m->op.from_sit = robot::Phases({robot::Phase::kHold});  // operator.from: sit only from hold
+    m->op.from_arm = robot::Phases({robot::Phase::kDisarmed});
     return m;
   }();
   return sit_after_release ? *sitting : fuzz::GamepadRobot();
@@ -180,6 +183,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (now == loop::Phase::kSitDown && before != loop::Phase::kSitDown && before != loop::Phase::kStandUp &&
           before != loop::Phase::kHold && before != loop::Phase::kRun)
         Fail("a sit-down not from standing", tick);
+      if (op.from_sit != 0 && now == loop::Phase::kSitDown && before != loop::Phase::kSitDown &&
+          before != loop::Phase::kHold)
+        Fail("a sit-down from a phase operator.from.sit does not name", tick);
+      if (op.from_arm != 0 && before == loop::Phase::kPassive && now == loop::Phase::kStandUp)
+        Fail("a stand-up from passive that operator.from.arm does not name", tick);
       if (now == loop::Phase::kPassive && before != loop::Phase::kPassive && before != loop::Phase::kSitDown)
         Fail("passive not after a sit-down", tick);
       before = now;

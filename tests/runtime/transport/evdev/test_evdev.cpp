@@ -139,7 +139,11 @@ std::string LoadError(const std::string& scratch, const std::string& from, const
 // 0 inside its range) whose operator fields a test sets; per tick its phase and the first motor's
 // (LF_HFE's) position command.
 struct GamepadLoop {
-  const robot::RobotModel& m = test::GamepadRobot();
+  explicit GamepadLoop(const robot::RobotModel& model = test::GamepadRobot()) : m(model) {
+    for (const robot::FieldSpec& f : m.fields)
+      nominal.push_back(f.name == "base_imu_qw" ? 1.0 : std::clamp(0.0, f.min, f.max));
+  }
+  const robot::RobotModel& m;
   test::ScriptedTransport feed{m};
   robot::RobotData d = robot::MakeRobotData(m);
   std::unique_ptr<loop::LoopData> l = loop::MakeLoopData(m, nullptr, loop::LoopOptions{});
@@ -147,10 +151,6 @@ struct GamepadLoop {
   std::vector<loop::Phase> phase;
   std::vector<double> q;
 
-  GamepadLoop() {
-    for (const robot::FieldSpec& f : m.fields)
-      nominal.push_back(f.name == "base_imu_qw" ? 1.0 : std::clamp(0.0, f.min, f.max));
-  }
   // As a motor does: it answers only the tick after it was sent something (else every tick).
   bool motors_answer_commands = false;
 
@@ -177,6 +177,21 @@ struct GamepadLoop {
   }
   std::string Last() const { return l->operator_status().last; }
 };
+
+// The gamepad robot's file (models/quadruped_gamepad) with `from` replaced by `to`, loaded from a
+// scratch copy beside the quadruped's files.
+Result<robot::RobotModel> GamepadWith(const std::string& scratch, const std::string& from, const std::string& to) {
+  const std::string quadruped = test::CopyRobotFolder("quadruped", scratch);
+  std::ifstream in(test::SourcePath("models/quadruped_gamepad/robot.yaml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find(from);
+  REQUIRE_MESSAGE(at != std::string::npos, from);
+  text.replace(at, from.size(), to);
+  const std::string dir = quadruped + "/../gamepad";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/robot.yaml") << text;
+  return robot::LoadRobotModel(dir + "/robot.yaml");
+}
 }  // namespace
 
 TEST_CASE("evdev: a recorded file's axes and buttons at their times - dead zone, scale, rate limit, reports") {
@@ -528,6 +543,52 @@ TEST_CASE(
   h.Run(10);
   CHECK(h.phase.back() == loop::Phase::kDisarmed);
   CHECK_MESSAGE(h.Last() == "arm refused at tick 10: e-stop is latched (disarmed)", h.Last());
+}
+
+TEST_CASE("evdev operator: operator.from narrows the phases a request is taken in - refusals said, bad files named") {
+  auto model = GamepadWith("evdev_from", "  switch: {rule: blend, duration_s: 0.5}",
+                           "  switch: {rule: blend, duration_s: 0.5}\n  from: {sit: [hold], arm: [disarmed]}");
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  REQUIRE(model->op.from_sit == robot::Phases({robot::Phase::kHold}));
+  GamepadLoop g(*model);
+  const robot::RobotModel& m = g.m;
+  using loop::Phase;
+  g.Set(m.op.arm, 1);
+  g.Run(10);  // stand-up
+  g.Set(m.op.arm, 0);
+  g.Set(m.op.sit, 1);  // the controller sits from stand-up, this robot file does not
+  g.Run(1);
+  CHECK(g.phase.back() == Phase::kStandUp);
+  CHECK_MESSAGE(g.Last() == "sit refused at tick 10: not a phase operator.from.sit names (stand-up)", g.Last());
+  g.Set(m.op.sit, 0);
+  g.Run(1300);
+  REQUIRE(g.phase.back() == Phase::kHold);
+  g.Set(m.op.sit, 1);  // from hold: taken
+  g.Run(1600);
+  CHECK(g.phase.back() == Phase::kPassive);
+  g.Set(m.op.sit, 0);
+  g.Set(m.op.arm, 1);  // from passive: the controller stands up, this robot file does not
+  g.Run(10);
+  CHECK(g.phase.back() == Phase::kPassive);
+  CHECK(g.Last().find(": not a phase operator.from.arm names (passive)") != std::string::npos);
+  CHECK(g.l->operator_status().refused == 2);
+  // Files refused naming the field and the value.
+  const std::pair<std::string, std::string> bad[] = {
+      {"from: {sit: [sleep]}", "operator.from.sit[0]: 'sleep' is not a phase (disarmed, arming, stand-up"},
+      {"from: {sit: [passive]}",
+       "operator.from.sit[0]: the controller does not take sit in passive (it does in stand-up, hold, run)"},
+      {"from: {estop: [hold]}", "operator.from"},
+      {"from: {walk: [hold]}", "operator.from"},
+      {"from: {arm: []}", "operator.from.arm: empty"},
+      {"from: [sit]", "operator.from: expected a mapping"},
+  };
+  for (const auto& [edit, want] : bad) {
+    CAPTURE(edit);
+    auto r = GamepadWith("evdev_from_bad", "  switch: {rule: blend, duration_s: 0.5}",
+                         "  switch: {rule: blend, duration_s: 0.5}\n  " + edit);
+    REQUIRE_FALSE(r.ok());
+    CHECK_MESSAGE(r.error().message.find(want) != std::string::npos, r.error().message);
+  }
 }
 
 TEST_CASE(
