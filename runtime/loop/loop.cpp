@@ -354,7 +354,16 @@ struct TickImpl {
         if (all) {
           MeasuredPose(m, d, l);
           for (const robot::MotorSpec& mo : m.motors) d.streams[mo.stream].age_ticks = 0;
-          EnterStandUp(m, l, tick);
+          // Armed again by the recovery rule (disarmed and arming at the re-arm's tick): passive,
+          // if the robot file says so.
+          const RecoveryStatus& re = l.recovery_;
+          if (m.op.rearm_to_passive && re.automatic + re.requested > 0 &&
+              l.phase_start_[static_cast<std::size_t>(Phase::kDisarmed)] ==
+                  l.phase_start_[static_cast<std::size_t>(Phase::kArming)]) {
+            Enter(l, Phase::kPassive, tick);
+          } else {
+            EnterStandUp(m, l, tick);
+          }
         } else if (in_phase >= m.phases.arming_timeout_ticks) {
           Enter(l, Phase::kFailed, tick);
         }

@@ -46,6 +46,7 @@
 //   stop     RequestStop(): damping, then motors off
 //   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off)
 //   rearm    RequestRearm(): run again after a safe-stop or e-stop, by the recovery rule below
+//            (with operator.rearm_to: passive, a robot re-armed is left passive, arm stands it up)
 //   switch_policy  the next of several command sources (runtime/loop/policy_set.hpp), in hold or
 //            run and while no fault is latched (safe-stop, e-stop)
 //   deadman  its level: the source runs only while it is held (the hold phase waits for it);

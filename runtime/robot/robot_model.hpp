@@ -178,6 +178,9 @@ struct OperatorSpec {
   // operator.from: the phases a request is taken in, a subset of the controller's (phase.hpp); 0:
   // all of the controller's.
   PhaseSet from_arm = 0, from_sit = 0, from_switch = 0;
+  // operator.rearm_to: passive: a re-armed robot (the recovery rule) is left passive (damped,
+  // motors on; arm stands it up), not stood up.
+  bool rearm_to_passive = false;
   bool any() const noexcept {
     return arm >= 0 || walk >= 0 || stop >= 0 || estop >= 0 || rearm >= 0 || deadman >= 0 || switch_policy >= 0 ||
            sit >= 0;

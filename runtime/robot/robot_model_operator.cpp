@@ -187,7 +187,7 @@ Status Builder::Operator(const YAML::Node& root) {
   PBPPO_TRY(f.Map(root, "operator", "", &n));
   PBPPO_TRY(f.Keys(n, "operator",
                    {"arm", "walk", "sit", "stop", "estop", "rearm", "deadman", "switch_policy", "switch",
-                    "deadman_sit_after_s", "from"}));
+                    "deadman_sit_after_s", "from", "rearm_to"}));
   OperatorSpec& op = m.op;
   const std::pair<const char*, std::int32_t*> requests[] = {
       {"arm", &op.arm},     {"walk", &op.walk},   {"sit", &op.sit},         {"stop", &op.stop},
@@ -222,6 +222,14 @@ Status Builder::Operator(const YAML::Node& root) {
                   "the robot does not sit: phases.sit_down_s is not given (nor, for a robot "
                   "without motors, anything to sit with)");
   if (n["from"]) PBPPO_TRY(From(n["from"]));
+  if (n["rearm_to"]) {
+    std::string to;
+    PBPPO_TRY(f.Text(n, "rearm_to", "operator", &to, Rule::kToken));
+    if (to != "stand" && to != "passive") return f.Fail("operator.rearm_to", "'" + to + "' is not stand or passive");
+    if (to == "passive" && !m.phases.enable_motors)
+      return f.Fail("operator.rearm_to", "the robot has no motors to leave passive (it runs again when re-armed)");
+    op.rearm_to_passive = to == "passive";
+  }
   if (n["deadman_sit_after_s"]) {
     const char* w = "operator.deadman_sit_after_s";
     PBPPO_TRY(f.Number(n, "deadman_sit_after_s", "operator", 0.001, 3600.0, &op.deadman_sit_after_s));

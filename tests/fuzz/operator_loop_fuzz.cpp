@@ -11,7 +11,8 @@
 //     only from hold (after a stand-up);
 //   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down
 //     (half the inputs on a robot that also sits down after the dead-man's release and whose
-//     operator.from takes sit only in hold and arm only disarmed: then only from there).
+//     operator.from takes sit only in hold and arm only disarmed: then only from there; and
+//     which is left passive when re-armed).
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -91,6 +92,7 @@ const robot::RobotModel& Robot(bool sit_after_release) {
     m->op.deadman_sit_after_ticks = 200;
     m->op.from_sit = robot::Phases({robot::Phase::kHold});  // operator.from: sit only from hold
     m->op.from_arm = robot::Phases({robot::Phase::kDisarmed});
+    m->op.rearm_to_passive = true;  // re-armed: passive
     return m;
   }();
   return sit_after_release ? *sitting : fuzz::GamepadRobot();
@@ -188,8 +190,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         Fail("a sit-down from a phase operator.from.sit does not name", tick);
       if (op.from_arm != 0 && before == loop::Phase::kPassive && now == loop::Phase::kStandUp)
         Fail("a stand-up from passive that operator.from.arm does not name", tick);
-      if (now == loop::Phase::kPassive && before != loop::Phase::kPassive && before != loop::Phase::kSitDown)
-        Fail("passive not after a sit-down", tick);
+      if (now == loop::Phase::kPassive && before != loop::Phase::kPassive && before != loop::Phase::kSitDown &&
+          !(op.rearm_to_passive && before == loop::Phase::kArming))
+        Fail("passive not after a sit-down (or a re-arm's arming, rearm_to: passive)", tick);
       before = now;
       if (now == loop::Phase::kDone || now == loop::Phase::kFailed) return 0;
     }

@@ -11,7 +11,7 @@
  *   0.0-1.0 START (arm: stand up)       3.0-9.0 LB (the dead-man)     3.5-4.0 A (walk)
  *   4.0-8.5 left stick up 0.55 (past the dead zone of 0.1: 0.5 m/s)   (released: stand, then sit)
  *   15.0-15.5 START (stand up)          16.5-16.8 R3 (sit down)       18.5-18.8 BACK (e-stop)
- *   19.0 silence (the pad gone)
+ *   19.6-19.9 GUIDE (re-arm)            20.5 silence (the pad gone)
  * SESSION run (a vehicle's mission):
  *   0.0-1.0 START (run)   6.0-6.3 BACK (e-stop)   9.0-9.3 GUIDE (re-arm)   13.0-13.3 B (stop)
  *   14.0 silence
@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   long long next = t0;
   for (;;) {
     const double s = (double)(Ros2NowNs() - t0) * 1e-9;
-    if (s >= (walk ? 19.0 : 14.0)) break;
+    if (s >= (walk ? 20.5 : 14.0)) break;
     for (unsigned k = 0; k < 6; ++k) axis[k] = 0.0f;
     for (unsigned k = 0; k < 15; ++k) button[k] = 0;
     button[kStart] = Held(s, 0.0, 1.0);
@@ -68,6 +68,7 @@ int main(int argc, char** argv) {
       button[kA] = Held(s, 3.5, 4.0);
       button[kRightStick] = Held(s, 16.5, 16.8);
       button[kBack] = Held(s, 18.5, 18.8);
+      button[kGuide] = Held(s, 19.6, 19.9);
       axis[1] = Held(s, 4.0, 8.5) ? 0.55f : 0.0f;
     } else {
       button[kBack] = Held(s, 6.0, 6.3);

@@ -5,8 +5,9 @@
 # pbppo-hil quadruped --in-process --operator robot runs models/quadruped_joy at real time.
 #   1. the session: START stands the robot up, A with LB held walks it on the left stick (0.5 m/s
 #      tracked within 0.2 m/s), releasing LB stands it and, LB not held again, 3 s into the hold it
-#      sits down (passive); START stands it up again, R3 sits it down, BACK e-stops; every request
-#      taken, no fall; the recording replays bit for bit;
+#      sits down (passive); START stands it up again, R3 sits it down, BACK e-stops, GUIDE re-arms
+#      it and leaves it passive (rearm_to: passive); every request taken, no fall; the recording
+#      replays bit for bit;
 #   2. a pad with fewer buttons than the robot file names: every Joy refused as malformed (the
 #      link degraded, named), the robot never arms, and waiting disarmed stops nothing;
 #   3. the AUV (models/auv_joy: a robot without motors) with pbppo-controller and pbppo-hil auv at
@@ -23,7 +24,7 @@ export CYCLONEDDS_URI='<CycloneDDS><Domain id="any"><General><Interfaces><Networ
 
 echo "== 1: a gamepad session over ROS 2's Joy"
 "$hil" quadruped --robot quadruped_joy --in-process --operator robot --policy "$blob" --domain "$domain" \
-  --duration 24 --report "$work/joy.json" --record "$work/joy.pbppolog" >"$work/hil.log" 2>&1 &
+  --duration 26 --report "$work/joy.json" --record "$work/joy.pbppolog" >"$work/hil.log" 2>&1 &
 hpid=$!
 rc=0; "$joy" "$domain" >"$work/joy.log" 2>&1 || rc=$?
 hrc=0; wait $hpid || hrc=$?
@@ -31,8 +32,9 @@ hrc=0; wait $hpid || hrc=$?
 [ "$hrc" -eq 0 ] || { cat "$work/hil.log"; fail "pbppo-hil exited $hrc"; }
 expect "$work/joy.log" "published [0-9]+"
 expect "$work/hil.log" "transport ros \(dds\): received [1-9][0-9]* \(malformed 0\)"
-expect "$work/hil.log" "operator: 5 requests, 0 refused"
+expect "$work/hil.log" "operator: 6 requests, 0 refused"
 expect "$work/hil.log" "mode change: tick [0-9]+: e-stop: e-stop request"
+expect "$work/hil.log" "mode change: tick [0-9]+: nominal: re-armed on request"
 expect "$work/hil.log" "no fall"
 /usr/bin/python3 - "$work/joy.json" "$work/hil.log" <<'PY'
 import json, re, sys
@@ -45,21 +47,22 @@ e = fwd[0]["mean_abs_error"]
 moves = [(int(t), a + " -> " + b) for t, a, b in re.findall(r"phase: tick (\d+): (\S+) -> (\S+)", log)]
 want = ["disarmed -> arming", "arming -> stand-up", "stand-up -> hold", "hold -> run", "run -> stand-up",
         "stand-up -> hold", "hold -> sit-down", "sit-down -> passive", "passive -> stand-up", "stand-up -> hold",
-        "hold -> sit-down", "sit-down -> passive"]
+        "hold -> sit-down", "sit-down -> passive", "passive -> disarmed", "disarmed -> arming", "arming -> passive"]
 assert [m for _, m in moves] == want, moves
 t = [tick for tick, _ in moves]
 estop = int(re.search(r"mode change: tick (\d+): e-stop", log).group(1))
 armed = t[0]
 print("Joy: armed at tick %d, walking +%d (|e| vx %.3f vy %.3f, measured vx %.3f), standing +%d, sitting (released) "
-      "+%d, up again +%d, sitting (R3) +%d, e-stop +%d" % (armed, t[3] - armed, e[0], e[1], fwd[0]["mean_measured"][0],
-                                                          t[4] - armed, t[6] - armed, t[8] - armed, t[10] - armed,
-                                                          estop - armed))
+      "+%d, up again +%d, sitting (R3) +%d, e-stop +%d, re-armed to passive +%d" % (
+          armed, t[3] - armed, e[0], e[1], fwd[0]["mean_measured"][0], t[4] - armed, t[6] - armed, t[8] - armed,
+          t[10] - armed, estop - armed, t[14] - armed))
 assert e[0] <= 0.2 and e[1] <= 0.2, e
 # The session's times on the node's clock (from START): A 3.5 s, LB released 9.0 (a 1 s stand-up,
 # then 3 s in hold: 13.0), START 15.0, R3 16.5, BACK 18.5.
 for k, when in ((3, 3500), (4, 9000), (6, 13000), (8, 15000), (10, 16500)):
     assert abs(t[k] - armed - when) <= 150, (k, t[k] - armed, when)
 assert abs(estop - armed - 18500) <= 150, estop - armed
+assert abs(t[12] - armed - 19600) <= 150, t[12] - armed  # re-armed at GUIDE, then passive
 PY
 "$pbppo" replay --robot quadruped_joy --policy "$blob" "$work/joy.pbppolog" >"$work/replay.log" 2>&1 ||
   { cat "$work/replay.log"; fail "pbppo replay"; }

@@ -405,6 +405,8 @@ TEST_CASE("evdev: robot files that map a gamepad wrongly are refused naming the 
       {{"operator: {arm: arm,", "operator: {arm: arm, deadman_sit_after_s: 2,"},
        "operator.deadman_sit_after_s: the robot does not sit: phases.sit_down_s is not given"},
       {{"operator: {arm: arm,", "operator: {arm: arm, deadman_sit_after_s: -1,"}, "operator.deadman_sit_after_s"},
+      {{"operator: {arm: arm,", "operator: {arm: arm, rearm_to: passive,"},
+       "operator.rearm_to: the robot has no motors to leave passive"},
       {{"deadman: deadman}", "deadman_sit_after_s: 2}"},
        "operator.deadman_sit_after_s: no dead-man to release (operator.deadman is not given)"},
   };
@@ -585,6 +587,43 @@ TEST_CASE("evdev operator: operator.from narrows the phases a request is taken i
   for (const auto& [edit, want] : bad) {
     CAPTURE(edit);
     auto r = GamepadWith("evdev_from_bad", "  switch: {rule: blend, duration_s: 0.5}",
+                         "  switch: {rule: blend, duration_s: 0.5}\n  " + edit);
+    REQUIRE_FALSE(r.ok());
+    CHECK_MESSAGE(r.error().message.find(want) != std::string::npos, r.error().message);
+  }
+}
+
+TEST_CASE("evdev operator: operator.rearm_to passive - an e-stopped robot re-armed is left passive, START stands it") {
+  auto model = GamepadWith("evdev_rearm_to", "  switch: {rule: blend, duration_s: 0.5}",
+                           "  switch: {rule: blend, duration_s: 0.5}\n  rearm_to: passive");
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  GamepadLoop g(*model);
+  const robot::RobotModel& m = g.m;
+  using loop::Phase;
+  g.Set(m.op.arm, 1);
+  g.Run(1300);
+  REQUIRE(g.phase.back() == Phase::kHold);
+  g.Set(m.op.arm, 0);
+  g.Set(m.op.estop, 1);
+  g.Run(10);
+  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);
+  g.Set(m.op.estop, 0);
+  g.Run(600);  // healthy 0.5 s
+  g.Set(m.op.rearm, 1);
+  g.Run(20);  // re-armed: arming (the motors answer), then passive: damped, motors commanded
+  CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
+  CHECK(g.phase.back() == Phase::kPassive);
+  CHECK(g.d.command[m.motors[1].kp] == 0.0);
+  CHECK(g.d.motors[1] == robot::MotorCommand::kCommand);
+  g.Set(m.op.rearm, 0);
+  g.Set(m.op.arm, 1);  // START stands it up from there
+  g.Run(1);
+  CHECK(g.phase.back() == Phase::kStandUp);
+  g.Run(1100);
+  CHECK(g.phase.back() == Phase::kHold);
+  for (const auto& [edit, want] :
+       {std::pair<std::string, std::string>{"rearm_to: sit", "operator.rearm_to: 'sit' is not stand or passive"}}) {
+    auto r = GamepadWith("evdev_rearm_to_bad", "  switch: {rule: blend, duration_s: 0.5}",
                          "  switch: {rule: blend, duration_s: 0.5}\n  " + edit);
     REQUIRE_FALSE(r.ok());
     CHECK_MESSAGE(r.error().message.find(want) != std::string::npos, r.error().message);
