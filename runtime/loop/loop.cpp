@@ -501,7 +501,10 @@ struct TickImpl {
         case Phase::kMotorOff:
           mc = in_phase > 0 && l.answered_[k] != 0 ? MotorCommand::kNone : MotorCommand::kDisable;
           break;
-        default: mc = l.sup_.mode == Mode::kEStop ? MotorCommand::kDisable : MotorCommand::kCommand; break;
+        default:  // e-stop: the motors off, or on with the damping commands (supervisor.estop: damping)
+          mc = l.sup_.mode == Mode::kEStop && !m.supervisor_model.estop_damps ? MotorCommand::kDisable
+                                                                              : MotorCommand::kCommand;
+          break;
       }
     }
   }

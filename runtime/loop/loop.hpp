@@ -44,7 +44,8 @@
 //   walk     from hold, run the command source; without it the source starts after hold_s
 //   sit      from stand-up, hold and run (no fault latched): sit down, then passive; arm stands up
 //   stop     RequestStop(): damping, then motors off
-//   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off)
+//   estop    an e-stop request at that tick (the supervisor's e-stop latches: motors off, or with
+//            supervisor.estop: damping, on with the damping commands)
 //   rearm    RequestRearm(): run again after a safe-stop or e-stop, by the recovery rule below
 //            (with operator.rearm_to: passive, a robot re-armed is left passive, arm stands it up)
 //   switch_policy  the next of several command sources (runtime/loop/policy_set.hpp), in hold or

@@ -295,7 +295,7 @@ struct Loader : detail::Builder {
   Status Supervisor(const YAML::Node& root) {
     YAML::Node n;
     PBPPO_TRY(f.Map(root, "supervisor", "", &n));
-    PBPPO_TRY(f.Keys(n, "supervisor", {"command_limit", "overrun", "signal_limits", "recovery"}));
+    PBPPO_TRY(f.Keys(n, "supervisor", {"command_limit", "overrun", "signal_limits", "recovery", "estop"}));
     PBPPO_TRY(Recovery(n));
     SupervisorSpec& s = m.supervisor;
     std::string limit;
@@ -303,6 +303,11 @@ struct Loader : detail::Builder {
     if (limit != "count" && limit != "degraded")
       return f.Fail("supervisor.command_limit", "'" + limit + "' is not count or degraded");
     s.command_limit_degrades = limit == "degraded";
+    std::string estop = "motors_off";
+    PBPPO_TRY(f.OptionalText(n, "estop", "supervisor", &estop, Rule::kToken));
+    if (estop != "motors_off" && estop != "damping")
+      return f.Fail("supervisor.estop", "'" + estop + "' is not motors_off or damping");
+    s.estop_damps = estop == "damping";
     YAML::Node o;
     PBPPO_TRY(f.Map(n, "overrun", "supervisor", &o));
     PBPPO_TRY(f.Keys(o, "supervisor.overrun", {"degraded", "safe_stop"}));
@@ -377,6 +382,7 @@ Status Derive(RobotModel& m, double tick_s) {
     sm.signal_limits.push_back({l.signal, static_cast<std::uint32_t>(k), l.stream, l.min, l.max});
   }
   sm.command_limit_degrades = m.supervisor.command_limit_degrades;
+  sm.estop_damps = m.supervisor.estop_damps;
   sm.overrun_degraded = m.supervisor.overrun_degraded;
   sm.overrun_safe_stop = m.supervisor.overrun_safe_stop;
   if (auto st = safety::ValidateSupervisorModel(sm); !st) return fail(st.error().message);

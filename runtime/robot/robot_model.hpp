@@ -199,6 +199,7 @@ struct RecoverySpec {
 
 struct SupervisorSpec {
   bool command_limit_degrades = false;  // command_limit: degraded (else: count)
+  bool estop_damps = false;             // estop: damping (else: motors_off)
   std::uint32_t overrun_degraded = 2, overrun_safe_stop = 5;
   std::vector<SignalLimitSpec> signal_limits;
   RecoverySpec recovery;

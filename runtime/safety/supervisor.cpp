@@ -243,6 +243,12 @@ Decision Supervise(const SupervisorModel& m, const SupervisorInput& in, std::uin
         v = stepped;
         break;
       }
+      case Mode::kEStop:
+        if (!m.estop_damps) {
+          v = Sane(0.0, c.min, c.max);
+          break;
+        }
+        [[fallthrough]];  // e-stop that damps: safe-stop's commands
       case Mode::kSafeStop:
         if (c.stop == StopKind::kRamp) {
           v = Toward(prev, 0.0, c.stop_rate);
@@ -253,7 +259,6 @@ Decision Supervise(const SupervisorModel& m, const SupervisorInput& in, std::uin
           v = Sane(i < in.inputs.size() ? in.inputs[i] : 0.0, c.min, c.max);
         }
         break;
-      case Mode::kEStop: v = Sane(0.0, c.min, c.max); break;
     }
     out[k] = v;
     st.previous[k] = v;

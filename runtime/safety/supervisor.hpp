@@ -111,6 +111,9 @@ struct SupervisorModel {
   std::vector<SignalLimit> signal_limits;
   bool command_limit_degrades = false;
   std::uint32_t overrun_degraded = 2, overrun_safe_stop = 5;
+  // E-stop's commands: false, every command 0 (the loop switches the motors off); true, safe-stop's
+  // (each command's stop: for a legged robot the damping values), the motors left on.
+  bool estop_damps = false;
 };
 
 // Checks every limit: finite, ordered, magnitudes <= 1000 where the command is rate limited or

@@ -6,13 +6,14 @@
 // file's blend rule) whose commands are anything. After every tick:
 //   - every command sent is finite and inside the model's limits (whatever the source asked);
 //   - an e-stop press wins: at its tick the mode is e-stop (arming too: the motors are switched
-//     off), and while it is, no motor is commanded;
+//     off), and while it is, no motor is commanded (an e-stop that damps: only with the stop
+//     values, no stiffness);
 //   - the command source runs only with the dead-man held in a valid sample, and a run starts
 //     only from hold (after a stand-up);
 //   - a sit-down starts only from standing (stand-up, hold, run), passive only after a sit-down
 //     (half the inputs on a robot that also sits down after the dead-man's release and whose
 //     operator.from takes sit only in hold and arm only disarmed: then only from there; and
-//     which is left passive when re-armed).
+//     which is left passive when re-armed and whose e-stop damps).
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -92,7 +93,8 @@ const robot::RobotModel& Robot(bool sit_after_release) {
     m->op.deadman_sit_after_ticks = 200;
     m->op.from_sit = robot::Phases({robot::Phase::kHold});  // operator.from: sit only from hold
     m->op.from_arm = robot::Phases({robot::Phase::kDisarmed});
-    m->op.rearm_to_passive = true;  // re-armed: passive
+    m->op.rearm_to_passive = true;           // re-armed: passive
+    m->supervisor_model.estop_damps = true;  // supervisor.estop: damping
     return m;
   }();
   return sit_after_release ? *sitting : fuzz::GamepadRobot();
@@ -174,8 +176,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (press && l->phase() != loop::Phase::kFailed && l->supervisor().mode != safety::Mode::kEStop)
         Fail("an e-stop press did not win", tick);
       if (l->supervisor().mode == safety::Mode::kEStop)
-        for (robot::MotorCommand c : d.motors)
-          if (c == robot::MotorCommand::kCommand) Fail("a motor commanded in e-stop", tick);
+        for (std::size_t k = 0; k < d.motors.size(); ++k) {
+          if (d.motors[k] != robot::MotorCommand::kCommand) continue;
+          if (!m.supervisor_model.estop_damps) Fail("a motor commanded in e-stop", tick);
+          const std::uint32_t kp = m.motors[k].kp;  // e-stop that damps: the stop values, no stiffness
+          if (kp < d.command.size() && d.command[kp] != m.supervisor_model.commands[kp].stop_value)
+            Fail("an e-stop that does not damp", tick);
+        }
       const loop::Phase now = l->phase();
       if (now == loop::Phase::kRun) {
         const auto dm = static_cast<std::size_t>(op.deadman);

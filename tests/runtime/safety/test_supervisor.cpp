@@ -167,7 +167,7 @@ TEST_CASE("supervisor: each check - the mode it asks for - the cause it names") 
   CHECK(Once(m, t).mode == Mode::kSafeStop);
 }
 
-TEST_CASE("supervisor: safe-stop holds the measured position with the stop values - e-stop zero") {
+TEST_CASE("supervisor: safe-stop holds the measured position with the stop values - e-stop zero, or damping") {
   const auto m = Model();
   SupervisorState s = MakeSupervisorState(m);
   std::vector<double> out(4);
@@ -180,6 +180,21 @@ TEST_CASE("supervisor: safe-stop holds the measured position with the stop value
   t.estop = true;
   Supervise(m, t.In(), 1, s, out);
   CHECK(out == std::vector<double>{0.0, 0.0, 0.0, 0.0});
+  // An e-stop that damps (robot.yaml supervisor.estop: damping) sends safe-stop's commands, latched.
+  auto damping = Model();
+  damping.estop_damps = true;
+  SupervisorState e = MakeSupervisorState(damping);
+  Tick u;
+  u.inputs = {0.7, -3.0};
+  u.estop = true;
+  Supervise(damping, u.In(), 0, e, out);
+  REQUIRE(e.mode == Mode::kEStop);
+  CHECK(out == std::vector<double>{0.7, 0.0, -2.0, 0.0});
+  u.estop = false;
+  u.inputs = {0.2, 0.1};
+  Supervise(damping, u.In(), 1, e, out);
+  CHECK(e.mode == Mode::kEStop);
+  CHECK(out == std::vector<double>{0.2, 0.0, 0.1, 0.0});
 }
 
 TEST_CASE("supervisor: modes latch - counters by cause - the decision that entered each mode - no allocation") {

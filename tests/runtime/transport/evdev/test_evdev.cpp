@@ -630,6 +630,41 @@ TEST_CASE("evdev operator: operator.rearm_to passive - an e-stopped robot re-arm
   }
 }
 
+TEST_CASE("evdev operator: supervisor.estop damping - the e-stop damps with the motors on, latched until a re-arm") {
+  auto model = GamepadWith("evdev_estop_damps", "  recovery: {rule: request, healthy_s: 0.5}",
+                           "  recovery: {rule: request, healthy_s: 0.5}\n  estop: damping");
+  REQUIRE_MESSAGE(model.ok(), model.error().message);
+  REQUIRE(model->supervisor_model.estop_damps);
+  GamepadLoop g(*model);
+  const robot::RobotModel& m = g.m;
+  g.Set(m.op.arm, 1);
+  g.Run(1300);
+  REQUIRE(g.phase.back() == loop::Phase::kHold);
+  g.Set(m.op.arm, 0);
+  g.Set(m.op.estop, 1);
+  g.Run(1);  // at the press's tick
+  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);
+  const safety::CommandLimit& kp = m.supervisor_model.commands[m.motors[1].kp];
+  const safety::CommandLimit& kd = m.supervisor_model.commands[m.motors[1].kd];
+  for (std::size_t k = 0; k < m.motors.size(); ++k) CHECK(g.d.motors[k] == robot::MotorCommand::kCommand);
+  CHECK(g.d.command[m.motors[1].kp] == kp.stop_value);
+  CHECK(g.d.command[m.motors[1].kd] == kd.stop_value);
+  CHECK(kp.stop_value == 0.0);
+  CHECK(kd.stop_value > 0.0);
+  g.Set(m.op.estop, 0);
+  g.Run(600);
+  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);  // latched
+  CHECK(g.d.motors[1] == robot::MotorCommand::kCommand);
+  g.Set(m.op.rearm, 1);
+  g.Run(20);
+  CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
+  auto bad = GamepadWith("evdev_estop_bad", "  recovery: {rule: request, healthy_s: 0.5}",
+                         "  recovery: {rule: request, healthy_s: 0.5}\n  estop: soft");
+  REQUIRE_FALSE(bad.ok());
+  CHECK_MESSAGE(bad.error().message.find("supervisor.estop: 'soft' is not motors_off or damping") != std::string::npos,
+                bad.error().message);
+}
+
 TEST_CASE(
     "evdev operator: sit down from hold to the sit pose, passive (damped), stand up on arm, refusals named, stop from "
     "passive") {
