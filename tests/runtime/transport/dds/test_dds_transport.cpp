@@ -619,6 +619,10 @@ TEST_CASE(
   fields[FieldOf(m, "estop")] = 1;
   tick(3);
   CHECK(l->supervisor().mode == safety::Mode::kEStop);
-  CHECK(ld.motors[0] == robot::MotorCommand::kDisable);
+  // The robot file's e-stop damps (supervisor.estop: damping): motors on, no stiffness.
+  REQUIRE(m.supervisor_model.estop_damps);
+  CHECK(ld.motors[0] == robot::MotorCommand::kCommand);
+  CHECK(ld.command[m.motors[0].kp] == 0.0);
+  CHECK(ld.command[m.motors[0].kd] > 0.0);
   CHECK(l->operator_status().requests == 2);
 }
