@@ -250,6 +250,10 @@ Result<TermSignals> Reader::Term(const std::string& name, const YAML::Node& term
   } else if (name == "velocity_commands" || name == "generated_commands") {
     const bool base_velocity = !Null(params) && params.IsMap() && params.size() == 1 && params["command_name"] &&
                                params["command_name"].IsScalar() && params["command_name"].Scalar() == "base_velocity";
+    if (!params)
+      return f_.Fail(where,
+                     "missing field 'params': the robot's operator gives base_velocity only ({command_name: "
+                     "base_velocity})");
     if (!base_velocity)
       return f_.Fail(where + ".params", YamlFields::Quote(params) +
                                             ": the robot's operator gives base_velocity only ({command_name: "

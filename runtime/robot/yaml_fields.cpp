@@ -218,6 +218,7 @@ std::string YamlFields::Hex(std::uint32_t v) {
 }
 
 std::string YamlFields::Quote(const YAML::Node& v) {
+  if (!v) return "nothing";  // an absent key's node: asking its type would throw
   std::string q(1, '\'');
   if (v.IsScalar()) {
     q.append(v.as<std::string>());

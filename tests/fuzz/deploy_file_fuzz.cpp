@@ -29,8 +29,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }();
   const std::string text(reinterpret_cast<const char*>(data), size);
   auto d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml");
-  if (!d && d.error().message.find("does not hold the articulation's joint order") != std::string::npos) {
-    // An Isaac Lab env.yaml: again with the order of the seed's articulation.
+  // An Isaac Lab env.yaml is refused for want of the articulation's joint order: again with the seed's. Only that
+  // refusal: another message may quote the file's text, and a deploy.yaml is refused any joint order.
+  if (!d && d.error().message.rfind("fuzz.yaml: top level: an Isaac Lab env.yaml does not hold the articulation's "
+                                    "joint order",
+                                    0) == 0) {
     static const std::vector<std::string> joints = {"LF_HAA", "RF_HAA", "LH_HAA", "RH_HAA", "LF_HFE", "RF_HFE",
                                                     "LH_HFE", "RH_HFE", "LF_KFE", "RF_KFE", "LH_KFE", "RH_KFE"};
     d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml", joints);

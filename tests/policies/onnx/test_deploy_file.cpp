@@ -179,6 +179,9 @@ TEST_CASE("deploy files: what the layout cannot express is refused naming the fi
             .find("observations.joint_pos_rel.params: ") == 0);
   CHECK(Refusal(ReplaceOnce(g, "{command_name: base_velocity}", "{command_name: pose}"))
             .find("observations.velocity_commands.params: ") == 0);
+  CHECK(Refusal(ReplaceOnce(g, "    params: {command_name: base_velocity}\n", "")) ==
+        "observations.velocity_commands: missing field 'params': the robot's operator gives base_velocity only "
+        "({command_name: base_velocity})");
   CHECK(Refusal(ReplaceOnce(g, "history_length: 3", "history_length: 2.5")) ==
         "observations.base_ang_vel.history_length: 2.5 is not a whole number");
   // The model against what the deploy file says: its input size.
