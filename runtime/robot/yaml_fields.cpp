@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
+#include <unordered_map>
 
 #include "runtime/robot/text_file.hpp"
 
@@ -12,7 +14,8 @@ namespace {
 
 // Every reader takes a mapping's keys as names: a key that is a list, a mapping or empty
 // ("? [a, b]: c", "{[a]: b}", "{: b}") is refused here, where the document is read, with its
-// line, so that no reader meets one.
+// line, so that no reader meets one; so is a key given twice in one mapping (a reader would see
+// only the first, the second silently lost).
 Status CheckKeys(const YAML::Node& n, const std::string& origin, int depth) {
   auto fail = [&](const YAML::Node& at, const std::string& what) {
     return MakeError(ErrorCode::kFormat,
@@ -20,8 +23,13 @@ Status CheckKeys(const YAML::Node& n, const std::string& origin, int depth) {
   };
   if (depth > 256) return fail(n, "nested more than 256 levels deep");
   if (n.IsMap()) {
+    std::unordered_map<std::string, int> line_of;  // key -> its line (1-based)
     for (const auto& kv : n) {
       if (!kv.first.IsScalar()) return fail(kv.first, "a mapping key that is not a name (a list, a mapping or empty)");
+      const auto [at, first] = line_of.emplace(kv.first.Scalar(), kv.first.Mark().line + 1);
+      if (!first)
+        return fail(kv.first, "key '" + kv.first.Scalar() + "' given twice in one mapping (first at line " +
+                                  std::to_string(at->second) + ")");
       if (auto st = CheckKeys(kv.second, origin, depth + 1); !st) return st;
     }
   } else if (n.IsSequence()) {

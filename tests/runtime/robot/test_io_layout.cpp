@@ -74,6 +74,11 @@ TEST_CASE("bad layouts are refused naming the file, element and field") {
         "t.yaml: YAML error at line 2: a mapping key that is not a name (a list, a mapping or empty)");
   CHECK(ErrorOf("robot: x\nobservations: [{name: a, {b: 1}: 2}]\nactions: [{name: b}]") ==
         "t.yaml: YAML error at line 2: a mapping key that is not a name (a list, a mapping or empty)");
+  // A key given twice: a reader would see the first only.
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a}]\nactions: [{name: b}]\nrobot: y\n") ==
+        "t.yaml: YAML error at line 4: key 'robot' given twice in one mapping (first at line 1)");
+  CHECK(ErrorOf("robot: x\nobservations: [{name: a, clip: 1, clip: 2}]\nactions: [{name: b}]") ==
+        "t.yaml: YAML error at line 2: key 'clip' given twice in one mapping (first at line 2)");
   CHECK(ErrorOf("robot: x\nobservations: " + std::string(300, '[') + std::string(300, ']') + "\n") ==
         "t.yaml: YAML error at line 2: nested more than 256 levels deep");
   CHECK(ErrorOf("- 1\n- 2\n") == "t.yaml: top level: expected a mapping with robot, observations, actions");
