@@ -35,7 +35,8 @@ Status PlotTimeSeries(const TimeSeriesPlot& p, const std::string& png_path) {
   std::ostringstream gp;
   gp << data.str() << "set terminal pngcairo size 1100," << 300 * p.panels.size() << "\nset output " << Quoted(png_path)
      << "\nset termoption noenhanced\nset multiplot layout " << p.panels.size() << ",1 title " << Quoted(p.title)
-     << "\nset grid\nset xlabel " << Quoted(p.xlabel) << "\nset key outside right\n"
+     << "\nset grid\nset xlabel " << Quoted(p.xlabel)
+     << "\nset key below horizontal\nset lmargin 10\nset rmargin 3\n"  // every panel the same width: time aligned
      << plots.str() << "unset multiplot\n";
   if (auto st = RunGnuplot(gp.str(), png_path + ".gp", png_path + ".log"); !st)
     return MakeError(st.error().code, "plot " + png_path + ": " + st.error().message);

@@ -105,6 +105,7 @@ Status Plot(const QuadrupedRig& rig, const std::string& png) {
     phase.title = "phase (2 stand-up, 3 hold, 4 run, 9 sit-down, 10 passive)";
     mode.title = "mode (2 safe-stop, 3 e-stop)";
     mode.dashed = true;
+    mode.group = 1;
     for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
       const RigSample& s = rig.trace()[i];
       phase.x.push_back(static_cast<double>(s.t_s));

@@ -5,7 +5,8 @@ machine (24-byte records: s64 seconds, s64 microseconds, u16 type, u16 code, s32
 little-endian).
 
   demo    a person stands the robot up, walks it, lets go of the dead-man, walks again, presses
-          the e-stop, re-arms and walks until the pad is unplugged
+          the e-stop (the robot sinks, damped), re-arms (passive), stands it up and walks until
+          the pad is unplugged
   switch  stands up, walks, switches to the next policy (RB) while walking, then back
   sit     stands up, walks, sits down (R3) from the walk, is passive, stands up again from the
           ground (START), walks, stands, sits and shuts down (B) from passive
@@ -67,7 +68,8 @@ def demo():
     s.forward(12.0, 0.0)
     s.key(12.5, BTN_TL, False)
     s.press(13.0, BTN_SELECT)    # BACK: e-stop (latched)
-    s.press(14.0, BTN_MODE)      # the Xbox button: re-arm (0.5 s healthy since the e-stop)
+    s.press(14.0, BTN_MODE)      # the Xbox button: re-arm (0.5 s healthy since the e-stop): passive
+    s.press(14.5, BTN_START)     # stand up from where it lies (1 s), hold
     s.key(16.0, BTN_TL, True)
     s.press(16.1, BTN_SOUTH)
     s.forward(16.5, 0.5)

@@ -20,7 +20,7 @@ eval box(8, 88, 10, 11, "#2a6ebb"); set label "done" at 88,10 center
 eval box(10, 80, 42, 11, "#2a6ebb"); set label "sit-down" at 80,42 center
 eval box(11, 54, 42, 15, "#8a6d2a"); set label "passive (damped)" at 54,42 center
 set object 9 rect center 14,10 size 24,6 fc rgb "#c0392b" fs solid 0.15 border lc rgb "#c0392b"
-set label "e-stop (latched): motors off" at 14,11 center tc rgb "#c0392b" font ",10:Bold"
+set label "e-stop (latched): damping" at 14,11 center tc rgb "#c0392b" font ",10:Bold"
 set label "BACK, from any phase" at 14,8.6 center tc rgb "#c0392b" font ",9"
 # Transitions and what asks for them.
 set arrow from 12.5,26 to 19.5,26 as 1; set label "START (arm)" at 16,28.4 center font ",9"
@@ -37,7 +37,9 @@ set arrow from 61,24 to 46,12 as 1
 set arrow from 84,24 to 48.5,11 as 1; set label "B (stop; also from sit-down, passive)" at 66,18.5 center font ",9"
 set arrow from 48.5,10 to 55.5,10 as 1; set label "0.5 s" at 52,7.8 center font ",9"
 set arrow from 66.5,10 to 82.5,10 as 1; set label "motors answer" at 74.5,12.2 center font ",9"
-set arrow from 20,13 to 24,24 as 2; set label "Xbox (re-arm), 0.5 s healthy" at 27,17.5 left tc rgb "#c0392b" font ",9"
+set arrow from 20,13 to 24,24 as 2; set label "Xbox (re-arm), 0.5 s healthy" at 26,17.5 left tc rgb "#c0392b" font ",9"
+set arrow from 21,28 to 21,43 nohead lw 1.3 lc rgb "#c0392b"
+set arrow from 21,43 to 46.5,43 as 2; set label "re-armed: passive (rearm_to)" at 22,44.6 left tc rgb "#c0392b" font ",9"
 set label "Sticks: left up/down vx, left left/right vy, right left/right yaw rate; dead zone 10 %, 1 m/s per s. The pad gone: command 0 and LB released, so the robot stands." at 1,2.5 left font ",9"
 # Sitting down and standing up again.
 set arrow from 64,28 to 76,40 as 1

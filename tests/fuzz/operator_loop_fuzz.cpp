@@ -84,20 +84,27 @@ class Feed final : public robot::Transport {
   std::abort();
 }
 
-// The gamepad robot, and the same with deadman_sit_after_s (0.2 s: sits down when the dead-man's
-// release is not followed by a press within 0.2 s of the hold) and operator.from.
+// The gamepad robot as shipped (an e-stop that damps, re-armed to passive) with deadman_sit_after_s
+// (0.2 s: sits down when the dead-man's release is not followed by a press within 0.2 s of the
+// hold) and operator.from; and the same with the defaults instead (motors off at an e-stop,
+// standing up at a re-arm, every request in every phase the controller takes it in).
 const robot::RobotModel& Robot(bool sit_after_release) {
   static const robot::RobotModel* sitting = [] {
     auto* m = new robot::RobotModel(fuzz::GamepadRobot());
+    if (!m->op.rearm_to_passive || !m->supervisor_model.estop_damps) std::abort();  // as shipped
     m->op.deadman_sit_after_s = 0.2;
     m->op.deadman_sit_after_ticks = 200;
     m->op.from_sit = robot::Phases({robot::Phase::kHold});  // operator.from: sit only from hold
     m->op.from_arm = robot::Phases({robot::Phase::kDisarmed});
-    m->op.rearm_to_passive = true;           // re-armed: passive
-    m->supervisor_model.estop_damps = true;  // supervisor.estop: damping
     return m;
   }();
-  return sit_after_release ? *sitting : fuzz::GamepadRobot();
+  static const robot::RobotModel* plain = [] {
+    auto* m = new robot::RobotModel(fuzz::GamepadRobot());
+    m->op.rearm_to_passive = false;           // re-armed: stand up
+    m->supervisor_model.estop_damps = false;  // supervisor.estop: motors_off
+    return m;
+  }();
+  return sit_after_release ? *sitting : *plain;
 }
 
 }  // namespace

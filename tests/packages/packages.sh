@@ -128,7 +128,7 @@ grep -E "^walked|^controller:" quadruped.log | sed 's/^/   /'
 pbppo-hil quadruped --robot quadruped_gamepad --in-process --operator robot --duration 20 \
   --policy "$share/policies/quadruped_walk/flat.blob" --gamepad "$share/robots/quadruped_gamepad/sessions/demo.ev" \
   --report gamepad.json >gamepad.log 2>&1 || fail "pbppo-hil quadruped (gamepad): $(tail -20 gamepad.log)"
-expect gamepad.log "operator: evdev .*demo.ev: 24 events in 24 reports, 0 unmapped"
+expect gamepad.log "operator: evdev .*demo.ev: 26 events in 26 reports, 0 unmapped"
 expect gamepad.log "controller: phase hold, mode nominal"
 expect gamepad.json '"fell": false'
 grep -E "^walked|^operator:" gamepad.log | sed 's/^/   /'

@@ -3,8 +3,9 @@
 // recorded event file in place of the pad's device (as --gamepad gives it), played on the
 // controller's tick clock: models/quadruped_gamepad/sessions/demo.ev, one session: arm on START,
 // walk on A with the dead-man (LB) held and the left stick forward, the dead-man released (the
-// robot stands), walking again, e-stop on BACK (latched), re-armed on the Xbox button, walking,
-// and the pad gone mid-walk (the file's end: the robot stands). The controller's recording of the
+// robot stands), walking again, e-stop on BACK (the motors damp, latched), re-armed on the Xbox
+// button (passive), stood up on START, walking, and the pad gone mid-walk (the file's end: the
+// robot stands). The controller's recording of the
 // session replays bit for bit. sessions/switch.ev switches policy mid-walk, sessions/sit.ev sits
 // the robot down and stands it up again.
 #include <doctest/doctest.h>
@@ -37,9 +38,10 @@ const std::string kPolicy = "policies/frozen/quadruped_walk/flat.blob";
 
 // The session's times (tools/gamepad_session.py wrote it): arm at 0.2 s, the dead-man at 1.8 and A
 // at 1.9, 0.5 m/s from 2.1 to 7.5, the dead-man released at 8.5, walking again from 10.1 (0.5 m/s
-// 10.5-12.0), released at 12.5, e-stop at 13.0, re-arm at 14.0, walking from 16.1 (0.5 m/s from
-// 16.5), the pad gone after its last report at 18.0.
-constexpr double kRelease1 = 8.5, kWalk2 = 10.1, kEStop = 13.0, kRearm = 14.0, kWalk3 = 16.1, kGone = 18.0;
+// 10.5-12.0), released at 12.5, e-stop at 13.0, re-arm at 14.0, START at 14.5, walking from 16.1
+// (0.5 m/s from 16.5), the pad gone after its last report at 18.0.
+constexpr double kRelease1 = 8.5, kWalk2 = 10.1, kEStop = 13.0, kRearm = 14.0, kStand = 14.5, kWalk3 = 16.1,
+                 kGone = 18.0;
 
 std::size_t At(double t_s) {
   return static_cast<std::size_t>(std::llround(t_s / 0.001));
@@ -68,7 +70,7 @@ struct SessionRun {
     o.policy = test::SourcePath(kPolicy);
     for (const std::string& p : switch_policies) o.switch_policies.push_back(test::SourcePath(p));
     o.operator_transport = pad.get();
-    o.command_record_capacity = 1 << 16;
+    o.command_record_capacity = At(duration_s) * m.motors.size();  // every command of the session
     auto schedule = loop::ParseSchedule(
         "stream: velocity_command\nphases:\n  - {name: session, duration_s: " + std::to_string(duration_s) + "}\n",
         "session", m);
@@ -102,6 +104,7 @@ struct SessionRun {
     REQUIRE((*recorder)->Stop().ok());
     CHECK((*recorder)->dropped() == 0);
     REQUIRE(r.trace().size() == phase.size());
+    REQUIRE(r.can().records_dropped() == 0);
   }
   double MeanVx(double from, double to) const {
     double sum = 0;
@@ -165,7 +168,8 @@ TEST_CASE(
   MESSAGE("walk 2: mean vx " << v2 << " m/s for 0.5");
   CHECK(std::abs(v2 - 0.5) <= 0.2);
   CHECK(s.Upright(kWalk2, kEStop));
-  // E-stop: within 3 ticks of the press, motors off, latched after the release, until MODE.
+  // E-stop: within 3 ticks of the press, latched after the release, until MODE; the motors damp
+  // (supervisor.estop: damping): every motor commanded every tick with kp 0 and the damping kd.
   const std::size_t e = At(kEStop);
   CHECK(mode[e - 1] < Mode::kEStop);
   bool within3 = false;
@@ -174,10 +178,38 @@ TEST_CASE(
   for (std::size_t k = e + 3; k < At(kRearm); ++k) REQUIRE(mode[k] == Mode::kEStop);
   CHECK(r.loop().recovery().requested == 1);
   CHECK(r.loop().recovery().refused == 0);
-  // Re-armed: arming, standing up, holding, upright.
+  const double kd = m.supervisor_model.commands[m.motors[0].kd].stop_value;
+  REQUIRE(kd > 0.0);
+  // Damped from the tick the e-stop is seen (within 3 of the press) to the re-arm, and passive
+  // after the re-arm until START.
+  const auto damped = [&](double from, double to, std::size_t* other) {
+    std::size_t n = 0;
+    for (const can::CommandRecord& c : r.can().RecordedCommands())
+      if (c.tick >= At(from) && c.tick < At(to)) {
+        if (c.kp == 0.0 && c.kd == kd)
+          ++n;
+        else
+          ++*other;
+      }
+    return n;
+  };
+  std::size_t other = 0;
+  CHECK(damped(kEStop + 0.003, kRearm, &other) == (At(kRearm) - At(kEStop + 0.003)) * m.motors.size());
+  CHECK(other == 0);
+  const double sunk = r.trace()[At(kRearm) - 1].z_m, standing = r.trace()[e - 1].z_m;
+  MESSAGE("base height: standing " << standing << " m, after 1 s of the e-stop's damping " << sunk << " m");
+  CHECK(sunk < standing - 0.05);
+  // Re-armed (rearm_to: passive): arming, then passive, damped where it lies, until START.
   CHECK(mode[At(kRearm) + 2] == Mode::kNominal);
-  CHECK(phase[At(kRearm + 1.6)] == Phase::kHold);
-  CHECK(s.Upright(kRearm + 1.6, 16.0));
+  CHECK(phase[At(kRearm) + 2] == Phase::kPassive);
+  CHECK(phase[At(kStand) - 1] == Phase::kPassive);
+  CHECK(damped(kRearm + 0.002, kStand, &other) == (At(kStand) - At(kRearm + 0.002)) * m.motors.size());
+  CHECK(other == 0);
+  // START: standing up from there, holding, upright.
+  CHECK(phase[At(kStand)] == Phase::kStandUp);
+  CHECK(phase[At(kStand + 1.1)] == Phase::kHold);
+  CHECK(s.Upright(kStand + 1.1, kWalk3));
+  CHECK(r.trace()[At(kWalk3) - 1].z_m > standing - 0.03);
   // Walking a third time; the pad gone mid-walk: the command stops, the robot stands, upright.
   CHECK(phase[At(kWalk3) + 2] == Phase::kRun);
   CHECK(phase[At(kGone) + 2] == Phase::kStandUp);

@@ -192,6 +192,17 @@ Result<robot::RobotModel> GamepadWith(const std::string& scratch, const std::str
   std::ofstream(dir + "/robot.yaml") << text;
   return robot::LoadRobotModel(dir + "/robot.yaml");
 }
+
+// START, the stand-up and the hold, then the e-stop pressed: the loop at the press's tick.
+void HoldThenEStop(GamepadLoop& g) {
+  g.Set(g.m.op.arm, 1);
+  g.Run(1300);
+  REQUIRE(g.phase.back() == loop::Phase::kHold);
+  g.Set(g.m.op.arm, 0);
+  g.Set(g.m.op.estop, 1);
+  g.Run(1);
+  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);
+}
 }  // namespace
 
 TEST_CASE("evdev: a recorded file's axes and buttons at their times - dead zone, scale, rate limit, reports") {
@@ -594,56 +605,50 @@ TEST_CASE("evdev operator: operator.from narrows the phases a request is taken i
 }
 
 TEST_CASE("evdev operator: operator.rearm_to passive - an e-stopped robot re-armed is left passive, START stands it") {
-  auto model = GamepadWith("evdev_rearm_to", "  switch: {rule: blend, duration_s: 0.5}",
-                           "  switch: {rule: blend, duration_s: 0.5}\n  rearm_to: passive");
-  REQUIRE_MESSAGE(model.ok(), model.error().message);
-  GamepadLoop g(*model);
-  const robot::RobotModel& m = g.m;
+  // The shipped gamepad robot re-arms to passive; the same file with rearm_to: stand stands up at once.
+  const auto estop_then_rearm = [](GamepadLoop& g) {
+    const robot::RobotModel& m = g.m;
+    HoldThenEStop(g);
+    g.Run(9);
+    g.Set(m.op.estop, 0);
+    g.Run(600);  // healthy 0.5 s
+    g.Set(m.op.rearm, 1);
+    g.Run(20);  // re-armed: arming (the motors answer), then the phase rearm_to names
+    CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
+    g.Set(m.op.rearm, 0);
+  };
   using loop::Phase;
-  g.Set(m.op.arm, 1);
-  g.Run(1300);
-  REQUIRE(g.phase.back() == Phase::kHold);
-  g.Set(m.op.arm, 0);
-  g.Set(m.op.estop, 1);
-  g.Run(10);
-  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);
-  g.Set(m.op.estop, 0);
-  g.Run(600);  // healthy 0.5 s
-  g.Set(m.op.rearm, 1);
-  g.Run(20);  // re-armed: arming (the motors answer), then passive: damped, motors commanded
-  CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
-  CHECK(g.phase.back() == Phase::kPassive);
+  GamepadLoop g;
+  const robot::RobotModel& m = g.m;
+  REQUIRE(m.op.rearm_to_passive);
+  estop_then_rearm(g);
+  CHECK(g.phase.back() == Phase::kPassive);  // damped, motors commanded
   CHECK(g.d.command[m.motors[1].kp] == 0.0);
   CHECK(g.d.motors[1] == robot::MotorCommand::kCommand);
-  g.Set(m.op.rearm, 0);
   g.Set(m.op.arm, 1);  // START stands it up from there
   g.Run(1);
   CHECK(g.phase.back() == Phase::kStandUp);
   g.Run(1100);
   CHECK(g.phase.back() == Phase::kHold);
-  for (const auto& [edit, want] :
-       {std::pair<std::string, std::string>{"rearm_to: sit", "operator.rearm_to: 'sit' is not stand or passive"}}) {
-    auto r = GamepadWith("evdev_rearm_to_bad", "  switch: {rule: blend, duration_s: 0.5}",
-                         "  switch: {rule: blend, duration_s: 0.5}\n  " + edit);
-    REQUIRE_FALSE(r.ok());
-    CHECK_MESSAGE(r.error().message.find(want) != std::string::npos, r.error().message);
-  }
+  auto standing = GamepadWith("evdev_rearm_to", "rearm_to: passive", "rearm_to: stand");
+  REQUIRE_MESSAGE(standing.ok(), standing.error().message);
+  CHECK_FALSE(standing->op.rearm_to_passive);
+  GamepadLoop h(*standing);
+  estop_then_rearm(h);
+  CHECK(h.phase.back() == Phase::kStandUp);  // standing up at once
+  h.Run(1100);
+  CHECK(h.phase.back() == Phase::kHold);
+  auto bad = GamepadWith("evdev_rearm_to_bad", "rearm_to: passive", "rearm_to: sit");
+  REQUIRE_FALSE(bad.ok());
+  CHECK_MESSAGE(bad.error().message.find("operator.rearm_to: 'sit' is not stand or passive") != std::string::npos,
+                bad.error().message);
 }
 
 TEST_CASE("evdev operator: supervisor.estop damping - the e-stop damps with the motors on, latched until a re-arm") {
-  auto model = GamepadWith("evdev_estop_damps", "  recovery: {rule: request, healthy_s: 0.5}",
-                           "  recovery: {rule: request, healthy_s: 0.5}\n  estop: damping");
-  REQUIRE_MESSAGE(model.ok(), model.error().message);
-  REQUIRE(model->supervisor_model.estop_damps);
-  GamepadLoop g(*model);
+  GamepadLoop g;  // the shipped gamepad robot: supervisor.estop: damping
   const robot::RobotModel& m = g.m;
-  g.Set(m.op.arm, 1);
-  g.Run(1300);
-  REQUIRE(g.phase.back() == loop::Phase::kHold);
-  g.Set(m.op.arm, 0);
-  g.Set(m.op.estop, 1);
-  g.Run(1);  // at the press's tick
-  CHECK(g.l->supervisor().mode == safety::Mode::kEStop);
+  REQUIRE(m.supervisor_model.estop_damps);
+  HoldThenEStop(g);  // at the press's tick
   const safety::CommandLimit& kp = m.supervisor_model.commands[m.motors[1].kp];
   const safety::CommandLimit& kd = m.supervisor_model.commands[m.motors[1].kd];
   for (std::size_t k = 0; k < m.motors.size(); ++k) CHECK(g.d.motors[k] == robot::MotorCommand::kCommand);
@@ -658,8 +663,14 @@ TEST_CASE("evdev operator: supervisor.estop damping - the e-stop damps with the 
   g.Set(m.op.rearm, 1);
   g.Run(20);
   CHECK(g.l->supervisor().mode == safety::Mode::kNominal);
-  auto bad = GamepadWith("evdev_estop_bad", "  recovery: {rule: request, healthy_s: 0.5}",
-                         "  recovery: {rule: request, healthy_s: 0.5}\n  estop: soft");
+  // The same file with estop: motors_off: every motor switched off at the press's tick.
+  auto off = GamepadWith("evdev_estop_off", "estop: damping", "estop: motors_off");
+  REQUIRE_MESSAGE(off.ok(), off.error().message);
+  CHECK_FALSE(off->supervisor_model.estop_damps);
+  GamepadLoop h(*off);
+  HoldThenEStop(h);
+  for (std::size_t k = 0; k < m.motors.size(); ++k) CHECK(h.d.motors[k] == robot::MotorCommand::kDisable);
+  auto bad = GamepadWith("evdev_estop_bad", "estop: damping", "estop: soft");
   REQUIRE_FALSE(bad.ok());
   CHECK_MESSAGE(bad.error().message.find("supervisor.estop: 'soft' is not motors_off or damping") != std::string::npos,
                 bad.error().message);
@@ -724,7 +735,8 @@ TEST_CASE(
   set(m.op.estop, 1);  // e-stop in passive: latched; arm refused until a re-arm
   run(10);
   CHECK(l->supervisor().mode == safety::Mode::kEStop);
-  CHECK(d.motors[1] == robot::MotorCommand::kDisable);
+  CHECK(d.motors[1] == robot::MotorCommand::kCommand);  // supervisor.estop: damping
+  CHECK(d.command[m.motors[1].kp] == 0.0);
   set(m.op.estop, 0);
   set(m.op.arm, 1);
   run(10);
@@ -733,12 +745,15 @@ TEST_CASE(
   CHECK(last().find(": e-stop is latched (passive)") != std::string::npos);
   set(m.op.arm, 0);
   run(600);
-  set(m.op.rearm, 1);  // healthy 0.5 s after the e-stop's release: re-armed, stands up
+  set(m.op.rearm, 1);  // healthy 0.5 s after the e-stop's release: re-armed, passive (rearm_to)
   run(5);
   CHECK(l->supervisor().mode == safety::Mode::kNominal);
   CHECK(l->recovery().requested == 1);
+  CHECK(phase.back() == Phase::kPassive);
   set(m.op.rearm, 0);
+  set(m.op.arm, 1);  // START stands it up
   run(1300);
+  set(m.op.arm, 0);
   CHECK(phase.back() == Phase::kHold);
   set(m.op.sit, 1);
   run(1600);
