@@ -6,9 +6,11 @@
 //   - the live device: buttons and axes reach the fields at the next tick; unplugged (the device
 //     destroyed): every field 0 at once, then silence; plugged in again: found at the next look;
 //     a pad whose axis ranges differ: refused, naming the axis and both ranges;
-//   - the demo session (models/quadruped_gamepad/sessions/demo.ev) written into the virtual pad
-//     tick by tick drives the walking quadruped in the HIL to the same commands, bit for bit, as
-//     the recorded file read directly.
+//   - the demo session (models/quadruped_gamepad/sessions/demo.ev: stand, walk, the dead-man
+//     released, e-stop with the motors damped, re-arm to passive, stand, the pad lost) and the
+//     policy-switch session (switch.ev) written into the virtual pad tick by tick drive the walking
+//     quadruped in the HIL to the same commands, bit for bit, as the recorded files read directly
+//     (tests/sim_hil/test_gamepad_hil.cpp checks what the files do).
 #include <doctest/doctest.h>
 #include <fcntl.h>
 #include <linux/uinput.h>
@@ -173,9 +175,13 @@ TEST_CASE(
   CHECK(t.Summary().find("refused (the last: ") != std::string::npos);
 }
 
-TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL to the same commands as its file") {
+namespace {
+
+// A session (models/quadruped_gamepad/sessions/NAME.ev) written into a virtual pad tick by tick
+// drives the HIL to the same CAN commands, bit for bit, as the recorded file read directly.
+void SameCommandsLive(const std::string& name, double duration_s, const std::vector<std::string>& more_policies) {
   const robot::RobotModel& m = test::GamepadRobot();
-  const std::string session = test::SourcePath("models/quadruped_gamepad/sessions/demo.ev");
+  const std::string session = test::SourcePath("models/quadruped_gamepad/sessions/" + name + ".ev");
   std::vector<EventRecord> records;
   {
     std::ifstream in(session, std::ios::binary);
@@ -184,7 +190,7 @@ TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL
     std::memcpy(records.data(), bytes.data(), records.size() * sizeof(EventRecord));
   }
   REQUIRE(records.size() > 10);
-  const double duration_s = 20.0;
+  const auto ticks = static_cast<std::uint64_t>(std::llround(duration_s / m.tick_period_s));
   const auto run = [&](const std::string& device, VirtualPad* pad) {
     transport::Settings s;
     s.evdev.device = device;
@@ -192,11 +198,13 @@ TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL
     REQUIRE_MESSAGE(op.ok(), op.error().message);
     sim::RigOptions o;
     o.policy = test::SourcePath("policies/frozen/quadruped_walk/flat.blob");
+    for (const std::string& p : more_policies) o.switch_policies.push_back(test::SourcePath(p));
     o.operator_transport = op->get();
-    o.command_record_capacity = 20000 * 24;
+    o.command_record_capacity = ticks * m.motors.size();
     o.trace_every = 10;
-    auto schedule =
-        loop::ParseSchedule("stream: velocity_command\nphases: [{name: session, duration_s: 20}]\n", "s", m);
+    auto schedule = loop::ParseSchedule(
+        "stream: velocity_command\nphases: [{name: session, duration_s: " + std::to_string(duration_s) + "}]\n", "s",
+        m);
     REQUIRE(schedule.ok());
     auto flat =
         sim::LoadQuadrupedScenario(test::SourcePath("models/quadruped/scenarios/flat.yaml"), m, m.tick_period_s);
@@ -210,7 +218,7 @@ TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL
       return static_cast<double>(e.sec - records[0].sec) * 1e6 + static_cast<double>(e.usec - records[0].usec);
     };
     std::size_t next = 0;
-    for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(std::llround(duration_s / m.tick_period_s)); ++k) {
+    for (std::uint64_t k = 0; k < ticks; ++k) {
       const double elapsed_us = static_cast<double>(k) * m.tick_period_s * 1e6;
       if (pad != nullptr) {
         for (; next < records.size() && us(records[next]) <= elapsed_us + 0.5; ++next)
@@ -219,13 +227,15 @@ TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL
       }
       REQUIRE((*rig)->Tick());
     }
+    CHECK((*rig)->can().records_dropped() == 0);
+    CHECK((*rig)->loop().operator_status().refused == 0);
     return (*rig)->can().RecordedCommands();
   };
   const auto from_file = run(session, nullptr);
   VirtualPad pad;
   const auto live = run(pad.path(), &pad);
   REQUIRE(from_file.size() == live.size());
-  REQUIRE(live.size() > 20000);
+  REQUIRE(live.size() > ticks * m.motors.size() / 2);
   std::size_t different = 0;
   for (std::size_t i = 0; i < live.size(); ++i) {
     const can::CommandRecord &a = live[i], &b = from_file[i];
@@ -233,6 +243,20 @@ TEST_CASE("gamepad uinput: the demo session through a virtual pad drives the HIL
                       a.kp == b.kp && a.kd == b.kd && a.tau_nm == b.tau_nm;  // bit for bit: no NaN is sent
     different += same ? 0 : 1;
   }
-  MESSAGE(live.size() << " commands, " << different << " different");
+  MESSAGE(name << ": " << live.size() << " commands, " << different << " different");
   CHECK(different == 0);
+}
+
+}  // namespace
+
+TEST_CASE(
+    "gamepad uinput: the demo session through a virtual pad (stand, walk, dead-man, e-stop damping, re-arm to passive, "
+    "stand, pad lost) drives the HIL to the same commands as its file") {
+  SameCommandsLive("demo", 20.0, {});
+}
+
+TEST_CASE(
+    "gamepad uinput: the policy-switch session through a virtual pad (RB mid-walk and back) drives the HIL to the same "
+    "commands as its file") {
+  SameCommandsLive("switch", 13.5, {"policies/frozen/quadruped_walk/mixed.blob"});
 }
