@@ -32,6 +32,11 @@ CLI::App* AddImportOnnx(CLI::App& app, ImportOnnxOptions& o) {
                 "in the robot's joint names")
       ->delimiter(',')
       ->needs(deploy);
+  c->add_option("--agent", o.agent,
+                "--deploy: the run's rsl_rl agent.yaml, checked against the graph's actor and its clip_actions "
+                "applied (default: the agent.yaml beside the deploy file, when there is one)")
+      ->check(CLI::ExistingFile)
+      ->needs(deploy);
   c->add_option("--out", o.out, "Output blob path (golden vectors go beside it)")->required();
   c->add_option("--seed", o.seed, "Seed of the golden-vector observations")->check(cli_checks::NonNegativeInteger());
   return c;
@@ -55,8 +60,15 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   std::optional<onnx::DeployImport> deployed;
   const std::string stem = policy::PathBeside(o.out, "");
   const std::string layout_path = stem + ".io_layout.yaml", mapping_path = stem + ".map.yaml";
+  std::optional<onnx::AgentFile> agent;
   if (!o.deploy.empty()) {
-    auto d = onnx::ReadDeployFile(o.deploy, *robot, *model, layout_path, mapping_path, o.joints);
+    if (const std::string a = o.agent.empty() ? onnx::AgentFileBeside(o.deploy) : o.agent; !a.empty()) {
+      auto read = onnx::ReadAgentFile(a);
+      if (!read) return fail(read.error().message);
+      agent = std::move(*read);
+    }
+    auto d =
+        onnx::ReadDeployFile(o.deploy, *robot, *model, layout_path, mapping_path, o.joints, agent ? &*agent : nullptr);
     if (!d) return fail(d.error().message);
     deployed = std::move(*d);
     layout = &deployed->layout;
@@ -74,6 +86,12 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   auto imported = onnx::Import(*model, *mapping, *layout, io);
   if (!imported) return fail(imported.error().message);
   const policy::PolicySpec& s = imported->spec;
+  std::vector<std::string> agent_notes;
+  if (agent) {
+    auto checked = onnx::CheckActor(*agent, s, imported->graph_normaliser);
+    if (!checked) return fail(checked.error().message);
+    agent_notes = std::move(*checked);
+  }
   std::printf("model        %s (%s %s, opset %lld, ir %lld)\n  sha256     %s\n", o.model.c_str(),
               model->producer_name.c_str(), model->producer_version.c_str(), static_cast<long long>(model->opset),
               static_cast<long long>(model->ir_version), io.source_sha256.c_str());
@@ -82,6 +100,8 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   if (deployed)
     for (const std::string& n : deployed->notes) std::printf("  %s\n", n.c_str());
   for (const std::string& n : imported->notes) std::printf("  %s\n", n.c_str());
+  if (agent) std::printf("  agent:       %s (%s)\n", agent->origin.c_str(), agent->section.c_str());
+  for (const std::string& n : agent_notes) std::printf("  %s\n", n.c_str());
   std::printf(
       "check        the blob's float64 reference against the graph's own evaluation on %zu rows: max |diff| "
       "%.3g (%.2g of the tolerance)\n",
@@ -89,11 +109,11 @@ int ImportOnnx(const ImportOnnxOptions& o) {
   // The layout and mapping a deploy file made, then the blob and the same golden rows the check
   // ran on (32 from --seed), beside it.
   if (deployed) {
-    auto bytes = [](const std::string& t) {
+    auto as_bytes = [](const std::string& t) {
       return std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(t.data()), t.size());
     };
-    const policy::FileBytes files[] = {{layout_path, bytes(deployed->layout_text)},
-                                       {mapping_path, bytes(deployed->mapping_text)}};
+    const policy::FileBytes files[] = {{layout_path, as_bytes(deployed->layout_text)},
+                                       {mapping_path, as_bytes(deployed->mapping_text)}};
     if (auto st = policy::WriteFilesAtomic(files); !st) return fail(st.error().message);
   }
   if (auto st = policy::WritePolicyFiles(o.out, s, imported->golden); !st) return fail(st.error().message);

@@ -6,7 +6,10 @@
 // of --map (a trainer's deploy file: unitree_rl_lab's deploy.yaml, or Isaac Lab's env.yaml with
 // --joints, its articulation's joint order), the IO layout and mapping are
 // made from it and written beside the blob (BLOB_STEM.io_layout.yaml, BLOB_STEM.map.yaml); the
-// blob is for that layout (a copy of the robot file whose files.io_layout names it runs it).
+// blob is for that layout (a copy of the robot file whose files.io_layout names it runs it). The
+// run's rsl_rl agent.yaml (--agent FILE, else the agent.yaml beside the deploy file when there is
+// one) is checked against the graph's actor (memory, hidden layers, activation, normaliser) and
+// its clip_actions applied to the raw actions.
 #pragma once
 
 #include <cstdint>
@@ -20,7 +23,7 @@ class App;
 namespace pbppo::cli {
 
 struct ImportOnnxOptions {
-  std::string model, robot, map, deploy, out;
+  std::string model, robot, map, deploy, agent, out;
   std::vector<std::string> joints;  // --joints: an Isaac Lab env.yaml's joint order
   std::uint64_t seed = 1;
 };

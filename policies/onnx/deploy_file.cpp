@@ -58,8 +58,8 @@ std::string Num(double v) {
 
 class Reader {
  public:
-  Reader(const std::string& path, const robot::RobotModel& robot, const Model& model)
-      : f_(path), path_(path), robot_(robot), model_(model) {}
+  Reader(const std::string& path, const robot::RobotModel& robot, const Model& model, const AgentFile* agent)
+      : f_(path), path_(path), robot_(robot), model_(model), agent_(agent) {}
 
   Result<DeployImport> Run(const YAML::Node& root, const std::string& format, const std::string& layout_path,
                            const std::string& mapping_path);
@@ -77,6 +77,7 @@ class Reader {
   std::string path_;
   const robot::RobotModel& robot_;
   const Model& model_;
+  const AgentFile* agent_;                     // its clip_actions bounds the raw actions; may be null
   std::vector<std::uint32_t> motor_of_joint_;  // policy joint -> robot motor (joint_ids_map)
   std::vector<double> default_pos_;            // policy order
   struct Obs {
@@ -227,8 +228,25 @@ Status Reader::Actions(const YAML::Node& root) {
         return f_.Fail(w, "[" + YamlFields::Num(lo) + ", " + YamlFields::Num(hi) + "] leaves no target inside joint " +
                               mo.joint + "'s limits [" + YamlFields::Num(c.min) + ", " + YamlFields::Num(c.max) + "]");
     }
+    // rsl_rl's clip_actions: the environment wrapper clips the raw action before the action term
+    // scales and offsets it, so each target lies within offset -+ clip x |scale|.
+    if (agent_ != nullptr && agent_->clip_actions > 0) {
+      const double c_raw = agent_->clip_actions, lo = offset[i] - c_raw * std::fabs(scale[i]),
+                   hi = offset[i] + c_raw * std::fabs(scale[i]);
+      x.low = std::max(x.low, lo);
+      x.high = std::min(x.high, hi);
+      if (!(x.low <= x.high))
+        return MakeError(ErrorCode::kInvalidValue,
+                         agent_->origin + ": clip_actions: " + YamlFields::Num(c_raw) + " bounds joint " + mo.joint +
+                             "'s targets to [" + YamlFields::Num(lo) + ", " + YamlFields::Num(hi) +
+                             "], outside its limits [" + YamlFields::Num(c.min) + ", " + YamlFields::Num(c.max) + "]");
+    }
     act_.push_back(x);
   }
+  if (agent_ != nullptr && agent_->clip_actions > 0)
+    notes_.push_back("actions:     " + agent_->origin + " clip_actions " + YamlFields::Num(agent_->clip_actions) +
+                     ": each raw action within [-" + YamlFields::Num(agent_->clip_actions) + ", " +
+                     YamlFields::Num(agent_->clip_actions) + "] before its scale (the targets' limits narrowed)");
   return {};
 }
 
@@ -431,7 +449,8 @@ Result<DeployImport> Reader::Run(const YAML::Node& node, const std::string& form
 
 Result<DeployImport> ParseDeployText(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
                                      const Model& model, const std::string& layout_path,
-                                     const std::string& mapping_path, const std::vector<std::string>& joints) {
+                                     const std::string& mapping_path, const std::vector<std::string>& joints,
+                                     const AgentFile* agent) {
   auto root = robot::ParseYaml(text, origin);
   if (!root) return std::move(root).error();
   // An Isaac Lab env.yaml holds its simulation and scene; a deploy.yaml holds neither.
@@ -441,14 +460,14 @@ Result<DeployImport> ParseDeployText(const std::string& text, const std::string&
       return MakeError(ErrorCode::kInvalidValue,
                        "--joints: a deploy.yaml orders the joints itself (joint_ids_map); --joints is for an Isaac "
                        "Lab env.yaml");
-    Reader r(origin, robot, model);
+    Reader r(origin, robot, model, agent);
     return r.Run(*root, "unitree_rl_lab deploy.yaml", layout_path, mapping_path);
   }
   std::vector<std::string> notes;
   auto converted = IsaacEnvAsDeploy(*root, origin, robot, joints, &notes);
   if (!converted) return std::move(converted).error();
   // Checked by the deploy.yaml reader: its messages name the deploy.yaml field the env.yaml gave.
-  Reader r(origin + " (as deploy.yaml)", robot, model);
+  Reader r(origin + " (as deploy.yaml)", robot, model, agent);
   auto d = r.Run(*converted, "Isaac Lab env.yaml", layout_path, mapping_path);
   if (!d) return d;
   d->notes.insert(d->notes.begin() + 1, notes.begin(), notes.end());
@@ -459,11 +478,12 @@ Result<DeployImport> ParseDeployText(const std::string& text, const std::string&
 
 Result<DeployImport> ParseDeployFile(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
                                      const Model& model, const std::string& layout_path,
-                                     const std::string& mapping_path, const std::vector<std::string>& joints) {
+                                     const std::string& mapping_path, const std::vector<std::string>& joints,
+                                     const AgentFile* agent) {
   // The readers look before they take (Null, IsMap, Key); a YAML node used in a way they did not
   // foresee still ends as a refusal naming the file, never as an exception out of the import.
   try {
-    return ParseDeployText(text, origin, robot, model, layout_path, mapping_path, joints);
+    return ParseDeployText(text, origin, robot, model, layout_path, mapping_path, joints, agent);
   } catch (const YAML::Exception& e) {
     return MakeError(ErrorCode::kFormat, origin + ": " + e.what());
   }
@@ -471,10 +491,10 @@ Result<DeployImport> ParseDeployFile(const std::string& text, const std::string&
 
 Result<DeployImport> ReadDeployFile(const std::string& path, const robot::RobotModel& robot, const Model& model,
                                     const std::string& layout_path, const std::string& mapping_path,
-                                    const std::vector<std::string>& joints) {
+                                    const std::vector<std::string>& joints, const AgentFile* agent) {
   auto text = robot::ReadTextFile(path);
   if (!text) return std::move(text).error();
-  return ParseDeployFile(*text, path, robot, model, layout_path, mapping_path, joints);
+  return ParseDeployFile(*text, path, robot, model, layout_path, mapping_path, joints, agent);
 }
 
 }  // namespace pbppo::onnx

@@ -28,6 +28,7 @@
 
 #include "policies/onnx/onnx_graph.hpp"
 #include "policies/onnx/onnx_map.hpp"
+#include "policies/onnx/rsl_rl_agent.hpp"
 #include "runtime/core/result.hpp"
 #include "runtime/robot/io_layout.hpp"
 #include "runtime/robot/robot_model.hpp"
@@ -47,12 +48,15 @@ struct DeployImport {
 // names the texts will be written under (messages name them).
 // `joints`: an Isaac Lab env.yaml's joint order (the articulation's, in the robot's joint names),
 // which that file does not hold; empty for a deploy.yaml, which orders them itself.
+// `agent`: the run's agent.yaml (rsl_rl_agent.hpp), whose clip_actions bounds the raw actions
+// before the action term (the targets' limits narrowed to offset -+ clip x |scale|); may be null.
 Result<DeployImport> ReadDeployFile(const std::string& path, const robot::RobotModel& robot, const Model& model,
                                     const std::string& layout_path, const std::string& mapping_path,
-                                    const std::vector<std::string>& joints = {});
+                                    const std::vector<std::string>& joints = {}, const AgentFile* agent = nullptr);
 // The same from the file's text; `origin` starts every error.
 Result<DeployImport> ParseDeployFile(const std::string& text, const std::string& origin, const robot::RobotModel& robot,
                                      const Model& model, const std::string& layout_path,
-                                     const std::string& mapping_path, const std::vector<std::string>& joints = {});
+                                     const std::string& mapping_path, const std::vector<std::string>& joints = {},
+                                     const AgentFile* agent = nullptr);
 
 }  // namespace pbppo::onnx

@@ -62,7 +62,7 @@ class Importer {
   Result<std::vector<std::int64_t>> IntsOf(const Node& n, std::size_t k, const char* attribute) const;
   Result<const Tensor*> ConstantInput(const Node& n, std::size_t k) const;
   Result<std::vector<double>> PerElement(const Node& n, const Tensor& t, std::uint32_t width) const;
-  Status Assemble(policy::PolicySpec& s, std::vector<std::string>& notes);
+  Status Assemble(policy::PolicySpec& s, std::vector<std::string>& notes, bool* graph_normaliser);
 
   const Model& m_;
   const Mapping& map_;
@@ -505,7 +505,7 @@ std::string Names(const std::vector<const Node*>& nodes) {
   return s;
 }
 
-Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes) {
+Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes, bool* graph_normaliser) {
   const std::uint32_t n_in = in_->size;
   std::size_t i = 0;
   // Input normaliser: x -> clamp(a x + b, lo, hi).
@@ -699,6 +699,7 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
 
   // What was recognised.
   std::string norm = norm_nodes.empty() ? "none" : Names(norm_nodes);
+  *graph_normaliser = !norm_nodes.empty();
   if (clip) norm += ", clip at " + YamlFields::Num(clip->hi);
   notes.push_back("normaliser:  " + norm +
                   (fold                 ? " (folded into the first layer: a scale is not positive)"
@@ -789,7 +790,7 @@ Result<Imported> Importer::Run(const ImportOptions& options) {
   if (auto st = Walk(); !st) return st.error();
 
   Imported out;
-  if (auto st = Assemble(out.spec, out.notes); !st) return st.error();
+  if (auto st = Assemble(out.spec, out.notes, &out.graph_normaliser); !st) return st.error();
   policy::Provenance& p = out.spec.provenance;
   p.trainer_version = Printable((m_.producer_name.empty() ? "unknown producer" : m_.producer_name) +
                                     (m_.producer_version.empty() ? "" : " " + m_.producer_version) + " via ONNX",

@@ -54,6 +54,7 @@ struct Imported {
   policy::GoldenVectors golden;
   // What was recognised, one line per piece ("normaliser: Sub 'x' / Div 'y' / Clip 'z' at 100").
   std::vector<std::string> notes;
+  bool graph_normaliser = false;  // the graph held an observation normaliser ahead of its first layer
   // The check against the graph evaluation: the largest |difference| over the golden rows and
   // all actions, and the largest difference in units of its tolerance (<= 1 passes).
   double check_max_abs = 0;

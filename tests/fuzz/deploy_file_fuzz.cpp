@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "policies/onnx/deploy_file.hpp"
+#include "policies/onnx/rsl_rl_agent.hpp"
+#include "runtime/policy/policy_spec.hpp"
 #include "runtime/robot/robot_model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -37,6 +39,31 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     static const std::vector<std::string> joints = {"LF_HAA", "RF_HAA", "LH_HAA", "RH_HAA", "LF_HFE", "RF_HFE",
                                                     "LH_HFE", "RH_HFE", "LF_KFE", "RF_KFE", "LH_KFE", "RH_KFE"};
     d = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml", joints);
+  }
+  // The same text as the run's agent.yaml: read or refused naming the file; read, the actor checks
+  // of two graphs (an MLP and an LSTM ahead of one) refuse naming it too, and its clip_actions
+  // reaches the deploy reader.
+  static const policy::PolicySpec* mlp =
+      new policy::PolicySpec(policy::MakeRandomSpec({51, 128, 64, 32, 12}, policy::Activation::kElu, 1));
+  static const policy::PolicySpec* lstm = new policy::PolicySpec(policy::MakeRandomRecurrentSpec(
+      {51, 64, 32, 12}, policy::Activation::kElu, 0, policy::LayerKind::kLstm, false, 2));
+  auto agent = onnx::ParseAgentFile(text, "fuzz.yaml");
+  if (!agent) {
+    if (agent.error().message.rfind("fuzz.yaml", 0) != 0) std::abort();
+  } else {
+    for (const policy::PolicySpec* s : {mlp, lstm})
+      for (bool normalises : {false, true})
+        if (auto c = onnx::CheckActor(*agent, *s, normalises); !c && c.error().message.rfind("fuzz.yaml", 0) != 0)
+          std::abort();
+    if (agent->clip_actions > 0) {
+      auto clipped = onnx::ParseDeployFile(text, "fuzz.yaml", *robot, *model, "l.yaml", "m.yaml", {}, &*agent);
+      if (clipped && d) {
+        for (std::size_t k = 0; k < clipped->layout.actions.size(); ++k)
+          if (clipped->layout.actions[k].low < d->layout.actions[k].low ||
+              clipped->layout.actions[k].high > d->layout.actions[k].high)
+            std::abort();  // a clip only narrows
+      }
+    }
   }
   if (!d) {
     const std::string& m = d.error().message;

@@ -32,7 +32,8 @@ OUT_DIR/
   unitree_walk.onnx + .deploy.yaml
                                 flat.blob as unitree_rl_lab exports an Isaac Lab policy: joints breadth
                                 first (joint_ids_map), two frames of base_ang_vel and projected_gravity;
-                                unitree_walk.env.yaml: the same as Isaac Lab's params/env.yaml
+                                unitree_walk.env.yaml: the same as Isaac Lab's params/env.yaml;
+                                unitree_walk.agent.yaml: the run's rsl_rl params/agent.yaml
   bad/*.onnx, bad/README        models the importer must refuse, and what its error must name
 
 The good models are what torch.onnx.export writes for these trainers (opset 17, producer
@@ -717,6 +718,26 @@ def unitree_walk(out_dir, flat, flat_layers, quad_actions):
     with open(os.path.join(out_dir, "unitree_walk.deploy.yaml"), "w") as f:
         f.write("\n".join(lines) + "\n")
     isaac_env(out_dir, offsets)
+    isaac_agent(out_dir, [w.shape[0] for (w, _, _) in flat_layers[:-1]], flat_layers[0][2])
+
+
+def isaac_agent(out_dir, hidden, activation):
+    """The same run's rsl_rl runner settings as Isaac Lab dumps them (params/agent.yaml, rsl_rl 2.3's
+    fields, abridged): an MLP actor of flat.blob's hidden widths, no observation normaliser, no
+    action clip."""
+    t = "seed: 42\ndevice: cuda:0\nnum_steps_per_env: 24\nmax_iterations: 1500\nempirical_normalization: false\n"
+    t += "obs_groups:\n  policy:\n  - policy\n  critic:\n  - policy\n  - critic\nclip_actions: null\n"
+    t += "save_interval: 50\nexperiment_name: quadruped_flat\nrun_name: ''\nlogger: tensorboard\nresume: false\n"
+    t += "class_name: OnPolicyRunner\npolicy:\n  class_name: ActorCritic\n  init_noise_std: 1.0\n"
+    t += "  noise_std_type: scalar\n  actor_obs_normalization: false\n  critic_obs_normalization: false\n"
+    t += "  actor_hidden_dims:\n" + "".join(f"  - {h}\n" for h in hidden)
+    t += "  critic_hidden_dims:\n  - 512\n  - 256\n  - 128\n"
+    t += f"  activation: {activation}\n"
+    t += "algorithm:\n  class_name: PPO\n  num_learning_epochs: 5\n  num_mini_batches: 4\n  learning_rate: 0.001\n"
+    t += "  schedule: adaptive\n  gamma: 0.99\n  lam: 0.95\n  entropy_coef: 0.01\n  desired_kl: 0.01\n"
+    t += "  max_grad_norm: 1.0\n  value_loss_coef: 1.0\n  use_clipped_value_loss: true\n  clip_param: 0.2\n"
+    with open(os.path.join(out_dir, "unitree_walk.agent.yaml"), "w") as f:
+        f.write("# rsl_rl's params/agent.yaml for unitree_walk.onnx (written by tools/onnx/make_models.py)\n" + t)
 
 
 def isaac_env(out_dir, offsets):

@@ -16,7 +16,9 @@
 #      history on some terms) imports with --deploy alone: the IO layout and mapping it writes,
 #      put in a copy of the robot's folder, walk the demo schedule as the shipped policy does;
 #      deploy files the layout cannot express are refused naming the field; the same policy's
-#      Isaac Lab env.yaml (with its joint order given) gives the same layout and blob.
+#      Isaac Lab env.yaml (with its joint order given) gives the same layout and blob; the run's
+#      rsl_rl agent.yaml beside it is checked against the graph (a normaliser left out, another
+#      run's widths refused) and its clip_actions narrows the targets.
 # usage: import_end_to_end.sh PBPPO HIL CONTROLLER SOURCE_DIR MODELS_DIR WORK_DIR
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
@@ -211,14 +213,15 @@ like_shipped unitree_walk 0.02 || fail "the deploy-file import does not walk as 
 expect "$work/unitree_wrong_layout.log" "policy does not fit robot layout 'quadruped'"
 d=$work/bad_deploy.yaml
 sed 's/stiffness: \[20.0,/stiffness: [40.0,/' "$models/unitree_walk.deploy.yaml" >"$d"
-refuse_deploy() {  # refuse_deploy PATTERN: $d refused, nothing written
-  local rc=0
+refuse_deploy() {  # refuse_deploy PATTERN [ARGS...]: $d (with ARGS) refused, nothing written
+  local rc=0 pattern=$1
+  shift
   rm -f "$work/refused".*
-  "$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$d" --out "$work/refused.blob" \
+  "$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$d" --out "$work/refused.blob" "$@" \
     >"$work/refused.log" 2>&1 || rc=$?
   [ "$rc" -eq 1 ] || { cat "$work/refused.log"; fail "$d: exit $rc, expected 1"; }
   [ -z "$(ls "$work"/refused.* 2>/dev/null | grep -v refused.log)" ] || fail "a refused deploy import wrote a file"
-  expect "$work/refused.log" "$1"
+  expect "$work/refused.log" "$pattern"
   sed 's/^/   /' "$work/refused.log"
 }
 refuse_deploy "bad_deploy.yaml: stiffness\[0\]: 40 for joint LF_HAA, but robot 'quadruped' tracks a policy's targets with kp 20"
@@ -237,4 +240,34 @@ cmp "$work/isaac_walk.blob" "$work/unitree_walk.blob" || fail "the env.yaml impo
 echo "   Isaac Lab env.yaml + --joints: the same blob, byte for byte (its layout's hash among the bytes), as the deploy.yaml gives"
 d=$models/unitree_walk.env.yaml
 refuse_deploy "unitree_walk.env.yaml: top level: an Isaac Lab env.yaml does not hold the articulation's joint order"
+# The run's rsl_rl agent.yaml beside its env.yaml (Isaac Lab's params/ folder) is read with it: the
+# graph's actor checked against what was trained; the same blob.
+params=$work/params
+mkdir -p "$params"
+cp "$models/unitree_walk.env.yaml" "$params/env.yaml"
+cp "$models/unitree_walk.agent.yaml" "$params/agent.yaml"
+"$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$params/env.yaml" \
+  --joints "$isaac_joints" --out "$work/isaac_agent.blob" >"$work/isaac_agent.import.log" 2>&1 ||
+  { cat "$work/isaac_agent.import.log"; fail "isaac_agent: import-onnx with agent.yaml beside env.yaml exited $?"; }
+expect "$work/isaac_agent.import.log" "agent: +.*params/agent.yaml \(policy\)"
+expect "$work/isaac_agent.import.log" "agent.yaml: +hidden layers \[128, 64, 32\] elu: the graph's"
+cmp "$work/isaac_agent.blob" "$work/isaac_walk.blob" || fail "the import with agent.yaml differs from the one without"
+grep "agent" "$work/isaac_agent.import.log" | sed 's/^/   /'
+# Trained on normalised observations but exported without the normaliser, and another run's
+# widths (given with --agent): refused naming the field, nothing written.
+d=$params/env.yaml
+sed 's/actor_obs_normalization: false/actor_obs_normalization: true/' "$models/unitree_walk.agent.yaml" >"$params/agent.yaml"
+refuse_deploy "agent.yaml: policy.actor_obs_normalization: true: the policy was trained on normalised observations, but the graph holds no normaliser" \
+  --joints "$isaac_joints"
+cp "$models/unitree_walk.agent.yaml" "$params/agent.yaml"
+sed '0,/^  - 128$/s//  - 256/' "$models/unitree_walk.agent.yaml" >"$work/other_agent.yaml"
+refuse_deploy "other_agent.yaml: policy.actor_hidden_dims: \[256, 64, 32\], but the graph's actor has hidden layers \[128, 64, 32\]" \
+  --joints "$isaac_joints" --agent "$work/other_agent.yaml"
+# Its clip_actions: each target within offset -+ clip x scale.
+sed 's/^clip_actions: null/clip_actions: 1.0/' "$models/unitree_walk.agent.yaml" >"$params/agent.yaml"
+"$pbppo" import-onnx "$models/unitree_walk.onnx" --robot "$quad" --deploy "$params/env.yaml" \
+  --joints "$isaac_joints" --out "$work/isaac_clip.blob" >"$work/isaac_clip.import.log" 2>&1 ||
+  { cat "$work/isaac_clip.import.log"; fail "isaac_clip: import-onnx with clip_actions exited $?"; }
+expect "$work/isaac_clip.import.log" "clip_actions 1: each raw action within \[-1, 1\] before its scale"
+expect "$work/isaac_clip.io_layout.yaml" "name: LF_HFE, command: q_des_LF_HFE, unit: rad, scale: 0.25, offset: 0.4.*, low: 0.15.*, high: 0.65"
 echo "import end to end: ok"

@@ -141,6 +141,38 @@ TEST_CASE("unitree_rl_lab's deploy.yaml: each input element is the layout observ
   CHECK(d->mapping_text.find("history: {length: 3, order: term-major, oldest: first}") != std::string::npos);
 }
 
+TEST_CASE("deploy files: the run's clip_actions (agent.yaml) narrows each target to offset -+ clip x scale") {
+  const ox::Model model = ModelOf(kInputs);
+  ox::AgentFile agent;
+  agent.origin = "agent.yaml";
+  agent.clip_actions = 1.0;
+  auto d = ox::ParseDeployFile(kGood, "deploy.yaml", Quadruped(), model, "l.yaml", "m.yaml", {}, &agent);
+  REQUIRE_MESSAGE(d.ok(), d.error().message);
+  const robot::IoLayout& l = d->layout;
+  CHECK(l.actions[4].command == "q_des_LF_HFE");  // scale 0.25, offset 0.4: [0.15, 0.65]
+  CHECK(l.actions[4].low == doctest::Approx(0.15).epsilon(1e-12));
+  CHECK(l.actions[4].high == doctest::Approx(0.65).epsilon(1e-12));
+  bool said = false;
+  for (const std::string& n : d->notes)
+    said = said || n.find("actions:     agent.yaml clip_actions 1: each raw action within [-1, 1]") == 0;
+  CHECK(said);
+  // A clip wide enough changes nothing; one that leaves no target inside a joint's limits is refused.
+  agent.clip_actions = 100.0;
+  auto wide = ox::ParseDeployFile(kGood, "deploy.yaml", Quadruped(), model, "l.yaml", "m.yaml", {}, &agent);
+  REQUIRE(wide.ok());
+  auto plain = Read(kGood);
+  REQUIRE(plain.ok());
+  CHECK(wide->layout_text == plain->layout_text);
+  const std::string far =
+      test::ReplaceOnce(kGood, "offset: [0.0, 0.0, 0.0, 0.0, 0.4,", "offset: [0.0, 0.0, 0.0, 0.0, 9.4,");
+  agent.clip_actions = 1.0;
+  auto refused = ox::ParseDeployFile(far, "deploy.yaml", Quadruped(), model, "l.yaml", "m.yaml", {}, &agent);
+  REQUIRE_FALSE(refused.ok());
+  CHECK_MESSAGE(refused.error().message.find("agent.yaml: clip_actions: 1 bounds joint LF_HFE's targets to [9.15, "
+                                             "9.65], outside its limits") == 0,
+                refused.error().message);
+}
+
 TEST_CASE("deploy files: what the layout cannot express is refused naming the field") {
   using test::ReplaceOnce;
   const std::string g = kGood;
