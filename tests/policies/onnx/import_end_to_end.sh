@@ -23,6 +23,7 @@
 set -euo pipefail
 pbppo=$1 hil=$2 ctl=$3 src=$4 models=$5 work=$6
 source "$src/tests/support/checks.sh"  # fail, expect, fresh_dir, start_in
+source "$src/tests/policies/onnx/lstm_vs_ort.sh"  # lstm_vs_ort
 start_in "$src" "$work"
 quad=models/quadruped/robot.yaml auv=models/auv/robot.yaml
 dds_domain  # sets domain: one no other test holds
@@ -148,30 +149,8 @@ echo "== 5: the imported LSTM walks in the quadruped HIL, replays bit for bit, a
   { cat "$work/imported_lstm.log"; fail "imported_lstm: pbppo-hil exited $?"; }
 expect "$work/imported_lstm.log" "no fall"
 sed -n '2,8p' "$work/imported_lstm.log" | sed "s/^/   imported_lstm: /"
-"$pbppo" replay "$work/lstm_run.log" --robot "$quad" --policy "$work/lstm_walk.blob" \
-  --policy-io "$work/lstm_io" >"$work/lstm_replay.log" 2>&1 || { cat "$work/lstm_replay.log"; fail "replay"; }
-expect "$work/lstm_replay.log" "commands compared, 0 different$"
-sed 's/^/   /' "$work/lstm_replay.log"
-steps=$(( $(stat -c %s "$work/lstm_io.obs.f32") / (45 * 4) ))
-[ "$steps" -ge 800 ] || fail "only $steps policy steps recorded"
-node tools/onnx/ort_eval.js "$models/lstm_walk.onnx" "$work/lstm_io.obs.f32" "$steps" "$work/lstm_ort.f32" \
-  h_in=h_out c_in=c_out || fail "ort_eval.js exited $?"
-"$pbppo" inspect --json "$work/lstm_walk.blob" >"$work/lstm_walk.json"
-# lstm_walk.yaml maps the layout's observations and actions in order, without constants: the
-# recorded observation is the model's input, the engine's action the layout's map of its output.
-/usr/bin/python3 - "$work" "$steps" <<'PY'
-import json, sys
-import numpy as np
-work, steps = sys.argv[1], int(sys.argv[2])
-m = json.load(open(f"{work}/lstm_walk.json"))["action_map"]
-y = np.fromfile(f"{work}/lstm_ort.f32", "<f4").reshape(steps, 12).astype(np.float64)
-engine = np.fromfile(f"{work}/lstm_io.act.f32", "<f4").reshape(steps, 12).astype(np.float64)
-ort = np.clip(y * np.array(m["scale"]) + np.array(m["offset"]), m["low"], m["high"])
-rel = np.abs(engine - ort) / np.maximum(1.0, np.abs(ort))
-print(f"   {steps} policy steps: engine vs ONNX Runtime max |diff| {np.abs(engine - ort).max():.3g} "
-      f"(relative {rel.max():.3g}; the import check's tolerance is at least 1e-5 relative)")
-sys.exit(0 if rel.max() <= 1e-5 else 1)
-PY
+lstm_vs_ort "$models/lstm_walk.onnx" "$work/lstm_walk.blob" "$work/lstm_run.log" "$work" lstm
+[ "$lstm_steps" -ge 800 ] || fail "only $lstm_steps policy steps recorded"
 # A rotated recording: each file begins with the loop's state, the LSTM's h and c among it, and
 # replays alone from there (mid-walk).
 "$hil" quadruped --in-process --policy "$work/lstm_walk.blob" --commands models/quadruped/schedules/demo.yaml \
