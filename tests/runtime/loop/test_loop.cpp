@@ -15,6 +15,7 @@
 
 #include "runtime/core/alloc_probe.hpp"
 #include "runtime/loop/loop.hpp"
+#include "runtime/loop/policy_set.hpp"
 #include "runtime/loop/policy_source.hpp"
 #include "runtime/loop/trajectory_source.hpp"
 #include "runtime/policy/blob.hpp"
@@ -302,6 +303,59 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
   b.Step();
   CHECK(b.loop->supervisor().mode == Mode::kSafeStop);
   CHECK(b.loop->supervisor().entered[2].cause == safety::Cause::kSignalLimit);
+}
+
+TEST_CASE("loop: a recurrent policy switched back to starts from its clean state, not the one it left") {
+  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
+  const robot::RobotModel& m = *loaded;
+  // Two recurrent policies for the layout: an LSTM 16 and a GRU 16, each before a dense layer.
+  const auto make = [&](policy::LayerKind kind, std::uint64_t seed) {
+    policy::PolicySpec spec = policy::MakeRandomRecurrentSpec({m.io->observation_size(), 16, m.io->action_size()},
+                                                              policy::Activation::kTanh, 0, kind, true, seed);
+    robot::ApplyLayoutToSpec(*m.io, spec);
+    auto model = policy::PolicyModel::FromSpec(spec);
+    REQUIRE_MESSAGE(model.ok(), model.error().message);
+    return std::move(*model);
+  };
+  const policy::PolicyModel lstm = make(policy::LayerKind::kLstm, 5), gru = make(policy::LayerKind::kGru, 6);
+  auto a = loop::PolicySource::Create(m, lstm);
+  auto b = loop::PolicySource::Create(m, gru);
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  const loop::PolicySource* first = a->get();
+  std::vector<std::unique_ptr<loop::CommandSource>> sources;
+  sources.push_back(std::move(*a));
+  sources.push_back(std::move(*b));
+  loop::PolicySet set(m, std::move(sources));
+  Bench bench(m, &set);
+  const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("velocity_command"));
+  const double command[3] = {0.5, 0.0, 0.0};
+  const auto step = [&] {
+    if (bench.tick % 20 == 0) bench.t.Put(m, op, command);
+    bench.Step();
+  };
+  bench.loop->Arm();
+  for (int k = 0; k < 1400 && bench.loop->phase() != Phase::kRun; ++k) step();
+  REQUIRE(bench.loop->phase() == Phase::kRun);
+  for (int k = 0; k < 400; ++k) step();  // 20 runs of the LSTM: its state far from zero
+  set.Switch();
+  for (int k = 0; k < 200; ++k) step();  // the GRU
+  set.Switch();
+  const std::uint64_t runs = first->runs();
+  while (first->runs() == runs) step();  // the LSTM's first run after the switch back
+  CHECK(set.switches() == 2);
+  CHECK(set.current() == 0);
+  // The same observation through the same model from a clean state gives the same action; the
+  // same observation again (the state now carried) gives another: the state matters, and was clean.
+  auto fresh = policy::MakePolicyData(lstm);
+  REQUIRE(fresh.ok());
+  std::copy(first->observation().begin(), first->observation().end(), fresh->observation().begin());
+  REQUIRE(policy::Forward(lstm, *fresh) == policy::ForwardStatus::kOk);
+  const std::vector<float> clean(fresh->action().begin(), fresh->action().end());
+  CHECK(std::vector<float>(first->action().begin(), first->action().end()) == clean);
+  REQUIRE(policy::Forward(lstm, *fresh) == policy::ForwardStatus::kOk);
+  CHECK(std::vector<float>(fresh->action().begin(), fresh->action().end()) != clean);
 }
 
 TEST_CASE("loop: a policy on velocity-commanded wheels - speeds as actions, a position target refused") {
