@@ -535,14 +535,16 @@ struct TickImpl {
                        std::uint64_t tick) noexcept;
 };
 
-void CheckSample(const RobotModel& m, RobotData& d) noexcept {
+void CheckSample(const RobotModel& m, RobotData& d, bool stopping) noexcept {
   for (std::size_t s = 0; s < m.streams.size(); ++s) {
     safety::StreamState& st = d.streams[s];
+    bool judged = !stopping;
+    for (std::size_t k = 0; k < m.motors.size() && !judged; ++k) judged = m.motors[k].stream == s;
     if (d.fresh[s] != 0) {
       st.seen = true;
       st.age_ticks = 0;
       ++d.samples[s];
-    } else if (st.age_ticks < 0xffffffffu) {
+    } else if (st.age_ticks < 0xffffffffu && judged) {
       ++st.age_ticks;
     }
     st.invalid_input = -1;
@@ -593,7 +595,8 @@ TickStatus TickImpl::Tick(const RobotModel& m, RobotData& d, LoopData& l, std::s
     if (l.recorder->snapshot_due()) l.recorder->Snapshot(m, d, l);
     l.recorder->Inputs(m, d, timing, ev);
   }
-  CheckSample(m, d);
+  // Stopping, only the motors' replies are read (the source may have ended the run).
+  CheckSample(m, d, l.phase_ == Phase::kDamping || l.phase_ == Phase::kMotorOff || l.phase_ == Phase::kDone);
   TickImpl::OperatorRequests(m, d, l, ev);
   const std::int64_t t1 = MonotonicNs();
   prof.Record(rt::Stage::kReceive, t1 - t0);

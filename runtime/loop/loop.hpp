@@ -290,7 +290,11 @@ enum class TickStatus : std::uint8_t {
 
 // The check stage: every stream's age (0 when fresh this tick), and its current fields against
 // the model's bounds (the one sample check; the first invalid field is the supervisor's input).
-void CheckSample(const robot::RobotModel& model, robot::RobotData& data) noexcept;
+// `stopping` (damping, motor-off, done: the commands are the stop's own, whatever comes in): only
+// the motors' streams are judged (their replies carry the stop through); every other stream's age
+// is held where it was, so an operator's schedule that ended the run, or a command stream gone
+// while the robot shuts down, is not a stale sample of something nothing reads.
+void CheckSample(const robot::RobotModel& model, robot::RobotData& data, bool stopping = false) noexcept;
 
 // One tick: read -> check -> observe -> infer -> supervise -> write. `timing` is the clock's
 // (tick index, wake time, consecutive deadline misses).

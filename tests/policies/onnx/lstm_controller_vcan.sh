@@ -3,8 +3,9 @@
 # tests/vm/vcan-vm, or on a host with vcan0/vcan1): pbppo-hil quadruped on flat ground in
 # lock-step over SocketCAN, the controller running tools/onnx/make_models.py's lstm_walk.onnx
 # (imported here with its mapping) on a short schedule (stand, then 0.5 m/s forward: the VM's
-# emulated CPU is about 90 times slower than the host; the schedule outlasts --duration, so its
-# commands are fresh through the controller's own stop) and recording the run. The robot walks
+# emulated CPU is about 90 times slower than the host; the schedule's end stops the run, and its
+# silence while the robot shuts down is no stale sample: mode nominal at the end) and recording
+# the run. The robot walks
 # forward upright; the recording replays bit for bit, the LSTM's state carried tick to tick; and
 # ONNX Runtime, run on the recorded observations with the state fed back, gives the engine's action
 # at every policy step of the run (tests/policies/onnx/lstm_vs_ort.sh).
@@ -22,7 +23,6 @@ stream: velocity_command
 phases:
   - {name: stand, duration_s: 1.5}
   - {name: forward, duration_s: 3.0, command_vx: 0.5}
-  - {name: stop, duration_s: 1.5}
 YAML
 "$hil" quadruped --can "$can" --lockstep >"$work/hil.log" 2>&1 &
 hil_pid=$!

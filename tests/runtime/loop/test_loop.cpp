@@ -305,6 +305,40 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
   CHECK(b.loop->supervisor().entered[2].cause == safety::Cause::kSignalLimit);
 }
 
+TEST_CASE("loop: stopping, the operator's silent stream is no stale sample - damping, motor off, mode nominal") {
+  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
+  const robot::RobotModel& m = *loaded;
+  const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("velocity_command"));
+  REQUIRE(m.phases.damping_ticks > m.streams[op].stale_degraded_ticks);  // silent long enough to be stale
+  const RandomPolicy p(m, *m.io, 16, 4);
+  REQUIRE(p.source.ok());
+  Bench b(m, p.source->get());
+  const double command[3] = {0.3, 0.0, 0.0};
+  b.loop->Arm();
+  for (int k = 0; k < 1600; ++k) {
+    if (b.tick % 20 == 0) b.t.Put(m, op, command);
+    b.Step();
+  }
+  REQUIRE(b.loop->phase() == Phase::kRun);
+  // The command source's end (a schedule played out) stops the run and its stream falls silent.
+  b.loop->RequestStop();
+  for (int k = 0; k < 1200 && b.loop->phase() != Phase::kDone; ++k) b.Step();
+  CHECK(b.loop->phase() == Phase::kDone);
+  CHECK(b.loop->supervisor().mode == Mode::kNominal);
+  CHECK(b.loop->supervisor().counts[safety::Cause::kStaleSample] == 0);
+  // Running, the same silence is a stale sample.
+  const RandomPolicy q(m, *m.io, 16, 4);
+  Bench c(m, q.source->get());
+  c.loop->Arm();
+  for (int k = 0; k < 2000; ++k) {
+    if (c.tick % 20 == 0 && k < 1400) c.t.Put(m, op, command);
+    c.Step();
+  }
+  CHECK(c.loop->phase() == Phase::kRun);
+  CHECK(c.loop->supervisor().counts[safety::Cause::kStaleSample] > 0);
+}
+
 TEST_CASE("loop: a recurrent policy switched back to starts from its clean state, not the one it left") {
   auto loaded = robot::LoadRobotModel(WalkingRobot());
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
