@@ -416,9 +416,14 @@ struct TickImpl {
         break;
       case Phase::kDisarmed:
         // Nothing is sent to the motors, so they do not answer (a motor replies to a command): their
-        // silence is not judged until arming has them answering (as at arming's end).
-        if (motors)
+        // silence is not judged until arming has them answering (as at arming's end). Nor is the
+        // IMUs': a simulator in lock-step steps its plant, and so sends its IMU samples, only on the
+        // commands it is sent (on a robot the IMU streams anyway, and is judged from arming on).
+        if (motors) {
           for (const robot::MotorSpec& mo : m.motors) d.streams[mo.stream].age_ticks = 0;
+          for (std::size_t s = 0; s < m.streams.size(); ++s)
+            if (m.streams[s].kind == robot::StreamKind::kImu) d.streams[s].age_ticks = 0;
+        }
         break;
       case Phase::kPassive:
       case Phase::kDone:

@@ -151,12 +151,18 @@ struct GamepadLoop {
   std::vector<loop::Phase> phase;
   std::vector<double> q;
 
-  // As a motor does: it answers only the tick after it was sent something (else every tick).
+  // As a simulator in lock-step does: a motor answers only the tick after it was sent something,
+  // and the IMU samples only when the plant stepped on a command (once at the start); else every
+  // stream every tick.
   bool motors_answer_commands = false;
 
   void Set(std::int32_t field, double v) { nominal[static_cast<std::size_t>(field)] = v; }
   bool Silent(std::uint32_t stream) const {
     if (!motors_answer_commands) return false;
+    bool commanded = false;
+    for (std::size_t k = 0; k < m.motors.size(); ++k)
+      commanded = commanded || d.motors[k] != robot::MotorCommand::kNone;
+    if (m.streams[stream].kind == robot::StreamKind::kImu) return !commanded && !phase.empty();
     for (std::size_t k = 0; k < m.motors.size(); ++k)
       if (m.motors[k].stream == stream) return d.motors[k] == robot::MotorCommand::kNone;
     return false;
@@ -532,8 +538,8 @@ TEST_CASE(
 }
 
 TEST_CASE(
-    "evdev operator: waiting disarmed for START with the motors silent is no fault, arm with an e-stop latched is "
-    "refused") {
+    "evdev operator: waiting disarmed for START with the motors and the IMU silent is no fault, arm with an e-stop "
+    "latched refused") {
   GamepadLoop g;
   g.motors_answer_commands = true;  // disarmed, nothing is sent: no motor answers
   const robot::RobotModel& m = g.m;
