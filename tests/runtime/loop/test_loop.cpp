@@ -196,9 +196,10 @@ TEST_CASE("loop: a silent motor - degraded, safe-stop naming it within 3 ticks, 
 namespace {
 
 // The quadruped with a walking policy's layout and an operator's velocity command (issue 18's
-// signals), in a copy of its folder.
-std::string WalkingRobot() {
-  const std::string dir = test::CopyRobotFolder("quadruped", "walking");
+// signals), in a copy of its folder named `scratch`: one per test case (ctest runs a binary's test
+// cases as parallel processes, which must not rewrite each other's files).
+std::string WalkingRobot(const std::string& scratch) {
+  const std::string dir = test::CopyRobotFolder("quadruped", scratch);
   const auto& m = test::QuadrupedRobot();
   std::ofstream io(dir + "/io_layout.yaml");
   io << "robot: quadruped\nobservations:\n";
@@ -246,7 +247,7 @@ struct RandomPolicy {
 }  // namespace
 
 TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the action held between") {
-  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  auto loaded = robot::LoadRobotModel(WalkingRobot("walking"));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
   const robot::RobotModel& m = *loaded;
   REQUIRE(m.policy_period_ticks == 20);
@@ -306,7 +307,7 @@ TEST_CASE("loop: a walking policy - generic signals, 50 Hz over 1 kHz ticks, the
 }
 
 TEST_CASE("loop: stopping, the operator's silent stream is no stale sample - damping, motor off, mode nominal") {
-  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  auto loaded = robot::LoadRobotModel(WalkingRobot("walking_stop"));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
   const robot::RobotModel& m = *loaded;
   const std::uint32_t op = static_cast<std::uint32_t>(m.StreamIndex("velocity_command"));
@@ -340,7 +341,7 @@ TEST_CASE("loop: stopping, the operator's silent stream is no stale sample - dam
 }
 
 TEST_CASE("loop: a recurrent policy switched back to starts from its clean state, not the one it left") {
-  auto loaded = robot::LoadRobotModel(WalkingRobot());
+  auto loaded = robot::LoadRobotModel(WalkingRobot("walking_switch"));
   REQUIRE_MESSAGE(loaded.ok(), loaded.error().message);
   const robot::RobotModel& m = *loaded;
   // Two recurrent policies for the layout: an LSTM 16 and a GRU 16, each before a dense layer.
