@@ -671,6 +671,10 @@ double QuadrupedWalk::Reward() noexcept {
              w.ang_vel_xy * (om[0] * om[0] + om[1] * om[1]) + w.orientation * (g0 * g0 + g1 * g1) +
              w.torques * torques + w.dof_acc * acc + w.action_rate * rate + w.collision * collisions_ +
              w.feet_air_time * air + w.dof_pos_limits * limits;
+  if (w.base_height != 0) {
+    const double h = d_->qpos[2] - GroundHeight(d_->qpos[0], d_->qpos[1]) - p.base_height_target_m;
+    r += w.base_height * h * h;
+  }
   r *= dt;
   if (p.only_positive) r = std::max(r, 0.0);
   if (fell_) r += w.termination * dt;  // after the clip, as legged_gym adds it

@@ -31,6 +31,7 @@ constexpr std::pair<const char*, double WalkRewardScales::*> kRewardScales[] = {
     {"collision", &WalkRewardScales::collision},
     {"feet_air_time", &WalkRewardScales::feet_air_time},
     {"dof_pos_limits", &WalkRewardScales::dof_pos_limits},
+    {"base_height", &WalkRewardScales::base_height},
     {"termination", &WalkRewardScales::termination},
 };
 
@@ -90,15 +91,17 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Number(cmd, "zero_below_mps", "commands", 0, 10, &p.zero_below_mps),
            f.Keys(rew, "rewards",
                   {"tracking_sigma", "only_positive", "feet_air_time_target_s", "soft_dof_pos_limit", "contact_force_n",
-                   "scales"}),
+                   "base_height_target_m", "scales"}),
            f.Number(rew, "tracking_sigma", "rewards", kSigmaMin, kSigmaMax, &p.tracking_sigma),
            flag(rew, "only_positive", "rewards", &only_positive),
            f.Number(rew, "feet_air_time_target_s", "rewards", 0, 10, &p.feet_air_time_target_s),
            f.Number(rew, "soft_dof_pos_limit", "rewards", 0.1, 1, &p.soft_dof_pos_limit),
            f.Number(rew, "contact_force_n", "rewards", 0, 1000, &p.contact_force_n),
-           f.Keys(sc, "rewards.scales",
-                  {"tracking_lin_vel", "tracking_ang_vel", "lin_vel_z", "ang_vel_xy", "orientation", "torques",
-                   "dof_acc", "action_rate", "collision", "feet_air_time", "dof_pos_limits", "termination"}),
+           f.OptionalNumber(rew, "base_height_target_m", "rewards", 0, 10, &p.base_height_target_m),
+           f.Keys(
+               sc, "rewards.scales",
+               {"tracking_lin_vel", "tracking_ang_vel", "lin_vel_z", "ang_vel_xy", "orientation", "torques", "dof_acc",
+                "action_rate", "collision", "feet_air_time", "dof_pos_limits", "base_height", "termination"}),
            f.Keys(term, "termination", {"base_contact", "max_tilt_rad"}),
            flag(term, "base_contact", "termination", &base_contact),
            f.Number(term, "max_tilt_rad", "termination", 0.05, 3.2, &p.max_tilt_rad),
@@ -130,9 +133,10 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
        }) {
     if (!st) return st.error();
   }
-  // legged_gym's reward scales, each any number (0: the term off); termination may be left out.
+  // legged_gym's reward scales, each any number (0: the term off); base_height and termination may
+  // be left out.
   for (const auto& [key, member] : kRewardScales) {
-    const bool optional = std::string_view(key) == "termination";
+    const bool optional = std::string_view(key) == "termination" || std::string_view(key) == "base_height";
     if (auto st = optional ? f.OptionalNumber(sc, key, "rewards.scales", -kBig, kBig, &(s.*member))
                            : f.Number(sc, key, "rewards.scales", -kBig, kBig, &(s.*member));
         !st)
@@ -144,6 +148,8 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
   p.only_positive = only_positive != 0;
   p.terminate_on_base_contact = base_contact != 0;
   if (p.episode_steps() < 1) return f.Fail("simulation.episode_s", "is shorter than one policy period");
+  if (s.base_height != 0 && !(p.base_height_target_m > 0))
+    return f.Fail("rewards", "missing field 'base_height_target_m': rewards.scales.base_height is not 0");
   return p;
 }
 
@@ -234,6 +240,9 @@ Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
       p.tracking_sigma = v;
     } else {
       p.scales.*(it->second) = v;
+      if (name == "base_height" && v != 0 && !(p.base_height_target_m > 0))
+        return MakeError(ErrorCode::kInvalidValue,
+                         "base_height=" + value + ": the task sets no rewards.base_height_target_m (walk.yaml)");
     }
     start = end + 1;
   }

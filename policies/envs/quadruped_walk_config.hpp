@@ -17,7 +17,8 @@ using Range = std::array<double, 2>;  // [low, high]
 
 struct WalkRewardScales {
   double tracking_lin_vel = 0, tracking_ang_vel = 0, lin_vel_z = 0, ang_vel_xy = 0, orientation = 0, torques = 0,
-         dof_acc = 0, action_rate = 0, collision = 0, feet_air_time = 0, dof_pos_limits = 0, termination = 0;
+         dof_acc = 0, action_rate = 0, collision = 0, feet_air_time = 0, dof_pos_limits = 0, base_height = 0,
+         termination = 0;
 };
 
 struct QuadrupedWalkParams {
@@ -46,6 +47,9 @@ struct QuadrupedWalkParams {
   double feet_air_time_target_s = 0.5;
   double soft_dof_pos_limit = 0.9;
   double contact_force_n = 1.0;
+  // base_height's target: the base's height over the ground under it (m); base_height costs
+  // (height - target)^2. Needed only when that term's scale is not 0.
+  double base_height_target_m = 0.0;
   WalkRewardScales scales;
   // termination
   bool terminate_on_base_contact = true;

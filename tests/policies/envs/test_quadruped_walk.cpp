@@ -460,3 +460,55 @@ TEST_CASE("quadruped-walk: --reward-scales replaces walk.yaml's scales for a run
   o.reward_scales = "tracking_sigma=-1";
   CHECK(ErrorOf(o).find("--reward-scales: tracking_sigma: '-1' is not in [1e-06, 100]") != std::string::npos);
 }
+
+TEST_CASE("quadruped-walk: base_height costs the base's distance from its target - optional, refused without one") {
+  // Both with every step's reward unclipped, one with the term: on the same robot and actions
+  // the difference is the term, from the base height the critic sees (its 49th input).
+  const std::string plain = ModelsWith("walk_bh_plain", "walk.yaml", "only_positive: true", "only_positive: false");
+  const std::string with = ModelsWith("walk_bh", "walk.yaml",
+                                      {"only_positive: true", "only_positive: false\n  base_height_target_m: 0.45",
+                                       "dof_pos_limits: -10.0", "dof_pos_limits: -10.0\n    base_height: -30.0"});
+  QuadrupedWalkOptions o = Nominal();
+  o.models_dir = plain;
+  auto base = MakeWalk(o);
+  o.models_dir = with;
+  auto changed = MakeWalk(o);
+  CHECK(base->params().scales.base_height == 0.0);
+  CHECK(changed->params().scales.base_height == -30.0);
+  CHECK(changed->params().base_height_target_m == 0.45);
+  Rng ra(3), rb(3), noise(5);
+  std::vector<float> oa(45), ob(45), act(12), critic(static_cast<std::size_t>(changed->critic_observation_size()));
+  base->Reset(ra, oa);
+  changed->Reset(rb, ob);
+  double largest = 0;
+  for (int t = 0; t < 200; ++t) {
+    for (float& a : act) a = static_cast<float>(noise.Uniform(-0.5, 0.5));
+    const StepResult a = base->Step(act, oa), b = changed->Step(act, ob);
+    REQUIRE(a.terminated == b.terminated);
+    if (a.terminated) break;
+    changed->CriticObservation(critic);
+    const double h = critic[48] - 0.45, cost = -30.0 * h * h * 0.02;
+    CHECK(b.reward - a.reward == doctest::Approx(cost).epsilon(1e-5));
+    largest = std::min(largest, cost);
+  }
+  CHECK(largest < -1e-4);  // the robot was off its target, so the term cost something
+  // A scale without a target is refused, in walk.yaml and from --reward-scales.
+  o.models_dir = ModelsWith("walk_bh_no_target", "walk.yaml", "dof_pos_limits: -10.0",
+                            "dof_pos_limits: -10.0\n    base_height: -30.0");
+  CHECK(ErrorOf(o).find(
+            "walk.yaml: rewards: missing field 'base_height_target_m': rewards.scales.base_height is not 0") !=
+        std::string::npos);
+  o = Nominal();
+  o.reward_scales = "base_height=-30";
+  CHECK(
+      ErrorOf(o).find("--reward-scales: base_height=-30: the task sets no rewards.base_height_target_m (walk.yaml)") !=
+      std::string::npos);
+  o.reward_scales = "base_height=0";
+  CHECK(MakeWalk(o)->params().scales.base_height == 0.0);
+  // The Go2's task uses it.
+  o = Nominal();
+  o.robot = "go2";
+  auto go2 = MakeWalk(o);
+  CHECK(go2->params().scales.base_height < 0);
+  CHECK(go2->params().base_height_target_m == doctest::Approx(0.28));
+}
