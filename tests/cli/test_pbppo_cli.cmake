@@ -347,8 +347,17 @@ expect_in("${OUT}" "no candidate met the limits (no demo fall, flat <= 0 of 2, m
 expect_choice(select_quadruped ${WORK}/walk_select 3 "candidate,stand_vx,stand_vy,stand_yaw,forward_vx")
 run(2 env PBPPO=${PBPPO} bash ${select_q} ${WORK}/no-such-run)
 expect_in("${ERR}" "usage: tools/select_quadruped.sh RUN_DIR")
-run(2 env PBPPO=${PBPPO} MIXED_ROBOTS=0 bash ${select_q} ${WORK}/walk_select)
-expect_in("${ERR}" "MIXED_ROBOTS: '0' is not a positive integer")
+# Flat ground alone (MIXED_ROBOTS=0) and a bound on the paper's figure: a candidate whose mean
+# |error| exceeds it does not qualify, and the table shows the figures.
+run(0 env PBPPO=${PBPPO} FLAT_ROBOTS=2 MIXED_ROBOTS=0 MAX_FALLS_FLAT=2 DEMO_SEEDS=1 MAX_ERROR_FLAT=0.001 bash ${select_q}
+    ${WORK}/walk_select)
+expect_in("${OUT}" "flat |e| vx/vy/yaw")
+expect_in("${OUT}" "no candidate met the limits (no demo fall, flat <= 2 of 2, mixed <= 4 of 0 falls, flat |error| <= 0.001 per axis)")
+expect_choice(select_quadruped ${WORK}/walk_select 3 "candidate,stand_vx,stand_vy,stand_yaw,forward_vx")
+run(2 env PBPPO=${PBPPO} MIXED_ROBOTS=-1 bash ${select_q} ${WORK}/walk_select)
+expect_in("${ERR}" "MIXED_ROBOTS: '-1' is not a non-negative integer")
+run(2 env PBPPO=${PBPPO} MAX_ERROR_FLAT=low bash ${select_q} ${WORK}/walk_select)
+expect_in("${ERR}" "MAX_ERROR_FLAT: 'low' is not a positive number (m/s and rad/s)")
 run(2 env PBPPO=${PBPPO} "DEMO_SEEDS=1 x2" bash ${select_q} ${WORK}/walk_select)
 expect_in("${ERR}" "DEMO_SEEDS: 'x2' is not a non-negative integer")
 run(2 env PBPPO=${PBPPO} SCHEDULE=${WORK}/no-such.yaml bash ${select_q} ${WORK}/walk_select)
