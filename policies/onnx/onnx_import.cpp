@@ -693,8 +693,8 @@ Status Importer::Assemble(policy::PolicySpec& s, std::vector<std::string>& notes
                                            YamlFields::Num(L.low) + ", " + YamlFields::Num(L.high) + "]");
     s.action_scale[k] = static_cast<float>(L.scale * sy[j]);
     s.action_offset[k] = static_cast<float>(L.scale * oy[j] + L.offset);
-    s.action_low[k] = static_cast<float>(low);
-    s.action_high[k] = static_cast<float>(high);
+    s.action_low[k] = policy::FloatNotBelow(low);
+    s.action_high[k] = policy::FloatNotAbove(high);
   }
 
   // What was recognised.

@@ -2,11 +2,25 @@
 // Set-up-time data: vectors and strings. The runtime repacks it into a PolicyModel.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace pbppo::policy {
+
+// A limit given in double, held in float32 on its inside: the nearest float not below `low`, not
+// above `high`. A blob clamps its commands to float limits; rounded to nearest, a limit such as
+// -0.83776 becomes -0.8377599716, just above the double limit the supervisor checks, so a policy
+// at its joint limit would send a command "beyond" it.
+inline float FloatNotBelow(double low) noexcept {
+  const float f = static_cast<float>(low);
+  return static_cast<double>(f) < low ? std::nextafter(f, HUGE_VALF) : f;
+}
+inline float FloatNotAbove(double high) noexcept {
+  const float f = static_cast<float>(high);
+  return static_cast<double>(f) > high ? std::nextafter(f, -HUGE_VALF) : f;
+}
 
 // kLeakyRelu: x > 0 ? x : alpha * x, with the layer's alpha (the negative slope) in [0, 1].
 enum class Activation : std::uint32_t { kIdentity = 0, kTanh = 1, kElu = 2, kRelu = 3, kLeakyRelu = 4 };

@@ -152,8 +152,8 @@ void ApplyLayoutToSpec(const IoLayout& layout, policy::PolicySpec& spec) {
   for (const auto& a : layout.actions) {
     spec.action_scale.push_back(static_cast<float>(a.scale));
     spec.action_offset.push_back(static_cast<float>(a.offset));
-    spec.action_low.push_back(static_cast<float>(a.low));
-    spec.action_high.push_back(static_cast<float>(a.high));
+    spec.action_low.push_back(policy::FloatNotBelow(a.low));
+    spec.action_high.push_back(policy::FloatNotAbove(a.high));
   }
 }
 

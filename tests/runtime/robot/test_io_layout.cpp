@@ -121,3 +121,31 @@ TEST_CASE("the shipped pendulum layout loads") {
   CHECK(l->observation_size() == 3);
   CHECK(l->action_size() == 1);
 }
+
+TEST_CASE(
+    "a policy's action limits are held in float inside the layout's - at its limit it sends no command beyond it") {
+  // The Go2's calf stops at -0.83776 rad, which rounds to the float -0.8377599716, above it.
+  CHECK(static_cast<double>(static_cast<float>(-0.83776)) > -0.83776);
+  for (const char* robot : {"go2", "quadruped"}) {
+    CAPTURE(robot);
+    auto l = LoadIoLayout(pbppo::test::SourcePath(std::string("models/") + robot + "/io_layout.yaml"));
+    REQUIRE_MESSAGE(l.ok(), l.error().message);
+    pbppo::policy::PolicySpec spec = pbppo::policy::MakeRandomSpec(
+        {static_cast<std::uint32_t>(l->observation_size()), 8, static_cast<std::uint32_t>(l->action_size())},
+        pbppo::policy::Activation::kTanh, 1);
+    ApplyLayoutToSpec(*l, spec);
+    for (std::size_t j = 0; j < l->actions.size(); ++j) {
+      const double low = l->actions[j].low, high = l->actions[j].high;
+      const double lo = spec.action_low[j], hi = spec.action_high[j];
+      CHECK(lo >= low);
+      CHECK(hi <= high);
+      // ... and the nearest such float: the next one out is beyond the limit.
+      CHECK(static_cast<double>(std::nextafter(spec.action_low[j], -HUGE_VALF)) < low);
+      CHECK(static_cast<double>(std::nextafter(spec.action_high[j], HUGE_VALF)) > high);
+    }
+  }
+  CHECK(pbppo::policy::FloatNotAbove(-0.83776) < static_cast<float>(-0.83776));
+  CHECK(pbppo::policy::FloatNotAbove(0.5) == 0.5f);
+  CHECK(pbppo::policy::FloatNotBelow(0.3) > static_cast<float>(0.3) - 1e-6f);
+  CHECK(static_cast<double>(pbppo::policy::FloatNotBelow(0.3)) >= 0.3);
+}
