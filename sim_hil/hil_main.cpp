@@ -131,6 +131,8 @@ void AddLeggedDdsOptions(CLI::App& app, pbppo::sim::LeggedDdsHilOptions& o) {
       ->check(positive);
   app.add_option("--report", o.report, "Write the run's report (JSON)");
   app.add_option("--trace", o.trace, "Write the base's trace, every 10 periods (CSV)");
+  app.add_option("--plot", o.plot,
+                 "Plot the commanded and measured velocity (PNG; and <name>_path.png, the base's path from above)");
   app.add_option("--remote", o.remote,
                  "A schedule of a stream the state message carries (the robot's remote: its keys and sticks), "
                  "played on the robot's clock");

@@ -435,6 +435,9 @@ int RunLeggedDdsHil(const LeggedDdsHilOptions& o, const std::atomic<bool>& stop)
   int rc = (!io_ok || !plant_ok || controller_lost || bad_crc > 0 || out_of_limits > 0) ? 1 : 0;
   if (!o.trace.empty())
     if (auto st = WriteRigTrace(trace, o.trace, 10); !st) rc = Fail(st.error().message);
+  if (!o.plot.empty())
+    if (auto st = PlotRigTrace(trace, m.name + " HIL", m.op.any(), o.plot); !st)
+      std::fprintf(stderr, "pbppo-hil go2: --plot: %s\n", st.error().message.c_str());
   if (!o.report.empty()) {
     nlohmann::json j;
     j["robot"] = m.name;

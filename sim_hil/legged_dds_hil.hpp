@@ -42,6 +42,7 @@ struct LeggedDdsHilOptions {
   std::string commands;       // the controller's velocity schedule: per-phase tracking in the report
   std::string report;         // JSON
   std::string trace;          // CSV, one row per 10 periods
+  std::string plot;           // PNG: commanded and measured velocity (and <stem>_path.png, the base path)
   bool lockstep = true;
   int domain_id = 0;
   double duration_s = 0;  // simulated; 0: until the controller leaves (or the schedule's end + 3 s)

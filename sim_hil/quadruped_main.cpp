@@ -47,13 +47,6 @@ int Fail(const std::string& msg, int rc) {
   return rc;
 }
 
-const char* kNames[3] = {"vx", "vy", "yaw rate"};
-
-// "out.png" -> "out": the stem the other plots' names extend.
-std::string PngStem(const std::string& png) {
-  return png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
-}
-
 Status WriteReportJson(const RigReport& r, double rtf, const std::string& path) {
   nlohmann::json j = {{"fell", r.fell},
                       {"fell_at_s", r.fell_at_s},
@@ -71,67 +64,6 @@ Status WriteReportJson(const RigReport& r, double rtf, const std::string& path) 
   }
   const std::string text = j.dump(2) + "\n";
   return policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
-}
-
-Status Plot(const QuadrupedRig& rig, const std::string& png) {
-  report::TimeSeriesPlot ts;
-  ts.title = "quadruped HIL: commanded (dashed) and measured velocity";
-  const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
-  for (int k = 0; k < 3; ++k) {
-    report::TimeSeriesPlot::Panel p;
-    p.ylabel = labels[k];
-    report::TimeSeriesPlot::Series cmd, meas;
-    cmd.title = std::string("command ") + kNames[k];
-    cmd.dashed = true;
-    meas.title = std::string("measured ") + kNames[k];
-    for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
-      const RigSample& s = rig.trace()[i];
-      const double c[3] = {static_cast<double>(s.cmd_vx), static_cast<double>(s.cmd_vy),
-                           static_cast<double>(s.cmd_yaw_rate)};
-      const double m[3] = {static_cast<double>(s.vx_mps), static_cast<double>(s.vy_mps),
-                           static_cast<double>(s.yaw_rate_radps)};
-      cmd.x.push_back(static_cast<double>(s.t_s));
-      cmd.y.push_back(c[k]);
-      meas.x.push_back(static_cast<double>(s.t_s));
-      meas.y.push_back(m[k]);
-    }
-    p.series = {cmd, meas};
-    ts.panels.push_back(p);
-  }
-  if (rig.model().op.any()) {  // an operator's requests move the phases: show them
-    report::TimeSeriesPlot::Panel p;
-    p.ylabel = "phase, mode";
-    report::TimeSeriesPlot::Series phase, mode;
-    phase.title = "phase (2 stand-up, 3 hold, 4 run, 9 sit-down, 10 passive)";
-    mode.title = "mode (2 safe-stop, 3 e-stop)";
-    mode.dashed = true;
-    mode.group = 1;
-    for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
-      const RigSample& s = rig.trace()[i];
-      phase.x.push_back(static_cast<double>(s.t_s));
-      phase.y.push_back(s.loop_phase);
-      mode.x.push_back(static_cast<double>(s.t_s));
-      mode.y.push_back(s.mode);
-    }
-    p.series = {phase, mode};
-    ts.panels.push_back(p);
-  }
-  if (auto st = report::PlotTimeSeries(ts, png); !st) return st;
-  report::MapPlot map;
-  map.title = "quadruped HIL: base path (top view)";
-  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
-  report::MapPlot::Path path;
-  for (std::size_t i = 0; i < rig.trace().size(); i += 10) {
-    const RigSample& s = rig.trace()[i];
-    path.xy.push_back({static_cast<double>(s.x_m), static_cast<double>(s.y_m)});
-    x0 = std::min(x0, static_cast<double>(s.x_m));
-    x1 = std::max(x1, static_cast<double>(s.x_m));
-    y0 = std::min(y0, static_cast<double>(s.y_m));
-    y1 = std::max(y1, static_cast<double>(s.y_m));
-  }
-  map.paths.push_back(path);
-  map.arena = {x0 - 0.5, x1 + 0.5, y0 - 0.5, y1 + 0.5};
-  return report::PlotMap(map, PngStem(png) + "_path.png");
 }
 
 int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOptions hil) {
@@ -265,7 +197,7 @@ int InProcess(const Options& o, const robot::RobotModel& model, QuadrupedHilOpti
   if (!o.report.empty())
     if (auto st = WriteReportJson(rep, sim_s / wall, o.report); !st) return Fail(st.error().message, 1);
   if (!o.plot.empty()) {
-    if (auto st = Plot(**rig, o.plot); !st)
+    if (auto st = PlotRigTrace((*rig)->trace(), "quadruped HIL", (*rig)->model().op.any(), o.plot); !st)
       std::fprintf(stderr, "pbppo-hil quadruped: --plot: %s\n", st.error().message.c_str());
     if (auto st = report::PlotLatency(
             profile, PngStem(o.plot) + "_latency.png",

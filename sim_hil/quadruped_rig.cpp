@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "report/plots.hpp"
 #include "runtime/core/clock.hpp"
 #include "runtime/policy/blob.hpp"
 
@@ -259,6 +260,74 @@ Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& pat
     text += line;
   }
   return policy::WriteFileAtomic(path, {reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+}
+
+std::string PngStem(const std::string& png) {
+  return png.size() > 4 && png.substr(png.size() - 4) == ".png" ? png.substr(0, png.size() - 4) : png;
+}
+
+Status PlotRigTrace(const std::vector<RigSample>& trace, const std::string& what, bool phases, const std::string& png,
+                    std::uint32_t every) {
+  static constexpr const char* kNames[3] = {"vx", "vy", "yaw rate"};
+  const std::size_t step = std::max<std::uint32_t>(every, 1);
+  report::TimeSeriesPlot ts;
+  ts.title = what + ": commanded (dashed) and measured velocity";
+  const char* labels[3] = {"vx [m/s]", "vy [m/s]", "yaw rate [rad/s]"};
+  for (int k = 0; k < 3; ++k) {
+    report::TimeSeriesPlot::Panel p;
+    p.ylabel = labels[k];
+    report::TimeSeriesPlot::Series cmd, meas;
+    cmd.title = std::string("command ") + kNames[k];
+    cmd.dashed = true;
+    meas.title = std::string("measured ") + kNames[k];
+    for (std::size_t i = 0; i < trace.size(); i += step) {
+      const RigSample& s = trace[i];
+      const double c[3] = {static_cast<double>(s.cmd_vx), static_cast<double>(s.cmd_vy),
+                           static_cast<double>(s.cmd_yaw_rate)};
+      const double m[3] = {static_cast<double>(s.vx_mps), static_cast<double>(s.vy_mps),
+                           static_cast<double>(s.yaw_rate_radps)};
+      cmd.x.push_back(static_cast<double>(s.t_s));
+      cmd.y.push_back(c[k]);
+      meas.x.push_back(static_cast<double>(s.t_s));
+      meas.y.push_back(m[k]);
+    }
+    p.series = {cmd, meas};
+    ts.panels.push_back(p);
+  }
+  if (phases) {  // an operator's requests move the phases: show them
+    report::TimeSeriesPlot::Panel p;
+    p.ylabel = "phase, mode";
+    report::TimeSeriesPlot::Series phase, mode;
+    phase.title = "phase (2 stand-up, 3 hold, 4 run, 9 sit-down, 10 passive)";
+    mode.title = "mode (2 safe-stop, 3 e-stop)";
+    mode.dashed = true;
+    mode.group = 1;
+    for (std::size_t i = 0; i < trace.size(); i += step) {
+      const RigSample& s = trace[i];
+      phase.x.push_back(static_cast<double>(s.t_s));
+      phase.y.push_back(s.loop_phase);
+      mode.x.push_back(static_cast<double>(s.t_s));
+      mode.y.push_back(s.mode);
+    }
+    p.series = {phase, mode};
+    ts.panels.push_back(p);
+  }
+  if (auto st = report::PlotTimeSeries(ts, png); !st) return st;
+  report::MapPlot map;
+  map.title = what + ": base path (top view)";
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  report::MapPlot::Path path;
+  for (std::size_t i = 0; i < trace.size(); i += step) {
+    const RigSample& s = trace[i];
+    path.xy.push_back({static_cast<double>(s.x_m), static_cast<double>(s.y_m)});
+    x0 = std::min(x0, static_cast<double>(s.x_m));
+    x1 = std::max(x1, static_cast<double>(s.x_m));
+    y0 = std::min(y0, static_cast<double>(s.y_m));
+    y1 = std::max(y1, static_cast<double>(s.y_m));
+  }
+  map.paths.push_back(path);
+  map.arena = {x0 - 0.5, x1 + 0.5, y0 - 0.5, y1 + 0.5};
+  return report::PlotMap(map, PngStem(png) + "_path.png");
 }
 
 }  // namespace pbppo::sim

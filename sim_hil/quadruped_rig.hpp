@@ -158,4 +158,14 @@ RigReport ReportOfTrace(const std::vector<RigSample>& trace, const loop::Schedul
 // Writes the trace as CSV (one row per `every` ticks); errors name the path.
 Status WriteRigTrace(const std::vector<RigSample>& trace, const std::string& path, std::uint32_t every = 10);
 
+// Plots a trace: `png` the commanded (dashed) and measured vx, vy and yaw rate against time (one
+// point per `every` samples; `phases`: a panel of the loop's phase and mode too, for a robot whose
+// operator moves them), and <stem>_path.png the base's path from above. `what` names the run in
+// the titles ("quadruped HIL").
+Status PlotRigTrace(const std::vector<RigSample>& trace, const std::string& what, bool phases, const std::string& png,
+                    std::uint32_t every = 10);
+
+// "out.png" -> "out": the stem the other plots' names extend.
+std::string PngStem(const std::string& png);
+
 }  // namespace pbppo::sim
