@@ -29,16 +29,35 @@
 # stage whose folder holds a finished run (summary.json, not interrupted) is kept, so a stopped
 # recipe resumes: a stage that was stopped or killed continues from its last resume.bin (pbppo
 # train --resume: the same weights as uninterrupted); delete OUT_DIR to train afresh.
-# Usage: tools/train_quadruped.sh [OUT_DIR=runs/train_quadruped]
-#   PBPPO=path/to/pbppo  HIL=path/to/pbppo-hil  THREADS=2  SEED=1  START_STEPS=2e7  FLAT_STEPS=2e7
+# Another legged robot of models/ (ROBOT=go2: its walk.yaml, io_layout.yaml and schedules/demo.yaml)
+# trains the same way and ships to policies/frozen/ROBOT_walk/; its HIL run is the DDS simulator
+# (pbppo-hil go2 --robot ROBOT) and pbppo-controller in lock-step, one start. The Go2's recipe:
+#   ROBOT=go2 FLAT_TERRAIN=flat SHARES=0.5:0.2 MIXED_ROBOTS=0 MAX_ERROR_FLAT=0.15 tools/train_quadruped.sh runs/train_go2
+# (its second stage on flat ground with half the commands following a heading, as the paper's test
+# sends them, and the choice among its snapshots bounded by the paper's figure on the development
+# seed: policies/frozen/go2_walk/README.md).
+# Usage: tools/train_quadruped.sh [OUT_DIR=runs/train_ROBOT]
+#   ROBOT=quadruped  PBPPO=path/to/pbppo  HIL=path/to/pbppo-hil  CONTROLLER=path/to/pbppo-controller
+#   THREADS=2  SEED=1  START_STEPS=2e7  FLAT_STEPS=2e7  FLAT_TERRAIN=mixed (the second stage's)
 #   SHARES=0.3:0.4  REWARD_SCALES=tracking_lin_vel=2.5,tracking_ang_vel=1.0,termination=-150
 #   CRITIC_WARMUP=20  SCHEDULE=pbppo  SNAPSHOTS=20 (0: no choice, the last policy)
+#   MIXED_ROBOTS, MAX_ERROR_FLAT: tools/select_quadruped.sh's  DOMAIN=41 (the DDS HIL's domain)
 #   SHIP=1 (0: train and evaluate, do not copy into policies/frozen)
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
-out="${1:-$root/runs/train_quadruped}"
+robot="${ROBOT:-quadruped}"
+case "$robot" in '' | */* | .*) fail "ROBOT: '$robot' is not a folder name of models/ (quadruped, go2)" ;; esac
+[ -f "$root/models/$robot/walk.yaml" ] || fail "ROBOT: models/$robot/walk.yaml not found (a legged robot with a walking task)"
+out="${1:-$root/runs/train_$robot}"
 pbppo="$(program PBPPO build/default/policies/pbppo)"
 hil="$(program HIL build/default/sim_hil/pbppo-hil)"
+[ "$robot" = quadruped ] || controller="$(program CONTROLLER build/default/firmware/pbppo-controller)"
+demo="$root/models/$robot/schedules/demo.yaml"
+[ -f "$demo" ] || fail "ROBOT: models/$robot/schedules/demo.yaml not found (the demo schedule)"
+flat_terrain="${FLAT_TERRAIN:-mixed}"
+case "$flat_terrain" in flat | mixed) ;; *) fail "FLAT_TERRAIN: '$flat_terrain' is not flat or mixed" ;; esac
+domain="${DOMAIN:-41}"
+non_negative_int DOMAIN "$domain"
 threads="${THREADS:-2}"
 seed="${SEED:-1}"
 start_steps="${START_STEPS:-2e7}"
@@ -50,11 +69,11 @@ non_negative_int SNAPSHOTS "$snapshots"
 warmup="${CRITIC_WARMUP:-20}"
 schedule="${SCHEDULE:-pbppo}"
 ship="${SHIP:-1}"
-frozen="$root/policies/frozen/quadruped_walk"
+frozen="$root/policies/frozen/${robot}_walk"
 # legged_gym's PPO for flat terrain (rsl_rl: 5 epochs, 4 minibatches, KL-adaptive rate, entropy
 # 0.01, value loss 1.0 clipped at 0.2, gradient norm 1.0, 128-64-32 ELU) on 512 environments x 24
 # steps (docs/quadruped_walk.md).
-common=(--env quadruped-walk --schedule "$schedule" --arms 0.1:0.3:5 --feedback rollout --threads "$threads"
+common=(--env quadruped-walk --robot "$robot" --schedule "$schedule" --arms 0.1:0.3:5 --feedback rollout --threads "$threads"
   --envs 512 --rollout 24 --minibatch 3072 --epochs 5 --lr 1e-3 --lr-schedule adaptive:0.01 --ent-coef 0.01
   --vf-coef 1.0 --clip-vf 0.2 --max-grad-norm 1.0 --hidden 128-64-32 --activation elu --seed "$seed")
 finished() { [ -f "$1/summary.json" ] && grep -q '"interrupted": false' "$1/summary.json"; }
@@ -91,7 +110,7 @@ seconds() { sed 's/[^0-9]//g' "$out/$1/wall_time.txt"; }
 stage start "" "$start_steps" --terrain flat --command-shares 1:0
 snapshot_flags=()
 [ "$snapshots" -gt 0 ] && snapshot_flags=(--snapshots "$snapshots")
-stage flat start "$flat_steps" --terrain mixed --command-shares "$shares" --reward-scales "$reward_scales" \
+stage flat start "$flat_steps" --terrain "$flat_terrain" --command-shares "$shares" --reward-scales "$reward_scales" \
   "${snapshot_flags[@]}"
 total=$(( $(seconds start) + $(seconds flat) ))
 echo "flat.blob from scratch (start + flat): $total s wall ($(( total / 60 )) min $(( total % 60 )) s)" |
@@ -102,7 +121,7 @@ mkdir -p "$report"
 # The policy to evaluate and ship: the choice among the flat stage's snapshots and its last policy.
 flat_blob="$out/flat/policy.blob"
 if [ "$snapshots" -gt 0 ]; then
-  PBPPO="$pbppo" "$root/tools/select_quadruped.sh" "$out/flat" | tee "$report/flat_select.txt"
+  PBPPO="$pbppo" ROBOT="$robot" "$root/tools/select_quadruped.sh" "$out/flat" | tee "$report/flat_select.txt"
   cp "$out/flat/select.csv" "$report/flat_select.csv"
   flat_blob="$out/flat/selected.blob"
 fi
@@ -110,14 +129,14 @@ fi
 for run in start flat; do
   for axis in vx vy yaw_rate; do
     "$pbppo" curves --out "$out/$run/tracking_$axis.png" --column "tracking_${axis}_100" \
-      --title "quadruped-walk, $run: mean |error| of $axis, last 100 training episodes" "$run=$out/$run" > /dev/null
+      --title "quadruped-walk ($robot), $run: mean |error| of $axis, last 100 training episodes" "$run=$out/$run" > /dev/null
   done
 done
 for policy in flat; do
   for terrain in flat mixed; do
     for s in 7 8; do
       name="${policy}_on_${terrain}_seed$s"
-      "$pbppo" eval "$flat_blob" --env quadruped-walk --terrain "$terrain" --seed "$s" --json \
+      "$pbppo" eval "$flat_blob" --env quadruped-walk --robot "$robot" --terrain "$terrain" --seed "$s" --json \
         --plot "$report/$name.png" > "$report/$name.json"
       python3 - "$report/$name.json" "$name" <<'PY'
 import json, sys
@@ -131,23 +150,39 @@ PY
   # 500 robots: a fall rate of 1 % shows as 5 falls, where 50 robots show 0 or 1.
   for terrain in flat mixed; do
     name="${policy}_on_${terrain}_500_seed7"
-    "$pbppo" eval "$flat_blob" --env quadruped-walk --terrain "$terrain" --seed 7 --episodes 500 \
+    "$pbppo" eval "$flat_blob" --env quadruped-walk --robot "$robot" --terrain "$terrain" --seed 7 --episodes 500 \
       --json > "$report/$name.json"
     python3 -c 'import json, sys; r = json.load(open(sys.argv[1])); e = r["mean_abs_error"]
 print("%-24s vx %.3f  vy %.3f  yaw %.3f  falls %d/%d (blocks %d/%d)" % (sys.argv[2], e["vx_mps"], e["vy_mps"],
       e["yaw_rate_radps"], r["falls"], r["robots"], r["falls_on_blocks"], r["robots_on_blocks"]))' "$report/$name.json" "$name"
   done
   # The demo schedule (stand, 0.5 m/s forward, 0.3 m/s sideways, turn in place at 0.5 rad/s, stop)
-  # in MuJoCo and in the Simbody HIL (the controller and the emulated CAN devices, lock-step).
-  "$pbppo" eval "$flat_blob" --env quadruped-walk --schedule "$root/models/quadruped/schedules/demo.yaml" \
-    --seed 7 > "$report/${policy}_demo_mujoco.txt"
-  "$hil" quadruped --in-process --policy "$flat_blob" \
-    --commands "$root/models/quadruped/schedules/demo.yaml" --scenario "$root/models/quadruped/scenarios/flat.yaml" \
-    --report "$report/${policy}_demo_hil.json" --plot "$report/${policy}_demo_hil.png" > "$report/${policy}_demo_hil.txt"
+  # in MuJoCo and in the Simbody HIL (the controller and the emulated devices, lock-step).
+  "$pbppo" eval "$flat_blob" --env quadruped-walk --robot "$robot" --schedule "$demo" \
+    --seed 7 > "$report/${policy}_demo_mujoco.txt" || [ $? -eq 1 ]  # a fall is a result (exit 1), shown below
+  if [ "$robot" != quadruped ]; then
+    # The robot's own messages over DDS: pbppo-hil go2 plays the robot, pbppo-controller runs the
+    # policy on the demo schedule and records; the recording must replay bit for bit.
+    "$hil" go2 --robot "$robot" --domain "$domain" --commands "$demo" --report "$report/${policy}_demo_hil.json" \
+      --trace "$out/demo_hil_trace.csv" --plot "$report/${policy}_demo_hil.png" > "$report/${policy}_demo_hil.txt" 2>&1 &
+    hil_pid=$!
+    "$controller" --robot "$robot" --domain "$domain" --policy "$flat_blob" --commands "$demo" --lockstep \
+      --lockstep-timeout-ms 200 --no-mlock --record "$out/demo_hil.pbppolog" > "$report/${policy}_demo_hil_controller.txt" 2>&1 ||
+      true
+    wait "$hil_pid" || fail "pbppo-hil go2 failed: $(cat "$report/${policy}_demo_hil.txt")"
+    "$pbppo" replay "$out/demo_hil.pbppolog" --robot "$robot" --policy "$flat_blob" | tail -n 1 |
+      tee "$report/${policy}_demo_hil_replay.txt"
+  else
+    "$hil" quadruped --in-process --policy "$flat_blob" \
+      --commands "$demo" --scenario "$root/models/quadruped/scenarios/flat.yaml" \
+      --report "$report/${policy}_demo_hil.json" --plot "$report/${policy}_demo_hil.png" > "$report/${policy}_demo_hil.txt"
+  fi
   for sim in mujoco hil; do
     echo "$policy, demo schedule in $sim:"
     grep -E '^(stand|forward|sideways|turn|stop) |walked' "$report/${policy}_demo_$sim.txt" | sed 's/^/  /'
   done
+  [ "$robot" = quadruped ] || grep -E "^controller:|^mode change" "$report/${policy}_demo_hil_controller.txt" || true
+  [ "$robot" = quadruped ] || continue
   # The same in the HIL from 12 starts (height 0.46, 0.48, 0.49 m; yaw 0, +-0.2, 0.7 rad): a
   # policy on the edge in one phase falls from some of them (docs/results/quadruped_sim2sim.md).
   starts="$report/${policy}_demo_hil_starts.txt"
@@ -156,8 +191,7 @@ print("%-24s vx %.3f  vy %.3f  yaw %.3f  falls %d/%d (blocks %d/%d)" % (sys.argv
     for yaw in 0.0 0.2 -0.2 0.7; do
       sed "s/height_m: [0-9.]*, yaw_rad: [-0-9.]*/height_m: $height, yaw_rad: $yaw/" \
         "$root/models/quadruped/scenarios/flat.yaml" > "$out/start.yaml"
-      "$hil" quadruped --in-process --policy "$flat_blob" \
-        --commands "$root/models/quadruped/schedules/demo.yaml" --scenario "$out/start.yaml" |
+      "$hil" quadruped --in-process --policy "$flat_blob" --commands "$demo" --scenario "$out/start.yaml" |
         awk -v h="$height" -v y="$yaw" '$1 == "forward" { f = $(NF-2) } $1 == "sideways" { s = $(NF-1) }
           $1 == "turn" { t = $NF } $1 == "walked" { fell = /FELL/ }
           END { printf "height %s yaw %s |e| forward %s sideways %s turn %s %s\n", h, y, f, s, t, fell ? "FELL" : "no fall" }' \
