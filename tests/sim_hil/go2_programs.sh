@@ -14,6 +14,10 @@
 #   4. the Go2's remote (models/go2_remote) played by the HIL's robot into LowState_: START stands
 #      the robot up, DOWN sits it down (passive on its belly), START stands it up again, SELECT is
 #      the e-stop; the trunk's heights, no fall, the recording replays bit for bit.
+#   5. the shipped walking policy (policies/frozen/go2_walk/flat.blob) on the demo schedule (stand,
+#      forward 0.5 m/s, sideways 0.3 m/s, turn in place 0.5 rad/s, stop) in the HIL in lock-step:
+#      no fall, every command inside the limits (none clamped: the mode stays nominal), each
+#      phase's commanded axis tracked within its bound; the recording replays bit for bit.
 # usage: go2_programs.sh HIL CONTROLLER PBPPO CYCLONE_GO2_ROBOT SOURCE_DIR WORK_DIR
 set -euo pipefail
 hil=$1 ctl=$2 pbppo=$3 cyclone=$4 src=$5 work=$6
@@ -116,4 +120,33 @@ check_height 7.9 0.0 0.08 1 "passive (on its belly)"
 check_height 9.9 0.25 0.40 0 "standing again"
 "$pbppo" replay "$work/run4.log" --robot "$remote" >"$work/replay4.log" 2>&1 || { cat "$work/replay4.log"; fail "replay"; }
 expect "$work/replay4.log" "commands compared, 0 different$"
+echo "== 5: the shipped walking policy on the demo schedule, recorded and replayed"
+blob=policies/frozen/go2_walk/flat.blob
+demo=models/go2/schedules/demo.yaml
+"$hil" go2 --domain "$domain" --commands "$demo" --report "$work/hil5.json" >"$work/hil5.log" 2>&1 &
+hil_pid=$!
+"$ctl" --robot "$robot" --domain "$domain" --policy "$blob" --commands "$demo" --lockstep --lockstep-timeout-ms 100 \
+  --no-mlock --record "$work/run5.log" >"$work/ctl5.log" 2>&1 || { cat "$work/ctl5.log"; fail "the controller failed"; }
+wait "$hil_pid" || { cat "$work/hil5.log"; fail "pbppo-hil go2 failed"; }
+cat "$work/hil5.log"
+grep -E "^(controller|supervisor):" "$work/ctl5.log"
+expect "$work/hil5.log" "outside the limits 0\)"
+expect "$work/hil5.log" "; no fall"
+expect "$work/ctl5.log" "final mode nominal"
+expect "$work/ctl5.log" "supervisor: command limit 0,"
+# Each phase's commanded axis (vx, vy, yaw rate) within its bound, and the robot at rest standing.
+python3 - "$work/hil5.json" <<'PY' || fail "tracking (above)"
+import json, sys
+bounds = {"stand": (0, 0.1), "forward": (0, 0.15), "sideways": (1, 0.2), "turn": (2, 0.2), "stop": (0, 0.1)}
+ok = True
+for p in json.load(open(sys.argv[1]))["phases"]:
+    axis, bound = bounds[p["name"]]
+    e = p["mean_abs_error"][axis]
+    print("  %-9s |e| %s %.3f (bound %.2f)" % (p["name"], ("vx", "vy", "yaw rate")[axis], e, bound))
+    ok &= e <= bound
+sys.exit(0 if ok else 1)
+PY
+"$pbppo" replay "$work/run5.log" --robot "$robot" --policy "$blob" >"$work/replay5.log" 2>&1 ||
+  { cat "$work/replay5.log"; fail "replay"; }
+expect "$work/replay5.log" "commands compared, 0 different$"
 echo "go2 programs: ok"

@@ -5,7 +5,10 @@
 //               no fall; on the 1:1 mix of flat ground and blocks at most 2 falls of 50
 //   mixed.blob  on the 1:1 mix of flat ground and blocks: at most 2 falls of 50; on flat ground
 //               the same tracking figures as the flat policy
-// Label `shipped` (not `unit`): it runs 200 robot-episodes, too long for the sanitizer builds.
+//   go2_walk/flat.blob  (the Unitree Go2) on flat ground: the same tracking figures on the test's
+//               two seeds, at most 1 fall of 50 (seed 7: one robot tips over 0.76 s into its
+//               episode, in the start's random pose and velocity; seed 8: none)
+// Label `shipped` (not `unit`): it runs 300 robot-episodes, too long for the sanitizer builds.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -20,17 +23,20 @@ using namespace pbppo;
 namespace {
 
 const std::string kDir = "policies/frozen/quadruped_walk/";
+const std::string kGo2Dir = "policies/frozen/go2_walk/";
 
 // The report's figures are the portable kernel's: the same on every machine. The AVX-512 kernel
 // rounds differently, and 20 s on blocks turns that into other robots falling (mixed.blob, seed 7:
 // 4 of 50 where the portable kernel gives 2; the folder's README).
-envs::WalkEvalResult Test(const std::string& blob, const std::string& terrain, std::uint64_t seed) {
+envs::WalkEvalResult Test(const std::string& blob, const std::string& terrain, std::uint64_t seed,
+                          const std::string& robot = "quadruped", const std::string& dir = kDir) {
   policy::LoadOptions load;
   load.kernel = policy::Kernel::kPortable;
-  auto model = policy::PolicyModel::FromFile(test::SourcePath(kDir + blob), load);
+  auto model = policy::PolicyModel::FromFile(test::SourcePath(dir + blob), load);
   REQUIRE_MESSAGE(model.ok(), model.error().message);
   envs::QuadrupedWalkOptions o;
   o.models_dir = test::SourcePath("models");
+  o.robot = robot;
   o.terrain = terrain;
   o.randomize = false;
   o.paper_test = true;
@@ -40,9 +46,9 @@ envs::WalkEvalResult Test(const std::string& blob, const std::string& terrain, s
   eo.seed = seed;
   auto r = envs::EvaluateWalk(*model, **env, eo);
   REQUIRE_MESSAGE(r.ok(), r.error().message);
-  MESSAGE(blob << " on " << terrain << ", seed " << seed << ": |error| vx " << r->mean_abs_error[0] << " vy "
-               << r->mean_abs_error[1] << " yaw rate " << r->mean_abs_error[2] << ", falls " << r->falls
-               << " (on blocks " << r->falls_on_blocks << " of " << r->robots_on_blocks << ")");
+  MESSAGE(robot << " " << blob << " on " << terrain << ", seed " << seed << ": |error| vx " << r->mean_abs_error[0]
+                << " vy " << r->mean_abs_error[1] << " yaw rate " << r->mean_abs_error[2] << ", falls " << r->falls
+                << " (on blocks " << r->falls_on_blocks << " of " << r->robots_on_blocks << ")");
   CHECK(r->robots == 50);
   CHECK(r->forward_problems == 0);
   return *r;
@@ -57,8 +63,9 @@ void CheckTracking(const envs::WalkEvalResult& r) {
 }  // namespace
 
 TEST_CASE("shipped walking policies: golden vectors reproduce through the runtime's Forward") {
-  for (const char* name : {"flat", "mixed"}) {
-    const std::string blob = test::SourcePath(kDir + name + ".blob");
+  for (const std::string& name : {kDir + "flat", kDir + "mixed", kGo2Dir + "flat"}) {
+    CAPTURE(name);
+    const std::string blob = test::SourcePath(name + ".blob");
     auto model = policy::PolicyModel::FromFile(blob);
     REQUIRE_MESSAGE(model.ok(), model.error().message);
     auto g = policy::ReadGoldenFile(policy::GoldenPathFor(blob));
@@ -92,6 +99,14 @@ TEST_CASE("shipped mixed policy: the paper's test on flat ground and blocks - at
   const auto flat = Test("mixed.blob", "flat", 7);
   CheckTracking(flat);
   CHECK(flat.falls == 0);
+}
+
+TEST_CASE("shipped Go2 policy: the paper's test on flat ground - tracking within 0.15, at most 1 fall of 50") {
+  for (const std::uint64_t seed : {7u, 8u}) {
+    const auto r = Test("flat.blob", "flat", seed, "go2", kGo2Dir);
+    CheckTracking(r);
+    CHECK(r.falls <= 1);
+  }
 }
 
 TEST_CASE("shipped flat policy in MuJoCo on a held velocity schedule - the command observed, tracked, no fall") {
