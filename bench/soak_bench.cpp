@@ -170,7 +170,10 @@ int main(int argc, char** argv) {
     const std::string newest = loop::RotatedPath(record.path, r->record_files - 1);
     std::string how;
     auto log = loop::ReadLog(newest);
-    auto source = loop::LoadSource(sim::SoakModel(*model, realtime), {policy, "", false, policy::Kernel::kAuto});
+    loop::SourceFiles source_files;
+    source_files.policy = policy;
+    source_files.self_test = false;
+    auto source = loop::LoadSource(sim::SoakModel(*model, realtime), source_files);
     if (!log || !source) {
       how = !log ? log.error().message : source.error().message;
     } else if (auto rp = loop::Replay(sim::SoakModel(*model, realtime), *log, source->source.get(), source->hash);

@@ -89,7 +89,10 @@ TEST_CASE("soak: the walking quadruped, 150,000 ticks under seeded faults - ever
     REQUIRE_FALSE(log->records.empty());
     if (next_tick != 0) CHECK(log->records.front().inputs.tick == next_tick);
     next_tick = log->records.back().outputs.tick + 1;
-    auto source = loop::LoadSource(m, {o.policy, "", false, policy::Kernel::kAuto});
+    loop::SourceFiles files;
+    files.policy = o.policy;
+    files.self_test = false;
+    auto source = loop::LoadSource(m, files);
     REQUIRE_MESSAGE(source.ok(), source.error().message);
     auto replay = loop::Replay(m, *log, source->source.get(), source->hash);
     REQUIRE_MESSAGE(replay.ok(), replay.error().message);

@@ -208,13 +208,15 @@ TEST_CASE("LoadSource: a robot that trusts keys arms only on a blob signed by on
   const std::string blob = scratch + "/auv.blob";
   std::filesystem::copy_file(test::SourcePath("policies/frozen/auv_nav/auv_nav.blob"), blob);
   std::filesystem::copy_file(test::SourcePath("policies/frozen/auv_nav/auv_nav.golden"), scratch + "/auv.golden");
-  auto unsigned_load = loop::LoadSource(*robot, {blob, "", true});
+  loop::SourceFiles files;
+  files.policy = blob;
+  auto unsigned_load = loop::LoadSource(*robot, files);
   REQUIRE_FALSE(unsigned_load.ok());
   CHECK(unsigned_load.error().message.find("refusing to arm: " + blob + " is not signed") == 0);
   auto bytes = ReadFileBytes(blob, 1u << 26);
   REQUIRE(bytes.ok());
   std::ofstream(SignaturePathFor(blob)) << Signed(*bytes, k);
-  auto signed_load = loop::LoadSource(*robot, {blob, "", true});
+  auto signed_load = loop::LoadSource(*robot, files);
   CHECK_MESSAGE(signed_load.ok(), signed_load.error().message);
   // A robot file naming a key that is not a public key fails to give its keys, naming it.
   std::ofstream(dir + "/keys/release.pub") << "not a key";
