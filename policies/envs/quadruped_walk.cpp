@@ -293,13 +293,14 @@ const std::string& QuadrupedWalk::name() const noexcept {
   return shared_->name;
 }
 std::string QuadrupedWalk::provenance() const {
-  // A blob's provenance holds 256 bytes of this: the run's choices first (terrain, command mix,
-  // reward scales changed for the run), then walk.yaml's noise and randomisation.
+  // A blob's provenance holds 256 bytes of this (cut with "...", summary.json has it whole): the
+  // run's choices first (robot, terrain, command mix, reward scales changed for the run), then
+  // walk.yaml's noise and randomisation.
   const QuadrupedWalkParams& p = shared_->params;
   char text[256];
-  int n = std::snprintf(text, sizeof text, "%s, terrain %s, commands every %g s (%g heading, %g zero planar",
-                        name().c_str(), shared_->options.terrain.c_str(), p.resample_s, p.heading_share,
-                        p.zero_planar_share);
+  int n = std::snprintf(text, sizeof text, "%s, robot %s, terrain %s, commands every %g s (%g heading, %g zero planar",
+                        name().c_str(), shared_->robot_model->name.c_str(), shared_->options.terrain.c_str(),
+                        p.resample_s, p.heading_share, p.zero_planar_share);
   std::string out(text, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof text) - 1)));
   if (p.single_axis_share > 0) {
     n = std::snprintf(text, sizeof text, ", %g single axis", p.single_axis_share);

@@ -14,6 +14,12 @@ Error InitError(const std::string& what) {
   return MakeError(ErrorCode::kInvalidValue, "--init: " + what);
 }
 
+// A blob's text field holds at most `max` bytes: a longer text is cut and says so, ending in "..."
+// (summary.json keeps the run's whole text).
+std::string FitText(const std::string& text, std::size_t max) {
+  return text.size() <= max ? text : text.substr(0, max - 3) + "...";
+}
+
 }  // namespace
 
 policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* params,
@@ -43,8 +49,8 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
   robot::ApplyLayoutToSpec(env.layout(), s);
   s.provenance.trainer_version = std::string("pbppo-rt ") + PBPPO_VERSION;
   s.provenance.git_revision = BuildGitRevision();
-  s.provenance.environment = env.provenance().substr(0, 256);
-  s.provenance.clip_schedule = info.clip_schedule.substr(0, 200);
+  s.provenance.environment = FitText(env.provenance(), 256);
+  s.provenance.clip_schedule = FitText(info.clip_schedule, 200);
   s.provenance.seed = info.seed;
   s.provenance.env_steps = info.env_steps;
   s.provenance.final_return = info.final_return;

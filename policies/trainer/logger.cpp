@@ -83,13 +83,14 @@ std::string Logger::Plots(const std::vector<IterationStats>& its) const {
   return note;
 }
 
-Status Logger::Finish(const std::string& env_name, TrainResult& res) {
+Status Logger::Finish(const std::string& env_name, const std::string& env_provenance, TrainResult& res) {
   if (o_.out_dir.empty()) return {};
   csv_.close();
   res.plots_note = o_.plots ? Plots(res.iterations) : "plots skipped: --no-plots";
   auto or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
   nlohmann::json j = OptionsJson(o_);
-  j["env"] = env_name;  // the environment's full name, as the blob's provenance has it
+  j["env"] = env_name;               // the environment's full name, as the blob's provenance has it
+  j["provenance"] = env_provenance;  // whole (the blob holds its first 256 bytes)
   j["iterations"] = res.iterations.size();
   j["env_steps"] = res.env_steps;
   j["eval_steps"] = res.eval_steps;

@@ -92,8 +92,9 @@ class Logger {
   // --snapshots) and the path.
   Status Open(const std::vector<IterationStats>& resumed = {});
   void Log(const IterationStats& s);
-  // The curves (unless --no-plots) and summary.json; `env_name` is the environment's full name.
-  Status Finish(const std::string& env_name, TrainResult& result);
+  // The curves (unless --no-plots) and summary.json; `env_name` is the environment's full name,
+  // `env_provenance` its whole provenance text (the blob holds its first 256 bytes).
+  Status Finish(const std::string& env_name, const std::string& env_provenance, TrainResult& result);
 
   // log.csv's header and rows.
   static std::string CsvHeader(std::size_t arms);

@@ -550,7 +550,7 @@ Result<TrainResult> Runner::Learn(const std::function<void(const Progress&)>& pr
   }
   if (auto s = WriteCheckpoint(res.final_return, loop.env_steps); !s) return s.error();
   if (writer) {
-    if (auto s = log.Finish(proto_->name(), res); !s) return s.error();
+    if (auto s = log.Finish(proto_->name(), proto_->provenance(), res); !s) return s.error();
     // A finished run has nothing to resume.
     if (!res.interrupted && !o_.out_dir.empty()) {
       std::error_code ec;

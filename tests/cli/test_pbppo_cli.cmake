@@ -318,7 +318,7 @@ run(0 ${PBPPO} inspect ${WORK}/walk/policy.blob)
 expect_in("${OUT}" "quadruped-walk")
 expect_in("${OUT}" "45 -> 16 elu -> 16 elu -> 12 identity")
 # The provenance records the terrain, the noise and the randomisation of the training.
-expect_in("${OUT}" "quadruped-walk, terrain mixed, commands every 5 s (1 heading, 0 zero planar); noise x1 (ang vel ")
+expect_in("${OUT}" "quadruped-walk, robot quadruped, terrain mixed, commands every 5 s (1 heading, 0 zero planar); noise x1 (ang vel ")
 expect_in("${OUT}" "; friction 0.5..1.25, mass -1..+1 kg, gains x0.9..1.1, latency 0..1, pushes 1 m/s/15 s")
 run(0 ${PBPPO} eval ${WORK}/walk/policy.blob --env quadruped-walk --episodes 2 --seed 3 --json
     --plot ${WORK}/walk/eval.png)
@@ -399,6 +399,23 @@ run(0 ${PBPPO} train --env quadruped-walk --command-shares 0.5:0.2 --reward-scal
 run(0 ${PBPPO} inspect ${WORK}/walk_heading/policy.blob)
 expect_in("${OUT}" "commands every 5 s (0.5 heading, 0.2 zero planar); rewards tracking_ang_vel=1.0,termination=-2; noise")
 expect_json(${WORK}/walk_heading/summary.json reward_scales "tracking_ang_vel=1.0,termination=-2")
+# Another robot, named in the provenance; a provenance longer than the blob's 256 bytes is cut
+# saying so ("..."), and summary.json holds it whole.
+run(0 ${PBPPO} train --env quadruped-walk --robot go2 --command-shares 0.5:0.2
+    --reward-scales tracking_lin_vel=2.5,tracking_ang_vel=1.0,termination=-150 --schedule fixed:0.2 --steps 384
+    --envs 8 --rollout 24 --minibatch 96 --epochs 1 --hidden 16-16 --activation elu --seed 1 --threads 2 --no-plots
+    --quiet --out ${WORK}/walk_go2)
+run(0 ${PBPPO} inspect ${WORK}/walk_go2/policy.blob)
+expect_in("${OUT}" "environment quadruped-walk, robot go2, terrain flat, commands every 5 s (0.5 heading, 0.2 zero planar); rewards tracking_lin_vel=2.5,")
+string(REGEX MATCH "environment ([^\n]*)" line "${OUT}")
+string(LENGTH "${CMAKE_MATCH_1}" n)
+if(NOT n EQUAL 256 OR NOT CMAKE_MATCH_1 MATCHES "[.][.][.]$")
+  message(FATAL_ERROR "a long provenance: ${n} bytes, not 256 ending in '...': ${CMAKE_MATCH_1}")
+endif()
+file(READ ${WORK}/walk_go2/summary.json json)
+string(JSON whole GET "${json}" provenance)
+expect_in("${whole}" "robot go2, terrain flat")
+expect_in("${whole}" ", pushes 1 m/s/15 s")
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales tracking_yaw=1 --steps 192 --quiet --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--reward-scales: 'tracking_yaw' is not a reward term (tracking_lin_vel, tracking_ang_vel, ")
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques=-2e-4,collision=x --steps 192 --quiet

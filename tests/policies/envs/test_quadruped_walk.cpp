@@ -416,6 +416,7 @@ TEST_CASE("quadruped-walk: single-axis commands - vx, vy or a yaw rate alone, a 
   auto kept = MakeWalk(o);
   CHECK(kept->params().single_axis_share == 0.0);
   CHECK(kept->provenance().find("(0.5 heading, 0.2 zero planar)") != std::string::npos);
+  CHECK(kept->provenance().rfind("quadruped-walk, robot quadruped, terrain flat, commands", 0) == 0);
   o.command_shares = "0.5:0.2:0.3";
   CHECK(MakeWalk(o)->provenance().find("(0.5 heading, 0.2 zero planar, 0.3 single axis)") != std::string::npos);
 }
