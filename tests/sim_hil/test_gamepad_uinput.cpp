@@ -227,7 +227,9 @@ void SameSamplesLive(const std::string& name) {
       r.fields.insert(r.fields.end(), d.fields.begin(), d.fields.end());
       r.fresh.push_back(d.fresh[stream]);
     }
-    r.stats = static_cast<evdev::EvdevTransport*>(op->get())->stats();
+    const auto* evdev_transport = dynamic_cast<const evdev::EvdevTransport*>(op->get());
+    REQUIRE(evdev_transport != nullptr);
+    r.stats = evdev_transport->stats();
     return r;
   };
   const Run from_file = run(session, nullptr);
@@ -236,7 +238,7 @@ void SameSamplesLive(const std::string& name) {
   REQUIRE(live.fields.size() == from_file.fields.size());
   std::size_t different = 0, first_different = live.fields.size();
   for (std::size_t i = 0; i < live.fields.size(); ++i) {
-    // bit for bit (no field is NaN: NaN != NaN would count)
+    // bit for bit (memcmp: a NaN equals the same NaN, and -0 differs from +0)
     if (std::memcmp(&live.fields[i], &from_file.fields[i], sizeof(double)) != 0) {
       ++different;
       first_different = std::min(first_different, i);
@@ -247,7 +249,7 @@ void SameSamplesLive(const std::string& name) {
                << (different > 0 ? " (the first at tick " + std::to_string(first_different / width) + ")" : ""));
   CHECK(different == 0);
   CHECK(live.fresh == from_file.fresh);
-  // The session moved the pad: a command and the arming reached the fields, and the pad was lost.
+  // The session moved the pad (its stick reached the command field) and the pad was lost once.
   std::size_t moving = 0;
   for (std::size_t k = 0; k < ticks; ++k)
     moving += live.fields[k * width + static_cast<std::size_t>(m.FieldIndex("command_vx"))] != 0.0 ? 1 : 0;
