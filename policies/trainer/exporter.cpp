@@ -14,8 +14,8 @@ Error InitError(const std::string& what) {
   return MakeError(ErrorCode::kInvalidValue, "--init: " + what);
 }
 
-// A blob's text field holds at most `max` bytes: a longer text is cut and says so, ending in "..."
-// (summary.json keeps the run's whole text).
+// A blob's text field holds at most `max` bytes (the reader's BlobLimits): a longer text is cut
+// and says so, ending in "..." (summary.json keeps the run's whole text).
 std::string FitText(const std::string& text, std::size_t max) {
   return text.size() <= max ? text : text.substr(0, max - 3) + "...";
 }
@@ -49,7 +49,7 @@ policy::PolicySpec FreezeActor(const GaussianPolicy<float>& actor, const float* 
   robot::ApplyLayoutToSpec(env.layout(), s);
   s.provenance.trainer_version = std::string("pbppo-rt ") + PBPPO_VERSION;
   s.provenance.git_revision = BuildGitRevision();
-  s.provenance.environment = FitText(env.provenance(), 256);
+  s.provenance.environment = FitText(env.provenance(), policy::BlobLimits{}.max_text_bytes);
   s.provenance.clip_schedule = FitText(info.clip_schedule, 200);
   s.provenance.seed = info.seed;
   s.provenance.env_steps = info.env_steps;
