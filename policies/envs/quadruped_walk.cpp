@@ -114,6 +114,8 @@ Result<std::unique_ptr<QuadrupedWalk>> QuadrupedWalk::Make(const QuadrupedWalkOp
     return MakeError(ErrorCode::kInvalidValue, "--commands: " + st.error().message);
   if (auto st = ApplyCommandShares(options.command_shares, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "--command-shares: " + st.error().message);
+  if (auto st = ApplyCommandResample(options.command_resample, sh->params); !st)
+    return MakeError(ErrorCode::kInvalidValue, "--command-resample: " + st.error().message);
   if (auto st = ApplyRewardScales(options.reward_scales, sh->params); !st)
     return MakeError(ErrorCode::kInvalidValue, "--reward-scales: " + st.error().message);
   if (options.paper_test) {

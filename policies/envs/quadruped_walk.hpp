@@ -61,6 +61,7 @@ struct QuadrupedWalkOptions {
   std::string terrain = "flat";  // flat | mixed
   std::string commands;          // "VX:VY:YAW" maxima; empty: walk.yaml's ranges
   std::string command_shares;    // "HEADING:ZERO_PLANAR[:SINGLE_AXIS]" shares; empty: walk.yaml's
+  std::string command_resample;  // "SECONDS" between the training's commands; empty: walk.yaml's
   std::string reward_scales;     // "NAME=VALUE,..." reward scales replacing walk.yaml's; empty: none
   bool noise = true;             // observation noise
   bool randomize = true;         // friction, mass, gains, latency, pushes (false: the nominal robot)

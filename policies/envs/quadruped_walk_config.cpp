@@ -210,6 +210,15 @@ Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p) {
   return {};
 }
 
+Status ApplyCommandResample(const std::string& spec, QuadrupedWalkParams& p) {
+  if (spec.empty()) return {};
+  double v = 0;
+  if (!WholeNumber(spec, v) || !(v >= 0.02 && v <= 3600))
+    return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not a period in [0.02, 3600] s");
+  p.resample_s = v;
+  return {};
+}
+
 Status ApplyRewardScales(const std::string& spec, QuadrupedWalkParams& p) {
   std::size_t start = 0;
   while (start < spec.size()) {

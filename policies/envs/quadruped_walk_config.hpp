@@ -84,6 +84,10 @@ Status ApplyCommandSpec(const std::string& spec, QuadrupedWalkParams& p);
 // walk.yaml's single_axis_share is kept); an empty spec keeps walk.yaml's. Errors name the part.
 Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p);
 
+// The training's command period of a --command-resample spec "SECONDS" (walk.yaml's resample_s,
+// in [0.02, 3600] as there); an empty spec keeps walk.yaml's. The paper's test keeps its own 10 s.
+Status ApplyCommandResample(const std::string& spec, QuadrupedWalkParams& p);
+
 // The reward scales of a --reward-scales spec "NAME=VALUE[,NAME=VALUE...]" (walk.yaml's
 // rewards.scales names, e.g. tracking_ang_vel=1.0, and tracking_sigma, the tracking terms'
 // width), the others kept; an empty spec keeps walk.yaml's. Errors name the term or the value.

@@ -224,6 +224,10 @@ EnvSpec QuadrupedWalkEnv() {
            "draw a yaw rate), the share with vx = vy = 0 (standing or turning in place) and the share along one "
            "axis alone (vx, vy or a yaw rate); default: models/quadruped/walk.yaml's",
            applies(ApplyCommandShares)),
+      Flag("command-resample", EnvFlag::kTrain, K::kText, "", "has velocity commands",
+           "SECONDS between the training's command draws (each a new command, and a new heading); the paper's "
+           "test draws every 10 s whatever this is; default: models/quadruped/walk.yaml's resample_s",
+           applies(ApplyCommandResample)),
       Flag("reward-scales", EnvFlag::kTrain, K::kText, "", "has reward scales to set",
            "NAME=VALUE[,NAME=VALUE...] replaces those reward scales of models/quadruped/walk.yaml for this run "
            "(e.g. tracking_ang_vel=1.0; also tracking_sigma, the tracking terms' width)",
@@ -247,6 +251,7 @@ EnvSpec QuadrupedWalkEnv() {
     q.terrain = FlagText(o, "terrain");
     q.commands = FlagText(o, "commands");
     q.command_shares = FlagText(o, "command-shares");
+    q.command_resample = FlagText(o, "command-resample");
     q.reward_scales = FlagText(o, "reward-scales");
     // Training always randomises the robot; pbppo eval takes the nominal one unless --randomize,
     // and the paper's test's commands whatever training used.

@@ -358,6 +358,15 @@ run(2 env PBPPO=${PBPPO} MIXED_ROBOTS=-1 bash ${select_q} ${WORK}/walk_select)
 expect_in("${ERR}" "MIXED_ROBOTS: '-1' is not a non-negative integer")
 run(2 env PBPPO=${PBPPO} MAX_ERROR_FLAT=low bash ${select_q} ${WORK}/walk_select)
 expect_in("${ERR}" "MAX_ERROR_FLAT: 'low' is not a positive number (m/s and rad/s)")
+# tools/train_quadruped.sh's polish stage: bad settings refused before anything is trained or written.
+set(recipe_q ${SOURCE_DIR}/tools/train_quadruped.sh)
+run(2 env PBPPO=${PBPPO} HIL=${PBPPO} POLISH_STEPS=many bash ${recipe_q} ${WORK}/walk_recipe_bad)
+expect_in("${ERR}" "train_quadruped: POLISH_STEPS: 'many' is not a number of steps (0: no polish stage)")
+run(2 env PBPPO=${PBPPO} HIL=${PBPPO} POLISH_STEPS=1e6 POLISH_ROBOTS=0 bash ${recipe_q} ${WORK}/walk_recipe_bad)
+expect_in("${ERR}" "POLISH_ROBOTS: '0' is not a positive integer")
+if(EXISTS ${WORK}/walk_recipe_bad)
+  message(FATAL_ERROR "train_quadruped.sh wrote its output folder after refusing its settings")
+endif()
 run(2 env PBPPO=${PBPPO} "DEMO_SEEDS=1 x2" bash ${select_q} ${WORK}/walk_select)
 expect_in("${ERR}" "DEMO_SEEDS: 'x2' is not a non-negative integer")
 run(2 env PBPPO=${PBPPO} SCHEDULE=${WORK}/no-such.yaml bash ${select_q} ${WORK}/walk_select)
@@ -401,12 +410,12 @@ expect_in("${OUT}" "commands every 5 s (0.5 heading, 0.2 zero planar); rewards t
 expect_json(${WORK}/walk_heading/summary.json reward_scales "tracking_ang_vel=1.0,termination=-2")
 # Another robot, named in the provenance; a provenance longer than the blob's 256 bytes is cut
 # saying so ("..."), and summary.json holds it whole.
-run(0 ${PBPPO} train --env quadruped-walk --robot go2 --command-shares 0.5:0.2
+run(0 ${PBPPO} train --env quadruped-walk --robot go2 --command-shares 0.5:0.2 --command-resample 2.5
     --reward-scales tracking_lin_vel=2.5,tracking_ang_vel=1.0,termination=-150 --schedule fixed:0.2 --steps 384
     --envs 8 --rollout 24 --minibatch 96 --epochs 1 --hidden 16-16 --activation elu --seed 1 --threads 2 --no-plots
     --quiet --out ${WORK}/walk_go2)
 run(0 ${PBPPO} inspect ${WORK}/walk_go2/policy.blob)
-expect_in("${OUT}" "environment quadruped-walk, robot go2, terrain flat, commands every 5 s (0.5 heading, 0.2 zero planar); rewards tracking_lin_vel=2.5,")
+expect_in("${OUT}" "environment quadruped-walk, robot go2, terrain flat, commands every 2.5 s (0.5 heading, 0.2 zero planar); rewards tracking_lin_vel=2.5,")
 string(REGEX MATCH "environment ([^\n]*)" line "${OUT}")
 string(LENGTH "${CMAKE_MATCH_1}" n)
 if(NOT n EQUAL 256 OR NOT CMAKE_MATCH_1 MATCHES "[.][.][.]$")
@@ -416,6 +425,11 @@ file(READ ${WORK}/walk_go2/summary.json json)
 string(JSON whole GET "${json}" provenance)
 expect_in("${whole}" "robot go2, terrain flat")
 expect_in("${whole}" ", pushes 1 m/s/15 s")
+expect_json(${WORK}/walk_go2/summary.json command_resample "2.5")
+run(2 ${PBPPO} train --env quadruped-walk --command-resample 0 --steps 192 --quiet --out ${WORK}/walk_bad)
+expect_in("${ERR}" "--command-resample: '0' is not a period in [0.02, 3600] s")
+run(2 ${PBPPO} eval ${WORK}/walk_go2/policy.blob --env quadruped-walk --robot go2 --command-resample 2.5)
+expect_in("${ERR}" "--command-resample")
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales tracking_yaw=1 --steps 192 --quiet --out ${WORK}/walk_bad)
 expect_in("${ERR}" "--reward-scales: 'tracking_yaw' is not a reward term (tracking_lin_vel, tracking_ang_vel, ")
 run(2 ${PBPPO} train --env quadruped-walk --reward-scales torques=-2e-4,collision=x --steps 192 --quiet

@@ -421,6 +421,37 @@ TEST_CASE("quadruped-walk: single-axis commands - vx, vy or a yaw rate alone, a 
   CHECK(MakeWalk(o)->provenance().find("(0.5 heading, 0.2 zero planar, 0.3 single axis)") != std::string::npos);
 }
 
+TEST_CASE("quadruped-walk: --command-resample sets the training's command period, not the paper's test's") {
+  QuadrupedWalkOptions o = Nominal();
+  o.command_resample = "2.5";
+  auto e = MakeWalk(o);
+  CHECK(e->params().resample_s == 2.5);
+  CHECK(e->provenance().find("commands every 2.5 s (") != std::string::npos);
+  // A new command (command_index) every 125 policy steps, and only then.
+  Rng rng(3);
+  std::vector<float> obs(45), act(12, 0.f);
+  e->Reset(rng, obs);
+  std::uint32_t seen = e->telemetry().command_index;
+  std::vector<int> changes;
+  for (int t = 1; t <= 400; ++t) {
+    const StepResult r = e->Step(act, obs);
+    if (e->telemetry().command_index != seen) changes.push_back(t);
+    seen = e->telemetry().command_index;
+    if (r.terminated || r.truncated) break;
+  }
+  REQUIRE(changes.size() >= 2);
+  CHECK(changes[0] == 125);
+  CHECK(changes[1] == 250);
+  o.paper_test = true;
+  CHECK(MakeWalk(o)->params().resample_s == 10.0);
+  o.paper_test = false;
+  for (const char* bad : {"0.01", "4000", "x", "2.5s", "nan"}) {
+    o.command_resample = bad;
+    CHECK(ErrorOf(o).find(std::string("--command-resample: '") + bad + "' is not a period in [0.02, 3600] s") !=
+          std::string::npos);
+  }
+}
+
 TEST_CASE("quadruped-walk: --reward-scales replaces walk.yaml's scales for a run - the reward follows them") {
   QuadrupedWalkOptions o = Nominal();
   auto base = MakeWalk(o);
