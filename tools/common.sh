@@ -28,6 +28,12 @@ positive_int() {
 non_negative_int() {
   case "$2" in '' | *[!0-9]*) fail "$1: '$2' is not a non-negative integer" ;; esac
 }
+# number_in NAME VALUE LOW HIGH WHAT: fail with "NAME: 'VALUE' is not WHAT" unless VALUE is a number
+# in [LOW, HIGH] (nan and inf are not).
+number_in() {
+  python3 -c 'import sys; v = float(sys.argv[1]); sys.exit(0 if float(sys.argv[2]) <= v <= float(sys.argv[3]) else 1)' \
+    "$2" "$3" "$4" 2>/dev/null || fail "$1: '$2' is not $5"
+}
 
 # schedule_runs OUT_DIR STEPS "SEEDS" SCHEDULE...: for every seed and schedule calls the script's
 # own `train_and_eval RUN SCHEDULE SEED`, RUN being OUT_DIR/<schedule>_seed<seed> (':' as '_'),

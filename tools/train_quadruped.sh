@@ -85,15 +85,10 @@ polish_snapshots="${POLISH_SNAPSHOTS:-8}"
 polish_robots="${POLISH_ROBOTS:-500}"
 non_negative_int POLISH_SNAPSHOTS "$polish_snapshots"
 positive_int POLISH_ROBOTS "$polish_robots"
-# number NAME VALUE LOW HIGH WHAT: fail naming the setting unless VALUE is a number in [LOW, HIGH].
-number() {
-  python3 -c 'import math, sys; v = float(sys.argv[1]); sys.exit(0 if float(sys.argv[2]) <= v <= float(sys.argv[3]) else 1)' \
-    "$2" "$3" "$4" 2>/dev/null || fail "$1: '$2' is not $5"
-}
-number POLISH_STEPS "$polish_steps" 0 1e12 "a number of steps (0: no polish stage)"
-number POLISH_LOG_STD "$polish_log_std" -20 2 "a log standard deviation in [-20, 2]"
-number POLISH_LR "$polish_lr" 1e-9 1 "a learning rate in (0, 1]"
-number POLISH_RESAMPLE "$polish_resample" 0.02 3600 "a command period in [0.02, 3600] s"
+number_in POLISH_STEPS "$polish_steps" 0 1e12 "a number of steps (0: no polish stage)"
+number_in POLISH_LOG_STD "$polish_log_std" -20 2 "a log standard deviation in [-20, 2]"
+number_in POLISH_LR "$polish_lr" 1e-9 1 "a learning rate in [1e-9, 1]"
+number_in POLISH_RESAMPLE "$polish_resample" 0.02 3600 "a command period in [0.02, 3600] s"
 polishing=$(python3 -c 'import sys; print(1 if float(sys.argv[1]) > 0 else 0)' "$polish_steps")
 schedule="${SCHEDULE:-pbppo}"
 ship="${SHIP:-1}"

@@ -15,8 +15,9 @@ namespace pbppo::envs {
 
 namespace {
 
-constexpr double kBig = 1e6;                         // the largest reward scale or value walk.yaml takes
-constexpr double kSigmaMin = 1e-6, kSigmaMax = 100;  // rewards.tracking_sigma, walk.yaml's and the flag's
+constexpr double kBig = 1e6;                                  // the largest reward scale or value walk.yaml takes
+constexpr double kSigmaMin = 1e-6, kSigmaMax = 100;           // rewards.tracking_sigma, walk.yaml's and the flag's
+constexpr double kResampleMinS = 0.02, kResampleMaxS = 3600;  // commands.resample_s, walk.yaml's and the flag's
 
 // walk.yaml's rewards.scales, by name.
 constexpr std::pair<const char*, double WalkRewardScales::*> kRewardScales[] = {
@@ -79,7 +80,7 @@ Result<QuadrupedWalkParams> ParseQuadrupedWalkParams(const YAML::Node& node, con
            f.Keys(cmd, "commands",
                   {"resample_s", "vx_mps", "vy_mps", "yaw_rate_radps", "heading_rad", "heading_share", "heading_gain",
                    "zero_planar_share", "single_axis_share", "zero_below_mps"}),
-           f.Number(cmd, "resample_s", "commands", 0.02, 3600, &p.resample_s),
+           f.Number(cmd, "resample_s", "commands", kResampleMinS, kResampleMaxS, &p.resample_s),
            f.Range(cmd, "vx_mps", "commands", -10, 10, &p.vx_mps),
            f.Range(cmd, "vy_mps", "commands", -10, 10, &p.vy_mps),
            f.Range(cmd, "yaw_rate_radps", "commands", -10, 10, &p.yaw_rate_radps),
@@ -213,8 +214,11 @@ Status ApplyCommandShares(const std::string& spec, QuadrupedWalkParams& p) {
 Status ApplyCommandResample(const std::string& spec, QuadrupedWalkParams& p) {
   if (spec.empty()) return {};
   double v = 0;
-  if (!WholeNumber(spec, v) || !(v >= 0.02 && v <= 3600))
-    return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not a period in [0.02, 3600] s");
+  if (!WholeNumber(spec, v) || !(v >= kResampleMinS && v <= kResampleMaxS)) {
+    char range[48];
+    std::snprintf(range, sizeof range, "[%g, %g]", kResampleMinS, kResampleMaxS);
+    return MakeError(ErrorCode::kInvalidValue, "'" + spec + "' is not a period in " + range + " s");
+  }
   p.resample_s = v;
   return {};
 }
